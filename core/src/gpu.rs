@@ -1,0 +1,71 @@
+//! The GPU context: created headless from the environment (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, ...) or handed
+//! over by the app (eframe's device). Timestamp features are requested whenever the adapter has them.
+
+use crate::error::GpuError;
+
+/// A device and queue plus what the renderer needs to know about them.
+#[derive(Clone)]
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    /// True when `TIMESTAMP_QUERY` is enabled on the device: per-pass GPU times come from timestamps.
+    pub timestamps: bool,
+}
+
+/// The timer features ShadowLab uses when an adapter offers them.
+pub const TIMER_FEATURES: wgpu::Features = wgpu_profiler::GpuProfiler::ALL_WGPU_TIMER_FEATURES;
+
+impl GpuContext {
+    /// Create a device without a window. Honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`), `WGPU_ADAPTER_NAME` and
+    /// the debug/validation variables. Works on Mesa lavapipe and GL llvmpipe.
+    pub fn headless() -> Result<GpuContext, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        // `initialize_adapter_from_env_or_default` panics when WGPU_ADAPTER_NAME matches nothing; check first so a
+        // typo gives an error, not a panic.
+        if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
+            let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+            let wanted_lc = wanted.to_lowercase();
+            if !adapters.iter().any(|a| a.get_info().name.to_lowercase().contains(&wanted_lc)) {
+                return Err(GpuError::NoAdapter);
+            }
+        }
+        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, None))
+            .map_err(|_| GpuError::NoAdapter)?;
+        let features = adapter.features() & TIMER_FEATURES;
+        let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+        let limits = wgpu::Limits {
+            max_texture_array_layers: adapter.limits().max_texture_array_layers,
+            max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
+            max_buffer_size: adapter.limits().max_buffer_size,
+            ..limits
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadowlab"),
+            required_features: features,
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::RequestDevice(e.to_string()))?;
+        Ok(GpuContext::from_device(device, queue, adapter.get_info()))
+    }
+
+    /// Use a device created elsewhere (the app passes eframe's).
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> GpuContext {
+        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        GpuContext { device, queue, adapter_info, timestamps }
+    }
+
+    /// "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
+    pub fn adapter_description(&self) -> String {
+        format!("{} ({:?}, {:?})", self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type)
+    }
+
+    /// Block until all submitted work is done.
+    pub fn wait_idle(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Validation(format!("device poll failed: {e}")))
+    }
+}

@@ -1,0 +1,16 @@
+//! ShadowLab's core: scenes, the many-light renderer and its shadow techniques, measurement. No UI code.
+
+pub mod error;
+pub mod scene;
+
+pub use error::{GpuError, LayoutError, LoadError};
+pub use scene::{Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource, TextureImage};
+pub mod gpu;
+pub mod math;
+pub mod renderer;
+pub mod shaders;
+pub mod technique;
+pub mod timing;
+
+pub use gpu::GpuContext;
+pub use renderer::{FrameReport, RenderSettings, Renderer, ToneMap};

@@ -1,0 +1,283 @@
+//! Rendering cube shadow maps into a reused depth atlas, with per-light and per-face chunk culling.
+//!
+//! Shared by every technique that renders cube maps (the reference per light, LightCluster per cluster).
+//! A batch of up to `capacity` cube maps is drawn in a single render pass: each face is a square tile of the
+//! atlas, selected with a viewport; clip-space clipping keeps triangles inside their tile. The atlas is
+//! reused batch after batch, so memory depends on the batch size, never on the number of lights.
+//!
+//! Culling (lavapipe is vertex-bound, so triangles are what costs):
+//! 1. a chunk is drawn for a caster only if its bounds touch the caster's range sphere,
+//! 2. and for a face only if its bounds touch the face's 90 degree pyramid.
+
+use glam::Vec3;
+
+use super::gpu_data::MatrixUniform;
+use super::gpu_scene::GpuScene;
+use crate::gpu::GpuContext;
+use crate::math::CUBE_FACES;
+use crate::scene::chunks::merge_draw_ranges;
+use crate::shaders;
+use crate::timing::PassTimer;
+
+pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Default memory for one batch's atlas. 128 MiB holds 85 cube maps at 256 texels per face, 5 at 1024.
+pub const DEFAULT_ATLAS_BUDGET_BYTES: u64 = 128 << 20;
+/// Upper bound of cube maps per batch (the per-face matrix buffer is sized for it).
+pub const MAX_CUBES_PER_BATCH: usize = 256;
+
+/// One cube map to render: its centre and depth range.
+#[derive(Clone, Copy, Debug)]
+pub struct CubeCaster {
+    pub position: Vec3,
+    pub near: f32,
+    pub far: f32,
+}
+
+/// The atlas of the current batch, as the shading passes see it.
+pub struct CubeAtlas {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+    pub resolution: u32,
+    pub tiles_per_row: u32,
+    /// Cube maps it holds.
+    pub capacity: usize,
+}
+
+/// Triangles drawn and culled by one `render` call.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CubeStats {
+    pub cubes: usize,
+    pub triangles_submitted: u64,
+    pub triangles_culled: u64,
+}
+
+pub struct CubeShadowRenderer {
+    pipeline: wgpu::RenderPipeline,
+    faces: wgpu::Buffer,
+    faces_bind_group: wgpu::BindGroup,
+    atlas: Option<CubeAtlas>,
+    ranges: Vec<(u32, u32)>,
+    visible: Vec<u32>,
+    face_visible: Vec<u32>,
+}
+
+impl CubeShadowRenderer {
+    pub fn new(gpu: &GpuContext) -> CubeShadowRenderer {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cube face"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(64),
+                },
+                count: None,
+            }],
+        });
+        let faces = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cube face matrices"),
+            size: (MAX_CUBES_PER_BATCH * 6 * std::mem::size_of::<MatrixUniform>()) as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let faces_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("cube face matrices"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &faces,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(64),
+                }),
+            }],
+        });
+        let module = shaders::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shadow depth"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow depth"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                })],
+            },
+            // No back-face culling: real scenes have single-sided walls that must still cast shadows.
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: SHADOW_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+        CubeShadowRenderer {
+            pipeline,
+            faces,
+            faces_bind_group,
+            atlas: None,
+            ranges: Vec::new(),
+            visible: Vec::new(),
+            face_visible: Vec::new(),
+        }
+    }
+
+    /// How many cube maps of `resolution` texels per face one batch holds within `budget_bytes`.
+    pub fn batch_capacity(gpu: &GpuContext, resolution: u32, budget_bytes: u64) -> usize {
+        let tiles_per_row = (gpu.device.limits().max_texture_dimension_2d / resolution.max(1)).max(1) as usize;
+        let by_size = tiles_per_row * tiles_per_row / 6;
+        let bytes_per_cube = 6 * (resolution as u64) * (resolution as u64) * 4;
+        let by_budget = (budget_bytes / bytes_per_cube.max(1)) as usize;
+        by_size.min(by_budget).clamp(1, MAX_CUBES_PER_BATCH)
+    }
+
+    /// The atlas of the last `render` call.
+    pub fn atlas(&self) -> Option<&CubeAtlas> {
+        self.atlas.as_ref()
+    }
+
+    /// Make sure the atlas holds `cubes` cube maps of `resolution`; reuses it when it is big enough.
+    /// Returns true when a new atlas was created (bind groups that use its view must be rebuilt).
+    pub fn ensure_atlas(&mut self, gpu: &GpuContext, resolution: u32, cubes: usize) -> bool {
+        if let Some(a) = &self.atlas {
+            if a.resolution == resolution && a.capacity >= cubes {
+                return false;
+            }
+        }
+        let max_dim = gpu.device.limits().max_texture_dimension_2d;
+        let max_tiles_per_row = (max_dim / resolution).max(1);
+        let tiles = (cubes * 6) as u32;
+        // A near-square atlas: as many columns as needed for a square, at most what the device allows.
+        let tiles_per_row = ((tiles as f32).sqrt().ceil() as u32).clamp(1, max_tiles_per_row);
+        let rows = tiles.div_ceil(tiles_per_row);
+        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("cube shadow atlas"),
+            size: wgpu::Extent3d {
+                width: tiles_per_row * resolution,
+                height: rows * resolution,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        self.atlas = Some(CubeAtlas { texture, view, resolution, tiles_per_row, capacity: cubes });
+        true
+    }
+
+    /// Render `casters` into tiles `6*i .. 6*i+6` of the atlas (which `ensure_atlas` must have sized),
+    /// in one render pass named `label`.
+    pub fn render(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &GpuScene,
+        timer: &PassTimer,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        casters: &[CubeCaster],
+    ) -> CubeStats {
+        let atlas = self.atlas.as_ref().expect("ensure_atlas before render");
+        assert!(casters.len() <= atlas.capacity && casters.len() <= MAX_CUBES_PER_BATCH);
+        let matrices: Vec<MatrixUniform> = casters
+            .iter()
+            .flat_map(|c| CUBE_FACES.iter().map(|f| MatrixUniform::new(f.clip_from_world(c.position, c.near, c.far))))
+            .collect();
+        gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
+
+        // Culling on the CPU, draw lists per face.
+        let total_triangles = scene.triangle_count;
+        let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
+        let mut draws: Vec<(u32, usize, usize)> = Vec::new(); // (tile, first range, range count)
+        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        for (ci, caster) in casters.iter().enumerate() {
+            self.visible.clear();
+            self.visible.extend(
+                scene
+                    .chunks
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| c.bounds.intersects_sphere(caster.position, caster.far))
+                    .map(|(i, _)| i as u32),
+            );
+            for (fi, face) in CUBE_FACES.iter().enumerate() {
+                self.face_visible.clear();
+                let mut tris = 0u64;
+                for &id in &self.visible {
+                    let c = &scene.chunks[id as usize];
+                    if face.intersects_aabb(caster.position, &c.bounds) {
+                        self.face_visible.push(id);
+                        tris += c.triangle_count() as u64;
+                    }
+                }
+                stats.triangles_submitted += tris;
+                stats.triangles_culled += total_triangles - tris;
+                merge_draw_ranges(&scene.chunks, self.face_visible.iter().copied(), &mut self.ranges);
+                draws.push(((ci * 6 + fi) as u32, all_ranges.len(), self.ranges.len()));
+                all_ranges.extend_from_slice(&self.ranges);
+            }
+        }
+
+        let res = atlas.resolution;
+        let tiles_per_row = atlas.tiles_per_row;
+        let pipeline = &self.pipeline;
+        let bind_group = &self.faces_bind_group;
+        timer.render_pass(
+            encoder,
+            label,
+            wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &atlas.view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+            |pass| {
+                pass.set_pipeline(pipeline);
+                pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+                pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                for &(tile, first, count) in &draws {
+                    if count == 0 {
+                        continue;
+                    }
+                    let x = (tile % tiles_per_row) * res;
+                    let y = (tile / tiles_per_row) * res;
+                    pass.set_viewport(x as f32, y as f32, res as f32, res as f32, 0.0, 1.0);
+                    pass.set_scissor_rect(x, y, res, res);
+                    let offset = tile * std::mem::size_of::<MatrixUniform>() as u32;
+                    pass.set_bind_group(0, bind_group, &[offset]);
+                    for &(first_index, index_count) in &all_ranges[first..first + count] {
+                        pass.draw_indexed(first_index..first_index + index_count, 0, 0..1);
+                    }
+                }
+            },
+        );
+        stats
+    }
+}

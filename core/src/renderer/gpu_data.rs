@@ -1,0 +1,85 @@
+//! Uniform and storage layouts shared between Rust and WGSL. Each struct names the WGSL struct it mirrors;
+//! size asserts catch a field added on one side only.
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::{Material, PointLight};
+
+/// Mirrors `Frame` in `common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameUniform {
+    pub clip_from_world: [[f32; 4]; 4],
+    pub world_from_clip: [[f32; 4]; 4],
+    pub camera_position: [f32; 4],
+    pub viewport: [f32; 4],
+    pub ambient: [f32; 4],
+    pub background: [f32; 4],
+    pub tonemap: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 208);
+
+/// Mirrors `Camera` in `gbuffer.wgsl` and `Face` in `shadow_depth.wgsl`: one matrix, padded to the 256-byte
+/// dynamic-offset alignment so an array of them can be indexed per draw.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MatrixUniform {
+    pub clip_from_world: [[f32; 4]; 4],
+    pub _pad: [[f32; 4]; 12],
+}
+const _: () = assert!(std::mem::size_of::<MatrixUniform>() == 256);
+
+impl MatrixUniform {
+    pub fn new(m: Mat4) -> Self {
+        MatrixUniform { clip_from_world: m.to_cols_array_2d(), _pad: [[0.0; 4]; 12] }
+    }
+}
+
+/// Mirrors `Light` in `common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub range: f32,
+    pub radiance: [f32; 3],
+    pub shadow_near: f32,
+}
+const _: () = assert!(std::mem::size_of::<GpuLight>() == 32);
+
+impl GpuLight {
+    pub fn new(light: &PointLight) -> Self {
+        GpuLight {
+            position: light.position.to_array(),
+            range: light.range,
+            radiance: (light.color * light.intensity).to_array(),
+            shadow_near: shadow_near(light.range),
+        }
+    }
+}
+
+/// Near plane of a light's cube shadow map: small against its range, so close occluders still cast shadows,
+/// large enough to keep 32-bit depth precise at the range.
+pub fn shadow_near(range: f32) -> f32 {
+    (range * 0.002).clamp(1e-4, 0.05)
+}
+
+/// Mirrors `Material` in `gbuffer.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MaterialUniform {
+    pub base_color: [f32; 4],
+    pub emissive: [f32; 4],
+    pub specular: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 48);
+
+impl MaterialUniform {
+    pub fn new(m: &Material, has_texture: bool) -> Self {
+        let spec: Vec3 = m.specular;
+        MaterialUniform {
+            base_color: m.base_color.to_array(),
+            emissive: [m.emissive.x, m.emissive.y, m.emissive.z, if has_texture { 1.0 } else { 0.0 }],
+            specular: [(spec.x + spec.y + spec.z) / 3.0, m.shininess.clamp(1.0, 4096.0), 0.0, 0.0],
+        }
+    }
+}

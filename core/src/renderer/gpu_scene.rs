@@ -1,0 +1,157 @@
+//! A scene uploaded to the GPU: one vertex and one index buffer for all chunks, a bind group per material
+//! (uniform, base-colour texture with mipmaps generated on the CPU, sampler).
+
+use wgpu::util::DeviceExt;
+
+use super::gpu_data::MaterialUniform;
+use crate::gpu::GpuContext;
+use crate::scene::chunks::{Chunk, ChunkedGeometry};
+use crate::scene::{Scene, TextureImage};
+
+pub struct GpuScene {
+    pub vertex_buffer: wgpu::Buffer,
+    pub index_buffer: wgpu::Buffer,
+    /// CPU copy of the chunks for culling.
+    pub chunks: Vec<Chunk>,
+    pub triangle_count: u64,
+    pub material_bind_groups: Vec<wgpu::BindGroup>,
+}
+
+impl GpuScene {
+    pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("material"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        })
+    }
+
+    pub fn new(gpu: &GpuContext, scene: &Scene, material_layout: &wgpu::BindGroupLayout) -> GpuScene {
+        let device = &gpu.device;
+        let geometry = ChunkedGeometry::build(scene);
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene vertices"),
+            contents: bytemuck::cast_slice(&geometry.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene indices"),
+            contents: bytemuck::cast_slice(&geometry.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("material sampler"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+            anisotropy_clamp: 1,
+            ..Default::default()
+        });
+        let max_dim = device.limits().max_texture_dimension_2d;
+        let textures: Vec<wgpu::TextureView> = scene.textures.iter().map(|t| upload_texture(gpu, t, max_dim)).collect();
+        let white = upload_texture(
+            gpu,
+            &TextureImage { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] },
+            max_dim,
+        );
+        let material_bind_groups = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let texture = m.base_color_texture.and_then(|i| textures.get(i));
+                let uniform = MaterialUniform::new(m, texture.is_some());
+                let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("material"),
+                    contents: bytemuck::bytes_of(&uniform),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(&m.name),
+                    layout: material_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: buffer.as_entire_binding() },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(texture.unwrap_or(&white)),
+                        },
+                        wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
+                    ],
+                })
+            })
+            .collect();
+        GpuScene {
+            vertex_buffer,
+            index_buffer,
+            triangle_count: geometry.triangle_count() as u64,
+            chunks: geometry.chunks,
+            material_bind_groups,
+        }
+    }
+}
+
+/// Upload an sRGB texture with a full mip chain (box-filtered on the CPU).
+fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::TextureView {
+    let mut level = image::RgbaImage::from_raw(t.width, t.height, t.rgba8.clone())
+        .unwrap_or_else(|| image::RgbaImage::from_pixel(1, 1, image::Rgba([255, 0, 255, 255])));
+    if level.width() > max_dim || level.height() > max_dim {
+        level = image::imageops::thumbnail(&level, level.width().min(max_dim), level.height().min(max_dim));
+    }
+    let mip_count = 32 - level.width().max(level.height()).leading_zeros();
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(&t.name),
+        size: wgpu::Extent3d { width: level.width(), height: level.height(), depth_or_array_layers: 1 },
+        mip_level_count: mip_count,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for mip in 0..mip_count {
+        if mip > 0 {
+            let w = (level.width() / 2).max(1);
+            let h = (level.height() / 2).max(1);
+            level = image::imageops::resize(&level, w, h, image::imageops::FilterType::Triangle);
+        }
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: mip,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            level.as_raw(),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * level.width()), rows_per_image: None },
+            wgpu::Extent3d { width: level.width(), height: level.height(), depth_or_array_layers: 1 },
+        );
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
+}

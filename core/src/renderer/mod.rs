@@ -1,0 +1,724 @@
+//! The deferred renderer shared by all techniques.
+//!
+//! A frame: (1) G-buffer pass (depth, normal, albedo, emission; chunks culled against the view frustum),
+//! (2) ambient pass that starts the HDR target with ambient + emission, (3) the technique's steps, each adding
+//! its lights' shadowed radiance into the HDR target and submitted on its own, (4) tone mapping to sRGB.
+//! Every pass is timed (see [`crate::timing`]). A frame can run to completion ([`Renderer::render_frame`]) or be
+//! advanced a few steps at a time ([`Renderer::begin_frame`], [`Renderer::advance`], [`Renderer::finish_frame`])
+//! so an interactive app stays responsive while a slow technique accumulates.
+
+pub mod cube_shadows;
+pub mod gpu_data;
+pub mod gpu_scene;
+pub mod readback;
+pub mod targets;
+
+use std::time::Instant;
+
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::math::Frustum;
+use crate::scene::chunks::merge_draw_ranges;
+use crate::scene::{Camera, PointLight, Scene};
+use crate::shaders;
+use crate::technique::{FrameContext, Technique, TechniqueCounts};
+use crate::timing::{PassTime, PassTimer, TimingSource};
+use gpu_data::{FrameUniform, MatrixUniform};
+use gpu_scene::GpuScene;
+use targets::FrameTargets;
+
+/// Largest render target side accepted.
+pub const MAX_RENDER_SIZE: u32 = 8192;
+
+/// How the HDR image becomes display colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToneMap {
+    Aces,
+    Reinhard,
+    /// Exposure then clamp: radiance 1 maps to white.
+    Linear,
+}
+
+/// Settings of the renderer (not of a technique).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub exposure: f32,
+    pub tonemap: ToneMap,
+    /// Ambient radiance factor: ambient term = `ambient * albedo`.
+    pub ambient: Vec3,
+    pub background: Vec3,
+    /// Blinn-Phong specular on top of Lambert.
+    pub specular: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 640,
+            height: 360,
+            exposure: 1.0,
+            tonemap: ToneMap::Aces,
+            ambient: Vec3::splat(0.03),
+            background: Vec3::new(0.05, 0.06, 0.08),
+            specular: false,
+        }
+    }
+}
+
+impl RenderSettings {
+    pub fn validate(&self) -> Result<(), GpuError> {
+        if self.width == 0 || self.height == 0 || self.width > MAX_RENDER_SIZE || self.height > MAX_RENDER_SIZE {
+            return Err(GpuError::InvalidSettings(format!(
+                "image size {}x{} must be between 1x1 and {MAX_RENDER_SIZE}x{MAX_RENDER_SIZE}",
+                self.width, self.height
+            )));
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(GpuError::InvalidSettings(format!("exposure {} must be > 0", self.exposure)));
+        }
+        if !(self.ambient.is_finite() && self.background.is_finite()) {
+            return Err(GpuError::InvalidSettings("ambient and background must be finite".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Bind group layouts and formats every technique uses.
+pub struct SharedLayouts {
+    /// Group 0 of full-screen passes: frame uniform + G-buffer (`common.wgsl`).
+    pub screen: wgpu::BindGroupLayout,
+    pub material: wgpu::BindGroupLayout,
+    pub camera: wgpu::BindGroupLayout,
+}
+
+impl SharedLayouts {
+    pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+    pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+    pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    pub const EMISSIVE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+    fn new(device: &wgpu::Device) -> SharedLayouts {
+        let tex = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let uniform = |binding, visibility| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let unfilterable = wgpu::TextureSampleType::Float { filterable: false };
+        let screen = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("screen"),
+            entries: &[
+                uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE),
+                tex(1, unfilterable),
+                tex(2, unfilterable),
+                tex(3, unfilterable),
+                tex(4, wgpu::TextureSampleType::Depth),
+            ],
+        });
+        let camera = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("camera"),
+            entries: &[uniform(0, wgpu::ShaderStages::VERTEX)],
+        });
+        SharedLayouts { screen, material: GpuScene::material_layout(device), camera }
+    }
+
+    /// A full-screen pipeline: `common.wgsl`'s triangle, `fs_main` of `module`, groups `[screen, extra...]`,
+    /// writing one `format` target, additive when `additive`.
+    pub fn fullscreen_pipeline(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        extra_groups: &[&wgpu::BindGroupLayout],
+        format: wgpu::TextureFormat,
+        additive: bool,
+    ) -> wgpu::RenderPipeline {
+        let mut groups: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&self.screen)];
+        groups.extend(extra_groups.iter().map(|g| Some(*g)));
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &groups,
+            immediate_size: 0,
+        });
+        let blend = additive.then_some(wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        });
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some("fullscreen_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+}
+
+/// Counts of a frame.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct FrameCounts {
+    pub lights_total: usize,
+    pub scene_triangles: u64,
+    /// Triangles the G-buffer pass drew after view-frustum culling of chunks.
+    pub gbuffer_triangles: u64,
+    #[serde(flatten)]
+    pub technique: TechniqueCounts,
+}
+
+/// What one frame cost and did.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameReport {
+    pub technique: String,
+    pub width: u32,
+    pub height: u32,
+    pub timing_source: TimingSource,
+    /// Per pass, in the order they ran; passes of one name (batches) are summed.
+    pub passes: Vec<PassTime>,
+    /// Sum of the passes.
+    pub gpu_total_ms: f64,
+    /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
+    pub wall_ms: f64,
+    pub counts: FrameCounts,
+}
+
+/// A frame in progress.
+pub struct FrameJob {
+    pub steps_total: usize,
+    pub steps_done: usize,
+    started: Instant,
+    camera: Camera,
+    lights: Vec<PointLight>,
+    gbuffer_triangles: u64,
+}
+
+impl FrameJob {
+    pub fn is_done(&self) -> bool {
+        self.steps_done >= self.steps_total
+    }
+    /// 0..1
+    pub fn progress(&self) -> f32 {
+        if self.steps_total == 0 {
+            1.0
+        } else {
+            self.steps_done as f32 / self.steps_total as f32
+        }
+    }
+}
+
+pub struct Renderer {
+    gpu: GpuContext,
+    pub layouts: SharedLayouts,
+    settings: RenderSettings,
+    scene: GpuScene,
+    targets: FrameTargets,
+    frame_uniform: wgpu::Buffer,
+    camera_uniform: wgpu::Buffer,
+    camera_bind_group: wgpu::BindGroup,
+    screen_bind_group: wgpu::BindGroup,
+    gbuffer_pipeline: wgpu::RenderPipeline,
+    ambient_pipeline: wgpu::RenderPipeline,
+    tonemap_pipeline: wgpu::RenderPipeline,
+    tonemap_layout: wgpu::BindGroupLayout,
+    tonemap_bind_group: wgpu::BindGroup,
+    timer: PassTimer,
+    draw_ranges: Vec<(u32, u32)>,
+}
+
+impl Renderer {
+    pub fn new(gpu: &GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Renderer, GpuError> {
+        settings.validate()?;
+        let device = &gpu.device;
+        let layouts = SharedLayouts::new(device);
+        let gpu_scene = GpuScene::new(gpu, scene, &layouts.material);
+        let targets = FrameTargets::new(gpu, settings.width, settings.height);
+        let frame_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: std::mem::size_of::<FrameUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("camera"),
+            size: std::mem::size_of::<MatrixUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("camera"),
+            layout: &layouts.camera,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_uniform.as_entire_binding() }],
+        });
+
+        let gbuffer_module = shaders::create_module(device, "gbuffer", shaders::GBUFFER);
+        let gbuffer_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(&layouts.camera), Some(&layouts.material)],
+            immediate_size: 0,
+        });
+        let gbuffer_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&gbuffer_layout),
+            vertex: wgpu::VertexState {
+                module: &gbuffer_module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
+                })],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: SharedLayouts::DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &gbuffer_module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[
+                    Some(SharedLayouts::ALBEDO_FORMAT.into()),
+                    Some(SharedLayouts::NORMAL_FORMAT.into()),
+                    Some(SharedLayouts::EMISSIVE_FORMAT.into()),
+                ],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let ambient_module = shaders::create_module(device, "ambient", shaders::AMBIENT);
+        let ambient_pipeline =
+            layouts.fullscreen_pipeline(device, "ambient", &ambient_module, &[], SharedLayouts::HDR_FORMAT, false);
+        let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let tonemap_module = shaders::create_module(device, "tonemap", shaders::TONEMAP);
+        let tonemap_pipeline = layouts.fullscreen_pipeline(
+            device,
+            "tonemap",
+            &tonemap_module,
+            &[&tonemap_layout],
+            SharedLayouts::OUTPUT_FORMAT,
+            false,
+        );
+        let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets);
+        let tonemap_bind_group = Self::tonemap_bind_group(device, &tonemap_layout, &targets);
+        let timer = PassTimer::new(gpu)?;
+        Ok(Renderer {
+            gpu: gpu.clone(),
+            layouts,
+            settings,
+            scene: gpu_scene,
+            targets,
+            frame_uniform,
+            camera_uniform,
+            camera_bind_group,
+            screen_bind_group,
+            gbuffer_pipeline,
+            ambient_pipeline,
+            tonemap_pipeline,
+            tonemap_layout,
+            tonemap_bind_group,
+            timer,
+            draw_ranges: Vec::new(),
+        })
+    }
+
+    fn screen_bind_group(
+        device: &wgpu::Device,
+        layouts: &SharedLayouts,
+        frame_uniform: &wgpu::Buffer,
+        t: &FrameTargets,
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("screen"),
+            layout: &layouts.screen,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: frame_uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&t.albedo) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&t.normal) },
+                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&t.emissive) },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&t.depth) },
+            ],
+        })
+    }
+
+    fn tonemap_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, t: &FrameTargets) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("tonemap"),
+            layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&t.hdr) }],
+        })
+    }
+
+    pub fn gpu(&self) -> &GpuContext {
+        &self.gpu
+    }
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+    pub fn targets(&self) -> &FrameTargets {
+        &self.targets
+    }
+    pub fn scene(&self) -> &GpuScene {
+        &self.scene
+    }
+
+    /// Change settings; resizes the targets when the size changed.
+    pub fn set_settings(&mut self, settings: RenderSettings) -> Result<(), GpuError> {
+        settings.validate()?;
+        if settings.width != self.settings.width || settings.height != self.settings.height {
+            self.targets = FrameTargets::new(&self.gpu, settings.width, settings.height);
+            self.screen_bind_group =
+                Self::screen_bind_group(&self.gpu.device, &self.layouts, &self.frame_uniform, &self.targets);
+            self.tonemap_bind_group = Self::tonemap_bind_group(&self.gpu.device, &self.tonemap_layout, &self.targets);
+        }
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// Replace the scene's geometry and materials.
+    pub fn set_scene(&mut self, scene: &Scene) {
+        self.scene = GpuScene::new(&self.gpu, scene, &self.layouts.material);
+    }
+
+    /// Create a technique by key on this renderer's device.
+    pub fn create_technique(&self, key: &str) -> Option<Box<dyn Technique>> {
+        crate::technique::create(key, &self.gpu, &self.layouts)
+    }
+
+    fn aspect(&self) -> f32 {
+        self.settings.width as f32 / self.settings.height as f32
+    }
+
+    fn context<'a>(&'a self, camera: &'a Camera, lights: &'a [PointLight]) -> FrameContext<'a> {
+        let aspect = self.aspect();
+        FrameContext {
+            gpu: &self.gpu,
+            scene: &self.scene,
+            layouts: &self.layouts,
+            screen_bind_group: &self.screen_bind_group,
+            hdr_view: &self.targets.hdr,
+            camera,
+            aspect,
+            frustum: Frustum::from_clip_from_world(&camera.clip_from_world(aspect)),
+            lights,
+            timer: &self.timer,
+        }
+    }
+
+    /// Start a frame: upload the camera, let the technique prepare, and render the G-buffer and ambient passes.
+    pub fn begin_frame(
+        &mut self,
+        technique: &mut dyn Technique,
+        camera: &Camera,
+        lights: &[PointLight],
+    ) -> Result<FrameJob, GpuError> {
+        if !camera.is_valid() {
+            return Err(GpuError::InvalidSettings("the camera has non-finite or degenerate values".into()));
+        }
+        let started = Instant::now();
+        let aspect = self.aspect();
+        let clip_from_world = camera.clip_from_world(aspect);
+        let s = &self.settings;
+        let uniform = FrameUniform {
+            clip_from_world: clip_from_world.to_cols_array_2d(),
+            world_from_clip: clip_from_world.inverse().to_cols_array_2d(),
+            camera_position: camera.position.extend(1.0).to_array(),
+            viewport: [s.width as f32, s.height as f32, 1.0 / s.width as f32, 1.0 / s.height as f32],
+            ambient: s.ambient.extend(if s.specular { 1.0 } else { 0.0 }).to_array(),
+            background: s.background.extend(1.0).to_array(),
+            tonemap: [
+                s.exposure,
+                match s.tonemap {
+                    ToneMap::Aces => 0.0,
+                    ToneMap::Reinhard => 1.0,
+                    ToneMap::Linear => 2.0,
+                },
+                0.0,
+                0.0,
+            ],
+        };
+        self.gpu.queue.write_buffer(&self.frame_uniform, 0, bytemuck::bytes_of(&uniform));
+        self.gpu.queue.write_buffer(&self.camera_uniform, 0, bytemuck::bytes_of(&MatrixUniform::new(clip_from_world)));
+
+        // View-frustum culling of chunks for the G-buffer.
+        let frustum = Frustum::from_clip_from_world(&clip_from_world);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut gbuffer_triangles = 0u64;
+        {
+            let chunks = &self.scene.chunks;
+            let visible: Vec<u32> = (0..chunks.len() as u32)
+                .filter(|&i| frustum.intersects_aabb(&chunks[i as usize].bounds))
+                .inspect(|&i| gbuffer_triangles += chunks[i as usize].triangle_count() as u64)
+                .collect();
+            // Draw ranges per material (chunks of a material are contiguous and sorted).
+            let mut per_material: Vec<(u32, Vec<(u32, u32)>)> = Vec::new();
+            let mut start = 0;
+            while start < visible.len() {
+                let material = chunks[visible[start] as usize].material;
+                let mut end = start;
+                while end < visible.len() && chunks[visible[end] as usize].material == material {
+                    end += 1;
+                }
+                merge_draw_ranges(chunks, visible[start..end].iter().copied(), &mut self.draw_ranges);
+                per_material.push((material, self.draw_ranges.clone()));
+                start = end;
+            }
+            let t = &self.targets;
+            let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
+            let attachment = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: clear(wgpu::Color::TRANSPARENT),
+                })
+            };
+            let scene = &self.scene;
+            let pipeline = &self.gbuffer_pipeline;
+            let camera_bg = &self.camera_bind_group;
+            self.timer.render_pass(
+                &mut encoder,
+                "gbuffer",
+                wgpu::RenderPassDescriptor {
+                    label: None,
+                    color_attachments: &[attachment(&t.albedo), attachment(&t.normal), attachment(&t.emissive)],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &t.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+                |pass| {
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, camera_bg, &[]);
+                    pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+                    pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                    for (material, ranges) in &per_material {
+                        pass.set_bind_group(1, &scene.material_bind_groups[*material as usize], &[]);
+                        for &(first, count) in ranges {
+                            pass.draw_indexed(first..first + count, 0, 0..1);
+                        }
+                    }
+                },
+            );
+            let pipeline = &self.ambient_pipeline;
+            let screen = &self.screen_bind_group;
+            self.timer.render_pass(
+                &mut encoder,
+                "ambient",
+                wgpu::RenderPassDescriptor {
+                    label: None,
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &t.hdr,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: clear(wgpu::Color::BLACK),
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                },
+                |pass| {
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, screen, &[]);
+                    pass.draw(0..3, 0..1);
+                },
+            );
+        }
+        self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
+
+        let steps_total = {
+            let ctx = self.context(camera, lights);
+            technique.prepare(&ctx)?
+        };
+        Ok(FrameJob {
+            steps_total,
+            steps_done: 0,
+            started,
+            camera: *camera,
+            lights: lights.to_vec(),
+            gbuffer_triangles,
+        })
+    }
+
+    /// Run up to `max_steps` steps of the technique. Returns true when all steps are done.
+    pub fn advance(
+        &mut self,
+        job: &mut FrameJob,
+        technique: &mut dyn Technique,
+        max_steps: usize,
+    ) -> Result<bool, GpuError> {
+        let mut n = 0;
+        while !job.is_done() && n < max_steps {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            {
+                let ctx = self.context(&job.camera, &job.lights);
+                technique.encode_step(&ctx, job.steps_done, &mut encoder)?;
+            }
+            self.timer.submit(&self.gpu, encoder, technique.step_label())?;
+            job.steps_done += 1;
+            n += 1;
+        }
+        Ok(job.is_done())
+    }
+
+    /// Tone-map whatever has been accumulated (also of an unfinished job, for progressive display) and, when
+    /// the job is done, collect the frame's timings.
+    pub fn finish_frame(&mut self, job: FrameJob, technique: &dyn Technique) -> Result<FrameReport, GpuError> {
+        self.tonemap()?;
+        let passes = self.timer.finish_frame(&self.gpu)?;
+        let gpu_total_ms = passes.iter().map(|p| p.ms).sum();
+        Ok(FrameReport {
+            technique: technique.key().to_string(),
+            width: self.settings.width,
+            height: self.settings.height,
+            timing_source: self.timer.source(),
+            passes,
+            gpu_total_ms,
+            wall_ms: job.started.elapsed().as_secs_f64() * 1000.0,
+            counts: FrameCounts {
+                lights_total: job.lights.len(),
+                scene_triangles: self.scene.triangle_count,
+                gbuffer_triangles: job.gbuffer_triangles,
+                technique: technique.counts(),
+            },
+        })
+    }
+
+    /// Tone-map the HDR target into the output texture.
+    pub fn tonemap(&mut self) -> Result<(), GpuError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let pipeline = &self.tonemap_pipeline;
+        let screen = &self.screen_bind_group;
+        let tonemap_bg = &self.tonemap_bind_group;
+        self.timer.render_pass(
+            &mut encoder,
+            "tonemap",
+            wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.targets.output,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+            |pass| {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, screen, &[]);
+                pass.set_bind_group(1, tonemap_bg, &[]);
+                pass.draw(0..3, 0..1);
+            },
+        );
+        self.timer.submit(&self.gpu, encoder, "tonemap")
+    }
+
+    /// Render a whole frame; `progress(done, total)` is called after each step.
+    pub fn render_frame(
+        &mut self,
+        technique: &mut dyn Technique,
+        camera: &Camera,
+        lights: &[PointLight],
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<FrameReport, GpuError> {
+        let mut job = self.begin_frame(technique, camera, lights)?;
+        progress(0, job.steps_total);
+        while !self.advance(&mut job, technique, 1)? {
+            progress(job.steps_done, job.steps_total);
+        }
+        if job.steps_total > 0 {
+            progress(job.steps_done, job.steps_total);
+        }
+        self.finish_frame(job, technique)
+    }
+
+    /// The tone-mapped output as an sRGB RGBA8 image.
+    pub fn read_output(&self) -> Result<image::RgbaImage, GpuError> {
+        let t = &self.targets;
+        let bytes = readback::read_texture(&self.gpu, &t.output_texture, t.width, t.height, 4)?;
+        image::RgbaImage::from_raw(t.width, t.height, bytes).ok_or_else(|| GpuError::Readback("size mismatch".into()))
+    }
+
+    /// The HDR radiance, linear RGBA, row-major.
+    pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, GpuError> {
+        let t = &self.targets;
+        let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 8)?;
+        Ok(bytes
+            .chunks_exact(8)
+            .map(|p| {
+                let h = |i: usize| readback::f16_to_f32(u16::from_le_bytes([p[i], p[i + 1]]));
+                [h(0), h(2), h(4), h(6)]
+            })
+            .collect())
+    }
+}

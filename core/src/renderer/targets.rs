@@ -1,0 +1,55 @@
+//! Screen-sized render targets: the G-buffer, the HDR accumulation target and the tone-mapped output.
+
+use super::SharedLayouts;
+use crate::gpu::GpuContext;
+
+pub struct FrameTargets {
+    pub width: u32,
+    pub height: u32,
+    pub albedo: wgpu::TextureView,
+    pub normal: wgpu::TextureView,
+    pub emissive: wgpu::TextureView,
+    pub depth: wgpu::TextureView,
+    pub hdr_texture: wgpu::Texture,
+    pub hdr: wgpu::TextureView,
+    /// sRGB output; the app shows it, the CLI saves it.
+    pub output_texture: wgpu::Texture,
+    pub output: wgpu::TextureView,
+}
+
+fn target(gpu: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFormat, copy: bool) -> wgpu::Texture {
+    let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    if copy {
+        usage |= wgpu::TextureUsages::COPY_SRC;
+    }
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+impl FrameTargets {
+    pub fn new(gpu: &GpuContext, width: u32, height: u32) -> FrameTargets {
+        let view = |t: wgpu::Texture| t.create_view(&Default::default());
+        let hdr_texture = target(gpu, "hdr", width, height, SharedLayouts::HDR_FORMAT, true);
+        let output_texture = target(gpu, "output", width, height, SharedLayouts::OUTPUT_FORMAT, true);
+        FrameTargets {
+            width,
+            height,
+            albedo: view(target(gpu, "gbuffer albedo", width, height, SharedLayouts::ALBEDO_FORMAT, false)),
+            normal: view(target(gpu, "gbuffer normal", width, height, SharedLayouts::NORMAL_FORMAT, false)),
+            emissive: view(target(gpu, "gbuffer emissive", width, height, SharedLayouts::EMISSIVE_FORMAT, false)),
+            depth: view(target(gpu, "gbuffer depth", width, height, SharedLayouts::DEPTH_FORMAT, false)),
+            hdr: hdr_texture.create_view(&Default::default()),
+            hdr_texture,
+            output: output_texture.create_view(&Default::default()),
+            output_texture,
+        }
+    }
+}

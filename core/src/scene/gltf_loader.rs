@@ -1,0 +1,660 @@
+//! glTF 2.0 loading with the `gltf` crate.
+//!
+//! The document is parsed and validated by `gltf`; buffers, images and accessor data are read here rather
+//! than with `gltf::import` and the `gltf` reader, because those fail on a single missing image, panic on a
+//! few malformed inputs (bad percent-escapes in URIs, accessor strides smaller than the element, mismatched
+//! accessor types in debug builds) and do not report which part of the file is broken. Every byte range is
+//! bounds-checked here, so a broken file gives a [`LoadError::Gltf`] with the reason.
+//!
+//! Conventions:
+//! - Node transforms are baked into positions and normals (normal matrix = inverse transpose); nodes with a
+//!   mirroring transform (negative determinant) get their triangle winding flipped so front faces stay front.
+//! - `unit_scale` multiplies world positions, light positions and ranges, and the camera's clip planes.
+//! - Base colour factor and emissive are linear; the base colour texture is sRGB. Materials are Lambertian
+//!   (metallic/roughness are ignored).
+//! - `KHR_lights_punctual` point lights keep their colour and intensity (candela) as given; a light without a
+//!   `range` gets the diagonal of the scene bounds as its range, so it reaches the whole scene while the
+//!   renderer's windowed falloff still ends at a finite distance. Spot and directional lights are skipped
+//!   with a warning.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::mesh::{Mode, Semantic};
+
+use super::texture::{decode_parallel, decode_texture_bytes, find_file_case_insensitive, load_texture};
+use super::{Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource, TextureImage};
+use crate::error::LoadError;
+
+/// Required extensions that change how geometry is stored; without support the meshes would be garbage.
+const UNSUPPORTED_GEOMETRY_EXTENSIONS: &[&str] = &["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
+
+/// Load a `.gltf` (external or embedded buffers) or `.glb` file: every mesh of the default scene with its node
+/// transform baked, base colour factor/texture, emissive, and `KHR_lights_punctual` point lights.
+pub fn load_gltf(path: &Path, unit_scale: f32) -> Result<Scene, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => LoadError::NotFound { path: path.to_path_buf() },
+        _ => LoadError::Io { path: path.to_path_buf(), source },
+    })?;
+    // The reading below is bounds-checked, but the `gltf` crate's document accessors still `unwrap` in places
+    // that rely on its validation; a file that slips through must not take the program down.
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| load_from_bytes(path, &bytes, unit_scale))) {
+        Ok(result) => result,
+        Err(panic) => {
+            let detail = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown error");
+            Err(LoadError::Gltf { path: path.to_path_buf(), reason: format!("malformed data ({detail})") })
+        }
+    }
+}
+
+fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, LoadError> {
+    let error = |reason: String| LoadError::Gltf { path: path.to_path_buf(), reason };
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(error("the file is empty".into()));
+    }
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
+    for ext in document.extensions_required() {
+        if UNSUPPORTED_GEOMETRY_EXTENSIONS.contains(&ext) {
+            return Err(error(format!("the file requires the unsupported extension {ext}")));
+        }
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let buffers = load_buffers(&document, dir, blob).map_err(error)?;
+
+    let mut loader = Loader {
+        document: &document,
+        buffers: &buffers,
+        dir,
+        unit_scale,
+        scene: Scene {
+            name: path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "gltf".into()),
+            source: SceneSource::File { path: path.to_path_buf(), unit_scale },
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            textures: Vec::new(),
+            lights: Vec::new(),
+            camera: Camera::framing(&Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) }),
+            bounds: Aabb::EMPTY,
+            warnings: Vec::new(),
+        },
+        default_material: None,
+        lights_without_range: Vec::new(),
+        camera: None,
+    };
+    for ext in document.extensions_required() {
+        if !UNSUPPORTED_GEOMETRY_EXTENSIONS.contains(&ext) && !loader.understands(ext) {
+            loader.warn(format!("the file requires extension {ext}, which is not supported; it is ignored"));
+        }
+    }
+    loader.load_materials();
+    loader.walk_nodes().map_err(error)?;
+
+    // Lights without a range reach across the whole scene (see the module documentation).
+    let bounds = Aabb::from_points(loader.scene.meshes.iter().flat_map(|m| m.positions.iter().copied()));
+    let diagonal = if bounds.is_empty() { 0.0 } else { bounds.size().length() };
+    let default_range = if diagonal.is_finite() && diagonal > 0.0 { diagonal } else { 1.0 };
+    for &i in &loader.lights_without_range {
+        loader.scene.lights[i].range = default_range;
+    }
+
+    let Loader { mut scene, camera, .. } = loader;
+    scene.finalize(path)?;
+    scene.camera = camera
+        .map(|c| c.complete(&scene.bounds))
+        .filter(Camera::is_valid)
+        .unwrap_or_else(|| Camera::framing(&scene.bounds));
+    Ok(scene)
+}
+
+/// A perspective camera found in the node tree; `z_far` is `None` for an infinite projection.
+struct FileCamera {
+    world: Mat4,
+    fov_y: f32,
+    near: f32,
+    z_far: Option<f32>,
+}
+
+impl FileCamera {
+    fn complete(&self, bounds: &Aabb) -> Camera {
+        let (_, orientation, position) = self.world.to_scale_rotation_translation();
+        // An infinite far plane is replaced by one just past the farthest corner of the scene.
+        let z_far = self.z_far.unwrap_or_else(|| {
+            let farthest = (bounds.center() - position).length() + bounds.size().length() * 0.5;
+            farthest * 1.5
+        });
+        Camera { position, orientation: orientation.normalize(), fov_y: self.fov_y, near: self.near, z_far }
+    }
+}
+
+struct Loader<'a> {
+    document: &'a gltf::Document,
+    buffers: &'a [Vec<u8>],
+    dir: &'a Path,
+    unit_scale: f32,
+    scene: Scene,
+    /// Index of the default material in `scene.materials`, added when a primitive has no material.
+    default_material: Option<usize>,
+    /// Indices into `scene.lights` of lights whose file gives no range.
+    lights_without_range: Vec<usize>,
+    camera: Option<FileCamera>,
+}
+
+impl Loader<'_> {
+    fn warn(&mut self, message: String) {
+        log::warn!("{message}");
+        self.scene.warnings.push(message);
+    }
+
+    fn understands(&self, extension: &str) -> bool {
+        matches!(
+            extension,
+            "KHR_lights_punctual"
+                | "KHR_materials_emissive_strength"
+                | "KHR_mesh_quantization"
+                | "KHR_texture_transform"
+        )
+    }
+
+    /// One scene material per glTF material, in file order, with their base colour textures.
+    fn load_materials(&mut self) {
+        // Decode each image used as a base colour texture once, in parallel.
+        let mut images: Vec<usize> = Vec::new();
+        for material in self.document.materials() {
+            if let Some(info) = material.pbr_metallic_roughness().base_color_texture() {
+                let image = info.texture().source().index();
+                if !images.contains(&image) {
+                    images.push(image);
+                }
+            }
+        }
+        let sources: Vec<ImageSource> = images.iter().map(|&i| self.image_source(i)).collect();
+        let dir = self.dir;
+        let decoded = decode_parallel(&sources, |source| source.load(dir));
+        let mut texture_of_image: HashMap<usize, usize> = HashMap::new();
+        for (&image, result) in images.iter().zip(decoded) {
+            match result {
+                Ok(texture) => {
+                    self.scene.textures.push(texture);
+                    texture_of_image.insert(image, self.scene.textures.len() - 1);
+                }
+                Err(e) => self.warn(format!("image {image}: {e}; the material is used without its texture")),
+            }
+        }
+
+        for material in self.document.materials() {
+            let pbr = material.pbr_metallic_roughness();
+            let texture =
+                pbr.base_color_texture().and_then(|info| texture_of_image.get(&info.texture().source().index()));
+            let strength = material.emissive_strength().unwrap_or(1.0);
+            self.scene.materials.push(Material {
+                name: material
+                    .name()
+                    .map(str::to_string)
+                    .unwrap_or_else(|| format!("material_{}", self.scene.materials.len())),
+                base_color: Vec4::from(pbr.base_color_factor()).max(Vec4::ZERO),
+                base_color_texture: texture.copied(),
+                emissive: (Vec3::from(material.emissive_factor()) * strength).max(Vec3::ZERO),
+                specular: Vec3::ZERO,
+                shininess: Material::default().shininess,
+            });
+        }
+    }
+
+    /// Where image `index` comes from, resolved up front so decoding can run on other threads.
+    fn image_source(&self, index: usize) -> ImageSource {
+        let json = &self.document.as_json().images[index];
+        let name = json.name.clone().or_else(|| json.uri.clone()).unwrap_or_else(|| format!("image_{index}"));
+        if let Some(uri) = &json.uri {
+            return ImageSource::Uri { name, uri: uri.clone() };
+        }
+        let bytes = json
+            .buffer_view
+            .and_then(|view| self.document.views().nth(view.value()))
+            .ok_or_else(|| "the image has neither a URI nor a buffer view".to_string())
+            .and_then(|view| view_bytes(&view, self.buffers).map(<[u8]>::to_vec));
+        ImageSource::Embedded { name, bytes }
+    }
+
+    /// Walk the default scene (or the first one, or all root nodes when the file has no scene).
+    fn walk_nodes(&mut self) -> Result<(), String> {
+        let document = self.document;
+        let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                let mut is_child = vec![false; document.nodes().len()];
+                for node in document.nodes() {
+                    for child in node.children() {
+                        is_child[child.index()] = true;
+                    }
+                }
+                document.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut visited = vec![false; document.nodes().len()];
+        // Depth-first with an explicit stack: node trees from files can be deep (or, when broken, cyclic).
+        let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut visited[node.index()], true) {
+                self.warn(format!("node {} is reached twice (a cycle or shared child); skipped", node.index()));
+                continue;
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if let Some(mesh) = node.mesh() {
+                self.add_mesh(&node, &mesh, world)?;
+            }
+            if let Some(light) = node.light() {
+                self.add_light(&node, &light, world);
+            }
+            if let Some(camera) = node.camera() {
+                if let (None, gltf::camera::Projection::Perspective(p)) = (&self.camera, camera.projection()) {
+                    self.camera = Some(FileCamera {
+                        world: Mat4::from_scale(Vec3::splat(self.unit_scale)) * world,
+                        fov_y: p.yfov(),
+                        near: p.znear() * self.unit_scale,
+                        z_far: p.zfar().map(|f| f * self.unit_scale),
+                    });
+                }
+            }
+            let children: Vec<gltf::Node> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|child| (child, world)));
+        }
+        Ok(())
+    }
+
+    fn add_light(&mut self, node: &gltf::Node, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
+        let name = light.name().or(node.name()).unwrap_or("unnamed").to_string();
+        match light.kind() {
+            gltf::khr_lights_punctual::Kind::Point => {
+                let position = world.transform_point3(Vec3::ZERO) * self.unit_scale;
+                let range = light.range().map(|r| r * self.unit_scale);
+                if range.is_none() {
+                    self.lights_without_range.push(self.scene.lights.len());
+                }
+                let light =
+                    PointLight::new(position, Vec3::from(light.color()), light.intensity(), range.unwrap_or(0.0));
+                self.scene.lights.push(light);
+            }
+            gltf::khr_lights_punctual::Kind::Spot { .. } => {
+                self.warn(format!("spot light '{name}' skipped (only point lights are supported)"));
+            }
+            gltf::khr_lights_punctual::Kind::Directional => {
+                self.warn(format!("directional light '{name}' skipped (only point lights are supported)"));
+            }
+        }
+    }
+
+    fn add_mesh(&mut self, node: &gltf::Node, mesh: &gltf::Mesh, world: Mat4) -> Result<(), String> {
+        let mesh_name =
+            mesh.name().or(node.name()).map(str::to_string).unwrap_or_else(|| format!("mesh_{}", mesh.index()));
+        let to_world = Mat4::from_scale(Vec3::splat(self.unit_scale)) * world;
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
+        for primitive in mesh.primitives() {
+            let label = format!("mesh '{mesh_name}' primitive {}", primitive.index());
+            if primitive.mode() != Mode::Triangles {
+                self.warn(format!("{label}: skipped {:?} primitive (only TRIANGLES are supported)", primitive.mode()));
+                continue;
+            }
+            let Some(position_accessor) = primitive.get(&Semantic::Positions) else {
+                self.warn(format!("{label}: skipped (no POSITION attribute)"));
+                continue;
+            };
+            let positions =
+                read_vec3(&position_accessor, self.buffers).map_err(|e| format!("{label}, POSITION: {e}"))?;
+            let vertex_count = positions.len();
+
+            let mut normals = match primitive.get(&Semantic::Normals) {
+                Some(accessor) => read_vec3(&accessor, self.buffers).map_err(|e| format!("{label}, NORMAL: {e}"))?,
+                None => Vec::new(),
+            };
+            if !normals.is_empty() && normals.len() != vertex_count {
+                self.warn(format!("{label}: NORMAL count differs from POSITION count; normals regenerated"));
+                normals.clear();
+            }
+
+            let material = primitive.material();
+            let uv_set = material.pbr_metallic_roughness().base_color_texture().map_or(0, |info| info.tex_coord());
+            let mut uvs = match primitive.get(&Semantic::TexCoords(uv_set)) {
+                Some(accessor) => {
+                    read_vec2(&accessor, self.buffers).map_err(|e| format!("{label}, TEXCOORD_{uv_set}: {e}"))?
+                }
+                None => Vec::new(),
+            };
+            if !uvs.is_empty() && uvs.len() != vertex_count {
+                self.warn(format!("{label}: TEXCOORD_{uv_set} count differs from POSITION count; ignored"));
+                uvs.clear();
+            }
+
+            let mut indices = match primitive.indices() {
+                Some(accessor) => {
+                    read_indices(&accessor, self.buffers).map_err(|e| format!("{label}, indices: {e}"))?
+                }
+                None => (0..vertex_count as u32).collect(),
+            };
+            if indices.len() % 3 != 0 {
+                self.warn(format!(
+                    "{label}: index count {} is not a multiple of 3; extra indices dropped",
+                    indices.len()
+                ));
+                indices.truncate(indices.len() / 3 * 3);
+            }
+            if mirrored {
+                for tri in indices.chunks_exact_mut(3) {
+                    tri.swap(1, 2);
+                }
+            }
+
+            let material = match material.index() {
+                Some(i) if i < self.document.materials().len() => i,
+                _ => *self.default_material.get_or_insert_with(|| {
+                    self.scene.materials.push(Material::default());
+                    self.scene.materials.len() - 1
+                }),
+            };
+            self.scene.meshes.push(Mesh {
+                name: format!("{mesh_name}#{}", primitive.index()),
+                positions: positions.into_iter().map(|p| to_world.transform_point3(p)).collect(),
+                // A singular transform gives NaN normals, which `Scene::finalize` regenerates from the geometry.
+                normals: normals.into_iter().map(|n| (normal_matrix * n).normalize()).collect(),
+                uvs,
+                indices,
+                material,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// An image to decode: a file or data URI, or bytes embedded in a buffer view (`.glb`).
+enum ImageSource {
+    Uri { name: String, uri: String },
+    Embedded { name: String, bytes: Result<Vec<u8>, String> },
+}
+
+impl ImageSource {
+    fn load(&self, dir: &Path) -> Result<TextureImage, String> {
+        match self {
+            ImageSource::Embedded { name, bytes } => decode_texture_bytes(name, bytes.as_ref().map_err(Clone::clone)?),
+            ImageSource::Uri { name, uri } => match read_uri(dir, uri)? {
+                UriData::Bytes(bytes) => decode_texture_bytes(name, &bytes),
+                UriData::File(file) => load_texture(&file),
+                UriData::Missing(wanted) => Err(format!("missing texture '{wanted}' (looked in {})", dir.display())),
+            },
+        }
+    }
+}
+
+/// What a URI points at.
+enum UriData {
+    /// Data decoded from a `data:` URI.
+    Bytes(Vec<u8>),
+    /// An existing file.
+    File(PathBuf),
+    /// A relative path with no file behind it (the decoded path).
+    Missing(String),
+}
+
+fn read_uri(dir: &Path, uri: &str) -> Result<UriData, String> {
+    if let Some(data) = uri.strip_prefix("data:") {
+        return decode_data_uri(data).map(UriData::Bytes);
+    }
+    let relative = if let Some(file) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+        file
+    } else if uri.split('/').next().is_some_and(|first| first.contains(':')) {
+        return Err(format!("unsupported URI '{}'", shorten(uri)));
+    } else {
+        uri
+    };
+    let relative = percent_decode(relative);
+    Ok(match find_file_case_insensitive(dir, &relative) {
+        Some(file) => UriData::File(file),
+        None => UriData::Missing(relative),
+    })
+}
+
+/// Load every buffer: the GLB binary chunk, data URIs or files next to the glTF. A missing or short buffer is
+/// an error: the meshes cannot be read without it.
+fn load_buffers(document: &gltf::Document, dir: &Path, mut blob: Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, String> {
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let i = buffer.index();
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => {
+                blob.take().ok_or_else(|| format!("buffer {i} refers to the GLB binary chunk, but there is none"))?
+            }
+            gltf::buffer::Source::Uri(uri) => match read_uri(dir, uri).map_err(|e| format!("buffer {i}: {e}"))? {
+                UriData::Bytes(bytes) => bytes,
+                UriData::File(file) => {
+                    std::fs::read(&file).map_err(|e| format!("buffer {i}: cannot read {}: {e}", file.display()))?
+                }
+                UriData::Missing(wanted) => {
+                    return Err(format!("buffer {i}: file '{wanted}' not found in {}", dir.display()));
+                }
+            },
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "buffer {i} is truncated: it has {} bytes, the file declares {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        buffers.push(data);
+    }
+    Ok(buffers)
+}
+
+/// The bytes of a buffer view, checked against its buffer.
+fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&'b [u8], String> {
+    let buffer =
+        buffers.get(view.buffer().index()).ok_or_else(|| format!("buffer view {} has no buffer", view.index()))?;
+    let start = view.offset();
+    let end = start.checked_add(view.length()).unwrap_or(usize::MAX);
+    buffer.get(start..end).ok_or_else(|| {
+        format!(
+            "buffer view {} (bytes {start}..{end}) lies outside buffer {} ({} bytes)",
+            view.index(),
+            view.buffer().index(),
+            buffer.len()
+        )
+    })
+}
+
+/// The elements of an accessor packed tightly (`count * element size` bytes), sparse substitutions applied.
+fn accessor_bytes(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u8>, String> {
+    let element = accessor.size();
+    let count = accessor.count();
+    let total = count.checked_mul(element).filter(|&t| t <= u32::MAX as usize).ok_or("the accessor is too large")?;
+    let mut out = vec![0u8; total];
+    if let Some(view) = accessor.view() {
+        let data = view_bytes(&view, buffers)?;
+        let stride = view.stride().unwrap_or(element);
+        if stride < element {
+            return Err(format!("byte stride {stride} is smaller than the element size {element}"));
+        }
+        let start = accessor.offset();
+        if count > 0 {
+            let end = (count - 1).checked_mul(stride).and_then(|e| e.checked_add(start + element));
+            if end.is_none_or(|end| end > data.len()) {
+                return Err(format!(
+                    "accessor {} reads past the end of buffer view {} ({} bytes)",
+                    accessor.index(),
+                    view.index(),
+                    data.len()
+                ));
+            }
+        }
+        for (i, dst) in out.chunks_exact_mut(element).enumerate() {
+            let src = start + i * stride;
+            dst.copy_from_slice(&data[src..src + element]);
+        }
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let n = sparse.count();
+        let index_size = match sparse.indices().index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let range = |offset: usize, len: usize| offset..offset.saturating_add(len);
+        let index_view = view_bytes(&sparse.indices().view(), buffers)?;
+        let index_bytes = index_view
+            .get(range(sparse.indices().offset(), n.saturating_mul(index_size)))
+            .ok_or("sparse indices lie outside their buffer view")?;
+        let value_view = view_bytes(&sparse.values().view(), buffers)?;
+        let value_bytes = value_view
+            .get(range(sparse.values().offset(), n.saturating_mul(element)))
+            .ok_or("sparse values lie outside their buffer view")?;
+        for (k, value) in value_bytes.chunks_exact(element.max(1)).enumerate().take(n) {
+            let target = read_uint(&index_bytes[k * index_size..(k + 1) * index_size]) as usize;
+            if target >= count {
+                return Err(format!("sparse index {target} is out of range (count {count})"));
+            }
+            out[target * element..(target + 1) * element].copy_from_slice(value);
+        }
+    }
+    Ok(out)
+}
+
+/// A little-endian unsigned integer of 1, 2 or 4 bytes.
+fn read_uint(bytes: &[u8]) -> u32 {
+    bytes.iter().rev().fold(0u32, |acc, &b| (acc << 8) | b as u32)
+}
+
+/// Accessor components as f32, normalised integers mapped to [0, 1] or [-1, 1] as the glTF spec says.
+fn read_floats(accessor: &gltf::Accessor, buffers: &[Vec<u8>], dimensions: Dimensions) -> Result<Vec<f32>, String> {
+    if accessor.dimensions() != dimensions {
+        return Err(format!("expected a {dimensions:?} accessor, found {:?}", accessor.dimensions()));
+    }
+    let bytes = accessor_bytes(accessor, buffers)?;
+    let normalized = accessor.normalized();
+    let scale = |v: f32, max: f32| if normalized { (v / max).max(-1.0) } else { v };
+    Ok(match accessor.data_type() {
+        DataType::F32 => bytes.chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect(),
+        DataType::U8 => bytes.iter().map(|&b| scale(b as f32, 255.0)).collect(),
+        DataType::I8 => bytes.iter().map(|&b| scale(b as i8 as f32, 127.0)).collect(),
+        DataType::U16 => {
+            bytes.chunks_exact(2).map(|b| scale(u16::from_le_bytes([b[0], b[1]]) as f32, 65535.0)).collect()
+        }
+        DataType::I16 => {
+            bytes.chunks_exact(2).map(|b| scale(i16::from_le_bytes([b[0], b[1]]) as f32, 32767.0)).collect()
+        }
+        DataType::U32 => bytes.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32).collect(),
+    })
+}
+
+fn read_vec3(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec3>, String> {
+    Ok(read_floats(accessor, buffers, Dimensions::Vec3)?.chunks_exact(3).map(Vec3::from_slice).collect())
+}
+
+fn read_vec2(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<Vec2>, String> {
+    Ok(read_floats(accessor, buffers, Dimensions::Vec2)?.chunks_exact(2).map(Vec2::from_slice).collect())
+}
+
+fn read_indices(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<u32>, String> {
+    if accessor.dimensions() != Dimensions::Scalar {
+        return Err(format!("expected a scalar accessor, found {:?}", accessor.dimensions()));
+    }
+    let size = match accessor.data_type() {
+        DataType::U8 => 1,
+        DataType::U16 => 2,
+        DataType::U32 => 4,
+        other => return Err(format!("indices must be unsigned integers, found {other:?}")),
+    };
+    Ok(accessor_bytes(accessor, buffers)?.chunks_exact(size).map(read_uint).collect())
+}
+
+/// Decode the part after `data:`: `[<media type>][;base64],<data>`.
+fn decode_data_uri(data: &str) -> Result<Vec<u8>, String> {
+    let (header, payload) = data.split_once(',').ok_or("malformed data URI (no ',')")?;
+    if header.ends_with(";base64") {
+        decode_base64(payload)
+    } else {
+        Ok(percent_decode_bytes(payload))
+    }
+}
+
+/// Standard or URL-safe base64, padding optional, whitespace ignored.
+fn decode_base64(text: &str) -> Result<Vec<u8>, String> {
+    let mut out = Vec::with_capacity(text.len() / 4 * 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for (i, c) in text.bytes().enumerate() {
+        let value = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            b'=' => break,
+            b' ' | b'\t' | b'\r' | b'\n' => continue,
+            _ => return Err(format!("invalid base64 data (character {i})")),
+        };
+        acc = (acc << 6) | value as u32;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Ok(out)
+}
+
+fn percent_decode_bytes(text: &str) -> Vec<u8> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        if bytes[i] == b'%' && i + 2 < bytes.len() {
+            if let (Some(h), Some(l)) = (hex(bytes[i + 1]), hex(bytes[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(bytes[i]);
+        i += 1;
+    }
+    out
+}
+
+/// URIs are percent-encoded (`my%20texture.png`); invalid escapes are kept as written.
+fn percent_decode(text: &str) -> String {
+    String::from_utf8_lossy(&percent_decode_bytes(text)).into_owned()
+}
+
+fn shorten(text: &str) -> String {
+    if text.chars().count() > 60 {
+        format!("{}...", text.chars().take(60).collect::<String>())
+    } else {
+        text.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_trip() {
+        assert_eq!(decode_base64("aGVsbG8gd29ybGQ=").unwrap(), b"hello world");
+        assert_eq!(decode_base64("aGVsbG8gd29ybGQ").unwrap(), b"hello world");
+        assert_eq!(decode_base64("AAEC\n/w==").unwrap(), [0, 1, 2, 255]);
+        assert!(decode_base64("a*b").is_err());
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("my%20tex.png"), "my tex.png");
+        assert_eq!(percent_decode("100%"), "100%");
+        assert_eq!(percent_decode("%zz%4"), "%zz%4");
+        assert_eq!(percent_decode("%FF"), "\u{FFFD}");
+    }
+}

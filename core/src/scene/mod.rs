@@ -1,0 +1,369 @@
+//! The scene model: meshes in world space, materials, textures, point lights, a camera and bounds.
+//!
+//! Every loader (OBJ, glTF, built-in generators) produces a [`Scene`]; the renderer only ever sees this.
+//! All positions are in world space (node transforms are baked at load) and in metres after the unit scale.
+
+pub mod builtin;
+pub mod chunks;
+pub mod gltf_loader;
+pub mod layout;
+pub mod obj_loader;
+pub mod texture;
+
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use serde::{Deserialize, Serialize};
+
+use crate::error::LoadError;
+
+/// Where a scene came from, so a scene file can re-create it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum SceneSource {
+    Builtin(String),
+    File { path: PathBuf, unit_scale: f32 },
+}
+
+/// An axis-aligned box. `Aabb::EMPTY` grows with [`Aabb::extend`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for p in points {
+            b.extend(p);
+        }
+        b
+    }
+    pub fn extend(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn size(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.length_squared()
+    }
+    pub fn intersects_sphere(&self, center: Vec3, radius: f32) -> bool {
+        self.distance_squared(center) <= radius * radius
+    }
+}
+
+/// A triangle mesh in world space. `normals` and `uvs` have one entry per position.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Triangle list.
+    pub indices: Vec<u32>,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Area-weighted smooth vertex normals, used when a file has none.
+    pub fn generate_normals(&mut self) {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for tri in self.indices.chunks_exact(3) {
+            let [a, b, c] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+            let n = (self.positions[b] - self.positions[a]).cross(self.positions[c] - self.positions[a]);
+            normals[a] += n;
+            normals[b] += n;
+            normals[c] += n;
+        }
+        self.normals = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
+    }
+}
+
+/// A material: base colour (linear RGBA factor times an optional sRGB texture) and emission (linear RGB).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub base_color: Vec4,
+    /// Index into [`Scene::textures`].
+    pub base_color_texture: Option<usize>,
+    pub emissive: Vec3,
+    /// Blinn-Phong specular colour (linear) and exponent; zero specular means pure Lambert.
+    pub specular: Vec3,
+    pub shininess: f32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: "default".into(),
+            base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+            base_color_texture: None,
+            emissive: Vec3::ZERO,
+            specular: Vec3::ZERO,
+            shininess: 32.0,
+        }
+    }
+}
+
+/// A decoded texture: RGBA8, sRGB encoded.
+#[derive(Clone, Debug)]
+pub struct TextureImage {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+/// An omnidirectional point light. Radiance falls off smoothly to zero at `range` (the papers' `L_att`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointLight {
+    pub position: Vec3,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    pub intensity: f32,
+    /// Attenuation range `L_att` in world units: the light contributes nothing beyond it.
+    pub range: f32,
+}
+
+impl PointLight {
+    pub fn new(position: Vec3, color: Vec3, intensity: f32, range: f32) -> Self {
+        PointLight { position, color, intensity, range }
+    }
+    /// True when every field is finite and range/intensity are usable.
+    pub fn is_valid(&self) -> bool {
+        self.position.is_finite()
+            && self.color.is_finite()
+            && self.intensity.is_finite()
+            && self.range.is_finite()
+            && self.range > 0.0
+            && self.intensity >= 0.0
+            && self.color.min_element() >= 0.0
+    }
+}
+
+/// The light falloff, shared by the shaders (`common.wgsl: attenuation`) and the tests:
+/// a windowed inverse square, `saturate(1 - (d/L_att)^4)^2 / (1 + d^2)`, which is exactly zero at `L_att`.
+pub fn attenuation(distance: f32, range: f32) -> f32 {
+    if distance >= range {
+        return 0.0;
+    }
+    let r = distance / range;
+    let window = (1.0 - r * r * r * r).clamp(0.0, 1.0);
+    window * window / (1.0 + distance * distance)
+}
+
+/// A perspective camera. `orientation` rotates the camera's local axes (looking down -Z, +Y up) into world.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Camera {
+    pub position: Vec3,
+    pub orientation: Quat,
+    /// Vertical field of view in radians.
+    pub fov_y: f32,
+    pub near: f32,
+    /// Far plane; also the `z_far` of LightCluster's view-adaptive clustering.
+    pub z_far: f32,
+}
+
+impl Camera {
+    pub fn look_at(position: Vec3, target: Vec3, fov_y: f32, near: f32, z_far: f32) -> Camera {
+        let forward = (target - position).try_normalize().unwrap_or(Vec3::NEG_Z);
+        // A view matrix looking at target, inverted, gives the camera's world orientation.
+        let up = if forward.abs().dot(Vec3::Y) > 0.999 { Vec3::Z } else { Vec3::Y };
+        let view = crate::math::look_to_rh(position, forward, up);
+        let (_, rot, _) = view.inverse().to_scale_rotation_translation();
+        Camera { position, orientation: rot, fov_y, near, z_far }
+    }
+    pub fn forward(&self) -> Vec3 {
+        self.orientation * Vec3::NEG_Z
+    }
+    pub fn up(&self) -> Vec3 {
+        self.orientation * Vec3::Y
+    }
+    pub fn right(&self) -> Vec3 {
+        self.orientation * Vec3::X
+    }
+    pub fn view_from_world(&self) -> Mat4 {
+        crate::math::look_to_rh(self.position, self.forward(), self.up())
+    }
+    /// Right-handed perspective with wgpu's 0..1 depth range.
+    pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
+        crate::math::perspective_rh(self.fov_y, aspect, self.near, self.z_far)
+    }
+    pub fn clip_from_world(&self, aspect: f32) -> Mat4 {
+        self.clip_from_view(aspect) * self.view_from_world()
+    }
+    /// A camera that sees all of `bounds` from the front (+Z side), slightly above.
+    pub fn framing(bounds: &Aabb) -> Camera {
+        let c = bounds.center();
+        let radius = (bounds.size().length() * 0.5).max(1e-3);
+        let fov_y = 50f32.to_radians();
+        let dist = radius / (fov_y * 0.5).tan();
+        let pos = c + Vec3::new(0.0, radius * 0.25, dist);
+        Camera::look_at(pos, c, fov_y, (dist - radius).max(dist * 1e-3).max(1e-3) * 0.05, dist + radius * 2.0)
+    }
+    pub fn is_valid(&self) -> bool {
+        self.position.is_finite()
+            && self.orientation.is_finite()
+            && self.fov_y.is_finite()
+            && self.fov_y > 0.0
+            && self.fov_y < std::f32::consts::PI
+            && self.near > 0.0
+            && self.z_far > self.near
+            && self.z_far.is_finite()
+    }
+}
+
+/// A loaded scene, ready for the renderer.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub source: SceneSource,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureImage>,
+    pub lights: Vec<PointLight>,
+    pub camera: Camera,
+    pub bounds: Aabb,
+    /// Recoverable problems met while loading (missing MTL, missing texture, ...), for the user to see.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(Mesh::triangle_count).sum()
+    }
+
+    /// Recompute `bounds` from the meshes.
+    pub fn update_bounds(&mut self) {
+        let mut b = Aabb::EMPTY;
+        for m in &self.meshes {
+            for &p in &m.positions {
+                b.extend(p);
+            }
+        }
+        if b.is_empty() {
+            b = Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) };
+        }
+        self.bounds = b;
+    }
+
+    /// Load a scene file by extension (`.obj`, `.gltf`, `.glb`), multiplying positions by `unit_scale`
+    /// (the conference room is in centimetres: 0.01 gives metres). The camera frames the scene; lights come
+    /// from the file when it has any (glTF `KHR_lights_punctual`).
+    pub fn load(path: &Path, unit_scale: f32) -> Result<Scene, LoadError> {
+        if !(unit_scale.is_finite() && unit_scale > 0.0) {
+            return Err(LoadError::InvalidScale { scale: unit_scale });
+        }
+        if !path.exists() {
+            return Err(LoadError::NotFound { path: path.to_path_buf() });
+        }
+        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("obj") => obj_loader::load_obj(path, unit_scale),
+            Some("gltf") | Some("glb") => gltf_loader::load_gltf(path, unit_scale),
+            _ => Err(LoadError::UnsupportedFormat { path: path.to_path_buf() }),
+        }
+    }
+
+    /// A built-in scene by name (`cornell`, `arcade`, `restaurant`).
+    pub fn builtin(name: &str) -> Result<Scene, LoadError> {
+        builtin::build(name)
+    }
+
+    /// `name` is a built-in scene name or a path to a file.
+    pub fn load_any(name_or_path: &str, unit_scale: f32) -> Result<Scene, LoadError> {
+        if builtin::NAMES.contains(&name_or_path) {
+            if unit_scale != 1.0 {
+                log::warn!("--scale is ignored for built-in scenes");
+            }
+            return Scene::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() && path.extension().is_none() {
+            return Err(LoadError::UnknownBuiltin {
+                name: name_or_path.to_string(),
+                choices: builtin::NAMES.join(", "),
+            });
+        }
+        Scene::load(path, unit_scale)
+    }
+
+    /// Finish a freshly loaded scene: drop degenerate/NaN triangles, generate missing normals, compute bounds.
+    /// Loaders call this last. Returns an error when no triangle is left.
+    pub fn finalize(&mut self, path_for_errors: &Path) -> Result<(), LoadError> {
+        let material_count = self.materials.len();
+        for mesh in &mut self.meshes {
+            let n = mesh.positions.len();
+            if mesh.material >= material_count {
+                mesh.material = 0;
+            }
+            // Drop triangles with out-of-range indices or non-finite positions.
+            let before = mesh.indices.len() / 3;
+            let positions = &mesh.positions;
+            let kept: Vec<u32> = mesh
+                .indices
+                .chunks_exact(3)
+                .filter(|t| t.iter().all(|&i| (i as usize) < n && positions[i as usize].is_finite()))
+                .flatten()
+                .copied()
+                .collect();
+            if kept.len() / 3 != before {
+                self.warnings.push(format!(
+                    "mesh '{}': dropped {} triangles with invalid indices or non-finite positions",
+                    mesh.name,
+                    before - kept.len() / 3
+                ));
+            }
+            mesh.indices = kept;
+            if mesh.uvs.len() != n {
+                mesh.uvs = vec![Vec2::ZERO; n];
+            }
+            let normals_ok = mesh.normals.len() == n && mesh.normals.iter().all(|v| v.is_finite());
+            if !normals_ok {
+                mesh.generate_normals();
+            } else {
+                for v in &mut mesh.normals {
+                    *v = v.try_normalize().unwrap_or(Vec3::Y);
+                }
+            }
+            for uv in &mut mesh.uvs {
+                if !uv.is_finite() {
+                    *uv = Vec2::ZERO;
+                }
+            }
+        }
+        self.meshes.retain(|m| !m.indices.is_empty());
+        if self.meshes.is_empty() {
+            return Err(LoadError::InvalidData {
+                path: path_for_errors.to_path_buf(),
+                reason: "the file contains no triangles".into(),
+            });
+        }
+        if self.materials.is_empty() {
+            self.materials.push(Material::default());
+        }
+        self.lights.retain(PointLight::is_valid);
+        self.update_bounds();
+        Ok(())
+    }
+}

@@ -1,0 +1,248 @@
+//! Shadow techniques. Every technique has the same shape, so adding one touches one folder and one line of
+//! [`REGISTRY`]:
+//! - a long-lived struct that owns its pipelines and GPU resources (`new`),
+//! - its parameters, described for the UI and the CLI ([`Technique::params`], [`Technique::set_param`]),
+//! - `prepare`: the CPU work of a frame (culling, clustering, batching), returning how many steps it needs,
+//! - `encode_step`: one function per pass, called once per step; each step is submitted on its own, which
+//!   bounds memory (a reused shadow-map pool) and lets the app spread a slow frame over UI frames,
+//! - its counts for the frame report and its overlays for the 3D view.
+//!
+//! The renderer owns what all techniques share: the G-buffer, the HDR accumulation target (already holding
+//! ambient and emission when steps run), tone mapping and timing.
+
+pub mod reference;
+
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::math::Frustum;
+use crate::renderer::gpu_scene::GpuScene;
+use crate::renderer::SharedLayouts;
+use crate::scene::{Camera, PointLight};
+use crate::timing::PassTimer;
+
+/// Everything a technique may read during a frame.
+pub struct FrameContext<'a> {
+    pub gpu: &'a GpuContext,
+    pub scene: &'a GpuScene,
+    pub layouts: &'a SharedLayouts,
+    /// Group 0 of every full-screen pass: the frame uniform and the G-buffer (see `common.wgsl`).
+    pub screen_bind_group: &'a wgpu::BindGroup,
+    /// HDR radiance target (`SharedLayouts::HDR_FORMAT`); techniques add their lights' radiance into it.
+    pub hdr_view: &'a wgpu::TextureView,
+    pub camera: &'a Camera,
+    pub aspect: f32,
+    pub frustum: Frustum,
+    pub lights: &'a [PointLight],
+    pub timer: &'a PassTimer,
+}
+
+/// What a technique did in a frame, for the frame report.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct TechniqueCounts {
+    /// Lights whose range sphere touches the view frustum.
+    pub lights_visible: usize,
+    pub shadow_maps: usize,
+    /// Steps (batches) the frame was split into.
+    pub batches: usize,
+    pub shadow_triangles_submitted: u64,
+    /// Triangles a shadow map would have drawn without chunk culling, minus those it drew.
+    pub shadow_triangles_culled: u64,
+}
+
+/// A parameter value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ParamValue {
+    Float(f32),
+    Int(i64),
+    Bool(bool),
+    Choice(String),
+}
+
+impl std::fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamValue::Float(v) => write!(f, "{v}"),
+            ParamValue::Int(v) => write!(f, "{v}"),
+            ParamValue::Bool(v) => write!(f, "{v}"),
+            ParamValue::Choice(v) => write!(f, "{v}"),
+        }
+    }
+}
+
+/// The kind and range of a parameter, enough for the UI to build a widget and for the CLI to parse text.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamKind {
+    Float { min: f32, max: f32 },
+    Int { min: i64, max: i64 },
+    Bool,
+    Choice(&'static [&'static str]),
+}
+
+/// A technique parameter with its current value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Param {
+    pub key: &'static str,
+    pub label: &'static str,
+    pub help: &'static str,
+    pub kind: ParamKind,
+    pub value: ParamValue,
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ParamError {
+    #[error("technique '{technique}' has no parameter '{key}' (it has: {known})")]
+    Unknown { technique: String, key: String, known: String },
+    #[error("parameter '{key}': {reason}")]
+    Invalid { key: String, reason: String },
+}
+
+impl ParamKind {
+    /// Parse and range-check text for this kind (`--param key=value` on the command line).
+    pub fn parse(&self, key: &str, text: &str) -> Result<ParamValue, ParamError> {
+        let invalid = |reason: String| ParamError::Invalid { key: key.to_string(), reason };
+        match self {
+            ParamKind::Float { .. } => {
+                let v: f32 = text.trim().parse().map_err(|_| invalid(format!("'{text}' is not a number")))?;
+                self.check(key, &ParamValue::Float(v))?;
+                Ok(ParamValue::Float(v))
+            }
+            ParamKind::Int { .. } => {
+                let v: i64 = text.trim().parse().map_err(|_| invalid(format!("'{text}' is not an integer")))?;
+                self.check(key, &ParamValue::Int(v))?;
+                Ok(ParamValue::Int(v))
+            }
+            ParamKind::Bool => match text.trim() {
+                "true" | "on" | "1" | "yes" => Ok(ParamValue::Bool(true)),
+                "false" | "off" | "0" | "no" => Ok(ParamValue::Bool(false)),
+                _ => Err(invalid(format!("'{text}' is not on/off"))),
+            },
+            ParamKind::Choice(_) => {
+                let v = ParamValue::Choice(text.trim().to_string());
+                self.check(key, &v)?;
+                Ok(v)
+            }
+        }
+    }
+
+    /// Check a value against this kind's type and range.
+    pub fn check(&self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        let invalid = |reason: String| Err(ParamError::Invalid { key: key.to_string(), reason });
+        match (self, value) {
+            (ParamKind::Float { min, max }, ParamValue::Float(v)) => {
+                if !v.is_finite() || v < min || v > max {
+                    return invalid(format!("{v} is outside {min}..={max}"));
+                }
+            }
+            (ParamKind::Int { min, max }, ParamValue::Int(v)) => {
+                if v < min || v > max {
+                    return invalid(format!("{v} is outside {min}..={max}"));
+                }
+            }
+            (ParamKind::Bool, ParamValue::Bool(_)) => {}
+            (ParamKind::Choice(options), ParamValue::Choice(v)) => {
+                if !options.contains(&v.as_str()) {
+                    return invalid(format!("'{v}' is not one of {}", options.join(", ")));
+                }
+            }
+            _ => return invalid(format!("wrong type of value {value}")),
+        }
+        Ok(())
+    }
+}
+
+/// A primitive drawn over the 3D view (by the app), in world space unless noted.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Overlay {
+    /// A dot of `radius_px` screen pixels.
+    Point {
+        position: Vec3,
+        color: [f32; 4],
+        radius_px: f32,
+    },
+    Line {
+        from: Vec3,
+        to: Vec3,
+        color: [f32; 4],
+    },
+    /// A wireframe sphere.
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        color: [f32; 4],
+    },
+    /// The frustum of a camera, given by its clip-from-world matrix.
+    Frustum {
+        clip_from_world: Mat4,
+        color: [f32; 4],
+    },
+}
+
+/// An overlay layer a technique offers; the app toggles layers individually.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverlayLayer {
+    pub name: &'static str,
+    pub visible_by_default: bool,
+    pub primitives: Vec<Overlay>,
+}
+
+pub trait Technique {
+    /// Stable identifier used by the CLI and scene files (`reference`).
+    fn key(&self) -> &'static str;
+    /// Name shown to people.
+    fn label(&self) -> &'static str;
+    fn params(&self) -> Vec<Param>;
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError>;
+    /// CPU work of a frame; returns the number of steps `encode_step` will be called for.
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError>;
+    /// Encode step `step` (0-based, < the count `prepare` returned). The renderer submits after each step, so
+    /// buffers written with `queue.write_buffer` here are seen by this step only.
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError>;
+    /// Label of a step's work when the CPU fallback times whole steps.
+    fn step_label(&self) -> &'static str;
+    fn counts(&self) -> TechniqueCounts;
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
+}
+
+/// Helper for `set_param`: find the parameter, check the value's range, or say what exists.
+pub fn check_param(technique: &str, params: &[Param], key: &str, value: &ParamValue) -> Result<(), ParamError> {
+    match params.iter().find(|p| p.key == key) {
+        Some(p) => p.kind.check(key, value),
+        None => Err(ParamError::Unknown {
+            technique: technique.to_string(),
+            key: key.to_string(),
+            known: params.iter().map(|p| p.key).collect::<Vec<_>>().join(", "),
+        }),
+    }
+}
+
+/// A registered technique: its key, and how to create it on a device.
+pub struct TechniqueEntry {
+    pub key: &'static str,
+    pub label: &'static str,
+    pub create: fn(&GpuContext, &SharedLayouts) -> Box<dyn Technique>,
+}
+
+/// Every technique ShadowLab has. The app's selector and the CLI's `--technique` read this list.
+pub const REGISTRY: &[TechniqueEntry] = &[TechniqueEntry {
+    key: "reference",
+    label: "Reference (cube shadow map per light)",
+    create: |gpu, layouts| Box::new(reference::Reference::new(gpu, layouts)),
+}];
+
+/// Create a technique by key.
+pub fn create(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {
+    REGISTRY.iter().find(|e| e.key == key).map(|e| (e.create)(gpu, layouts))
+}
+
+/// The keys of all techniques, for error messages.
+pub fn keys() -> String {
+    REGISTRY.iter().map(|e| e.key).collect::<Vec<_>>().join(", ")
+}

@@ -1,0 +1,376 @@
+//! Reference: one cube shadow map per light, binary visibility. This is the oracle every other technique is
+//! compared with, and the test oracle of the image tests.
+//!
+//! Per frame:
+//! 1. Cull each light's range sphere (radius `L_att`) against the view frustum; the others contribute nothing.
+//! 2. Split the visible lights into batches of as many cube maps as fit the atlas budget.
+//! 3. Per batch (one step): render the batch's cube maps into the reused atlas (chunk-culled per light and
+//!    per face), then shade every pixel with the batch's lights and add the result into the HDR target.
+//!
+//! Memory is the atlas of one batch plus 32 bytes per visible light, whatever the number of lights.
+
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+use super::{
+    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
+};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer, DEFAULT_ATLAS_BUDGET_BYTES};
+use crate::renderer::gpu_data::GpuLight;
+use crate::renderer::SharedLayouts;
+use crate::scene::PointLight;
+use crate::shaders;
+
+/// Mirrors `Batch` in `reference_shade.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ReferenceBatchUniform {
+    first_light: u32,
+    light_count: u32,
+    resolution: f32,
+    bias_world: f32,
+    normal_offset_texels: f32,
+    tiles_per_row: u32,
+    _pad: [f32; 2],
+}
+const _: () = assert!(std::mem::size_of::<ReferenceBatchUniform>() == 32);
+
+/// The reference's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceParams {
+    /// Texels per cube face.
+    pub shadow_resolution: u32,
+    /// Constant depth bias in world units.
+    pub bias_world: f32,
+    /// Normal offset in shadow-map texels.
+    pub normal_offset_texels: f32,
+    /// Memory for one batch's atlas, in MiB.
+    pub atlas_budget_mib: u32,
+}
+
+impl Default for ReferenceParams {
+    fn default() -> Self {
+        ReferenceParams {
+            shadow_resolution: 1024,
+            bias_world: 0.01,
+            normal_offset_texels: 1.5,
+            atlas_budget_mib: (DEFAULT_ATLAS_BUDGET_BYTES >> 20) as u32,
+        }
+    }
+}
+
+pub struct Reference {
+    pub params: ReferenceParams,
+    cubes: CubeShadowRenderer,
+    pipeline: wgpu::RenderPipeline,
+    group_layout: wgpu::BindGroupLayout,
+    batch_uniform: wgpu::Buffer,
+    lights_buffer: wgpu::Buffer,
+    lights_capacity: usize,
+    bind_group: Option<wgpu::BindGroup>,
+    /// Indices of the visible lights of this frame, in batch order.
+    visible: Vec<usize>,
+    gpu_lights: Vec<GpuLight>,
+    batch_size: usize,
+    counts: TechniqueCounts,
+}
+
+impl Reference {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Reference {
+        let device = &gpu.device;
+        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("reference shade"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Depth,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let module = shaders::create_module(device, "reference_shade", shaders::REFERENCE_SHADE);
+        let pipeline = layouts.fullscreen_pipeline(
+            device,
+            "reference shade",
+            &module,
+            &[&group_layout],
+            SharedLayouts::HDR_FORMAT,
+            true,
+        );
+        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("reference batch"),
+            contents: bytemuck::bytes_of(&ReferenceBatchUniform::zeroed_default()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let lights_capacity = 64;
+        let lights_buffer = Self::create_lights_buffer(device, lights_capacity);
+        Reference {
+            params: ReferenceParams::default(),
+            cubes: CubeShadowRenderer::new(gpu),
+            pipeline,
+            group_layout,
+            batch_uniform,
+            lights_buffer,
+            lights_capacity,
+            bind_group: None,
+            visible: Vec::new(),
+            gpu_lights: Vec::new(),
+            batch_size: 1,
+            counts: TechniqueCounts::default(),
+        }
+    }
+
+    fn create_lights_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reference lights"),
+            size: (capacity * std::mem::size_of::<GpuLight>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// The lights of this frame that passed view-frustum culling (indices into the frame's lights).
+    pub fn visible_lights(&self) -> &[usize] {
+        &self.visible
+    }
+}
+
+impl ReferenceBatchUniform {
+    fn zeroed_default() -> Self {
+        bytemuck::Zeroable::zeroed()
+    }
+}
+
+impl Technique for Reference {
+    fn key(&self) -> &'static str {
+        "reference"
+    }
+
+    fn label(&self) -> &'static str {
+        "Reference"
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let p = &self.params;
+        vec![
+            Param {
+                key: "shadow_res",
+                label: "Cube resolution",
+                help: "Texels per cube-map face",
+                kind: ParamKind::Int { min: 16, max: 4096 },
+                value: ParamValue::Int(p.shadow_resolution as i64),
+            },
+            Param {
+                key: "bias",
+                label: "Depth bias",
+                help: "Constant bias in world units",
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                value: ParamValue::Float(p.bias_world),
+            },
+            Param {
+                key: "normal_offset",
+                label: "Normal offset",
+                help: "Receiver offset along its normal, in shadow-map texels",
+                kind: ParamKind::Float { min: 0.0, max: 16.0 },
+                value: ParamValue::Float(p.normal_offset_texels),
+            },
+            Param {
+                key: "atlas_mib",
+                label: "Batch memory (MiB)",
+                help: "Memory of one batch of cube maps; more lights per batch means fewer passes",
+                kind: ParamKind::Int { min: 1, max: 4096 },
+                value: ParamValue::Int(p.atlas_budget_mib as i64),
+            },
+        ]
+    }
+
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        check_param(self.key(), &self.params(), key, value)?;
+        match (key, value) {
+            ("shadow_res", ParamValue::Int(v)) => self.params.shadow_resolution = *v as u32,
+            ("bias", ParamValue::Float(v)) => self.params.bias_world = *v,
+            ("normal_offset", ParamValue::Float(v)) => self.params.normal_offset_texels = *v,
+            ("atlas_mib", ParamValue::Int(v)) => self.params.atlas_budget_mib = *v as u32,
+            _ => unreachable!("check_param accepted an unknown key"),
+        }
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        // Step 1: view-frustum culling of range spheres.
+        self.visible.clear();
+        self.visible.extend(
+            ctx.lights
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
+                .map(|(i, _)| i),
+        );
+        self.gpu_lights.clear();
+        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
+
+        // Step 2: batches sized to the atlas budget.
+        let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
+        let budget = self.params.atlas_budget_mib as u64 * (1 << 20);
+        self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget);
+        let batches = self.visible.len().div_ceil(self.batch_size);
+        self.counts = TechniqueCounts {
+            lights_visible: self.visible.len(),
+            shadow_maps: 0,
+            batches,
+            shadow_triangles_submitted: 0,
+            shadow_triangles_culled: 0,
+        };
+        if self.visible.is_empty() {
+            return Ok(0);
+        }
+
+        let mut rebind = self.bind_group.is_none();
+        if self.gpu_lights.len() > self.lights_capacity {
+            self.lights_capacity = self.gpu_lights.len().next_power_of_two();
+            self.lights_buffer = Self::create_lights_buffer(&ctx.gpu.device, self.lights_capacity);
+            rebind = true;
+        }
+        ctx.gpu.queue.write_buffer(&self.lights_buffer, 0, bytemuck::cast_slice(&self.gpu_lights));
+        rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible.len()));
+        if rebind {
+            let atlas = self.cubes.atlas().expect("atlas was just ensured");
+            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("reference shade"),
+                layout: &self.group_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
+                ],
+            }));
+        }
+        Ok(batches)
+    }
+
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        // Step 3: shadow maps of this batch, then its shading.
+        let first = step * self.batch_size;
+        let last = (first + self.batch_size).min(self.visible.len());
+        let casters: Vec<CubeCaster> = self.gpu_lights[first..last]
+            .iter()
+            .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
+            .collect();
+        let stats = self.cubes.render(ctx.gpu, ctx.scene, ctx.timer, encoder, "shadow maps", &casters);
+        self.counts.shadow_maps += stats.cubes;
+        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
+        self.counts.shadow_triangles_culled += stats.triangles_culled;
+
+        let atlas = self.cubes.atlas().expect("prepare sized the atlas");
+        let uniform = ReferenceBatchUniform {
+            first_light: first as u32,
+            light_count: (last - first) as u32,
+            resolution: atlas.resolution as f32,
+            bias_world: self.params.bias_world,
+            normal_offset_texels: self.params.normal_offset_texels,
+            tiles_per_row: atlas.tiles_per_row,
+            _pad: [0.0; 2],
+        };
+        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        let pipeline = &self.pipeline;
+        let group = self.bind_group.as_ref().expect("prepare created the bind group");
+        ctx.timer.render_pass(
+            encoder,
+            "shading",
+            wgpu::RenderPassDescriptor {
+                label: None,
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: ctx.hdr_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            },
+            |pass| {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+                pass.set_bind_group(1, group, &[]);
+                pass.draw(0..3, 0..1);
+            },
+        );
+        Ok(())
+    }
+
+    fn step_label(&self) -> &'static str {
+        "shadow maps + shading"
+    }
+
+    fn counts(&self) -> TechniqueCounts {
+        self.counts.clone()
+    }
+
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
+        let color = |l: &PointLight| {
+            let c = l.color / l.color.max_element().max(1e-6);
+            [c.x, c.y, c.z, 1.0]
+        };
+        vec![
+            OverlayLayer {
+                name: "lights",
+                visible_by_default: true,
+                primitives: lights
+                    .iter()
+                    .map(|l| Overlay::Point {
+                        position: l.position,
+                        color: color(l),
+                        radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
+                    })
+                    .collect(),
+            },
+            OverlayLayer {
+                name: "light ranges",
+                visible_by_default: false,
+                primitives: lights
+                    .iter()
+                    .map(|l| {
+                        let [r, g, b, _] = color(l);
+                        Overlay::Sphere { center: l.position, radius: l.range, color: [r, g, b, 0.35] }
+                    })
+                    .collect(),
+            },
+        ]
+    }
+}

@@ -1,0 +1,530 @@
+//! Scene loading: small hand-written fixtures (`tests/fixtures/`) and the real scenes in `../shared/scenes`
+//! (or `$SHADOWLAB_SCENES`). The real-scene tests fail, not skip, when that folder is missing.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::{Vec3, Vec4};
+use shadowlab_core::scene::gltf_loader::load_gltf;
+use shadowlab_core::scene::obj_loader::load_obj;
+use shadowlab_core::scene::texture::{decode_texture_bytes, find_file_case_insensitive, load_texture};
+use shadowlab_core::{LoadError, Scene};
+
+fn fixtures() -> PathBuf {
+    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures")).to_path_buf()
+}
+
+fn fixture(name: &str) -> PathBuf {
+    fixtures().join(name)
+}
+
+/// The shared real scenes. Missing scenes are a test failure with instructions, never a silent skip.
+fn scenes_dir() -> PathBuf {
+    let dir = std::env::var_os("SHADOWLAB_SCENES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/scenes")).to_path_buf());
+    assert!(
+        dir.is_dir(),
+        "the shared scenes folder {} is missing: these tests need the real scenes (dabrovic-sponza, conference, \
+         cornell-box, cornell-box-gltf) next to the project, or SHADOWLAB_SCENES pointing at them",
+        dir.display()
+    );
+    dir
+}
+
+fn assert_close(a: Vec3, b: Vec3, eps: f32) {
+    assert!((a - b).abs().max_element() <= eps, "{a} != {b} (eps {eps})");
+}
+
+fn material<'a>(scene: &'a Scene, name: &str) -> &'a shadowlab_core::Material {
+    scene.materials.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no material '{name}'"))
+}
+
+fn has_warning(scene: &Scene, needle: &str) -> bool {
+    scene.warnings.iter().any(|w| w.contains(needle))
+}
+
+/// Every mesh is well formed: indices in range, one normal/uv per position, unit normals.
+fn assert_well_formed(scene: &Scene) {
+    assert!(!scene.meshes.is_empty());
+    for mesh in &scene.meshes {
+        let n = mesh.positions.len();
+        assert_eq!(mesh.normals.len(), n, "mesh {}", mesh.name);
+        assert_eq!(mesh.uvs.len(), n, "mesh {}", mesh.name);
+        assert_eq!(mesh.indices.len() % 3, 0);
+        assert!(mesh.indices.iter().all(|&i| (i as usize) < n), "mesh {}", mesh.name);
+        assert!(mesh.material < scene.materials.len());
+        for normal in &mesh.normals {
+            assert!((normal.length() - 1.0).abs() < 1e-3, "mesh {}: normal {normal} is not unit length", mesh.name);
+        }
+    }
+    for m in &scene.materials {
+        if let Some(t) = m.base_color_texture {
+            let tex = &scene.textures[t];
+            assert_eq!(tex.rgba8.len(), (tex.width * tex.height * 4) as usize);
+        }
+    }
+    assert!(!scene.bounds.is_empty());
+    assert!(scene.camera.is_valid(), "{:?}", scene.camera);
+}
+
+fn mesh_of_material<'a>(scene: &'a Scene, material: &str) -> &'a shadowlab_core::Mesh {
+    let index = scene.materials.iter().position(|m| m.name == material).expect("material");
+    scene.meshes.iter().find(|m| m.material == index).expect("mesh with material")
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Textures
+
+#[test]
+fn finds_files_regardless_of_case_and_separators() {
+    let dir = fixtures();
+    assert_eq!(find_file_case_insensitive(&dir, "checker.png"), Some(dir.join("checker.png")));
+    let found = find_file_case_insensitive(&dir, "Checker.PNG").expect("case-insensitive match");
+    assert_eq!(found.file_name().unwrap(), "checker.png");
+    let nested = find_file_case_insensitive(&dir, r"TEXTURES\tiny.PNG").expect("backslashes and case");
+    assert!(nested.ends_with("textures/Tiny.png"), "{}", nested.display());
+    let nested = find_file_case_insensitive(&dir, r".\textures\Tiny.png").expect("leading .\\");
+    assert!(nested.ends_with("Tiny.png"));
+    let absolute = find_file_case_insensitive(&dir, r"C:\Users\artist\maps\CHECKER.png").expect("file name fallback");
+    assert_eq!(absolute.file_name().unwrap(), "checker.png");
+    assert_eq!(find_file_case_insensitive(&dir, "no_such_file.png"), None);
+    assert_eq!(find_file_case_insensitive(&dir, "textures"), None, "a directory is not a texture");
+    assert_eq!(find_file_case_insensitive(&dir, ""), None);
+}
+
+#[test]
+fn decodes_png_to_rgba8() {
+    let texture = load_texture(&fixture("checker.png")).unwrap();
+    assert_eq!((texture.width, texture.height), (4, 4));
+    assert_eq!(texture.rgba8.len(), 4 * 4 * 4);
+    assert_eq!(&texture.rgba8[0..4], &[255, 0, 0, 255], "texel (0,0) is red");
+    assert_eq!(&texture.rgba8[4..8], &[255, 255, 255, 255], "texel (1,0) is white");
+    assert_eq!(texture.name, "checker.png");
+
+    assert!(load_texture(&fixture("no_such_file.png")).unwrap_err().contains("no_such_file.png"));
+    let err = decode_texture_bytes("junk.png", b"definitely not an image").unwrap_err();
+    assert!(err.contains("junk.png"), "{err}");
+    let bytes = std::fs::read(fixture("checker.png")).unwrap();
+    assert!(decode_texture_bytes("cut.png", &bytes[..40]).is_err(), "a truncated PNG is an error");
+}
+
+#[test]
+fn downscales_textures_larger_than_2048() {
+    let image = image::RgbaImage::from_pixel(4096, 1024, image::Rgba([10, 20, 30, 255]));
+    let mut png = Vec::new();
+    image::DynamicImage::ImageRgba8(image)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let texture = decode_texture_bytes("wide.png", &png).unwrap();
+    assert_eq!((texture.width, texture.height), (2048, 512), "aspect ratio kept");
+    assert_eq!(&texture.rgba8[0..4], &[10, 20, 30, 255]);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// OBJ fixtures
+
+#[test]
+fn obj_quad_materials_textures_and_quirks() {
+    let scene = load_obj(&fixture("quad.obj"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.name, "quad");
+    assert_eq!(
+        scene.source,
+        shadowlab_core::SceneSource::File { path: fixture("quad.obj"), unit_scale: 1.0 },
+        "the source re-creates the scene"
+    );
+    // 1 (no material) + 2 (quad) + 1 (negative indices) + 1 + 1 + 1; the `l` element adds nothing.
+    assert_eq!(scene.triangle_count(), 7);
+    assert!(scene.lights.is_empty());
+    // Four MTL materials plus the default for faces without a (known) material.
+    assert_eq!(scene.materials.len(), 5, "{:?}", scene.materials.iter().map(|m| &m.name).collect::<Vec<_>>());
+
+    // The MTL says "Checker.PNG" and ".\CHECKER.png"; the file is checker.png. Loaded once.
+    assert_eq!(scene.textures.len(), 1, "the same file is decoded once");
+    assert_eq!(material(&scene, "Checker").base_color_texture, Some(0));
+    assert_eq!(material(&scene, "checker_again").base_color_texture, Some(0));
+    assert_eq!(material(&scene, "Checker").base_color, Vec4::ONE);
+    assert!(!has_warning(&scene, "missing texture"), "{:?}", scene.warnings);
+
+    let red = material(&scene, "red");
+    assert_eq!(red.base_color, Vec4::new(0.8, 0.1, 0.05, 0.75), "Kd (trailing comment ignored) and d");
+    assert_eq!(red.emissive, Vec3::new(2.0, 1.0, 0.5));
+    assert_eq!(red.specular, Vec3::splat(0.5));
+    assert_eq!(red.shininess, 64.0);
+    assert_eq!(red.base_color_texture, None);
+    let grey = material(&scene, "grey");
+    assert_eq!(grey.base_color.truncate(), Vec3::splat(0.5), "a one-value Kd is grey");
+    assert_eq!(grey.specular, Vec3::ZERO, "illum 1 has no highlight");
+
+    // Faces before any usemtl and with an unknown material use the default material.
+    let default = scene.materials.iter().position(|m| m.name == "default").expect("default material");
+    assert_eq!(scene.meshes.iter().filter(|m| m.material == default).map(|m| m.triangle_count()).sum::<usize>(), 2);
+
+    // The textured quad has the file's normals and flipped v (OBJ's origin is bottom left).
+    let quad = mesh_of_material(&scene, "Checker");
+    assert_eq!(quad.triangle_count(), 2);
+    assert!(quad.normals.iter().all(|n| *n == Vec3::Y));
+    let corner = quad.positions.iter().position(|p| *p == Vec3::new(-1.0, 0.0, -1.0)).unwrap();
+    assert_eq!(quad.uvs[corner], glam::Vec2::new(0.0, 1.0));
+
+    // Negative indices -3 -2 -1 refer to the three vertices just above them.
+    let red_mesh = mesh_of_material(&scene, "red");
+    let mut positions: Vec<[f32; 3]> = red_mesh.positions.iter().map(|p| p.to_array()).collect();
+    positions.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(positions, vec![[0.0, 1.0, 0.0], [0.0, 2.0, 0.0], [1.0, 1.0, 0.0]]);
+    assert_close(scene.bounds.min, Vec3::new(-1.0, 0.0, -1.0), 0.0);
+    assert_close(scene.bounds.max, Vec3::new(1.0, 2.0, 1.0), 0.0);
+}
+
+#[test]
+fn obj_without_normals_gets_unit_normals_and_unit_scale() {
+    let scene = load_obj(&fixture("no_normals.obj"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 12);
+    assert_eq!(scene.materials.len(), 1, "only the default material");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Smooth normals of a cube point away from the centre, along the diagonals.
+    for mesh in &scene.meshes {
+        for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
+            assert!(n.dot(p.normalize()) > 0.99, "normal {n} at {p}");
+        }
+    }
+
+    let scaled = load_obj(&fixture("no_normals.obj"), 0.01).unwrap();
+    assert_close(scaled.bounds.min, Vec3::splat(-0.01), 1e-7);
+    assert_close(scaled.bounds.max, Vec3::splat(0.01), 1e-7);
+    assert!(scaled.camera.is_valid());
+    assert!(scaled.camera.z_far < 1.0, "the camera frames the scaled scene: {:?}", scaled.camera);
+    assert_eq!(scaled.source, shadowlab_core::SceneSource::File { path: fixture("no_normals.obj"), unit_scale: 0.01 });
+    // The camera looks at the scene.
+    let to_center = (scaled.bounds.center() - scaled.camera.position).normalize();
+    assert!(scaled.camera.forward().dot(to_center) > 0.99);
+}
+
+#[test]
+fn obj_with_missing_mtl_warns_and_uses_default_material() {
+    let scene = load_obj(&fixture("missing_mtl.obj"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 1);
+    assert!(has_warning(&scene, "does_not_exist.mtl"), "{:?}", scene.warnings);
+    assert_eq!(scene.materials.len(), 1);
+    assert_eq!(scene.materials[0], shadowlab_core::Material::default());
+}
+
+#[test]
+fn obj_with_missing_texture_warns_and_keeps_colour() {
+    let scene = load_obj(&fixture("missing_texture.obj"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert!(has_warning(&scene, "missing texture 'no_such_texture.jpg'"), "{:?}", scene.warnings);
+    assert!(scene.textures.is_empty());
+    let blue = material(&scene, "blue");
+    assert_eq!(blue.base_color_texture, None);
+    assert_eq!(blue.base_color, Vec4::new(0.2, 0.4, 0.6, 1.0));
+}
+
+/// A broken OBJ gives `LoadError::Obj` naming the file and the problem.
+fn expect_obj_error(name: &str, needles: &[&str]) {
+    let path = fixture(name);
+    let err = match load_obj(&path, 1.0) {
+        Ok(scene) => panic!("{name} loaded ({} triangles), expected an error", scene.triangle_count()),
+        Err(e) => e,
+    };
+    assert!(matches!(err, LoadError::Obj { .. }), "{name}: {err:?}");
+    let message = err.to_string();
+    assert!(message.contains(name), "the message names the file: {message}");
+    for needle in needles {
+        assert!(message.contains(needle), "{name}: '{needle}' not in: {message}");
+    }
+}
+
+#[test]
+fn broken_obj_files_are_errors_not_panics() {
+    expect_obj_error("broken_index.obj", &["face vertex index out of bounds", "line 7", "f 1 2 9"]);
+    expect_obj_error("truncated.obj", &["position", "line 7", "v 1.000000 2.0"]);
+    expect_obj_error("binary_junk.obj", &["binary"]);
+    expect_obj_error("empty.obj", &["empty"]);
+    // tobj's index arithmetic overflows on this one (a panic in debug builds); it must come back as an error.
+    expect_obj_error("bad_texcoord_index.obj", &["line 7"]);
+}
+
+#[test]
+fn obj_without_geometry_is_invalid_data() {
+    let err = load_obj(&fixture("text_junk.obj"), 1.0).unwrap_err();
+    assert!(matches!(err, LoadError::InvalidData { .. }), "{err:?}");
+    assert!(err.to_string().contains("text_junk.obj") && err.to_string().contains("no triangles"), "{err}");
+}
+
+#[test]
+fn missing_files_are_not_found() {
+    assert!(matches!(load_obj(&fixture("nope.obj"), 1.0), Err(LoadError::NotFound { .. })));
+    assert!(matches!(load_gltf(&fixture("nope.gltf"), 1.0), Err(LoadError::NotFound { .. })));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// glTF fixtures
+
+/// lit_quad.gltf and lit_quad.glb hold the same scene (see make_fixtures.py).
+fn check_lit_quad(scene: &Scene, unit_scale: f32) {
+    assert_well_formed(scene);
+    // Two instances of a 2-triangle quad; the LINES primitive is skipped.
+    assert_eq!(scene.triangle_count(), 4);
+    assert!(has_warning(scene, "only TRIANGLES"), "{:?}", scene.warnings);
+    assert!(has_warning(scene, "spot light"), "{:?}", scene.warnings);
+
+    assert_eq!(scene.materials.len(), 1);
+    let m = &scene.materials[0];
+    assert_eq!(m.name, "checker_mat");
+    assert_eq!(m.base_color, Vec4::new(0.5, 0.25, 1.0, 1.0));
+    assert_eq!(m.emissive, Vec3::new(4.0, 2.0, 0.0), "emissive factor x KHR_materials_emissive_strength");
+    assert_eq!(m.base_color_texture, Some(0));
+    assert_eq!(scene.textures.len(), 1);
+    assert_eq!((scene.textures[0].width, scene.textures[0].height), (4, 4));
+    assert_eq!(&scene.textures[0].rgba8[0..4], &[255, 0, 0, 255]);
+
+    // The quad node sits under root (translation (1,2,3), scale 2): x in [-1,3], y in [0,4], z = 3; the
+    // mirrored copy is at z = 3 + 2 * -2 = -1.
+    let s = unit_scale;
+    assert_close(scene.bounds.min, Vec3::new(-1.0, 0.0, -1.0) * s, 1e-5);
+    assert_close(scene.bounds.max, Vec3::new(3.0, 4.0, 3.0) * s, 1e-5);
+    for mesh in &scene.meshes {
+        // Transformed normals stay +Z, and every triangle's winding agrees with them, mirrored or not.
+        assert!(mesh.normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-5), "{:?}", mesh.normals);
+        for tri in mesh.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[tri[k] as usize]);
+            assert!((b - a).cross(c - a).dot(Vec3::Z) > 0.0, "mesh {}: winding disagrees with the normal", mesh.name);
+        }
+        let uv_of = |p: Vec3| mesh.uvs[mesh.positions.iter().position(|q| (*q - p).length() < 1e-5).unwrap()];
+        let z = mesh.positions[0].z;
+        if (z - 3.0 * s).abs() < 1e-5 {
+            // Un-mirrored: local (-1,-1) -> world (-1, 0); its uv is (0, 1).
+            assert_eq!(uv_of(Vec3::new(-1.0, 0.0, 3.0) * s), glam::Vec2::new(0.0, 1.0));
+        }
+    }
+
+    // Point light 0 at local (0,1,0) under root: (1,2,3) + 2 * (0,1,0) = (1,4,3). Light 2 has no range.
+    assert_eq!(scene.lights.len(), 2, "{:?}", scene.lights);
+    let key = scene.lights[0];
+    assert_close(key.position, Vec3::new(1.0, 4.0, 3.0) * s, 1e-5);
+    assert_eq!(key.color, Vec3::new(1.0, 0.5, 0.25));
+    assert_eq!(key.intensity, 20.0);
+    assert!((key.range - 12.0 * s).abs() < 1e-5);
+    let lamp = scene.lights[1];
+    assert_close(lamp.position, Vec3::new(0.0, 5.0, 0.0) * s, 1e-5);
+    assert_eq!(lamp.color, Vec3::ONE);
+    assert!((lamp.range - scene.bounds.size().length()).abs() < 1e-4, "default range = bounds diagonal");
+
+    // The file's perspective camera at (0,0,10).
+    assert_close(scene.camera.position, Vec3::new(0.0, 0.0, 10.0) * s, 1e-5);
+    assert!((scene.camera.fov_y - 0.8).abs() < 1e-6);
+    assert!((scene.camera.near - 0.1 * s).abs() < 1e-6);
+    assert!((scene.camera.z_far - 100.0 * s).abs() < 1e-3);
+    assert_close(scene.camera.forward(), Vec3::NEG_Z, 1e-5);
+}
+
+#[test]
+fn gltf_with_embedded_buffer_lights_and_transforms() {
+    let path = fixture("lit_quad.gltf");
+    let scene = load_gltf(&path, 1.0).unwrap();
+    check_lit_quad(&scene, 1.0);
+    assert_eq!(scene.name, "lit_quad");
+    assert_eq!(scene.source, shadowlab_core::SceneSource::File { path, unit_scale: 1.0 });
+}
+
+#[test]
+fn glb_matches_gltf() {
+    let scene = load_gltf(&fixture("lit_quad.glb"), 1.0).unwrap();
+    check_lit_quad(&scene, 1.0);
+}
+
+#[test]
+fn gltf_unit_scale_applies_to_geometry_lights_and_camera() {
+    let scene = load_gltf(&fixture("lit_quad.glb"), 0.5).unwrap();
+    check_lit_quad(&scene, 0.5);
+}
+
+#[test]
+fn gltf_with_external_buffer_and_image() {
+    let scene = load_gltf(&fixture("external.gltf"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 2);
+    assert_eq!(scene.textures.len(), 1);
+    assert_eq!(scene.materials[0].base_color_texture, Some(0));
+    assert_eq!(scene.materials[0].base_color, Vec4::ONE, "glTF default base colour factor");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.lights.is_empty());
+}
+
+#[test]
+fn gltf_missing_image_warns_and_wrong_case_image_is_found() {
+    let scene = load_gltf(&fixture("missing_image.gltf"), 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 4);
+    assert_eq!(scene.materials.len(), 2);
+    assert!(has_warning(&scene, "missing texture 'no_such_image.png'"), "{:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    let missing = material(&scene, "missing");
+    assert_eq!(missing.base_color_texture, None);
+    assert_eq!(missing.base_color, Vec4::new(0.2, 0.4, 0.6, 1.0));
+    assert_eq!(material(&scene, "wrong_case").base_color_texture, Some(0), "CHECKER.PNG resolves to checker.png");
+}
+
+/// A broken glTF gives `LoadError::Gltf` naming the file and the problem.
+fn expect_gltf_error(name: &str, needles: &[&str]) {
+    let path = fixture(name);
+    let err = match load_gltf(&path, 1.0) {
+        Ok(scene) => panic!("{name} loaded ({} triangles), expected an error", scene.triangle_count()),
+        Err(e) => e,
+    };
+    assert!(matches!(err, LoadError::Gltf { .. }), "{name}: {err:?}");
+    let message = err.to_string();
+    assert!(message.contains(name), "the message names the file: {message}");
+    for needle in needles {
+        assert!(message.contains(needle), "{name}: '{needle}' not in: {message}");
+    }
+}
+
+#[test]
+fn broken_gltf_files_are_errors_not_panics() {
+    expect_gltf_error("missing_bin.gltf", &["does_not_exist.bin", "not found"]);
+    expect_gltf_error("truncated.glb", &[]);
+    expect_gltf_error("bad_accessor.gltf", &["POSITION", "past the end"]);
+    expect_gltf_error("not_gltf.gltf", &[]);
+}
+
+#[test]
+fn every_prefix_of_a_glb_is_an_error_not_a_panic() {
+    let bytes = std::fs::read(fixture("lit_quad.glb")).unwrap();
+    let dir = std::env::temp_dir().join(format!("shadowlab-loaders-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("cut.glb");
+    for len in (0..bytes.len()).step_by(37) {
+        std::fs::write(&path, &bytes[..len]).unwrap();
+        assert!(load_gltf(&path, 1.0).is_err(), "a GLB cut at {len} bytes loaded");
+    }
+    let text = std::fs::read(fixture("lit_quad.gltf")).unwrap();
+    let path = dir.join("cut.gltf");
+    for len in (0..text.len()).step_by(97) {
+        std::fs::write(&path, &text[..len]).unwrap();
+        assert!(load_gltf(&path, 1.0).is_err(), "a glTF cut at {len} bytes loaded");
+    }
+    let obj = std::fs::read(fixture("quad.obj")).unwrap();
+    let path = dir.join("cut.obj");
+    for len in 0..obj.len() {
+        std::fs::write(&path, &obj[..len]).unwrap();
+        // A cut OBJ may still be a valid (smaller) OBJ; it only must not panic.
+        let _ = load_obj(&path, 1.0);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Real scenes (../shared/scenes)
+
+#[test]
+fn sponza_loads_with_its_textures() {
+    let path = scenes_dir().join("dabrovic-sponza/sponza.obj");
+    let start = Instant::now();
+    let scene = load_obj(&path, 1.0).unwrap();
+    let seconds = start.elapsed().as_secs_f64();
+    eprintln!(
+        "sponza: {} triangles, {} textures, loaded in {seconds:.2} s",
+        scene.triangle_count(),
+        scene.textures.len()
+    );
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 66_450);
+    assert_eq!(scene.materials.len(), 20, "every face has one of the 20 MTL materials");
+    // 19 of the 20 materials have a map_Kd, naming 12 distinct files.
+    let textured = scene.materials.iter().filter(|m| m.base_color_texture.is_some()).count();
+    assert_eq!(textured, 19);
+    assert_eq!(scene.textures.len(), 12, "each texture file is loaded once");
+    assert!(!has_warning(&scene, "missing texture"), "{:?}", scene.warnings);
+    assert!(!has_warning(&scene, "cannot load texture"), "{:?}", scene.warnings);
+    assert!(scene.textures.iter().all(|t| t.width <= 2048 && t.height <= 2048 && t.width > 0));
+    // Bounds about x[-17.4,17.4] y[-0.9,15.7] z[-7.8,7.8] (SOURCE.md).
+    assert_close(scene.bounds.min, Vec3::new(-17.4, -0.9, -7.8), 0.2);
+    assert_close(scene.bounds.max, Vec3::new(17.4, 15.7, 7.8), 0.2);
+    assert!(scene.lights.is_empty());
+    assert!(seconds < 30.0, "sponza took {seconds:.1} s to load");
+}
+
+#[test]
+fn conference_loads_fast_and_scaled() {
+    let path = scenes_dir().join("conference/conference.obj");
+    let start = Instant::now();
+    let scene = load_obj(&path, 0.01).unwrap();
+    let seconds = start.elapsed().as_secs_f64();
+    eprintln!(
+        "conference: {} triangles in {} meshes, loaded in {seconds:.2} s",
+        scene.triangle_count(),
+        scene.meshes.len()
+    );
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 331_179);
+    assert!(scene.textures.is_empty());
+    // Centimetre-ish units x0.01: about x[-10.2,16.9] y[-0.03,6.5] z[-10.6,6.7].
+    assert!(
+        (scene.bounds.min.x - -10.2).abs() < 0.05 && (scene.bounds.max.x - 16.9).abs() < 0.05,
+        "{:?}",
+        scene.bounds
+    );
+    assert!((scene.bounds.max.y - 6.5).abs() < 0.05, "{:?}", scene.bounds);
+    assert!(seconds < 30.0, "conference took {seconds:.1} s to load");
+}
+
+#[test]
+fn every_cornell_box_obj_loads() {
+    let dir = scenes_dir().join("cornell-box");
+    // Triangle counts from cornell-box/SOURCE.md.
+    let expected = [
+        ("CornellBox-Original.obj", 36),
+        ("CornellBox-Mirror.obj", 36),
+        ("CornellBox-Sphere.obj", 2188),
+        ("CornellBox-Glossy.obj", 1112),
+        ("CornellBox-Glossy-Floor.obj", 1112),
+        ("CornellBox-Water.obj", 7088),
+        ("CornellBox-Empty-CO.obj", 12),
+        ("CornellBox-Empty-RG.obj", 12),
+        ("CornellBox-Empty-White.obj", 12),
+        ("CornellBox-Empty-Squashed.obj", 12),
+        ("water.obj", 4900),
+    ];
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".obj"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), expected.len(), "{files:?}");
+    for (name, triangles) in expected {
+        let scene = load_obj(&dir.join(name), 1.0).unwrap_or_else(|e| panic!("{e}"));
+        assert_well_formed(&scene);
+        assert_eq!(scene.triangle_count(), triangles, "{name}");
+        assert!(!has_warning(&scene, "cannot parse"), "{name}: {:?}", scene.warnings);
+        assert!(scene.bounds.size().max_element() < 3.0, "{name}: {:?}", scene.bounds);
+    }
+
+    let original = load_obj(&dir.join("CornellBox-Original.obj"), 1.0).unwrap();
+    assert_eq!(material(&original, "light").emissive, Vec3::new(17.0, 12.0, 4.0));
+    assert_eq!(material(&original, "leftWall").base_color, Vec4::new(0.63, 0.065, 0.05, 1.0));
+    assert!(original.warnings.is_empty(), "{:?}", original.warnings);
+    assert_close(original.bounds.min, Vec3::new(-1.0, 0.0, -1.04), 0.05);
+    assert_close(original.bounds.max, Vec3::new(1.0, 1.99, 1.0), 0.05);
+}
+
+#[test]
+fn cornell_box_gltf_loads() {
+    let path = scenes_dir().join("cornell-box-gltf/cornellBox-2.80-Eevee-gltf.gltf");
+    let scene = Scene::load(&path, 1.0).unwrap();
+    assert_well_formed(&scene);
+    assert_eq!(scene.triangle_count(), 4_410);
+    assert_eq!(scene.materials.len(), 13);
+    assert_eq!(scene.textures.len(), 2);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(material(&scene, "light.000").emissive, Vec3::ONE);
+    assert!(scene.lights.is_empty(), "the file has no KHR_lights_punctual lights");
+    // Box spans x,z in [-2,2], y in [0,3] (SOURCE.md).
+    assert_close(scene.bounds.min, Vec3::new(-2.0, 0.0, -2.0), 0.1);
+    assert_close(scene.bounds.max, Vec3::new(2.0, 3.0, 2.0), 0.1);
+}

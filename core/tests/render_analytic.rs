@@ -1,0 +1,277 @@
+//! Image correctness of the reference with analytic expectations, on the software adapter:
+//! a ground plane, a square occluder and point lights, compared pixel by pixel with a CPU ray cast.
+
+mod common;
+
+use common::*;
+use glam::{Vec3, Vec4Swizzles};
+use shadowlab_core::scene::{attenuation, Camera, PointLight, Scene};
+use shadowlab_core::technique::{ParamValue, Technique};
+use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+
+const W: u32 = 160;
+const H: u32 = 120;
+const AMBIENT: f32 = 0.1;
+
+fn settings() -> RenderSettings {
+    RenderSettings {
+        width: W,
+        height: H,
+        ambient: Vec3::splat(AMBIENT),
+        background: Vec3::new(0.0, 0.0, 1.0),
+        tonemap: ToneMap::Linear,
+        ..Default::default()
+    }
+}
+
+struct Rendered {
+    hdr: Vec<[f32; 4]>,
+    report: FrameReport,
+}
+
+fn render_with(scene: &Scene, lights: &[PointLight], shadow_res: i64, atlas_mib: i64) -> Rendered {
+    let gpu = gpu();
+    let mut renderer = Renderer::new(&gpu, scene, settings()).unwrap();
+    let mut technique = renderer.create_technique("reference").unwrap();
+    technique.set_param("shadow_res", &ParamValue::Int(shadow_res)).unwrap();
+    technique.set_param("atlas_mib", &ParamValue::Int(atlas_mib)).unwrap();
+    let report = renderer.render_frame(technique.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
+    Rendered { hdr: renderer.read_hdr().unwrap(), report }
+}
+
+fn render(scene: &Scene, lights: &[PointLight]) -> Rendered {
+    render_with(scene, lights, 256, 128)
+}
+
+/// What a camera ray through a pixel centre hits.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Hit {
+    Background,
+    Ground(Vec3),
+    Plate(Vec3),
+}
+
+fn cast(camera: &Camera, px: u32, py: u32) -> Hit {
+    let clip_from_world = camera.clip_from_world(W as f32 / H as f32);
+    let world_from_clip = clip_from_world.inverse();
+    let ndc_x = (px as f32 + 0.5) / W as f32 * 2.0 - 1.0;
+    let ndc_y = 1.0 - (py as f32 + 0.5) / H as f32 * 2.0;
+    let a = world_from_clip * glam::Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+    let b = world_from_clip * glam::Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let origin = a.xyz() / a.w;
+    let dir = (b.xyz() / b.w - origin).normalize();
+    let hit_plane = |y: f32, half: f32| -> Option<(f32, Vec3)> {
+        let t = (y - origin.y) / dir.y;
+        let p = origin + dir * t;
+        (t > 0.0 && p.x.abs() <= half && p.z.abs() <= half).then_some((t, p))
+    };
+    let plate = hit_plane(PLATE_CENTER.y, PLATE_SIZE * 0.5);
+    let ground = hit_plane(0.0, GROUND_SIZE * 0.5);
+    match (plate, ground) {
+        (Some((tp, p)), Some((tg, _))) if tp < tg => Hit::Plate(p),
+        (Some((_, p)), None) => Hit::Plate(p),
+        (_, Some((_, g))) => Hit::Ground(g),
+        (None, None) => Hit::Background,
+    }
+}
+
+/// Visibility of `light` from ground point `p`: Some(true) lit, Some(false) umbra, None too close to the
+/// shadow boundary to say (shadow-map texels blur it by a little).
+fn ground_visibility(p: Vec3, light: &PointLight) -> Option<bool> {
+    if light.position.y <= PLATE_CENTER.y {
+        return Some(true);
+    }
+    let t = (PLATE_CENTER.y - p.y) / (light.position.y - p.y);
+    let q = p + (light.position - p) * t;
+    let inf = q.x.abs().max(q.z.abs());
+    let margin = 0.06;
+    if inf < PLATE_SIZE * 0.5 - margin {
+        Some(false)
+    } else if inf > PLATE_SIZE * 0.5 + margin {
+        Some(true)
+    } else {
+        None
+    }
+}
+
+/// Expected HDR radiance of a pixel, or None where the answer is ambiguous (silhouettes, shadow edges).
+fn expected(camera: &Camera, lights: &[PointLight], px: u32, py: u32) -> Option<[f32; 4]> {
+    let hit = cast(camera, px, py);
+    // Pixels next to a silhouette may be covered by either surface.
+    let neighbours = [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)];
+    for (dx, dy) in neighbours {
+        let (nx, ny) = (px as i32 + dx, py as i32 + dy);
+        if nx >= 0 && ny >= 0 && nx < W as i32 && ny < H as i32 {
+            let other = cast(camera, nx as u32, ny as u32);
+            if std::mem::discriminant(&other) != std::mem::discriminant(&hit) {
+                return None;
+            }
+        }
+    }
+    let p = match hit {
+        Hit::Background => return Some([0.0, 0.0, 1.0, 1.0]),
+        Hit::Ground(p) | Hit::Plate(p) => p,
+    };
+    let mut radiance = AMBIENT * ALBEDO;
+    for light in lights {
+        let to_light = light.position - p;
+        let d = to_light.length();
+        let n_dot_l = (to_light / d).dot(Vec3::Y);
+        if n_dot_l <= 0.0 || d >= light.range {
+            continue;
+        }
+        let visible = match hit {
+            Hit::Ground(_) => ground_visibility(p, light)?,
+            _ => true,
+        };
+        if visible {
+            radiance += ALBEDO / std::f32::consts::PI * light.intensity * attenuation(d, light.range) * n_dot_l;
+        }
+    }
+    Some([radiance, radiance, radiance, 1.0])
+}
+
+/// Compare every pixel that has an expectation; relative tolerance plus a small absolute one (f16 target,
+/// 8-bit sRGB albedo). Writes actual/expected/difference PNGs on failure.
+fn assert_matches_analytic(name: &str, camera: &Camera, lights: &[PointLight], hdr: &[[f32; 4]]) -> (usize, usize) {
+    let mut bad = vec![false; (W * H) as usize];
+    let mut exp = vec![None; (W * H) as usize];
+    let (mut checked, mut wrong) = (0, 0);
+    let mut first_wrong = None;
+    for y in 0..H {
+        for x in 0..W {
+            let i = (y * W + x) as usize;
+            exp[i] = expected(camera, lights, x, y);
+            if let Some(e) = exp[i] {
+                checked += 1;
+                let a = hdr[i];
+                let ok = (0..3).all(|c| (a[c] - e[c]).abs() <= 0.02 * e[c].abs() + 2e-3);
+                if !ok {
+                    wrong += 1;
+                    bad[i] = true;
+                    first_wrong.get_or_insert((x, y, a, e));
+                }
+            }
+        }
+    }
+    if wrong > 0 {
+        let dir = write_failure_images(name, W, H, hdr, &exp, &bad);
+        panic!(
+            "{name}: {wrong} of {checked} pixels differ from the analytic answer, first {first_wrong:?}; images in {}",
+            dir.display()
+        );
+    }
+    assert!(checked > (W * H / 2) as usize, "{name}: too few pixels checked ({checked})");
+    (checked, wrong)
+}
+
+#[test]
+fn umbra_is_unlit_and_lit_pixels_follow_the_attenuation() {
+    let scene = plane_and_occluder();
+    let light = white_light(Vec3::new(0.3, 3.0, 0.2), 20.0, 8.0);
+    let r = render(&scene, &[light]);
+    assert_matches_analytic("umbra", &scene.camera, &[light], &r.hdr);
+    // The test must have seen both umbra and lit ground pixels.
+    let (mut umbra, mut lit) = (0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            if let Hit::Ground(p) = cast(&scene.camera, x, y) {
+                match ground_visibility(p, &light) {
+                    Some(false) => umbra += 1,
+                    Some(true) => lit += 1,
+                    None => {}
+                }
+            }
+        }
+    }
+    assert!(umbra > 200 && lit > 2000, "umbra {umbra}, lit {lit}");
+    assert_eq!(r.report.counts.technique.lights_visible, 1);
+    assert_eq!(r.report.counts.technique.shadow_maps, 1);
+}
+
+#[test]
+fn two_lights_add_up() {
+    let scene = plane_and_occluder();
+    let a = white_light(Vec3::new(-1.0, 2.5, 0.0), 12.0, 6.0);
+    let b = PointLight::new(Vec3::new(1.5, 2.0, 1.0), Vec3::new(1.0, 0.5, 0.25), 15.0, 5.0);
+    let ra = render(&scene, &[a]);
+    let rb = render(&scene, &[b]);
+    let rab = render(&scene, &[a, b]);
+    assert_matches_analytic("two-lights", &scene.camera, &[a, b], &rab.hdr);
+    let mut compared = 0;
+    for i in 0..(W * H) as usize {
+        for c in 0..3 {
+            let sum = ra.hdr[i][c] + rb.hdr[i][c] - if i_is_background(&ra.hdr[i]) { 0.0 } else { AMBIENT * ALBEDO };
+            let both = rab.hdr[i][c];
+            if i_is_background(&ra.hdr[i]) {
+                continue;
+            }
+            compared += 1;
+            assert!((both - sum).abs() <= 0.01 * sum.abs() + 2e-3, "pixel {i} channel {c}: {both} vs {sum}");
+        }
+    }
+    assert!(compared > 1000);
+}
+
+fn i_is_background(p: &[f32; 4]) -> bool {
+    p[2] == 1.0 && p[0] == 0.0 && p[1] == 0.0
+}
+
+#[test]
+fn a_light_out_of_range_contributes_nothing() {
+    let scene = plane_and_occluder();
+    // In view, but 3 m above the plate with a 2.5 m range: it reaches no surface.
+    let far_light = white_light(Vec3::new(0.0, 4.0, 0.5), 1000.0, 2.5);
+    let r = render(&scene, &[far_light]);
+    let none = render(&scene, &[]);
+    assert_eq!(r.report.counts.technique.lights_visible, 1, "the light's sphere is in view");
+    assert_eq!(r.hdr, none.hdr, "a light beyond its range must not change a pixel");
+    // Its range sphere is outside the view: culled before any shadow map.
+    let behind = white_light(Vec3::new(0.0, 6.0, 30.0), 1000.0, 2.0);
+    let r = render(&scene, &[behind]);
+    assert_eq!(r.report.counts.technique.lights_visible, 0);
+    assert_eq!(r.report.counts.technique.shadow_maps, 0);
+    assert_eq!(r.hdr, none.hdr);
+}
+
+#[test]
+fn zero_lights_render_ambient_only() {
+    let scene = plane_and_occluder();
+    let r = render(&scene, &[]);
+    assert_matches_analytic("ambient-only", &scene.camera, &[], &r.hdr);
+    assert_eq!(r.report.counts.technique.shadow_maps, 0);
+    assert_eq!(r.report.counts.lights_total, 0);
+    assert!(r.report.passes.iter().any(|p| p.name == "gbuffer"));
+}
+
+#[test]
+fn a_thousand_lights_render_in_bounded_batches_with_the_same_result() {
+    let scene = plane_and_occluder();
+    // 1,000 dim lights above the plane, a grid with jitter, all in view.
+    let lights: Vec<PointLight> = (0..1000)
+        .map(|i| {
+            let x = (i % 40) as f32 / 39.0 * 8.0 - 4.0;
+            let z = (i / 40) as f32 / 24.0 * 6.0 - 3.0;
+            white_light(Vec3::new(x, 1.5 + 0.5 * ((i * 7) % 5) as f32 / 5.0, z), 0.05, 2.0)
+        })
+        .collect();
+    // 1 MiB per batch at 32 texels per face: 42 cube maps per batch.
+    let small = render_with(&scene, &lights, 32, 1);
+    let big = render_with(&scene, &lights, 32, 64);
+    let c = &small.report.counts.technique;
+    assert_eq!(c.lights_visible, 1000);
+    assert_eq!(c.shadow_maps, 1000);
+    assert!(c.batches >= 20, "a 1 MiB budget must split 1,000 cube maps into many batches, got {}", c.batches);
+    assert!(big.report.counts.technique.batches < c.batches);
+    // Batching changes memory, never the picture (up to f16 rounding of the accumulation order).
+    let mut max_diff = 0f32;
+    for (a, b) in small.hdr.iter().zip(&big.hdr) {
+        for ch in 0..3 {
+            max_diff = max_diff.max((a[ch] - b[ch]).abs() / (1e-3 + b[ch].abs()));
+        }
+    }
+    assert!(max_diff < 0.01, "batched and unbatched images differ by {max_diff}");
+    // And the lights did light the plane.
+    let center = small.hdr[(H / 2 * W + W / 2) as usize][0];
+    assert!(center > AMBIENT * ALBEDO * 1.5, "centre radiance {center}");
+}

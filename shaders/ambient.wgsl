@@ -1,0 +1,11 @@
+// First pass into the HDR target: ambient * albedo + emission on geometry, the background elsewhere.
+// Composed after common.wgsl.
+
+@fragment
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let s = load_surface(vec2<i32>(in.position.xy));
+    if !s.is_geometry {
+        return vec4<f32>(frame.background.rgb, 1.0);
+    }
+    return vec4<f32>(frame.ambient.rgb * s.albedo + s.emissive, 1.0);
+}

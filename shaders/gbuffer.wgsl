@@ -1,0 +1,70 @@
+// G-buffer pass: albedo, normal + shininess, emissive + specular, hardware depth.
+// Vertex layout: `Vertex` in core/src/scene/chunks.rs. `Material` mirrors `MaterialUniform` in gpu_data.rs.
+
+struct Camera {
+    clip_from_world: mat4x4<f32>,
+}
+
+struct Material {
+    base_color: vec4<f32>,
+    // rgb emissive, w: 1 when the base colour texture is used
+    emissive: vec4<f32>,
+    // x: specular intensity, y: shininess
+    specular: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var material_sampler: sampler;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @location(2) world: vec3<f32>,
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    var out: VertexOut;
+    out.clip = camera.clip_from_world * vec4<f32>(v.position, 1.0);
+    out.normal = v.normal;
+    out.uv = v.uv;
+    out.world = v.position;
+    return out;
+}
+
+struct GBufferOut {
+    @location(0) albedo: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+    @location(2) emissive: vec4<f32>,
+}
+
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    var color = material.base_color;
+    if material.emissive.w > 0.5 {
+        color *= textureSample(base_color_texture, material_sampler, in.uv);
+    }
+    // Alpha-tested foliage and the like: cut out, as Sponza's MTL expects.
+    if color.a < 0.5 {
+        discard;
+    }
+    // Two-sided lighting: real scenes have single-sided walls seen from both sides.
+    var n = normalize(in.normal);
+    if !front {
+        n = -n;
+    }
+    var out: GBufferOut;
+    out.albedo = vec4<f32>(color.rgb, 1.0);
+    out.normal = vec4<f32>(n, material.specular.y);
+    out.emissive = vec4<f32>(material.emissive.rgb, material.specular.x);
+    return out;
+}
