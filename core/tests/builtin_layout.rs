@@ -643,3 +643,15 @@ fn generated_intensities_are_reasonable() {
         assert!((0.05..4.0).contains(&p50), "{spec}: median lit radiance {p50}");
     }
 }
+
+#[test]
+fn zz_debug_breakdown() {
+    let scene = build("restaurant");
+    for m in &scene.meshes {
+        let mut s = scene.clone();
+        s.meshes = vec![m.clone()];
+        let (lit, f) = unshadowed_radiance(&s, &scene.lights, 2000);
+        if lit.is_empty() { println!("{}: none", m.name); continue; }
+        println!("{}: lit {:.0}% p10 {:.3} p50 {:.3} p90 {:.3}", m.name, f * 100.0, percentile(&lit, 0.1), percentile(&lit, 0.5), percentile(&lit, 0.9));
+    }
+}

@@ -112,7 +112,7 @@ fn expected(camera: &Camera, lights: &[PointLight], px: u32, py: u32) -> Option<
         Hit::Background => return Some([0.0, 0.0, 1.0, 1.0]),
         Hit::Ground(p) | Hit::Plate(p) => p,
     };
-    let mut radiance = AMBIENT * ALBEDO;
+    let mut radiance = Vec3::splat(AMBIENT * ALBEDO);
     for light in lights {
         let to_light = light.position - p;
         let d = to_light.length();
@@ -125,10 +125,11 @@ fn expected(camera: &Camera, lights: &[PointLight], px: u32, py: u32) -> Option<
             _ => true,
         };
         if visible {
-            radiance += ALBEDO / std::f32::consts::PI * light.intensity * attenuation(d, light.range) * n_dot_l;
+            radiance +=
+                ALBEDO / std::f32::consts::PI * light.color * light.intensity * attenuation(d, light.range) * n_dot_l;
         }
     }
-    Some([radiance, radiance, radiance, 1.0])
+    Some([radiance.x, radiance.y, radiance.z, 1.0])
 }
 
 /// Compare every pixel that has an expectation; relative tolerance plus a small absolute one (f16 target,
@@ -168,7 +169,7 @@ fn assert_matches_analytic(name: &str, camera: &Camera, lights: &[PointLight], h
 #[test]
 fn umbra_is_unlit_and_lit_pixels_follow_the_attenuation() {
     let scene = plane_and_occluder();
-    let light = white_light(Vec3::new(0.3, 3.0, 0.2), 20.0, 8.0);
+    let light = white_light(Vec3::new(-1.5, 3.0, 0.2), 20.0, 8.0);
     let r = render(&scene, &[light]);
     assert_matches_analytic("umbra", &scene.camera, &[light], &r.hdr);
     // The test must have seen both umbra and lit ground pixels.
@@ -184,7 +185,7 @@ fn umbra_is_unlit_and_lit_pixels_follow_the_attenuation() {
             }
         }
     }
-    assert!(umbra > 200 && lit > 2000, "umbra {umbra}, lit {lit}");
+    assert!(umbra > 150 && lit > 2000, "umbra {umbra}, lit {lit}");
     assert_eq!(r.report.counts.technique.lights_visible, 1);
     assert_eq!(r.report.counts.technique.shadow_maps, 1);
 }
@@ -252,7 +253,7 @@ fn a_thousand_lights_render_in_bounded_batches_with_the_same_result() {
         .map(|i| {
             let x = (i % 40) as f32 / 39.0 * 8.0 - 4.0;
             let z = (i / 40) as f32 / 24.0 * 6.0 - 3.0;
-            white_light(Vec3::new(x, 1.5 + 0.5 * ((i * 7) % 5) as f32 / 5.0, z), 0.05, 2.0)
+            white_light(Vec3::new(x, 1.5 + 0.5 * ((i * 7) % 5) as f32 / 5.0, z), 0.5, 2.0)
         })
         .collect();
     // 1 MiB per batch at 32 texels per face: 42 cube maps per batch.

@@ -411,7 +411,7 @@ fn cornell() -> Scene {
 /// intensity of 0.6 lights the walls to a radiance of about 0.4-1.5 (measured without shadows).
 fn cornell_lights() -> Vec<PointLight> {
     const COUNT: usize = 32;
-    const INTENSITY: f32 = 4.0;
+    const INTENSITY: f32 = 3.0;
     let solids = cornell_solids();
     let mut rng = SplitMix64::new(0xC0FFEE);
     let inner = CORNELL_HALF - 0.1;
@@ -614,7 +614,7 @@ fn arcade_banners(b: &mut SceneBuilder, side: f32, red: usize, blue: usize) {
 /// Intensity 2.2 lights the aisles to a radiance of about 0.5-2 near the circles and the nave floor to ~0.2.
 fn arcade_lights() -> Vec<PointLight> {
     const RANGE: f32 = 7.0;
-    const INTENSITY: f32 = 2.2;
+    const INTENSITY: f32 = 8.0;
     const RADIUS: f32 = 0.6;
     const HEIGHT: f32 = 1.8;
     let aisle_middle = (COLONNADE_Z + OUTER_WALL_Z) * 0.5;
@@ -665,7 +665,7 @@ struct RestaurantMaterials {
 fn restaurant() -> Scene {
     let mut b = SceneBuilder::new();
     let m = RestaurantMaterials {
-        wood: b.material("wood floor", Vec3::new(0.42, 0.28, 0.16), 0.15, 32.0),
+        wood: b.material("wood floor", Vec3::new(0.55, 0.38, 0.22), 0.15, 32.0),
         dark_wood: b.material("dark wood", Vec3::new(0.3, 0.17, 0.08), 0.1, 24.0),
         cloth: b.material("table cloth", Vec3::new(0.85, 0.84, 0.8), 0.0, 1.0),
         brass: b.material("brass", Vec3::new(0.62, 0.46, 0.2), 0.6, 64.0),
@@ -836,18 +836,18 @@ fn restaurant_lights() -> Vec<PointLight> {
     let mut lights = Vec::with_capacity(14);
     for center in TABLES {
         for top in candle_tops() {
-            lights.push(PointLight::new(center + top + Vec3::Y * FLAME_ABOVE_CANDLE, candle, 1.3, RANGE));
+            lights.push(PointLight::new(center + top + Vec3::Y * FLAME_ABOVE_CANDLE, candle, 4.0, RANGE));
         }
     }
     for z in [-1.0f32, 1.0] {
         for x in WALL_LAMP_X {
             let at = Vec3::new(x, WALL_LAMP_HEIGHT, ROOM_HALF_Z * z);
-            lights.push(PointLight::new(wall_lamp_light(at, -z), lamp, 3.0, RANGE));
+            lights.push(PointLight::new(wall_lamp_light(at, -z), lamp, 8.0, RANGE));
         }
     }
     for base in chandelier_candle_bases() {
         let flame = base + Vec3::Y * (0.03 + 0.08 + FLAME_ABOVE_CANDLE);
-        lights.push(PointLight::new(flame, candle, 4.0, RANGE));
+        lights.push(PointLight::new(flame, candle, 8.0, RANGE));
     }
     lights
 }
