@@ -86,6 +86,9 @@ pub struct RenderArgs {
     /// Frame report as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Frames rendered and thrown away before the measured one (the first frame also compiles pipelines).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
@@ -288,6 +291,13 @@ fn render(args: RenderArgs) -> Result<()> {
         renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
     apply_params(technique.as_mut(), args.shadow_res, &args.params)?;
 
+    if args.warmup > 20 {
+        bail!("--warmup {}: at most 20 frames", args.warmup);
+    }
+    for i in 0..args.warmup {
+        let mut progress = Progress::new(&format!("warm-up {}/{}", i + 1, args.warmup), args.quiet);
+        renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
+    }
     let mut progress = Progress::new(&format!("{} / {}", scene.name, technique.key()), args.quiet);
     let report = renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
     let image = renderer.read_output()?;

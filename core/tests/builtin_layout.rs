@@ -331,7 +331,7 @@ fn cameras_are_valid_and_look_at_the_scene() {
 
 #[test]
 fn builtin_lights_give_a_reasonable_exposure() {
-    // Without shadows, the median lit surface should land in the range where ACES at exposure 1 shows detail.
+    // Without shadows, lit surfaces should land in the range where ACES at exposure 1 shows detail.
     let stats: Vec<(&str, f32, f32)> = builtin::NAMES
         .iter()
         .map(|&name| {
@@ -342,9 +342,11 @@ fn builtin_lights_give_a_reasonable_exposure() {
             (name, p50, p90)
         })
         .collect();
+    // The restaurant's 2 m lights leave much of its 8 x 6 m room dim (as in the paper), hence the low floor
+    // for the median; the brightly lit surfaces (90th percentile) must be well exposed everywhere.
     for (name, p50, p90) in stats {
-        assert!((0.15..2.5).contains(&p50), "{name}: median lit radiance {p50}");
-        assert!(p90 < 8.0, "{name}: 90th percentile radiance {p90}");
+        assert!((0.1..2.0).contains(&p50), "{name}: median lit radiance {p50}");
+        assert!((0.5..4.0).contains(&p90), "{name}: 90th percentile radiance {p90}");
     }
 }
 
@@ -641,17 +643,5 @@ fn generated_intensities_are_reasonable() {
         let p50 = percentile(&lit, 0.5);
         println!("arcade {spec}: lit {:.0}%, p50 {p50:.3} p90 {:.3}", fraction * 100.0, percentile(&lit, 0.9));
         assert!((0.05..4.0).contains(&p50), "{spec}: median lit radiance {p50}");
-    }
-}
-
-#[test]
-fn zz_debug_breakdown() {
-    let scene = build("restaurant");
-    for m in &scene.meshes {
-        let mut s = scene.clone();
-        s.meshes = vec![m.clone()];
-        let (lit, f) = unshadowed_radiance(&s, &scene.lights, 2000);
-        if lit.is_empty() { println!("{}: none", m.name); continue; }
-        println!("{}: lit {:.0}% p10 {:.3} p50 {:.3} p90 {:.3}", m.name, f * 100.0, percentile(&lit, 0.1), percentile(&lit, 0.5), percentile(&lit, 0.9));
     }
 }

@@ -529,3 +529,37 @@ fn cornell_box_gltf_loads() {
     assert_close(scene.bounds.min, Vec3::new(-2.0, 0.0, -2.0), 0.1);
     assert_close(scene.bounds.max, Vec3::new(2.0, 3.0, 2.0), 0.1);
 }
+
+#[test]
+fn corrupted_files_never_panic() {
+    // Deterministic byte corruption of the fixtures: loading may fail, but must return.
+    let dir = std::env::temp_dir().join(format!("shadowlab-corrupt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(fixture("checker.png"), dir.join("checker.png")).unwrap();
+    std::fs::copy(fixture("quad.mtl"), dir.join("quad.mtl")).unwrap();
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    for (name, replacements) in [
+        ("lit_quad.glb", &b"\x00\xff\x7f\x80 "[..]),
+        ("lit_quad.gltf", &b"0-9\"{}[],:e."[..]),
+        ("quad.obj", &b"0-9/ \nfv."[..]),
+    ] {
+        let original = std::fs::read(fixture(name)).unwrap();
+        let path = dir.join(name);
+        for _ in 0..3000 {
+            let mut bytes = original.clone();
+            for _ in 0..1 + next() % 4 {
+                let at = (next() % bytes.len() as u64) as usize;
+                bytes[at] = replacements[(next() % replacements.len() as u64) as usize];
+            }
+            std::fs::write(&path, &bytes).unwrap();
+            let _ = Scene::load(&path, 1.0);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -408,7 +408,8 @@ fn cornell() -> Scene {
 
 /// 32 lights at seeded random positions in the room, at least 10 cm from the walls and 8 cm from the objects,
 /// with random `L_att` in [0.6, 1.6] (LightCluster Fig. 8). With the room full of overlapping lights an
-/// intensity of 0.6 lights the walls to a radiance of about 0.4-1.5 (measured without shadows).
+/// intensity of 3 gives the lit surfaces a median radiance of ~0.7 and ~2 near lights (measured without
+/// shadows), bright but not blown out after tone mapping.
 fn cornell_lights() -> Vec<PointLight> {
     const COUNT: usize = 32;
     const INTENSITY: f32 = 3.0;
@@ -611,7 +612,8 @@ fn arcade_banners(b: &mut SceneBuilder, side: f32, red: usize, blue: usize) {
 
 /// The arcade's paper light set (LightCluster Fig. 7): ten circles of eight lights, radius 0.6 m at 1.8 m,
 /// five in each aisle, centred in the bays at x = 0, ±5, ±10 and in the middle of the aisle's depth; `L_att` = 7.
-/// Intensity 2.2 lights the aisles to a radiance of about 0.5-2 near the circles and the nave floor to ~0.2.
+/// Intensity 8 gives the lit surfaces a median radiance of ~0.45 and ~1.4 in the aisles near the circles
+/// (measured without shadows); the middle of the nave, 5 m from the circles, stays dim (~0.05) as in Sponza.
 fn arcade_lights() -> Vec<PointLight> {
     const RANGE: f32 = 7.0;
     const INTENSITY: f32 = 8.0;
@@ -827,8 +829,9 @@ fn chandelier_candle_bases() -> [Vec3; 4] {
 }
 
 /// The restaurant's 14 lights (LightCluster Fig. 9), all with `L_att` = 2: three candles on each table,
-/// four wall lamps and four chandelier candles. Intensities: ~0.8-1.5 radiance on the table tops from the
-/// candles, a pool of light on the wall around each lamp, the chandelier a little brighter to light the floor.
+/// four wall lamps and four chandelier candles. Intensities (measured without shadows): the candles light the
+/// table cloths to ~0.8-1.6; the wall lamps make a pool of ~0.4-1 on the wall around them; the chandelier,
+/// brighter, lights the ceiling around it. With `L_att` = 2 much of the room stays dim, as in the paper.
 fn restaurant_lights() -> Vec<PointLight> {
     const RANGE: f32 = 2.0;
     let candle = Vec3::new(1.0, 0.72, 0.42);

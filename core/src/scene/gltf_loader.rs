@@ -455,7 +455,7 @@ fn view_bytes<'b>(view: &gltf::buffer::View, buffers: &'b [Vec<u8>]) -> Result<&
     let buffer =
         buffers.get(view.buffer().index()).ok_or_else(|| format!("buffer view {} has no buffer", view.index()))?;
     let start = view.offset();
-    let end = start.checked_add(view.length()).unwrap_or(usize::MAX);
+    let end = start.saturating_add(view.length());
     buffer.get(start..end).ok_or_else(|| {
         format!(
             "buffer view {} (bytes {start}..{end}) lies outside buffer {} ({} bytes)",

@@ -292,6 +292,9 @@ impl Scene {
 
     /// `name` is a built-in scene name or a path to a file.
     pub fn load_any(name_or_path: &str, unit_scale: f32) -> Result<Scene, LoadError> {
+        if !(unit_scale.is_finite() && unit_scale > 0.0) {
+            return Err(LoadError::InvalidScale { scale: unit_scale });
+        }
         if builtin::NAMES.contains(&name_or_path) {
             if unit_scale != 1.0 {
                 log::warn!("--scale is ignored for built-in scenes");

@@ -13,7 +13,7 @@
 
 use std::borrow::Cow;
 use std::cell::RefCell;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3, Vec4};
@@ -118,6 +118,8 @@ fn parse_obj(
     dir: &Path,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), String> {
+    // The update is needed when tobj's optional `merging`/`reordering` features add fields.
+    #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -126,10 +128,18 @@ fn parse_obj(
         ignore_lines: true,
         ..Default::default()
     };
+    // tobj resolves a negative (relative) index reaching before the first element to a huge index and then
+    // does unchecked arithmetic on it (`vt * 2 + 1`), which overflows and panics in debug builds. Files with
+    // relative texture/normal indices are rare and small, so check them up front (a fast substring search
+    // keeps the common case free); the catch_unwind below stays as a backstop for anything else.
+    if text.contains("/-") {
+        if let Some(at) = locate_face_problem(text) {
+            return Err(format!("face index out of range ({at})"));
+        }
+    }
     let mtl_warnings = RefCell::new(Vec::new());
     let material_loader = |mtl: &Path| load_mtl_lenient(dir, mtl, &mut mtl_warnings.borrow_mut());
-    // tobj does unchecked index arithmetic (`vt * 2 + 1` on an index resolved from a far-out-of-range negative
-    // index), which overflows and panics in debug builds; user files must never take the program down.
+    // User files must never take the program down, whatever tobj does with them.
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         tobj::load_obj_buf(&mut text.as_bytes(), &options, material_loader)
     }));
@@ -302,11 +312,11 @@ fn convert_materials(mtl: &[tobj::Material], dir: &Path, scene: &mut Scene) {
     let mut files: Vec<PathBuf> = Vec::new();
     let mut file_index: HashMap<PathBuf, usize> = HashMap::new();
     let mut material_file: Vec<Option<usize>> = Vec::with_capacity(mtl.len());
-    let mut missing_warned: HashMap<&str, ()> = HashMap::new();
+    let mut missing_warned: HashSet<&str> = HashSet::new();
     for m in mtl {
         let file = m.diffuse_texture.as_deref().and_then(|name| {
             let found = find_file_case_insensitive(dir, name);
-            if found.is_none() && missing_warned.insert(name, ()).is_none() {
+            if found.is_none() && missing_warned.insert(name) {
                 warn(
                     &mut scene.warnings,
                     format!("missing texture '{name}' (material '{}'), looked in {}", m.name, dir.display()),
@@ -414,8 +424,9 @@ fn describe_line(index: usize, line: &str) -> String {
     format!("line {}: `{shown}`", index + 1)
 }
 
-/// Find the first face whose indices do not parse or point outside the vertex data (the whole file's, as
-/// tobj resolves positive indices at the end; negative ones are relative to the data read so far).
+/// Find the first face whose indices do not parse or point outside the vertex data, judged as tobj does:
+/// positive indices against the whole file's data (faces are resolved at the end), negative ones relative
+/// to the data read so far, and texture/normal indices not at all when the file has no `vt`/`vn`.
 fn locate_face_problem(text: &str) -> Option<String> {
     let (mut v_total, mut vt_total, mut vn_total) = (0i64, 0i64, 0i64);
     for line in text.lines() {
@@ -442,7 +453,7 @@ fn locate_face_problem(text: &str) -> Option<String> {
                             2 => (vn_seen, vn_total),
                             _ => return false,
                         };
-                        if part.is_empty() {
+                        if part.is_empty() || (k > 0 && total == 0) {
                             return k > 0;
                         }
                         match part.parse::<i64>() {

@@ -1,0 +1,185 @@
+//! End-to-end tests of `shadowlab` as a user runs it: real renders with a report, and bad input that must give
+//! a non-zero exit and a one-line error, never a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn shadowlab(args: &[&str]) -> Output {
+    let runtime = std::env::temp_dir().join("shadowlab-xdg");
+    std::fs::create_dir_all(&runtime).unwrap();
+    Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .args(args)
+        // Quiets Mesa's "XDG_RUNTIME_DIR is invalid" noise.
+        .env("XDG_RUNTIME_DIR", &runtime)
+        .output()
+        .expect("run shadowlab")
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/cli").join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn fixtures() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures")
+}
+
+fn shared_scenes() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
+    assert!(dir.is_dir(), "the shared scenes are missing: expected them at {}", dir.display());
+    dir
+}
+
+/// Bad input: exit code 1, no panic, and the last stderr line is one `error: ...` line containing `expect`.
+fn assert_fails_with(args: &[&str], expect: &str) {
+    let out = shadowlab(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{args:?} should fail; stderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+    let last = stderr.lines().last().unwrap_or_default();
+    assert!(last.starts_with("error: "), "{args:?}: last line is not an error line: {last:?}");
+    assert!(last.contains(expect), "{args:?}: expected '{expect}' in {last:?}");
+}
+
+fn render_ok(name: &str, extra: &[&str]) -> (image::RgbaImage, serde_json::Value) {
+    let dir = out_dir(name);
+    let png = dir.join("out.png");
+    let json = dir.join("report.json");
+    let mut args = vec!["render", "--quiet", "--warmup", "0", "--out", png.to_str().unwrap()];
+    args.extend_from_slice(&["--report", json.to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&png).unwrap().to_rgba8();
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    (img, report)
+}
+
+/// Share of pixels that are not (nearly) the background colour, and the mean luminance.
+fn image_stats(img: &image::RgbaImage) -> (f32, f32) {
+    let bg = img.get_pixel(0, 0).0;
+    let mut differ = 0usize;
+    let mut sum = 0f32;
+    for p in img.pixels() {
+        let d: i32 = (0..3).map(|c| (p.0[c] as i32 - bg[c] as i32).abs()).sum();
+        if d > 12 {
+            differ += 1;
+        }
+        sum += (p.0[0] as f32 + p.0[1] as f32 + p.0[2] as f32) / 3.0;
+    }
+    let n = (img.width() * img.height()) as f32;
+    (differ as f32 / n, sum / n)
+}
+
+#[test]
+fn renders_each_builtin_scene_with_a_report() {
+    for (scene, lights) in [("cornell", 32u64), ("arcade", 80), ("restaurant", 14)] {
+        let (img, report) = render_ok(
+            &format!("builtin-{scene}"),
+            &["--scene", scene, "--width", "96", "--height", "64", "--shadow-res", "64"],
+        );
+        assert_eq!((img.width(), img.height()), (96, 64));
+        let (share, mean) = image_stats(&img);
+        assert!(mean > 10.0, "{scene}: image is black (mean {mean})");
+        assert!(share > 0.2, "{scene}: image is mostly background");
+        assert_eq!(report["frame"]["counts"]["lights_total"], lights, "{scene}");
+        assert!(report["adapter"].as_str().unwrap().len() > 3);
+        assert!(report["frame"]["counts"]["shadow_maps"].as_u64().unwrap() > 0, "{scene}");
+        let passes = report["frame"]["passes"].as_array().unwrap();
+        for name in ["gbuffer", "shadow maps", "shading", "tonemap"] {
+            assert!(passes.iter().any(|p| p["name"] == name), "{scene}: no '{name}' pass in {passes:?}");
+        }
+        assert_eq!(report["parameters"]["shadow_res"], "64");
+    }
+}
+
+#[test]
+fn renders_sponza_with_the_paper_layout() {
+    let sponza = shared_scenes().join("dabrovic-sponza/sponza.obj");
+    let (img, report) = render_ok(
+        "sponza",
+        &[
+            "--scene",
+            sponza.to_str().unwrap(),
+            "--lights",
+            "paper",
+            "--camera=-14,2.5,0,10,3,0",
+            "--z-far",
+            "30",
+            "--width",
+            "96",
+            "--height",
+            "54",
+            "--shadow-res",
+            "64",
+        ],
+    );
+    let (_, mean) = image_stats(&img);
+    assert!(mean > 10.0, "sponza is black");
+    let counts = &report["frame"]["counts"];
+    assert_eq!(counts["lights_total"], 80);
+    assert_eq!(counts["scene_triangles"], 66450);
+    // Culling must remove most of the 6 x 66,450 triangles per cube map.
+    let drawn = counts["shadow_triangles_submitted"].as_f64().unwrap();
+    let culled = counts["shadow_triangles_culled"].as_f64().unwrap();
+    assert!(culled > drawn, "chunk culling: drawn {drawn}, culled {culled}");
+}
+
+#[test]
+fn random_layout_and_scene_file_with_scale() {
+    let obj = fixtures().join("quad.obj");
+    let (_, report) = render_ok(
+        "random",
+        &["--scene", obj.to_str().unwrap(), "--scale", "2", "--lights", "random:50:1.5:3", "--width", "64", "--height", "48"],
+    );
+    assert_eq!(report["frame"]["counts"]["lights_total"], 50);
+    assert_eq!(report["scale"], 2.0);
+}
+
+#[test]
+fn bad_input_gives_a_one_line_error() {
+    let dir = out_dir("bad");
+    let png = dir.join("x.png");
+    let png = png.to_str().unwrap();
+    let broken = fixtures().join("broken_index.obj");
+    let truncated = fixtures().join("truncated.glb");
+    assert_fails_with(&["render", "--scene", "nowhere", "--out", png], "unknown built-in scene 'nowhere'");
+    assert_fails_with(&["render", "--scene", "/no/such/file.obj", "--out", png], "file not found");
+    assert_fails_with(&["render", "--scene", broken.to_str().unwrap(), "--out", png], "broken_index.obj");
+    assert_fails_with(&["render", "--scene", truncated.to_str().unwrap(), "--out", png], "truncated.glb");
+    assert_fails_with(&["render", "--scene", "cornell", "--lights", "random:abc", "--out", png], "random:abc");
+    assert_fails_with(&["render", "--scene", "cornell", "--lights", "random:100001:1", "--out", png], "100001");
+    assert_fails_with(&["render", "--scene", "cornell", "--lights", "random:5:nan", "--out", png], "random:5:nan");
+    assert_fails_with(&["render", "--scene", "cornell", "--width", "0", "--out", png], "image size");
+    assert_fails_with(&["render", "--scene", "cornell", "--width", "100000", "--out", png], "image size");
+    assert_fails_with(&["render", "--scene", "cornell", "--shadow-res", "0", "--out", png], "shadow_res");
+    assert_fails_with(&["render", "--scene", "cornell", "--param", "bias=inf", "--out", png], "bias");
+    assert_fails_with(&["render", "--scene", "cornell", "--param", "nope=1", "--out", png], "no parameter 'nope'");
+    assert_fails_with(&["render", "--scene", "cornell", "--technique", "magic", "--out", png], "unknown technique");
+    assert_fails_with(&["render", "--scene", "cornell", "--out", "/tmp/x.jpg"], ".png");
+    assert_fails_with(&["render", "--scene", "cornell", "--out", "/no/such/dir/x.png"], "does not exist");
+    assert_fails_with(&["render", "--scene", "cornell", "--camera", "1,2,3", "--out", png], "--camera");
+    assert_fails_with(&["render", "--scene", "cornell", "--z-far=-1", "--out", png], "--z-far");
+    assert_fails_with(&["render", "--scene", "cornell", "--scale", "0", "--out", png], "scale");
+    assert!(!Path::new(png).exists(), "a failed render must not write its output");
+}
+
+#[test]
+fn zero_lights_render_and_report_no_shadow_maps() {
+    let (img, report) =
+        render_ok("zero", &["--scene", "cornell", "--lights", "random:0:1", "--width", "64", "--height", "48"]);
+    assert_eq!(report["frame"]["counts"]["shadow_maps"], 0);
+    assert_eq!(report["frame"]["counts"]["lights_total"], 0);
+    let (_, mean) = image_stats(&img);
+    assert!(mean < 60.0, "ambient only should be dark, mean {mean}");
+}
+
+#[test]
+fn info_prints_scene_statistics() {
+    let out = shadowlab(&["info", "--scene", "arcade"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("lights     80"), "{text}");
+    assert!(text.contains("triangles"), "{text}");
+}
