@@ -141,6 +141,7 @@ fn random_layout_and_scene_file_with_scale() {
 fn bad_input_gives_a_one_line_error() {
     let dir = out_dir("bad");
     let png = dir.join("x.png");
+    let _ = std::fs::remove_file(&png);
     let png = png.to_str().unwrap();
     let broken = fixtures().join("broken_index.obj");
     let truncated = fixtures().join("truncated.glb");
