@@ -43,14 +43,28 @@ fn cube_face_up(face: u32) -> vec3<f32> {
 }
 
 // Where direction `v` (from the light) lands in cube map `cube_index` of an atlas with `resolution` texels per
-// face and `tiles_per_row` tiles per row.
+// face and `tiles_per_row` tiles per row. Written out per major axis instead of through `cube_face_forward` and
+// `cube_face_up` (same table): this runs per pixel per light, and the selects are much cheaper than the switches
+// on lavapipe. `right = cross(forward, up)` gives the signs below.
 fn cube_lookup(v: vec3<f32>, cube_index: u32, resolution: f32, tiles_per_row: u32) -> CubeLookup {
-    let face = cube_face_of(v);
-    let forward = cube_face_forward(face);
-    let up = cube_face_up(face);
-    let right = cross(forward, up);
-    let z = dot(v, forward);
-    let ndc = vec2<f32>(dot(v, right), dot(v, up)) / z;
+    let a = abs(v);
+    var face: u32;
+    var z: f32;
+    var xy: vec2<f32>;
+    if a.x >= a.y && a.x >= a.z {
+        z = a.x;
+        face = select(1u, 0u, v.x >= 0.0);
+        xy = vec2<f32>(select(-v.z, v.z, v.x >= 0.0), v.y);
+    } else if a.y >= a.z {
+        z = a.y;
+        face = select(3u, 2u, v.y >= 0.0);
+        xy = vec2<f32>(v.x, select(-v.z, v.z, v.y >= 0.0));
+    } else {
+        z = a.z;
+        face = select(5u, 4u, v.z >= 0.0);
+        xy = vec2<f32>(select(v.x, -v.x, v.z >= 0.0), v.y);
+    }
+    let ndc = xy / z;
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
     var out: CubeLookup;
     let tile = cube_index * 6u + face;

@@ -131,7 +131,18 @@ fn random_layout_and_scene_file_with_scale() {
     let obj = fixtures().join("quad.obj");
     let (_, report) = render_ok(
         "random",
-        &["--scene", obj.to_str().unwrap(), "--scale", "2", "--lights", "random:50:1.5:3", "--width", "64", "--height", "48"],
+        &[
+            "--scene",
+            obj.to_str().unwrap(),
+            "--scale",
+            "2",
+            "--lights",
+            "random:50:1.5:3",
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
     );
     assert_eq!(report["frame"]["counts"]["lights_total"], 50);
     assert_eq!(report["scale"], 2.0);

@@ -17,7 +17,7 @@
 //!   renderer's windowed falloff still ends at a finite distance. Spot and directional lights are skipped
 //!   with a warning.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
@@ -58,7 +58,9 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(error("the file is empty".into()));
     }
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(|e| error(e.to_string()))?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| error(e.to_string()))?;
+    validate(&document).map_err(error)?;
     for ext in document.extensions_required() {
         if UNSUPPORTED_GEOMETRY_EXTENSIONS.contains(&ext) {
             return Err(error(format!("the file requires the unsupported extension {ext}")));
@@ -86,6 +88,7 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
         default_material: None,
         lights_without_range: Vec::new(),
         camera: None,
+        warned: HashSet::new(),
     };
     for ext in document.extensions_required() {
         if !UNSUPPORTED_GEOMETRY_EXTENSIONS.contains(&ext) && !loader.understands(ext) {
@@ -110,6 +113,32 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
         .filter(Camera::is_valid)
         .unwrap_or_else(|| Camera::framing(&scene.bounds));
     Ok(scene)
+}
+
+/// `gltf::Gltf::from_slice`'s validation, preceded by the one check it relies on without making it (its
+/// POSITION `min`/`max` hook indexes the accessor list unchecked and panics on a bad index).
+fn validate(document: &gltf::Document) -> Result<(), String> {
+    use gltf::json::validation::{Checked, Validate};
+    let root = document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive.attributes.get(&Checked::Valid(gltf::Semantic::Positions)) {
+                if index.value() >= root.accessors.len() {
+                    return Err(format!("mesh {m} primitive {p}: POSITION accessor {} does not exist", index.value()));
+                }
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| errors.push(format!("{}: {error}", path())));
+    match errors.len() {
+        0 => Ok(()),
+        n => Err(format!(
+            "invalid glTF: {}{}",
+            errors.iter().take(3).cloned().collect::<Vec<_>>().join("; "),
+            if n > 3 { format!(" (and {} more)", n - 3) } else { String::new() }
+        )),
+    }
 }
 
 /// A perspective camera found in the node tree; `z_far` is `None` for an infinite projection.
@@ -143,12 +172,16 @@ struct Loader<'a> {
     /// Indices into `scene.lights` of lights whose file gives no range.
     lights_without_range: Vec<usize>,
     camera: Option<FileCamera>,
+    warned: HashSet<String>,
 }
 
 impl Loader<'_> {
+    /// Record a warning once (a mesh instanced by many nodes would repeat its warnings).
     fn warn(&mut self, message: String) {
-        log::warn!("{message}");
-        self.scene.warnings.push(message);
+        if self.warned.insert(message.clone()) {
+            log::warn!("{message}");
+            self.scene.warnings.push(message);
+        }
     }
 
     fn understands(&self, extension: &str) -> bool {
