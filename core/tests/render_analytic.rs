@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use glam::{Vec3, Vec4Swizzles};
 use shadowlab_core::scene::{attenuation, Camera, PointLight, Scene};
-use shadowlab_core::technique::{ParamValue, Technique};
+use shadowlab_core::technique::ParamValue;
 use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
 
 const W: u32 = 160;

@@ -684,12 +684,12 @@ fn restaurant() -> Scene {
         // Chairs on the long sides, facing the table.
         for dz in [-0.75f32, 0.75] {
             for dx in [-0.35, 0.35] {
-                add_chair(b.mesh("chairs", m.dark_wood), center + Vec3::new(dx, 0.0, dz), dz.signum());
+                add_chair(b.mesh("chairs", m.dark_wood), center + Vec3::new(dx, 0.0, dz), Vec3::Z * dz.signum());
             }
         }
         // A chair at the head of the table, turned 90 degrees, away from the room's middle.
         let head = if i == 0 { -1.0 } else { 1.0 };
-        add_chair_facing_x(b.mesh("chairs", m.dark_wood), center + Vec3::new(head * 0.95, 0.0, 0.0), head);
+        add_chair(b.mesh("chairs", m.dark_wood), center + Vec3::new(head * 0.95, 0.0, 0.0), Vec3::X * head);
     }
     for z in [-1.0f32, 1.0] {
         for x in WALL_LAMP_X {
@@ -763,18 +763,9 @@ fn add_table(b: &mut SceneBuilder, center: Vec3, m: &RestaurantMaterials) {
     }
 }
 
-/// A chair beside a table; `side` = ±1 is the side of the table (along Z) it stands on, its back away from it.
-fn add_chair(mesh: &mut Mesh, floor: Vec3, side: f32) {
-    add_chair_parts(mesh, floor, Vec3::Z * side);
-}
-
-/// A chair at the head of a table; `side` = ±1 along X.
-fn add_chair_facing_x(mesh: &mut Mesh, floor: Vec3, side: f32) {
-    add_chair_parts(mesh, floor, Vec3::X * side);
-}
-
-/// Seat, four legs and a backrest on the `back` side (a unit vector along X or Z).
-fn add_chair_parts(mesh: &mut Mesh, floor: Vec3, back: Vec3) {
+/// A chair standing at `floor`: seat, four legs and a backrest on the `back` side (a unit vector along X or Z,
+/// pointing away from the table).
+fn add_chair(mesh: &mut Mesh, floor: Vec3, back: Vec3) {
     let (seat_half, seat_height) = (0.22, 0.46);
     add_box(mesh, floor + Vec3::Y * seat_height, Vec3::new(seat_half, 0.025, seat_half), 0.0);
     let side = Vec3::new(back.z, 0.0, back.x);
@@ -795,7 +786,7 @@ fn add_wall_lamp(b: &mut SceneBuilder, at: Vec3, out: f32, m: &RestaurantMateria
     add_box(brass, at + dir * 0.015, Vec3::new(0.06, 0.1, 0.015), 0.0);
     add_box(brass, at + dir * 0.14 - Vec3::Y * 0.05, Vec3::new(0.012, 0.012, 0.11), 0.0);
     let cup = at + dir * 0.25 - Vec3::Y * 0.06;
-    add_cylinder(brass, cup, 0.04, 0.04, 12);
+    add_cylinder(brass, cup, 0.025, 0.04, 12);
     add_cylinder(b.mesh("candles", m.wax), cup + Vec3::Y * 0.04, 0.012, 0.08, 10);
 }
 
