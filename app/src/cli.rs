@@ -322,8 +322,17 @@ fn render(args: RenderArgs) -> Result<()> {
             report.counts.technique.shadow_triangles_submitted,
             report.counts.technique.shadow_triangles_culled,
         );
+        if let Some(c) = report.counts.technique.clusters {
+            eprintln!(
+                "  {c} clusters{}",
+                if report.counts.technique.fell_back_to_reference { " (= visible lights: reference path)" } else { "" }
+            );
+        }
         for p in &report.passes {
             eprintln!("  {:<14} {:>10.2} ms  ({} passes)", p.name, p.ms, p.count);
+        }
+        for p in &report.cpu_stages {
+            eprintln!("  {:<14} {:>10.3} ms  (CPU)", p.name, p.ms);
         }
         eprintln!("wrote {}", args.out.display());
     }

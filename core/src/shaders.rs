@@ -16,6 +16,11 @@ pub const REFERENCE_SHADE: &str = concat!(
     include_str!("../../shaders/cube_shadow.wgsl"),
     include_str!("../../shaders/reference_shade.wgsl")
 );
+pub const LIGHTCLUSTER_SHADE: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/cube_shadow.wgsl"),
+    include_str!("../../shaders/lightcluster_shade.wgsl")
+);
 
 /// Every composed shader module: (name, the files it is made of, source).
 pub const MODULES: &[(&str, &[&str], &str)] = &[
@@ -24,6 +29,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
     ("tonemap", &["common.wgsl", "tonemap.wgsl"], TONEMAP),
     ("reference_shade", &["common.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"], REFERENCE_SHADE),
+    ("lightcluster_shade", &["common.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"], LIGHTCLUSTER_SHADE),
 ];
 
 /// Create a shader module from one of the sources above.

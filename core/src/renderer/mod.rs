@@ -216,6 +216,8 @@ pub struct FrameReport {
     pub passes: Vec<PassTime>,
     /// Sum of the passes.
     pub gpu_total_ms: f64,
+    /// CPU stages of the technique (e.g. clustering), milliseconds.
+    pub cpu_stages: Vec<PassTime>,
     /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
     pub wall_ms: f64,
     pub counts: FrameCounts,
@@ -638,6 +640,7 @@ impl Renderer {
             timing_source: self.timer.source(),
             passes,
             gpu_total_ms,
+            cpu_stages: technique.cpu_times(),
             wall_ms: job.started.elapsed().as_secs_f64() * 1000.0,
             counts: FrameCounts {
                 lights_total: job.lights.len(),

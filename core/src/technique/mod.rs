@@ -51,6 +51,12 @@ pub struct TechniqueCounts {
     pub shadow_triangles_submitted: u64,
     /// Triangles a shadow map would have drawn without chunk culling, minus those it drew.
     pub shadow_triangles_culled: u64,
+    /// Light clusters (LightCluster), when the technique clusters.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clusters: Option<usize>,
+    /// True when the technique handed the frame to the reference path (LightCluster's worst case).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub fell_back_to_reference: bool,
 }
 
 /// A parameter value.
@@ -209,7 +215,121 @@ pub trait Technique {
     /// Label of a step's work when the CPU fallback times whole steps.
     fn step_label(&self) -> &'static str;
     fn counts(&self) -> TechniqueCounts;
+    /// CPU stages of the last `prepare` (e.g. clustering), in milliseconds.
+    fn cpu_times(&self) -> Vec<crate::timing::PassTime> {
+        Vec::new()
+    }
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
+}
+
+/// A full-screen pass that adds `pipeline`'s output into the HDR target: group 0 is the screen bind group,
+/// group 1 the technique's. The shading passes of all techniques go through here.
+pub fn accumulate_pass(
+    ctx: &FrameContext,
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::RenderPipeline,
+    group: &wgpu::BindGroup,
+) {
+    ctx.timer.render_pass(
+        encoder,
+        label,
+        wgpu::RenderPassDescriptor {
+            label: None,
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: ctx.hdr_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        },
+        |pass| {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+            pass.set_bind_group(1, group, &[]);
+            pass.draw(0..3, 0..1);
+        },
+    );
+}
+
+/// A storage-buffer layout entry for fragment shaders, read only.
+pub fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A uniform-buffer layout entry for fragment shaders.
+pub fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A depth-texture layout entry (cube shadow atlases) for fragment shaders.
+pub fn depth_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Depth,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A storage buffer of `T` that grows (to the next power of two) when a frame needs more.
+pub struct GrowableBuffer {
+    pub buffer: wgpu::Buffer,
+    capacity_bytes: u64,
+    label: &'static str,
+}
+
+impl GrowableBuffer {
+    pub fn new(device: &wgpu::Device, label: &'static str, capacity_bytes: u64) -> Self {
+        let capacity_bytes = capacity_bytes.max(256);
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: capacity_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        GrowableBuffer { buffer, capacity_bytes, label }
+    }
+
+    /// Upload `data`; returns true when the buffer was recreated (bind groups must be rebuilt).
+    pub fn write<T: bytemuck::Pod>(&mut self, gpu: &GpuContext, data: &[T]) -> bool {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let mut grown = false;
+        if bytes.len() as u64 > self.capacity_bytes {
+            *self = GrowableBuffer::new(&gpu.device, self.label, (bytes.len() as u64).next_power_of_two());
+            grown = true;
+        }
+        if !bytes.is_empty() {
+            gpu.queue.write_buffer(&self.buffer, 0, bytes);
+        }
+        grown
+    }
 }
 
 /// Helper for `set_param`: find the parameter, check the value's range, or say what exists.
@@ -232,11 +352,18 @@ pub struct TechniqueEntry {
 }
 
 /// Every technique ShadowLab has. The app's selector and the CLI's `--technique` read this list.
-pub const REGISTRY: &[TechniqueEntry] = &[TechniqueEntry {
-    key: "reference",
-    label: "Reference (cube shadow map per light)",
-    create: |gpu, layouts| Box::new(reference::Reference::new(gpu, layouts)),
-}];
+pub const REGISTRY: &[TechniqueEntry] = &[
+    TechniqueEntry {
+        key: "reference",
+        label: "Reference (cube shadow map per light)",
+        create: |gpu, layouts| Box::new(reference::Reference::new(gpu, layouts)),
+    },
+    TechniqueEntry {
+        key: "lightcluster",
+        label: "LightCluster (clustered cube maps, PCF/PCSS)",
+        create: |gpu, layouts| Box::new(lightcluster::LightCluster::new(gpu, layouts)),
+    },
+];
 
 /// Create a technique by key.
 pub fn create(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {

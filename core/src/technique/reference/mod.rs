@@ -13,8 +13,8 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::{
-    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
-    TechniqueCounts,
+    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, FrameContext, GrowableBuffer,
+    Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
@@ -68,8 +68,7 @@ pub struct Reference {
     pipeline: wgpu::RenderPipeline,
     group_layout: wgpu::BindGroupLayout,
     batch_uniform: wgpu::Buffer,
-    lights_buffer: wgpu::Buffer,
-    lights_capacity: usize,
+    lights_buffer: GrowableBuffer,
     bind_group: Option<wgpu::BindGroup>,
     /// Indices of the visible lights of this frame, in batch order.
     visible: Vec<usize>,
@@ -83,38 +82,7 @@ impl Reference {
         let device = &gpu.device;
         let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference shade"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Depth,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-            ],
+            entries: &[storage_entry(0), uniform_entry(1), depth_texture_entry(2)],
         });
         let module = shaders::create_module(device, "reference_shade", shaders::REFERENCE_SHADE);
         let pipeline = layouts.fullscreen_pipeline(
@@ -130,8 +98,7 @@ impl Reference {
             contents: bytemuck::bytes_of(&ReferenceBatchUniform::zeroed_default()),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let lights_capacity = 64;
-        let lights_buffer = Self::create_lights_buffer(device, lights_capacity);
+        let lights_buffer = GrowableBuffer::new(device, "reference lights", 64 * 32);
         Reference {
             params: ReferenceParams::default(),
             cubes: CubeShadowRenderer::new(gpu),
@@ -139,22 +106,12 @@ impl Reference {
             group_layout,
             batch_uniform,
             lights_buffer,
-            lights_capacity,
             bind_group: None,
             visible: Vec::new(),
             gpu_lights: Vec::new(),
             batch_size: 1,
             counts: TechniqueCounts::default(),
         }
-    }
-
-    fn create_lights_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("reference lights"),
-            size: (capacity * std::mem::size_of::<GpuLight>()) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
     }
 
     /// The lights of this frame that passed view-frustum culling (indices into the frame's lights).
@@ -248,18 +205,14 @@ impl Technique for Reference {
             batches,
             shadow_triangles_submitted: 0,
             shadow_triangles_culled: 0,
+            ..Default::default()
         };
         if self.visible.is_empty() {
             return Ok(0);
         }
 
         let mut rebind = self.bind_group.is_none();
-        if self.gpu_lights.len() > self.lights_capacity {
-            self.lights_capacity = self.gpu_lights.len().next_power_of_two();
-            self.lights_buffer = Self::create_lights_buffer(&ctx.gpu.device, self.lights_capacity);
-            rebind = true;
-        }
-        ctx.gpu.queue.write_buffer(&self.lights_buffer, 0, bytemuck::cast_slice(&self.gpu_lights));
+        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
         rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible.len()));
         if rebind {
             let atlas = self.cubes.atlas().expect("atlas was just ensured");
@@ -267,7 +220,7 @@ impl Technique for Reference {
                 label: Some("reference shade"),
                 layout: &self.group_layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
                 ],
@@ -305,31 +258,8 @@ impl Technique for Reference {
             _pad: [0.0; 2],
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
-        let pipeline = &self.pipeline;
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        ctx.timer.render_pass(
-            encoder,
-            "shading",
-            wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: ctx.hdr_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            },
-            |pass| {
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, ctx.screen_bind_group, &[]);
-                pass.set_bind_group(1, group, &[]);
-                pass.draw(0..3, 0..1);
-            },
-        );
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
         Ok(())
     }
 

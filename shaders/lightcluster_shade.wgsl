@@ -1,0 +1,200 @@
+// LightCluster (Wiesenhuetter et al. 2013, section 3.2), shading of one batch of clusters. Each cluster is a
+// disc area light of radius d_min at its center light, with one cube shadow map (far plane C_att). For every
+// pixel, a cluster's visibility is computed once (PCF or PCSS over a Poisson disk) and modulates the summed
+// radiance of all its member lights. Composed after common.wgsl and cube_shadow.wgsl.
+// `Batch` and `Cluster` mirror `ClusterBatchUniform` and `GpuCluster` in core/src/technique/lightcluster/gpu.rs.
+
+struct Batch {
+    first_cluster: u32,
+    cluster_count: u32,
+    resolution: f32,
+    bias_world: f32,
+    normal_offset_texels: f32,
+    tiles_per_row: u32,
+    // Poisson-disk samples, 1..=64
+    samples: u32,
+    // 0: PCF, 1: PCSS
+    pcss: u32,
+}
+
+struct Cluster {
+    position: vec3<f32>,
+    // area-light radius: the cluster's d_min
+    radius: f32,
+    // C_att: no member light reaches farther from the center
+    c_att: f32,
+    shadow_near: f32,
+    first_light: u32,
+    light_count: u32,
+}
+
+@group(1) @binding(0) var<storage, read> lights: array<Light>;
+@group(1) @binding(1) var<storage, read> clusters: array<Cluster>;
+@group(1) @binding(2) var<uniform> batch: Batch;
+@group(1) @binding(3) var shadow_atlas: texture_depth_2d;
+
+// Mitchell best-candidate points in the unit disc: every prefix is well spread, so the first N serve any N.
+var<private> POISSON: array<vec2<f32>, 64> = array<vec2<f32>, 64>(
+    vec2<f32>(-0.3523, -0.6983),
+    vec2<f32>(0.6386, 0.7280),
+    vec2<f32>(-0.8586, 0.4818),
+    vec2<f32>(0.8402, -0.4860),
+    vec2<f32>(-0.1599, 0.1652),
+    vec2<f32>(-0.1793, 0.8959),
+    vec2<f32>(-0.8760, -0.2242),
+    vec2<f32>(0.9604, 0.1273),
+    vec2<f32>(0.3131, -0.8999),
+    vec2<f32>(0.3790, -0.1101),
+    vec2<f32>(0.2796, 0.3824),
+    vec2<f32>(-0.0341, -0.3252),
+    vec2<f32>(-0.5879, 0.1097),
+    vec2<f32>(0.2731, 0.9369),
+    vec2<f32>(-0.4670, 0.5822),
+    vec2<f32>(-0.4849, -0.2895),
+    vec2<f32>(0.4350, -0.5125),
+    vec2<f32>(-0.7774, -0.6001),
+    vec2<f32>(-0.0853, -0.9735),
+    vec2<f32>(0.6422, 0.3273),
+    vec2<f32>(-0.9542, 0.1344),
+    vec2<f32>(-0.0990, 0.5397),
+    vec2<f32>(0.7488, -0.1360),
+    vec2<f32>(0.6552, -0.7500),
+    vec2<f32>(0.0921, -0.6386),
+    vec2<f32>(0.1250, 0.0843),
+    vec2<f32>(0.1782, 0.6642),
+    vec2<f32>(-0.5085, 0.8599),
+    vec2<f32>(0.8260, 0.5368),
+    vec2<f32>(-0.2291, -0.1081),
+    vec2<f32>(-0.4243, 0.3145),
+    vec2<f32>(0.5177, 0.0990),
+    vec2<f32>(0.2367, -0.3355),
+    vec2<f32>(-0.7013, 0.6893),
+    vec2<f32>(-0.5995, -0.7907),
+    vec2<f32>(-0.1435, -0.5532),
+    vec2<f32>(0.4223, 0.5865),
+    vec2<f32>(-0.5319, -0.5314),
+    vec2<f32>(0.0396, 0.3298),
+    vec2<f32>(0.9581, -0.2676),
+    vec2<f32>(0.5945, -0.3212),
+    vec2<f32>(-0.6401, -0.1210),
+    vec2<f32>(-0.6390, 0.4398),
+    vec2<f32>(0.0439, 0.9901),
+    vec2<f32>(-0.2543, -0.3451),
+    vec2<f32>(-0.7081, -0.3723),
+    vec2<f32>(-0.3055, -0.9210),
+    vec2<f32>(0.9090, 0.3368),
+    vec2<f32>(0.0969, -0.1444),
+    vec2<f32>(-0.3636, 0.0807),
+    vec2<f32>(-0.7797, 0.2681),
+    vec2<f32>(-0.2808, 0.7045),
+    vec2<f32>(0.0860, -0.8515),
+    vec2<f32>(0.7343, 0.0973),
+    vec2<f32>(-0.1552, -0.7785),
+    vec2<f32>(0.4361, -0.7193),
+    vec2<f32>(-0.0098, 0.7634),
+    vec2<f32>(-0.2163, 0.3685),
+    vec2<f32>(0.3163, 0.1743),
+    vec2<f32>(0.4632, 0.8386),
+    vec2<f32>(-0.8032, -0.0065),
+    vec2<f32>(0.6438, -0.5208),
+    vec2<f32>(0.9579, -0.0683),
+    vec2<f32>(-0.8930, -0.4462)
+);
+
+struct ShadowSample {
+    // 1 when the sample point is lit
+    lit: f32,
+    // distance along the face axis of the stored occluder (when not lit)
+    occluder: f32,
+    // distance along the face axis of the sample point
+    receiver: f32,
+}
+
+fn shadow_sample(q: vec3<f32>, cluster: Cluster, cube_index: u32) -> ShadowSample {
+    let look = cube_lookup(q - cluster.position, cube_index, batch.resolution, batch.tiles_per_row);
+    let depth = textureLoad(shadow_atlas, look.texel, 0);
+    var out: ShadowSample;
+    out.receiver = look.axis_distance;
+    out.occluder = cube_depth_to_distance(depth, cluster.shadow_near, cluster.c_att);
+    out.lit = select(0.0, 1.0, depth >= 1.0 || look.axis_distance - batch.bias_world <= out.occluder);
+    return out;
+}
+
+// A point of the receiver plane (through p, normal n) seen from the light in direction `offset` away from p,
+// `offset` being perpendicular to the light direction l: samples stay on the receiver plane, so filtering
+// does not shadow the surface itself, while their footprint in the shadow map keeps the filter's size.
+fn on_receiver_plane(p: vec3<f32>, n: vec3<f32>, l: vec3<f32>, offset: vec3<f32>) -> vec3<f32> {
+    return p + offset - l * (dot(offset, n) / max(dot(l, n), 0.2));
+}
+
+fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
+    let to_light = cluster.position - s.position;
+    let d = length(to_light);
+    let l = to_light / d;
+    let texel_world = 2.0 * d / batch.resolution;
+    let p = s.position + s.normal * (texel_world * batch.normal_offset_texels);
+    // Basis of the plane perpendicular to the light direction.
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), abs(l.x) > 0.9);
+    let t = normalize(cross(l, helper));
+    let b = cross(l, t);
+    let n = s.normal;
+    let count = clamp(batch.samples, 1u, 64u);
+
+    // Filter radius in world units at the receiver.
+    var filter_radius = cluster.radius;
+    if batch.pcss == 1u {
+        // PCSS step 1: blocker search over the region the disc light can see through.
+        var blocker_sum = 0.0;
+        var blockers = 0.0;
+        for (var i = 0u; i < count; i++) {
+            let o = POISSON[i] * cluster.radius;
+            let smp = shadow_sample(on_receiver_plane(p, n, l, t * o.x + b * o.y), cluster, cube_index);
+            if smp.lit < 0.5 {
+                blocker_sum += smp.occluder;
+                blockers += 1.0;
+            }
+        }
+        if blockers == 0.0 {
+            return 1.0;
+        }
+        // Step 2: penumbra width from similar triangles, w = r (d_receiver - d_blocker) / d_blocker.
+        let d_blocker = max(blocker_sum / blockers, cluster.shadow_near);
+        let d_receiver = max(d - texel_world, d_blocker);
+        // The wider the filter, the sparser its samples: limit it to a few light radii (see the module notes).
+        filter_radius = min(cluster.radius * (d_receiver - d_blocker) / d_blocker, 4.0 * cluster.radius);
+    }
+    // PCF (PCSS step 3) over a disc of `filter_radius`.
+    if filter_radius <= 0.0 {
+        return shadow_sample(p, cluster, cube_index).lit;
+    }
+    var lit = 0.0;
+    for (var i = 0u; i < count; i++) {
+        let o = POISSON[i] * filter_radius;
+        lit += shadow_sample(on_receiver_plane(p, n, l, t * o.x + b * o.y), cluster, cube_index).lit;
+    }
+    return lit / f32(count);
+}
+
+@fragment
+fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let s = load_surface(vec2<i32>(in.position.xy));
+    if !s.is_geometry {
+        discard;
+    }
+    var sum = vec3<f32>(0.0);
+    for (var c = 0u; c < batch.cluster_count; c++) {
+        let cluster = clusters[batch.first_cluster + c];
+        // Pixels beyond C_att get nothing from the cluster (paper 3.2.2).
+        if distance(s.position, cluster.position) > cluster.c_att {
+            continue;
+        }
+        var unshadowed = vec3<f32>(0.0);
+        for (var i = 0u; i < cluster.light_count; i++) {
+            unshadowed += shade_light(s, lights[cluster.first_light + i]);
+        }
+        if any(unshadowed > vec3<f32>(0.0)) {
+            sum += unshadowed * cluster_visibility(s, cluster, c);
+        }
+    }
+    return vec4<f32>(sum, 0.0);
+}
