@@ -1,0 +1,150 @@
+//! LightCluster on the GPU against the reference: the reference is the oracle.
+
+mod common;
+
+use common::*;
+use glam::Vec3;
+use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+fn render(
+    scene: &Scene,
+    lights: &[PointLight],
+    technique: &str,
+    params: &[(&str, ParamValue)],
+) -> (Vec<[f32; 4]>, FrameReport) {
+    let gpu = gpu();
+    let settings = RenderSettings { width: W, height: H, tonemap: ToneMap::Linear, ..Default::default() };
+    let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
+    let mut t = renderer.create_technique(technique).unwrap();
+    t.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
+    for (k, v) in params {
+        t.set_param(k, v).unwrap();
+    }
+    let report = renderer.render_frame(t.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
+    (renderer.read_hdr().unwrap(), report)
+}
+
+/// Largest per-channel relative difference and the share of pixels differing by more than `tol` (relative).
+fn compare(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> (f32, f32) {
+    let mut worst = 0f32;
+    let mut over = 0usize;
+    for (p, q) in a.iter().zip(b) {
+        let d = (0..3).map(|c| (p[c] - q[c]).abs() / (1e-3 + q[c].abs())).fold(0f32, f32::max);
+        worst = worst.max(d);
+        if d > tol {
+            over += 1;
+        }
+    }
+    (worst, over as f32 / a.len() as f32)
+}
+
+fn lights_around_occluder() -> Vec<PointLight> {
+    // Three groups of lights above the plate; inside a group lights are 0.2 m apart.
+    let mut lights = Vec::new();
+    for (gi, center) in
+        [Vec3::new(-1.5, 3.0, 0.2), Vec3::new(1.2, 2.5, -0.5), Vec3::new(0.0, 3.5, 1.5)].iter().enumerate()
+    {
+        for k in 0..4 {
+            let a = k as f32 * std::f32::consts::FRAC_PI_2 + gi as f32;
+            lights.push(white_light(*center + Vec3::new(a.cos(), 0.0, a.sin()) * 0.1, 4.0, 8.0));
+        }
+    }
+    lights
+}
+
+#[test]
+fn one_cluster_per_light_with_zero_radius_equals_the_reference() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    for filter in ["pcf", "pcss"] {
+        let (lc, report) = render(
+            &scene,
+            &lights,
+            "lightcluster",
+            &[
+                ("d_init", ParamValue::Float(0.0)),
+                ("fallback", ParamValue::Bool(false)),
+                ("filter", ParamValue::Choice(filter.into())),
+            ],
+        );
+        let c = &report.counts.technique;
+        assert_eq!(c.clusters, Some(lights.len()), "{filter}");
+        assert!(!c.fell_back_to_reference);
+        assert_eq!(c.shadow_maps, lights.len());
+        let (worst, _) = compare(&lc, &reference, 0.0);
+        assert!(worst < 1e-3, "{filter}: LightCluster with d_init = 0 differs from the reference by {worst}");
+    }
+}
+
+#[test]
+fn a_tiny_radius_stays_within_a_tight_threshold_of_the_reference() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (lc, report) = render(
+        &scene,
+        &lights,
+        "lightcluster",
+        &[("d_init", ParamValue::Float(0.001)), ("fallback", ParamValue::Bool(false))],
+    );
+    assert_eq!(report.counts.technique.clusters, Some(lights.len()));
+    let (_, share) = compare(&lc, &reference, 0.01);
+    assert!(share < 0.002, "{:.3}% of pixels differ by more than 1%", share * 100.0);
+}
+
+#[test]
+fn the_worst_case_falls_back_to_the_reference_path() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (lc, report) = render(&scene, &lights, "lightcluster", &[("d_init", ParamValue::Float(0.01))]);
+    let c = &report.counts.technique;
+    assert!(c.fell_back_to_reference, "clusters == visible lights must take the reference path");
+    assert_eq!(c.clusters, Some(lights.len()));
+    assert_eq!(c.shadow_maps, lights.len());
+    assert_eq!(lc, reference, "the fallback must be the reference exactly");
+}
+
+#[test]
+fn clustering_reduces_shadow_maps_and_softens_shadows_with_a_bounded_error() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    for filter in ["pcf", "pcss"] {
+        let (lc, report) = render(
+            &scene,
+            &lights,
+            "lightcluster",
+            &[("d_init", ParamValue::Float(0.5)), ("filter", ParamValue::Choice(filter.into()))],
+        );
+        let c = &report.counts.technique;
+        assert_eq!(c.clusters, Some(3), "{filter}: three groups of lights make three clusters");
+        assert_eq!(c.shadow_maps, 3);
+        assert!(!c.fell_back_to_reference);
+        // Soft shadows differ from the hard reference near the shadow boundaries only.
+        let (_, share) = compare(&lc, &reference, 0.05);
+        assert!(share > 0.001, "{filter}: a disc light of radius d_min must soften something ({share})");
+        assert!(share < 0.15, "{filter}: {:.1}% of pixels differ by more than 5%", share * 100.0);
+        // The CPU stage is reported.
+        assert!(report.cpu_stages.iter().any(|s| s.name == "clustering"));
+    }
+}
+
+#[test]
+fn zero_and_out_of_view_lights_give_no_clusters() {
+    let scene = plane_and_occluder();
+    let (img, report) = render(&scene, &[], "lightcluster", &[]);
+    assert_eq!(report.counts.technique.clusters, Some(0));
+    let (reference, _) = render(&scene, &[], "reference", &[]);
+    assert_eq!(img, reference);
+    let behind = [white_light(Vec3::new(0.0, 6.0, 40.0), 10.0, 2.0)];
+    let (_, report) = render(&scene, &behind, "lightcluster", &[]);
+    assert_eq!(report.counts.technique.lights_visible, 0);
+    assert_eq!(report.counts.technique.shadow_maps, 0);
+}
