@@ -274,6 +274,9 @@ fn check_center_spacing(name: &str, c: &Clustering) {
 fn check_nearest(name: &str, lights: &[PointLight], c: &Clustering, sample: impl Iterator<Item = usize>) {
     for i in sample {
         let Some(k) = c.cluster_of[i] else { continue };
+        if c.clusters[k as usize].center == i {
+            continue; // a center is its own cluster (it may coincide with another center whose d_min is 0)
+        }
         let p = lights[i].position;
         let d2 = p.distance_squared(c.clusters[k as usize].position);
         for (j, other) in c.clusters.iter().enumerate() {
@@ -472,7 +475,7 @@ fn hundred_thousand_lights() {
         check_nearest(&name, &lights, &c, (0..300).map(|_| rng.below(lights.len())));
         if d_init == 0.0 {
             assert_eq!(c.clusters.len(), c.visible);
-        } else {
+        } else if d_init >= 0.5 {
             assert!(c.clusters.len() < c.visible, "{name}: some lights cluster");
         }
     }
@@ -587,38 +590,39 @@ fn worked_example_assigns_to_the_nearest_center_not_the_first() {
         light(at(0.9), 1.0),  // 0: covered by A (0.9 <= 1), but C is nearer (0.6)
         light(at(0.0), 3.0),  // 1: A, the largest range: first center
         light(at(0.5), 2.0),  // 2: covered by A (0.5), nearest A
-        light(at(1.5), 2.0),  // 3: C, 1.5 > 1 from A (sorted before 2? no: same range, index 3 > 2)
+        light(at(1.5), 2.0),  // 3: C, 1.5 > 1 from A (same range as 2: sorted after it by index)
         light(at(2.2), 1.0),  // 4: covered by C (0.7), nearest C
-        light(at(-1.0), 1.0), // 5: exactly d_min from A: covered (not farther than d_min)
+        light(at(-1.0), 2.5), // 5: exactly d_min from A: covered ("farther than d_min" fails); grows C_att
         light(at(0.0), 0.5),  // 6: coincident with A: covered, d_C 0
-        light(at(0.0), 1.0) + Vec3::ZERO,
     ];
-    let lights = &lights[..7];
     let params = ClusterParams { d_init: 1.0, z_far: 100.0, adaptive: false };
-    let c = cluster_lights(lights, camera.position, &frustum, &params);
+    let c = cluster_lights(&lights, camera.position, &frustum, &params);
     assert_eq!(c.visible, 7);
     assert_eq!(c.clusters.len(), 2);
     let (a, cc) = (&c.clusters[0], &c.clusters[1]);
     assert_eq!((a.center, cc.center), (1, 3));
-    // Members after the center in sorted order: range 2 (index 2), then range 1 by index (5), then 0.5 (6).
-    assert_eq!(a.members, vec![1, 2, 5, 6]);
+    // Members after the center in sorted order: 5 (range 2.5), 2 (range 2), 6 (range 0.5); 0 and 4 by index.
+    assert_eq!(a.members, vec![1, 5, 2, 6]);
     assert_eq!(cc.members, vec![3, 0, 4]);
-    assert_eq!(a.c_att, 3.0); // max(3, 0.5 + 2, 1 + 1, 0 + 0.5)
-    assert!((cc.c_att - (0.7 + 1.0)).abs() < 1e-6); // max(2, 0.6 + 1, 0.7 + 1)
+    assert_eq!(a.c_att, 3.5); // max(3, 1 + 2.5, 0.5 + 2, 0 + 0.5)
+    assert_eq!(cc.c_att, 2.0); // max(2, 0.6 + 1, 0.7 + 1)
     assert!((cc.radius - 0.7).abs() < 1e-6);
     assert_eq!(a.radius, 1.0);
     assert_eq!((a.d_min, cc.d_min), (1.0, 1.0));
     assert_eq!(c.cluster_of, vec![Some(1), Some(0), Some(0), Some(1), Some(1), Some(0), Some(0)]);
 
-    // View-adaptive: the camera is 20 from the lights and z_far 40, so d_min = 0.5 * d_init.
+    // View-adaptive: the lights are about 20 from the camera and z_far is 40, so d_min is about 0.5.
+    // Sorted: 1, 5, 2, 3, 0, 4, 6. 1 is a center (d_min exactly 0.5); 5 is 1.0 > 0.5 from it: a center;
+    // 2 is exactly 0.5 from 1: covered; 3, 0 and 4 are each more than ~0.4986 from every earlier center:
+    // centers; 6 coincides with 1: covered. Step 4: 2 is 0.4 from 0 but 0.5 from 1, so it joins 0.
     let params = ClusterParams { d_init: 1.0, z_far: 40.0, adaptive: true };
-    let c = cluster_lights(lights, camera.position, &frustum, &params);
+    let c = cluster_lights(&lights, camera.position, &frustum, &params);
     let centers: Vec<usize> = c.clusters.iter().map(|k| k.center).collect();
-    // A (0.0) first; 3 (1.5) and 2 (0.5, 0.5 from A: covered since d_min(A) = 0.5) ... 2 is covered;
-    // 5 (-1.0) is 1.0 > 0.5 from A: a center; 0 (0.9) is 0.6 from 3 (d_min(3) ~ 0.4985) and 0.9 from A: a center;
-    // 4 (2.2) is 0.7 from 3: a center; 6 is coincident with A: covered.
-    assert_eq!(centers, vec![1, 3, 5, 0, 4]);
-    assert_eq!(c.clusters[0].members, vec![1, 2, 6]);
+    assert_eq!(centers, vec![1, 5, 3, 0, 4]);
+    assert_eq!(c.clusters[0].d_min, 0.5);
+    assert_eq!(c.clusters[0].members, vec![1, 6]);
+    assert_eq!(c.clusters[3].members, vec![0, 2]);
+    assert_eq!(c, reference(&lights, camera.position, &frustum, &params));
 }
 
 #[test]
