@@ -4,7 +4,7 @@
 //! with ranges in 0.5..7 m; the camera sits at one end looking down the box (60 degree vertical field of view,
 //! 16:9, `z_far` 30 as in the paper); view-adaptive `d_min`. "median ms" is the steady state of a frame: a
 //! long-lived `Clusterer` writing into a reused `Clustering`. "fresh ms" is `cluster_lights`, which allocates
-//! its buffers and every cluster's member list on each call.
+//! its buffers and every cluster's member list on each call. `CLUSTERING_LIGHTS=2048` runs one light count only.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -71,7 +71,9 @@ fn main() {
     let frustum = Frustum::from_clip_from_world(&camera.clip_from_world(16.0 / 9.0));
     println!("| lights | visible | d_init | clusters | grid | median ms | ms per 1000 lights | fresh ms |");
     println!("|---:|---:|---:|---:|---|---:|---:|---:|");
-    for &n in &COUNTS {
+    // `CLUSTERING_LIGHTS=2048` restricts the run to one light count (for profiling).
+    let only: Option<usize> = std::env::var("CLUSTERING_LIGHTS").ok().and_then(|v| v.parse().ok());
+    for &n in COUNTS.iter().filter(|&&n| only.is_none_or(|o| o == n)) {
         let lights = lights(n, n as u64);
         for &d_init in &D_INITS {
             let params = ClusterParams { d_init, z_far: camera.z_far, adaptive: true };

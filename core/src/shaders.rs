@@ -21,6 +21,16 @@ pub const LIGHTCLUSTER_SHADE: &str = concat!(
     include_str!("../../shaders/cube_shadow.wgsl"),
     include_str!("../../shaders/lightcluster_shade.wgsl")
 );
+pub const UNSHADOWED_SHADE: &str =
+    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/unshadowed_shade.wgsl"));
+pub const RAYTRACE_SHADOW: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/raytrace_bvh.wgsl"),
+    include_str!("../../shaders/raytrace_shadow.wgsl")
+);
+pub const RAYTRACE_TEST: &str =
+    concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/raytrace_test.wgsl"));
+pub const OVERLAY: &str = include_str!("../../shaders/overlay.wgsl");
 
 /// Every composed shader module: (name, the files it is made of, source).
 pub const MODULES: &[(&str, &[&str], &str)] = &[
@@ -29,7 +39,11 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
     ("tonemap", &["common.wgsl", "tonemap.wgsl"], TONEMAP),
     ("reference_shade", &["common.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"], REFERENCE_SHADE),
+    ("overlay", &["overlay.wgsl"], OVERLAY),
+    ("unshadowed_shade", &["common.wgsl", "unshadowed_shade.wgsl"], UNSHADOWED_SHADE),
     ("lightcluster_shade", &["common.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"], LIGHTCLUSTER_SHADE),
+    ("raytrace_shadow", &["common.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"], RAYTRACE_SHADOW),
+    ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
 ];
 
 /// Create a shader module from one of the sources above.

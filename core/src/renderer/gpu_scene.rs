@@ -13,6 +13,9 @@ pub struct GpuScene {
     pub index_buffer: wgpu::Buffer,
     /// CPU copy of the chunks for culling.
     pub chunks: Vec<Chunk>,
+    /// CPU copy of the merged geometry (vertices, indices, chunks), for techniques that need the triangles
+    /// themselves (the ray tracer builds its BVH from it). Shared, so a technique can cache by pointer.
+    pub geometry: std::sync::Arc<ChunkedGeometry>,
     pub triangle_count: u64,
     pub material_bind_groups: Vec<wgpu::BindGroup>,
 }
@@ -111,7 +114,8 @@ impl GpuScene {
             vertex_buffer,
             index_buffer,
             triangle_count: geometry.triangle_count() as u64,
-            chunks: geometry.chunks,
+            chunks: geometry.chunks.clone(),
+            geometry: std::sync::Arc::new(geometry),
             material_bind_groups,
         }
     }

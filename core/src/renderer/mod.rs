@@ -10,6 +10,7 @@
 pub mod cube_shadows;
 pub mod gpu_data;
 pub mod gpu_scene;
+pub mod overlay;
 pub mod readback;
 pub mod targets;
 
@@ -55,6 +56,9 @@ pub struct RenderSettings {
     pub background: Vec3,
     /// Blinn-Phong specular on top of Lambert.
     pub specular: bool,
+    /// At most this many lights (cube maps) per step; 0 = as many as the technique's memory budget allows.
+    /// The app lowers it on slow adapters so each UI frame does a bounded amount of work.
+    pub max_lights_per_step: usize,
 }
 
 impl Default for RenderSettings {
@@ -67,6 +71,7 @@ impl Default for RenderSettings {
             ambient: Vec3::splat(0.03),
             background: Vec3::new(0.05, 0.06, 0.08),
             specular: false,
+            max_lights_per_step: 0,
         }
     }
 }
@@ -264,6 +269,7 @@ pub struct Renderer {
     tonemap_bind_group: wgpu::BindGroup,
     timer: PassTimer,
     draw_ranges: Vec<(u32, u32)>,
+    overlay: Option<overlay::OverlayRenderer>,
 }
 
 impl Renderer {
@@ -377,6 +383,7 @@ impl Renderer {
             tonemap_bind_group,
             timer,
             draw_ranges: Vec::new(),
+            overlay: None,
         })
     }
 
@@ -460,6 +467,10 @@ impl Renderer {
             frustum: Frustum::from_clip_from_world(&camera.clip_from_world(aspect)),
             lights,
             timer: &self.timer,
+            max_lights_per_step: match self.settings.max_lights_per_step {
+                0 => usize::MAX,
+                n => n,
+            },
         }
     }
 
@@ -684,6 +695,34 @@ impl Renderer {
             },
         );
         self.timer.submit(&self.gpu, encoder, "tonemap")
+    }
+
+    /// Draw overlay primitives over the output (call after [`Renderer::tonemap`]). Depth-tested against the
+    /// G-buffer of the last frame, unless `x_ray`.
+    pub fn draw_overlays(
+        &mut self,
+        camera: &Camera,
+        primitives: &[crate::technique::Overlay],
+        x_ray: bool,
+    ) -> Result<(), GpuError> {
+        if primitives.is_empty() {
+            return Ok(());
+        }
+        let overlay = self.overlay.get_or_insert_with(|| overlay::OverlayRenderer::new(&self.gpu));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let t = &self.targets;
+        overlay.draw(
+            &self.gpu,
+            &mut encoder,
+            &t.output,
+            &t.depth,
+            camera.clip_from_world(self.settings.width as f32 / self.settings.height as f32),
+            (t.width, t.height),
+            primitives,
+            x_ray,
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        Ok(())
     }
 
     /// Render a whole frame; `progress(done, total)` is called after each step.

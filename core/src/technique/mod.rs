@@ -11,7 +11,9 @@
 //! ambient and emission when steps run), tone mapping and timing.
 
 pub mod lightcluster;
+pub mod raytraced;
 pub mod reference;
+pub mod unshadowed;
 
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -38,6 +40,9 @@ pub struct FrameContext<'a> {
     pub frustum: Frustum,
     pub lights: &'a [PointLight],
     pub timer: &'a PassTimer,
+    /// Upper bound on the lights (or clusters, cube maps) one step may handle, so an interactive caller can keep
+    /// each step short; `usize::MAX` when unlimited. Never changes the image, only how the work is split.
+    pub max_lights_per_step: usize,
 }
 
 /// What a technique did in a frame, for the frame report.
@@ -359,9 +364,19 @@ pub const REGISTRY: &[TechniqueEntry] = &[
         create: |gpu, layouts| Box::new(reference::Reference::new(gpu, layouts)),
     },
     TechniqueEntry {
+        key: "unshadowed",
+        label: "Unshadowed (no shadows, preview)",
+        create: |gpu, layouts| Box::new(unshadowed::Unshadowed::new(gpu, layouts)),
+    },
+    TechniqueEntry {
         key: "lightcluster",
         label: "LightCluster (clustered cube maps, PCF/PCSS)",
         create: |gpu, layouts| Box::new(lightcluster::LightCluster::new(gpu, layouts)),
+    },
+    TechniqueEntry {
+        key: "raytraced",
+        label: "Ray traced (ground truth)",
+        create: |gpu, layouts| Box::new(raytraced::Raytraced::new(gpu, layouts)),
     },
 ];
 

@@ -49,20 +49,33 @@
 //!
 //! # Performance
 //!
-//! Steps 3 and 4 never compare a light against all centers. Centers go into a uniform grid with a cell size of
-//! at least `2 * d_init`: a dense array of cells over the visible lights' bounding box when that has at most
-//! `4 * lights + 4096` cells, otherwise a hash grid (open addressing, keyed by the cell coordinates) with the
-//! same cell size, so a tiny `d_init` (or a few far-away lights) costs memory proportional to the lights, not
-//! to the scene's volume. Each search visits only the cells overlapping the axis-aligned box around the light
-//! whose half-width is the search radius (so at most 2 x 2 x 2 cells when the radius is at most `d_init`), and
-//! the exact distance test decides. The box is computed in `f64` with a small safety margin, so no light
-//! within the radius is ever missed through rounding.
+//! Steps 3 and 4 never compare a light against all centers: centers go into a multi-level uniform grid (a
+//! "loose" grid per level of `d_min`), and every search visits only the cells overlapping the axis-aligned box
+//! whose half-width is the search radius, then applies the exact distance test.
 //!
-//! - Step 3 searches with the largest `d_min` of the centers selected so far (`<= d_init`): every center that
-//!   could cover the light lies within it.
-//! - Step 4 is exact: a light reached step 4 because some center `c` covered it at distance
-//!   `r = distance(light, c) <= d_min(c) <= d_init`. The nearest center is at most `r` away, so searching the
-//!   box of half-width `r` (recorded per light in step 3) finds the nearest center and every tie.
+//! - **Levels.** View-adaptive `d_min` shrinks from `d_init` at the camera to 0 at `z_far`, so the spacing of
+//!   centers varies a lot across the frustum and no single cell size fits. Level `l` has cells of size
+//!   `2 * d_init / 2^l` and holds the centers with `d_min` in `(size / 4, size / 2]`, so a search of radius
+//!   `<= d_min` spans at most 2 x 2 x 2 cells of its level and the centers in a cell are few (they are more
+//!   than `d_min` apart). Levels stop at a floor cell size, the estimated spacing of the visible lights (from
+//!   the cells their bounding box occupies, so flat, linear and clumped layouts are estimated well); all finer
+//!   `d_min` (and 0) share the floor level, whose cells then hold about one light. Without view-adaptive
+//!   scaling there is one level.
+//! - **Dense or hash.** A level is a dense array of cells over the visible lights' bounding box when that has
+//!   at most `4 * lights + 4096` cells; otherwise its cells live in a hash table (open addressing, keyed by
+//!   level and cell coordinates), so a tiny `d_init` or a few far-away lights cost memory proportional to the
+//!   lights, never to the scene's volume. Levels are initialised lazily, when their first center arrives.
+//! - **Pruning levels.** A level also records the range of its centers' distances to the camera; a light at
+//!   distance `D` from the camera searches a level with radius `h` only when that range meets `[D - h, D + h]`
+//!   (a center within `h` is within `h` of `D`, by the triangle inequality), so most searches visit one level.
+//! - **Step 3** searches each level with the largest `d_min` of its centers: a center can only cover lights
+//!   within its own `d_min`.
+//! - **Step 4 is exact**: a light reached step 4 because some center `c` covered it at distance
+//!   `r = distance(light, c) <= d_min(c) <= d_init` (recorded per light in step 3). The nearest center is at
+//!   most `r` away, so searching every level with radius `r` finds it and every tie.
+//! - **Rounding.** Boxes are computed in `f64` and widened by a relative `1e-4` plus `1e-6` cells, and level
+//!   pruning by a relative `1e-4`, far more than `f32` distance rounding, so no candidate is ever missed: the
+//!   result is exactly that of the brute-force `O(lights * centers)` algorithm (the tests compare the two).
 //!
 //! The sort is a stable LSD radix sort on the range's bits. [`Clusterer`] keeps every buffer between calls and
 //! reuses the output's clusters (and their member vectors) through [`Clusterer::cluster_into`], so a frame
@@ -77,8 +90,11 @@ use crate::scene::PointLight;
 const NONE: u32 = u32::MAX;
 /// Unused slot of the hash grid (cell keys use 63 bits at most).
 const EMPTY_KEY: u64 = u64::MAX;
-/// Cell coordinates use at most this many bits per axis (the cell size grows to keep them in range).
-const AXIS_BITS: u32 = 21;
+/// Cell coordinates use at most this many bits per axis (the cell size grows to keep them in range); the hash
+/// key holds three of them and the level.
+const AXIS_BITS: u32 = 19;
+/// Levels of the grid at most (level 0 has cells of `2 * d_init`, each level halves them).
+const MAX_LEVELS: usize = 24;
 /// Below this many visible lights the comparison sort beats the radix sort.
 const RADIX_MIN: usize = 256;
 
@@ -129,7 +145,7 @@ impl ClusterParams {
     /// (0 at and beyond `z_far`, and for a NaN distance). 1 when `adaptive` is off, and when `z_far` is NaN
     /// or not positive (invalid: no scaling).
     pub fn scale_at(&self, distance_to_camera: f32) -> f32 {
-        if !self.adaptive || !(self.z_far > 0.0) {
+        if !self.is_view_adaptive() {
             return 1.0;
         }
         let scale = 1.0 - distance_to_camera / self.z_far;
@@ -143,11 +159,21 @@ impl ClusterParams {
     /// The paper's `d_min = d_init * (1 - |C_pos| / z_far)` of a center at `center` seen from `camera`,
     /// with [`ClusterParams::effective_d_init`] and [`ClusterParams::scale_at`]. Always finite and `>= 0`.
     pub fn d_min_at(&self, center: Vec3, camera: Vec3) -> f32 {
+        self.d_min_at_distance(center.distance(camera))
+    }
+
+    /// [`ClusterParams::d_min_at`] for a center `distance_to_camera` (`|C_pos|`) from the camera.
+    pub fn d_min_at_distance(&self, distance_to_camera: f32) -> f32 {
         let d_init = self.effective_d_init();
         if d_init == 0.0 {
             return 0.0;
         }
-        d_init * self.scale_at(center.distance(camera))
+        d_init * self.scale_at(distance_to_camera)
+    }
+
+    /// Whether `d_min` depends on the distance to the camera (`adaptive` and a positive `z_far`).
+    pub fn is_view_adaptive(&self) -> bool {
+        self.adaptive && self.z_far > 0.0
     }
 }
 
@@ -185,22 +211,26 @@ pub struct Clustering {
 pub enum GridKind {
     /// No grid was needed (`d_init` is 0, or fewer than two visible lights).
     None,
-    /// A dense array of cells over the visible lights' bounding box.
+    /// Every level that received centers was a dense array of cells.
     Dense,
-    /// A hash table keyed by cell coordinates.
+    /// Every level that received centers lived in the hash table.
     Hash,
+    /// Some levels of each kind.
+    Mixed,
 }
 
 /// Statistics of the last [`Clusterer`] call's grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridInfo {
     pub kind: GridKind,
-    /// Cell edge length in world units (0 for [`GridKind::None`]).
-    pub cell_size: f64,
-    /// Cells per axis of the visible lights' bounding box.
-    pub dims: [u32; 3],
-    /// Slots allocated: cells for [`GridKind::Dense`], table size for [`GridKind::Hash`].
-    pub slots: usize,
+    /// Levels prepared (from `2 * d_init` down to the floor cell size).
+    pub levels: usize,
+    /// Levels that received centers, dense and hashed.
+    pub dense_levels: usize,
+    pub hash_levels: usize,
+    /// Cell size of the coarsest and the finest (floor) level, in world units (0 without a grid).
+    pub coarsest_cell: f64,
+    pub finest_cell: f64,
 }
 
 /// Cluster lights with fresh buffers: steps 1 to 4 of section 3.1 (see the [module docs](self)).
@@ -224,10 +254,11 @@ pub struct Clusterer {
     /// Step 1/2: per visible light `(!range_bits) << 32 | input index`; sorted ascending = step 2's order.
     keys: Vec<u64>,
     keys_tmp: Vec<u64>,
-    /// Per visible light in sorted order: input index, position, range.
+    /// Per visible light in sorted order: input index, position, range, distance to the camera.
     ids: Vec<u32>,
     pos: Vec<Vec3>,
     range: Vec<f32>,
+    to_camera: Vec<f32>,
     /// Per visible light in sorted order: its cluster when it is a center, else [`NONE`].
     center_slot: Vec<u32>,
     /// Per visible light in sorted order that is no center: distance to the center that covered it in step 3.
@@ -272,19 +303,19 @@ impl Clusterer {
         assert!(lights.len() < NONE as usize, "at most {} lights can be clustered", NONE - 1);
         self.cull(lights, frustum);
         sort_by_range(&mut self.keys, &mut self.keys_tmp);
-        self.gather(lights);
+        self.gather(lights, camera_position, params);
 
         let d_init = params.effective_d_init();
         out.visible = self.ids.len();
         out.cluster_of.clear();
         out.cluster_of.resize(lights.len(), None);
         if d_init > 0.0 && self.ids.len() > 1 {
-            self.grid.build(&self.pos, d_init);
+            self.grid.build(&self.pos, d_init, params.is_view_adaptive());
         } else {
             self.grid.clear();
         }
 
-        let clusters = self.select_centers(params, camera_position, out);
+        let clusters = self.select_centers(params, out);
         out.clusters.truncate(clusters);
         if clusters < self.ids.len() {
             self.assign_remaining(out);
@@ -310,22 +341,26 @@ impl Clusterer {
     }
 
     /// Lay out the visible lights in sorted order for steps 3 and 4.
-    fn gather(&mut self, lights: &[PointLight]) {
+    fn gather(&mut self, lights: &[PointLight], camera: Vec3, params: &ClusterParams) {
         self.ids.clear();
         self.pos.clear();
         self.range.clear();
+        self.to_camera.clear();
+        let adaptive = params.is_view_adaptive();
         for &key in &self.keys {
             let id = key as u32;
             let light = &lights[id as usize];
             self.ids.push(id);
             self.pos.push(light.position);
             self.range.push(light.range);
+            // Only view-adaptive d_min and level pruning need it.
+            self.to_camera.push(if adaptive { light.position.distance(camera) } else { 0.0 });
         }
     }
 
     /// Step 3: select the cluster centers in sorted order; writes a cluster per center into `out` and returns
     /// how many there are. Non-centers get `center_slot = NONE` and their covering distance in `cover`.
-    fn select_centers(&mut self, params: &ClusterParams, camera: Vec3, out: &mut Clustering) -> usize {
+    fn select_centers(&mut self, params: &ClusterParams, out: &mut Clustering) -> usize {
         let n = self.ids.len();
         self.center_slot.clear();
         self.center_slot.resize(n, NONE);
@@ -334,24 +369,21 @@ impl Clusterer {
         self.center_pos.clear();
         self.center_d_min.clear();
         self.next.clear();
-        // Largest d_min of the centers so far: no center can cover a light farther away than this.
-        let mut max_d_min = 0.0f32;
         for i in 0..n {
             let p = self.pos[i];
-            if max_d_min > 0.0 {
-                if let Some(d) = self.covering_distance(p, max_d_min) {
-                    self.cover[i] = d;
-                    continue;
-                }
+            let to_camera = self.to_camera[i];
+            if let Some(d) = self.covering_distance(p, to_camera) {
+                self.cover[i] = d;
+                continue;
             }
             let k = self.center_pos.len() as u32;
-            let d_min = params.d_min_at(p, camera);
-            max_d_min = max_d_min.max(d_min);
+            // Same expression as `ClusterParams::d_min_at(p, camera)`.
+            let d_min = params.d_min_at_distance(to_camera);
             self.center_slot[i] = k;
             self.center_pos.push(p);
             self.center_d_min.push(d_min);
             self.next.push(NONE);
-            self.grid.insert(p, k, &mut self.next);
+            self.grid.insert(p, to_camera, d_min, k, &mut self.next);
 
             let id = self.ids[i] as usize;
             let range = self.range[i];
@@ -380,24 +412,28 @@ impl Clusterer {
     }
 
     /// Step 3's test: the distance to some center `c` with `distance <= d_min(c)` and `d_min(c) > 0`, or `None`
-    /// when `p` is farther than `d_min(c)` from every center (so it becomes a center). Only centers within
-    /// `radius` (the largest `d_min`) can cover `p`, and only their cells are visited.
+    /// when `p` is farther than `d_min(c)` from every center (so it becomes a center). Each level is searched
+    /// with the largest `d_min` of its centers: no center can cover a light farther away.
     #[inline]
-    fn covering_distance(&self, p: Vec3, radius: f32) -> Option<f32> {
-        let (lo, hi) = self.grid.cell_range(p, radius);
-        for z in lo[2]..=hi[2] {
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    let mut k = self.grid.head([x, y, z]);
-                    while k != NONE {
-                        let d_min = self.center_d_min[k as usize];
-                        if d_min > 0.0 {
-                            let d = p.distance(self.center_pos[k as usize]);
-                            if d <= d_min {
-                                return Some(d);
+    fn covering_distance(&self, p: Vec3, to_camera: f32) -> Option<f32> {
+        for level in 0..self.grid.levels.len() {
+            let Some((lo, hi)) = self.grid.search_box(level, p, to_camera, self.grid.levels[level].max_d_min) else {
+                continue;
+            };
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let mut k = self.grid.head(level, [x, y, z]);
+                        while k != NONE {
+                            let d_min = self.center_d_min[k as usize];
+                            if d_min > 0.0 {
+                                let d = p.distance(self.center_pos[k as usize]);
+                                if d <= d_min {
+                                    return Some(d);
+                                }
                             }
+                            k = self.next[k as usize];
                         }
-                        k = self.next[k as usize];
                     }
                 }
             }
@@ -412,9 +448,9 @@ impl Clusterer {
                 continue;
             }
             let p = self.pos[i];
-            let (k, d2) = match self.nearest_center(p, self.cover[i]) {
+            let (k, d2) = match self.nearest_center(p, self.to_camera[i], self.cover[i]) {
                 Some(found) => found,
-                // Unreachable (the covering center is within the searched box); kept exact and panic-free.
+                // Unreachable (the covering center is within the searched boxes); kept exact and panic-free.
                 None => self.nearest_center_brute_force(p),
             };
             let d_c = d2.sqrt();
@@ -430,21 +466,25 @@ impl Clusterer {
     /// The nearest center to `p` (smallest squared distance, then smallest cluster index) among the centers
     /// within `radius`, with its squared distance.
     #[inline]
-    fn nearest_center(&self, p: Vec3, radius: f32) -> Option<(u32, f32)> {
-        let (lo, hi) = self.grid.cell_range(p, radius);
+    fn nearest_center(&self, p: Vec3, to_camera: f32, radius: f32) -> Option<(u32, f32)> {
         let mut best = NONE;
         let mut best_d2 = f32::INFINITY;
-        for z in lo[2]..=hi[2] {
-            for y in lo[1]..=hi[1] {
-                for x in lo[0]..=hi[0] {
-                    let mut k = self.grid.head([x, y, z]);
-                    while k != NONE {
-                        let d2 = p.distance_squared(self.center_pos[k as usize]);
-                        if d2 < best_d2 || (d2 == best_d2 && k < best) {
-                            best = k;
-                            best_d2 = d2;
+        for level in 0..self.grid.levels.len() {
+            let Some((lo, hi)) = self.grid.search_box(level, p, to_camera, radius) else {
+                continue;
+            };
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let mut k = self.grid.head(level, [x, y, z]);
+                        while k != NONE {
+                            let d2 = p.distance_squared(self.center_pos[k as usize]);
+                            if d2 < best_d2 || (d2 == best_d2 && k < best) {
+                                best = k;
+                                best_d2 = d2;
+                            }
+                            k = self.next[k as usize];
                         }
-                        k = self.next[k as usize];
                     }
                 }
             }
@@ -502,57 +542,75 @@ fn sort_by_range(keys: &mut Vec<u64>, tmp: &mut Vec<u64>) {
     }
 }
 
-/// A uniform grid of cluster centers: per cell the head of a linked list through `Clusterer::next`.
-#[derive(Debug)]
-struct Grid {
-    kind: GridKind,
-    /// World position of cell (0, 0, 0)'s minimum corner (the visible lights' bounding box minimum).
-    origin: [f64; 3],
+/// One level of the grid: cells of one size, holding the centers of one `d_min` band.
+#[derive(Clone, Copy, Debug)]
+struct Level {
     cell: f64,
     inv_cell: f64,
+    /// `dims - 1` per axis, as `f64` for clamping cell coordinates.
+    top: [f64; 3],
     dims: [u32; 3],
-    /// Head center per cell (dense) or per table slot (hash).
-    heads: Vec<u32>,
-    /// Hash grid: cell key per slot, [`EMPTY_KEY`] when unused.
-    keys: Vec<u64>,
-    mask: usize,
-    shift: u32,
+    dense: bool,
+    /// Start of this level's cells in `Grid::dense_heads`, once `count > 0` (dense levels).
+    offset: usize,
+    count: u32,
+    /// Largest `d_min` of the level's centers: no center of the level covers a light farther away.
+    max_d_min: f32,
+    /// Smallest and largest distance to the camera of the level's centers (for pruning; view-adaptive only).
+    near: f32,
+    far: f32,
 }
 
-impl Default for Grid {
-    fn default() -> Self {
-        Grid {
-            kind: GridKind::None,
-            origin: [0.0; 3],
-            cell: 0.0,
-            inv_cell: 0.0,
-            dims: [1; 3],
-            heads: Vec::new(),
-            keys: Vec::new(),
-            mask: 0,
-            shift: 64,
-        }
-    }
+/// A multi-level uniform grid of cluster centers: per cell the head of a linked list through
+/// `Clusterer::next`. See the module docs (Performance).
+#[derive(Debug, Default)]
+struct Grid {
+    /// World position of every level's cell (0, 0, 0) minimum corner (the visible lights' bounding box min).
+    origin: [f64; 3],
+    /// Level 0's cell size over 2 (`d_init` plus a hair), for choosing a center's level.
+    half_cell0: f64,
+    /// Prune levels by distance to the camera (view-adaptive only).
+    prune: bool,
+    levels: Vec<Level>,
+    dense_heads: Vec<u32>,
+    dense_budget: u64,
+    hash_keys: Vec<u64>,
+    hash_heads: Vec<u32>,
+    hash_slots: usize,
+    hash_ready: bool,
+    mask: usize,
+    shift: u32,
+    /// Scratch: occupancy bitmap for the spacing estimate.
+    occupied: Vec<u64>,
 }
 
 impl Grid {
     fn clear(&mut self) {
-        self.kind = GridKind::None;
-        self.cell = 0.0;
-        self.dims = [1; 3];
+        self.levels.clear();
     }
 
     fn info(&self) -> GridInfo {
-        let slots = match self.kind {
-            GridKind::None => 0,
-            GridKind::Dense => self.heads.len(),
-            GridKind::Hash => self.keys.len(),
+        let used = || self.levels.iter().filter(|l| l.count > 0);
+        let dense_levels = used().filter(|l| l.dense).count();
+        let hash_levels = used().filter(|l| !l.dense).count();
+        let kind = match (dense_levels, hash_levels) {
+            (0, 0) => GridKind::None,
+            (_, 0) => GridKind::Dense,
+            (0, _) => GridKind::Hash,
+            _ => GridKind::Mixed,
         };
-        GridInfo { kind: self.kind, cell_size: self.cell, dims: self.dims, slots }
+        GridInfo {
+            kind,
+            levels: self.levels.len(),
+            dense_levels,
+            hash_levels,
+            coarsest_cell: self.levels.first().map_or(0.0, |l| l.cell),
+            finest_cell: self.levels.last().map_or(0.0, |l| l.cell),
+        }
     }
 
-    /// Prepare an empty grid over the bounding box of `positions` (finite, at least two) for `d_init > 0`.
-    fn build(&mut self, positions: &[Vec3], d_init: f32) {
+    /// Prepare empty levels over the bounding box of `positions` (finite, at least two) for `d_init > 0`.
+    fn build(&mut self, positions: &[Vec3], d_init: f32, adaptive: bool) {
         let (mut min, mut max) = (positions[0], positions[0]);
         for &p in positions {
             min = min.min(p);
@@ -561,68 +619,145 @@ impl Grid {
         let origin = [min.x as f64, min.y as f64, min.z as f64];
         let extent = [max.x as f64 - origin[0], max.y as f64 - origin[1], max.z as f64 - origin[2]];
         let largest = extent[0].max(extent[1]).max(extent[2]);
-        // At least 2 * d_init (so a search box of half-width <= d_init spans at most 2 cells per axis) and
-        // large enough for cell coordinates to fit AXIS_BITS bits.
-        let mut cell = (2.0 * d_init as f64).max(largest / (1u64 << (AXIS_BITS - 1)) as f64);
-        if !(cell.is_finite() && cell > 0.0) {
-            cell = 1.0;
-        }
-        let dims = extent.map(|e| ((e / cell).floor() as u32).saturating_add(1).min(1 << AXIS_BITS));
-        let cells = dims.iter().map(|&d| d as u64).product::<u64>();
-        let n = positions.len() as u64;
+        // Cells at least this large keep cell coordinates within AXIS_BITS bits.
+        let smallest_cell = largest / (1u64 << (AXIS_BITS - 1)) as f64;
+        // Slightly over 2 * d_init, so level 0 holds every d_min <= d_init.
+        let cell0 = (2.0 * d_init as f64) * (1.0 + 1e-6);
+        let floor = if adaptive { self.spacing(positions, origin, extent) } else { cell0 };
         self.origin = origin;
-        self.cell = cell;
-        self.inv_cell = 1.0 / cell;
-        self.dims = dims;
-        if cells <= 4 * n + 4096 {
-            self.kind = GridKind::Dense;
-            self.heads.clear();
-            self.heads.resize(cells as usize, NONE);
-        } else {
-            // At most one occupied cell per center, at most one center per light: load factor <= 1/2.
-            self.kind = GridKind::Hash;
-            let slots = (2 * positions.len()).next_power_of_two().max(64);
-            self.keys.clear();
-            self.keys.resize(slots, EMPTY_KEY);
-            self.heads.clear();
-            self.heads.resize(slots, NONE);
-            self.mask = slots - 1;
-            self.shift = 64 - slots.trailing_zeros();
+        self.half_cell0 = cell0 / 2.0;
+        self.prune = adaptive;
+        self.dense_budget = 4 * positions.len() as u64 + 4096;
+        self.dense_heads.clear();
+        self.hash_ready = false;
+        self.hash_slots = (2 * positions.len()).next_power_of_two().max(64);
+        self.levels.clear();
+        let mut cell = cell0;
+        loop {
+            let last = cell <= floor || self.levels.len() + 1 == MAX_LEVELS;
+            let mut size = if last { cell.max(floor) } else { cell };
+            size = size.max(smallest_cell);
+            if !(size.is_finite() && size > 0.0) {
+                size = if largest > 0.0 { largest } else { 1.0 };
+            }
+            let dims = extent.map(|e| ((e / size) as u32).saturating_add(1).min(1 << AXIS_BITS));
+            let cells = dims.iter().map(|&d| d as u64).product::<u64>();
+            self.levels.push(Level {
+                cell: size,
+                inv_cell: 1.0 / size,
+                top: dims.map(|d| (d - 1) as f64),
+                dims,
+                dense: cells <= self.dense_budget,
+                offset: 0,
+                count: 0,
+                max_d_min: 0.0,
+                near: f32::INFINITY,
+                far: f32::NEG_INFINITY,
+            });
+            if last {
+                break;
+            }
+            cell /= 2.0;
         }
     }
 
-    /// Cell coordinates of `p` (inside the bounding box the grid was built over).
-    #[inline]
-    fn cell_of(&self, p: Vec3) -> [u32; 3] {
-        let q = [p.x, p.y, p.z];
-        std::array::from_fn(|a| {
-            let x = ((q[a] as f64 - self.origin[a]) * self.inv_cell).floor();
-            (x.max(0.0) as u32).min(self.dims[a] - 1)
-        })
+    /// Estimated spacing of the lights: the cell size at which the bounding box has about one cell per light
+    /// along its non-degenerate axes, refined by the share of those cells the lights occupy (so clumps and
+    /// flat or linear layouts get their own spacing, not the bounding box's).
+    fn spacing(&mut self, positions: &[Vec3], origin: [f64; 3], extent: [f64; 3]) -> f64 {
+        let n = positions.len() as f64;
+        let mut used = extent.map(|e| e > 0.0);
+        let mut cell = 0.0;
+        for _ in 0..3 {
+            let axes = used.iter().filter(|&&u| u).count();
+            if axes == 0 {
+                return 0.0;
+            }
+            let volume: f64 = (0..3).filter(|&a| used[a]).map(|a| extent[a]).product();
+            cell = (volume / n).powf(1.0 / axes as f64);
+            let thin = (0..3).filter(|&a| used[a] && extent[a] < cell).count();
+            if thin == 0 {
+                break;
+            }
+            for a in 0..3 {
+                used[a] &= extent[a] >= cell;
+            }
+        }
+        let axes = used.iter().filter(|&&u| u).count().max(1);
+        if !(cell.is_finite() && cell > 0.0) {
+            return 0.0;
+        }
+        let dims = extent.map(|e| ((e / cell) as u64).saturating_add(1));
+        let cells = dims.iter().product::<u64>();
+        if cells > 64 * positions.len() as u64 {
+            return cell;
+        }
+        self.occupied.clear();
+        self.occupied.resize(cells.div_ceil(64) as usize, 0);
+        let inv = 1.0 / cell;
+        let mut count = 0u64;
+        for p in positions {
+            let q = [p.x, p.y, p.z];
+            let c: [u64; 3] = std::array::from_fn(|a| (((q[a] as f64 - origin[a]) * inv) as u64).min(dims[a] - 1));
+            let index = c[0] + dims[0] * (c[1] + dims[1] * c[2]);
+            let (word, bit) = ((index / 64) as usize, 1u64 << (index % 64));
+            count += (self.occupied[word] & bit == 0) as u64;
+            self.occupied[word] |= bit;
+        }
+        cell * (count as f64 / n).powf(1.0 / axes as f64)
     }
 
-    /// The cells overlapping the box of half-width `radius` around `p`, as inclusive corners. Conservative:
-    /// the half-width is widened by a relative 1e-4 (covering `f32` distance rounding) and 1e-6 cells
-    /// (covering `f64` rounding of coordinates, which are below 2^21 cells), so every point whose computed
-    /// `f32` distance to `p` is at most `radius` lies in one of these cells.
+    /// The level for a center with `d_min`: the finest whose cells are at least `2 * d_min`.
     #[inline]
-    fn cell_range(&self, p: Vec3, radius: f32) -> ([u32; 3], [u32; 3]) {
+    fn level_of(&self, d_min: f32) -> usize {
+        let last = self.levels.len() - 1;
+        let ratio = self.half_cell0 / d_min as f64; // >= 1; infinite for d_min = 0
+        if !(ratio >= 2.0) {
+            return 0;
+        }
+        if ratio.is_infinite() {
+            return last;
+        }
+        // floor(log2(ratio)) from the exponent bits (ratio is a normal number >= 2).
+        let exponent = ((ratio.to_bits() >> 52) & 0x7FF) as usize - 1023;
+        exponent.min(last)
+    }
+
+    /// The inclusive cell corners of `level` overlapping the box of half-width `radius` around `p`, or `None`
+    /// when the level has no center that can be within `radius` of `p` (empty, or its centers' distances to the
+    /// camera are all farther than `radius` from `to_camera`).
+    ///
+    /// Conservative: the half-width is widened by a relative 1e-4 (covering `f32` distance rounding) and 1e-6
+    /// cells (covering `f64` rounding of coordinates, which are below 2^19 cells), and the distance band by a
+    /// relative 1e-4, so every center whose computed `f32` distance to `p` is at most `radius` is visited.
+    #[inline]
+    fn search_box(&self, level: usize, p: Vec3, to_camera: f32, radius: f32) -> Option<([u32; 3], [u32; 3])> {
+        let l = &self.levels[level];
+        if l.count == 0 || !(radius > 0.0) && radius != 0.0 {
+            return None;
+        }
+        if self.prune && to_camera.is_finite() && l.far.is_finite() {
+            let slack = (to_camera + radius) * 1e-4;
+            if to_camera + radius + slack < l.near || to_camera - radius - slack > l.far {
+                return None;
+            }
+        }
         let q = [p.x, p.y, p.z];
-        let r = radius as f64 * 1.0001 * self.inv_cell + 1e-6;
+        let r = radius as f64 * 1.0001 * l.inv_cell + 1e-6;
         let mut lo = [0u32; 3];
         let mut hi = [0u32; 3];
         for a in 0..3 {
-            let x = (q[a] as f64 - self.origin[a]) * self.inv_cell;
-            let top = (self.dims[a] - 1) as f64;
-            lo[a] = (x - r).floor().clamp(0.0, top) as u32;
-            hi[a] = (x + r).floor().clamp(0.0, top) as u32;
+            let x = (q[a] as f64 - self.origin[a]) * l.inv_cell;
+            // `as u32` truncates, which is floor for the non-negative values the clamp leaves.
+            lo[a] = (x - r).clamp(0.0, l.top[a]) as u32;
+            hi[a] = (x + r).clamp(0.0, l.top[a]) as u32;
         }
-        (lo, hi)
+        Some((lo, hi))
     }
 
     #[inline]
-    fn key(c: [u32; 3]) -> u64 {
-        c[0] as u64 | (c[1] as u64) << AXIS_BITS | (c[2] as u64) << (2 * AXIS_BITS)
+    fn key(level: usize, c: [u32; 3]) -> u64 {
+        c[0] as u64 | (c[1] as u64) << AXIS_BITS | (c[2] as u64) << (2 * AXIS_BITS) | (level as u64) << (3 * AXIS_BITS)
     }
 
     #[inline]
@@ -630,61 +765,82 @@ impl Grid {
         (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize
     }
 
-    /// The first center in cell `c`, or [`NONE`].
     #[inline]
-    fn head(&self, c: [u32; 3]) -> u32 {
-        match self.kind {
-            GridKind::Dense => {
-                let [nx, ny, _] = self.dims;
-                self.heads[c[0] as usize + nx as usize * (c[1] as usize + ny as usize * c[2] as usize)]
+    fn dense_index(l: &Level, c: [u32; 3]) -> usize {
+        l.offset + c[0] as usize + l.dims[0] as usize * (c[1] as usize + l.dims[1] as usize * c[2] as usize)
+    }
+
+    /// The first center in cell `c` of `level` (which has centers), or [`NONE`].
+    #[inline]
+    fn head(&self, level: usize, c: [u32; 3]) -> u32 {
+        let l = &self.levels[level];
+        if l.dense {
+            return self.dense_heads[Self::dense_index(l, c)];
+        }
+        let key = Self::key(level, c);
+        let mut slot = self.slot_of_key(key);
+        loop {
+            let k = self.hash_keys[slot];
+            if k == key {
+                return self.hash_heads[slot];
             }
-            GridKind::Hash => {
-                let key = Self::key(c);
-                let mut slot = self.slot_of_key(key);
-                loop {
-                    let k = self.keys[slot];
-                    if k == key {
-                        return self.heads[slot];
-                    }
-                    if k == EMPTY_KEY {
-                        return NONE;
-                    }
-                    slot = (slot + 1) & self.mask;
-                }
+            if k == EMPTY_KEY {
+                return NONE;
             }
-            GridKind::None => NONE,
+            slot = (slot + 1) & self.mask;
         }
     }
 
-    /// Add center `k` at `p` to its cell's list.
-    #[inline]
-    fn insert(&mut self, p: Vec3, k: u32, next: &mut [u32]) {
-        let slot = match self.kind {
-            GridKind::None => return,
-            GridKind::Dense => {
-                let c = self.cell_of(p);
-                let [nx, ny, _] = self.dims;
-                c[0] as usize + nx as usize * (c[1] as usize + ny as usize * c[2] as usize)
+    /// Add center `k` at `p` (`to_camera` from the camera, with `d_min`) to its level and cell.
+    fn insert(&mut self, p: Vec3, to_camera: f32, d_min: f32, k: u32, next: &mut [u32]) {
+        if self.levels.is_empty() {
+            return;
+        }
+        let level = self.level_of(d_min);
+        let l = &mut self.levels[level];
+        if l.count == 0 && l.dense {
+            // First center of a dense level: its cells are cleared now.
+            l.offset = self.dense_heads.len();
+            let cells = l.dims.iter().map(|&d| d as usize).product::<usize>();
+            self.dense_heads.resize(l.offset + cells, NONE);
+        }
+        l.count += 1;
+        l.max_d_min = l.max_d_min.max(d_min);
+        l.near = l.near.min(to_camera);
+        l.far = l.far.max(to_camera);
+        let l = *l;
+        let q = [p.x, p.y, p.z];
+        let c: [u32; 3] =
+            std::array::from_fn(|a| ((q[a] as f64 - self.origin[a]) * l.inv_cell).clamp(0.0, l.top[a]) as u32);
+        let heads = if l.dense {
+            &mut self.dense_heads[Self::dense_index(&l, c)]
+        } else {
+            if !self.hash_ready {
+                self.hash_ready = true;
+                self.hash_keys.clear();
+                self.hash_keys.resize(self.hash_slots, EMPTY_KEY);
+                self.hash_heads.clear();
+                self.hash_heads.resize(self.hash_slots, NONE);
+                self.mask = self.hash_slots - 1;
+                self.shift = 64 - self.hash_slots.trailing_zeros();
             }
-            GridKind::Hash => {
-                let key = Self::key(self.cell_of(p));
-                let mut slot = self.slot_of_key(key);
-                loop {
-                    let existing = self.keys[slot];
-                    if existing == key {
-                        break;
-                    }
-                    if existing == EMPTY_KEY {
-                        self.keys[slot] = key;
-                        self.heads[slot] = NONE;
-                        break;
-                    }
-                    slot = (slot + 1) & self.mask;
+            let key = Self::key(level, c);
+            let mut slot = self.slot_of_key(key);
+            loop {
+                let existing = self.hash_keys[slot];
+                if existing == key {
+                    break;
                 }
-                slot
+                if existing == EMPTY_KEY {
+                    self.hash_keys[slot] = key;
+                    self.hash_heads[slot] = NONE;
+                    break;
+                }
+                slot = (slot + 1) & self.mask;
             }
+            &mut self.hash_heads[slot]
         };
-        next[k as usize] = self.heads[slot];
-        self.heads[slot] = k;
+        next[k as usize] = *heads;
+        *heads = k;
     }
 }

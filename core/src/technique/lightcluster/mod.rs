@@ -342,7 +342,7 @@ impl Technique for LightCluster {
         }
         let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let budget = self.params.atlas_budget_mib as u64 * (1 << 20);
-        self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget);
+        self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step);
         let batches = cluster_count.div_ceil(self.batch_size);
         self.counts =
             TechniqueCounts { lights_visible: visible, batches, clusters: Some(cluster_count), ..Default::default() };

@@ -1,0 +1,160 @@
+//! Comparing a technique's image with the reference: error metrics, difference images, visibility factors.
+//!
+//! Pure CPU functions over linear HDR radiance images ([`Image`], e.g. from `Renderer::read_hdr`); nothing here
+//! touches the GPU. The role of Falcor's `ErrorMeasurePass`, plus the metrics of the many-light shadow papers
+//! (INSM's shadow intensity error, LightCluster's difference images) and NVIDIA's FLIP.
+//!
+//! # Pixels that count
+//!
+//! Every metric is computed over the same set of pixels `P`: those whose entry in the caller's mask is `true`
+//! (valid, i.e. geometry was drawn there), or every pixel when the mask is `None`. The mask is a row-major
+//! `&[bool]` of `width * height` entries; the renderer's background colour can occur on geometry, so the
+//! comparison never guesses it from colours. `N = |P|`. An empty `P` gives `pixels: 0` and zero errors.
+//!
+//! # Definitions
+//!
+//! `T` is the technique's image, `R` the reference, `c` one of the three colour channels (alpha is ignored),
+//! `d_c(p) = T_c(p) − R_c(p)`, and `Y = 0.2126·r + 0.7152·g + 0.0722·b` (Rec. 709 luminance of linear RGB).
+//!
+//! | metric | formula |
+//! |---|---|
+//! | `mse` | `1/(3N) · Σ_p Σ_c d_c(p)²` — linear radiance, not tone mapped |
+//! | `rmse` | `√mse` |
+//! | `mean_abs` | `1/(3N) · Σ_p Σ_c |d_c(p)|` |
+//! | `peak_luminance` | `max(max_p Y_R(p), 1e-3)` over finite reference pixels of `P` |
+//! | `psnr_db` | `10·log10(peak_luminance² / mse)`; `None` (JSON `null`) when `mse = 0` (identical images) |
+//! | `share_over_threshold` | `1/N · #{p : |Y_T(p) − Y_R(p)| > threshold · max(Y_R(p), 1e-3)}` — a relative luminance error with a floor so black reference pixels need an absolute difference of `threshold·1e-3` |
+//! | `shadow_intensity_error` | `1/N · Σ_p |V_T(p) − V_R(p)|` (INSM, Wang et al. 2016: "average shadow intensity error per valid image pixel"), `V` from [`visibility_image`]; only when visibility images are passed |
+//! | `shadow_intensity_bias` | `1/N · Σ_p (V_T(p) − V_R(p))`: > 0 when the technique leaks light (too bright), < 0 when it over-shadows |
+//! | `flip_mean` | mean over `P` of the per-pixel FLIP error (NVIDIA's ꟻLIP, LDR, in `[0,1]`) between [`tonemap_for_flip`] of both images; only when asked |
+//!
+//! The visibility factor of a pixel is `V = (Y_shadowed − Y_ambient) / (Y_unshadowed − Y_ambient)` clamped to
+//! `[0,1]`: the luminance-weighted share of the direct light that reaches the pixel. `Y_ambient` (ambient and
+//! emission only) is subtracted because ambient light is never shadowed. Where the unshadowed direct light is
+//! negligible (`≤ 1% of Y_unshadowed + 1e-6`, which covers `0/0`) `V = 1` (lit): shadowing cannot change such
+//! a pixel noticeably, and the f16 HDR target cannot resolve the ratio there.
+//!
+//! # Broken pixels
+//!
+//! A pixel of `P` with a non-finite (NaN, ±inf) colour channel in `T` or `R` never panics and never poisons the
+//! sums: it is counted in `non_finite` and scored as a maximal error — an absolute error of `peak_luminance`
+//! in each channel for `mse`/`mean_abs` (so it costs as much as a pixel that is entirely wrong at the image's
+//! brightest level), over the threshold, a FLIP error of 1, and a visibility error of 1 (`V` is NaN there).
+//! Difference images draw such pixels magenta, a colour outside [`colormap`].
+
+mod diff;
+mod flip;
+mod metrics;
+mod visibility;
+
+pub use diff::{colormap, difference_image, visibility_difference_image, DiffMode};
+pub use flip::{flip_error_map, tonemap_for_flip, DEFAULT_PIXELS_PER_DEGREE};
+pub use metrics::{compare, CompareOptions, Metrics, Visibility};
+pub use visibility::visibility_image;
+
+/// A linear RGBA radiance image, row-major from the top left (the layout of `Renderer::read_hdr`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl Image {
+    /// Wraps `pixels`; fails when there are not exactly `width * height` of them.
+    pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Result<Image, CompareError> {
+        let image = Image { width, height, pixels };
+        image.check("image")?;
+        Ok(image)
+    }
+
+    /// An image of one colour.
+    pub fn filled(width: u32, height: u32, rgba: [f32; 4]) -> Image {
+        Image { width, height, pixels: vec![rgba; width as usize * height as usize] }
+    }
+
+    /// Number of pixels, `width * height`.
+    pub fn len(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The pixel at column `x`, row `y`.
+    pub fn get(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Errors when the public fields disagree (the pixel count is not `width * height`).
+    fn check(&self, what: &'static str) -> Result<(), CompareError> {
+        if self.pixels.len() != self.len() {
+            return Err(CompareError::PixelCount {
+                what,
+                width: self.width,
+                height: self.height,
+                found: self.pixels.len(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Why a comparison could not be made.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CompareError {
+    #[error("{what} is {found_w}x{found_h} but the reference is {expected_w}x{expected_h}")]
+    SizeMismatch { what: &'static str, expected_w: u32, expected_h: u32, found_w: u32, found_h: u32 },
+    #[error("{what} says {width}x{height} but holds {found} pixels")]
+    PixelCount { what: &'static str, width: u32, height: u32, found: usize },
+    #[error("{what} has {found} entries, expected one per pixel ({expected})")]
+    Length { what: &'static str, expected: usize, found: usize },
+    #[error("invalid {what} {value} (must be a finite number >= 0)")]
+    InvalidParameter { what: &'static str, value: f32 },
+}
+
+/// Rec. 709 luminance of linear RGB (alpha ignored).
+pub fn luminance(p: [f32; 4]) -> f32 {
+    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+}
+
+fn is_finite_rgb(p: [f32; 4]) -> bool {
+    p[0].is_finite() && p[1].is_finite() && p[2].is_finite()
+}
+
+/// `image` must have the reference's size and a consistent pixel count.
+fn check_same_size(what: &'static str, image: &Image, reference: &Image) -> Result<(), CompareError> {
+    reference.check("reference")?;
+    if image.width != reference.width || image.height != reference.height {
+        return Err(CompareError::SizeMismatch {
+            what,
+            expected_w: reference.width,
+            expected_h: reference.height,
+            found_w: image.width,
+            found_h: image.height,
+        });
+    }
+    image.check(what)
+}
+
+/// The mask, when given, must have one entry per pixel.
+fn check_len<T>(what: &'static str, values: Option<&[T]>, expected: usize) -> Result<(), CompareError> {
+    match values {
+        Some(v) if v.len() != expected => Err(CompareError::Length { what, expected, found: v.len() }),
+        _ => Ok(()),
+    }
+}
+
+fn check_param(what: &'static str, value: f32) -> Result<(), CompareError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(CompareError::InvalidParameter { what, value })
+    }
+}
+
+/// Whether pixel `i` is compared.
+fn in_mask(mask: Option<&[bool]>, i: usize) -> bool {
+    mask.is_none_or(|m| m[i])
+}

@@ -1,0 +1,294 @@
+//! Drawing a technique's overlay primitives ([`crate::technique::Overlay`]) over the tone-mapped output:
+//! lines for segments, wireframe spheres (three great circles) and camera frusta; screen-sized round dots for
+//! points. Depth-tested against the G-buffer depth, or drawn on top in x-ray mode.
+
+use glam::{Mat4, Vec3, Vec4};
+use wgpu::util::DeviceExt;
+
+use super::SharedLayouts;
+use crate::gpu::GpuContext;
+use crate::shaders;
+use crate::technique::Overlay;
+
+/// Mirrors `View` in `overlay.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct OverlayUniform {
+    clip_from_world: [[f32; 4]; 4],
+    viewport: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<OverlayUniform>() == 80);
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct LineVertex {
+    position: [f32; 3],
+    color: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct DotVertex {
+    center: [f32; 3],
+    corner_px: [f32; 2],
+    color: [f32; 4],
+}
+
+/// Segments per circle of a wireframe sphere.
+const CIRCLE_SEGMENTS: usize = 48;
+
+pub struct OverlayRenderer {
+    uniform: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    /// [depth tested, x-ray]
+    line_pipelines: [wgpu::RenderPipeline; 2],
+    dot_pipelines: [wgpu::RenderPipeline; 2],
+}
+
+/// Line-list vertices and dot triangles for a set of primitives.
+fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Vec<DotVertex>) {
+    let mut seg = |a: Vec3, b: Vec3, color: [f32; 4]| {
+        if a.is_finite() && b.is_finite() {
+            lines.push(LineVertex { position: a.to_array(), color });
+            lines.push(LineVertex { position: b.to_array(), color });
+        }
+    };
+    for p in primitives {
+        match p {
+            Overlay::Line { from, to, color } => seg(*from, *to, *color),
+            Overlay::Sphere { center, radius, color } => {
+                for axis in 0..3 {
+                    let point = |i: usize| {
+                        let a = i as f32 / CIRCLE_SEGMENTS as f32 * std::f32::consts::TAU;
+                        let (s, c) = a.sin_cos();
+                        let v = match axis {
+                            0 => Vec3::new(c, s, 0.0),
+                            1 => Vec3::new(c, 0.0, s),
+                            _ => Vec3::new(0.0, c, s),
+                        };
+                        *center + v * *radius
+                    };
+                    for i in 0..CIRCLE_SEGMENTS {
+                        seg(point(i), point(i + 1), *color);
+                    }
+                }
+            }
+            Overlay::Frustum { clip_from_world, color } => {
+                let world_from_clip = clip_from_world.inverse();
+                let corner = |x: f32, y: f32, z: f32| {
+                    let p = world_from_clip * Vec4::new(x, y, z, 1.0);
+                    p.truncate() / p.w
+                };
+                let c: Vec<Vec3> = [(-1., -1.), (1., -1.), (1., 1.), (-1., 1.)]
+                    .iter()
+                    .flat_map(|&(x, y)| [corner(x, y, 0.0), corner(x, y, 1.0)])
+                    .collect();
+                for i in 0..4 {
+                    let j = (i + 1) % 4;
+                    seg(c[2 * i], c[2 * j], *color);
+                    seg(c[2 * i + 1], c[2 * j + 1], *color);
+                    seg(c[2 * i], c[2 * i + 1], *color);
+                }
+            }
+            Overlay::Point { position, color, radius_px } => {
+                if !position.is_finite() {
+                    continue;
+                }
+                let r = radius_px.clamp(0.5, 64.0);
+                for (x, y) in [(-r, -r), (r, -r), (r, r), (-r, -r), (r, r), (-r, r)] {
+                    dots.push(DotVertex { center: position.to_array(), corner_px: [x, y], color: *color });
+                }
+            }
+        }
+    }
+}
+
+impl OverlayRenderer {
+    pub fn new(gpu: &GpuContext) -> OverlayRenderer {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("overlay"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("overlay view"),
+            contents: bytemuck::bytes_of(&<OverlayUniform as bytemuck::Zeroable>::zeroed()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("overlay"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
+        });
+        let module = shaders::create_module(device, "overlay", shaders::OVERLAY);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("overlay"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let make = |vs: &str, fs: &str, topology, buffer: wgpu::VertexBufferLayout, x_ray: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("overlay"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(buffer)],
+                },
+                primitive: wgpu::PrimitiveState { topology, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: SharedLayouts::DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(if x_ray {
+                        wgpu::CompareFunction::Always
+                    } else {
+                        wgpu::CompareFunction::LessEqual
+                    }),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: SharedLayouts::OUTPUT_FORMAT,
+                        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        const LINE_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+        const DOT_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Float32x4];
+        let line_layout = || wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<LineVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &LINE_ATTRIBUTES,
+        };
+        let dot_layout = || wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<DotVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &DOT_ATTRIBUTES,
+        };
+        let lines = wgpu::PrimitiveTopology::LineList;
+        let tris = wgpu::PrimitiveTopology::TriangleList;
+        OverlayRenderer {
+            uniform,
+            bind_group,
+            line_pipelines: [
+                make("line_vs", "line_fs", lines, line_layout(), false),
+                make("line_vs", "line_fs", lines, line_layout(), true),
+            ],
+            dot_pipelines: [
+                make("dot_vs", "dot_fs", tris, dot_layout(), false),
+                make("dot_vs", "dot_fs", tris, dot_layout(), true),
+            ],
+        }
+    }
+
+    /// Draw `primitives` over `output` (the tone-mapped target) using `depth` (the G-buffer depth).
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw(
+        &self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        output: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        clip_from_world: Mat4,
+        size: (u32, u32),
+        primitives: &[Overlay],
+        x_ray: bool,
+    ) {
+        let mut lines = Vec::new();
+        let mut dots = Vec::new();
+        tessellate(primitives, &mut lines, &mut dots);
+        if lines.is_empty() && dots.is_empty() {
+            return;
+        }
+        let (w, h) = (size.0 as f32, size.1 as f32);
+        let uniform =
+            OverlayUniform { clip_from_world: clip_from_world.to_cols_array_2d(), viewport: [w, h, 1.0 / w, 1.0 / h] };
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        let buffer = |data: &[u8]| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("overlay vertices"),
+                contents: data,
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        };
+        let line_buffer = (!lines.is_empty()).then(|| buffer(bytemuck::cast_slice(&lines)));
+        let dot_buffer = (!dots.is_empty()).then(|| buffer(bytemuck::cast_slice(&dots)));
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("overlays"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: output,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let i = usize::from(x_ray);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        if let Some(b) = &line_buffer {
+            pass.set_pipeline(&self.line_pipelines[i]);
+            pass.set_vertex_buffer(0, b.slice(..));
+            pass.draw(0..lines.len() as u32, 0..1);
+        }
+        if let Some(b) = &dot_buffer {
+            pass.set_pipeline(&self.dot_pipelines[i]);
+            pass.set_vertex_buffer(0, b.slice(..));
+            pass.draw(0..dots.len() as u32, 0..1);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn primitives_tessellate_to_the_expected_vertex_counts() {
+        let (mut lines, mut dots) = (Vec::new(), Vec::new());
+        let c = [1.0; 4];
+        tessellate(
+            &[
+                Overlay::Line { from: Vec3::ZERO, to: Vec3::X, color: c },
+                Overlay::Sphere { center: Vec3::ZERO, radius: 1.0, color: c },
+                Overlay::Frustum { clip_from_world: Mat4::IDENTITY, color: c },
+                Overlay::Point { position: Vec3::Y, color: c, radius_px: 3.0 },
+                Overlay::Point { position: Vec3::NAN, color: c, radius_px: 3.0 },
+            ],
+            &mut lines,
+            &mut dots,
+        );
+        assert_eq!(lines.len(), 2 + 3 * CIRCLE_SEGMENTS * 2 + 12 * 2);
+        assert_eq!(dots.len(), 6, "a NaN point is skipped");
+        // Sphere points lie on the sphere.
+        for v in &lines[2..2 + 3 * CIRCLE_SEGMENTS * 2] {
+            assert!((Vec3::from_array(v.position).length() - 1.0).abs() < 1e-5);
+        }
+    }
+}

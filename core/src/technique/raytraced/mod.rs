@@ -1,0 +1,487 @@
+//! Ray traced: shadow rays through a BVH of the scene's triangles, the ground truth the cube-map techniques
+//! approximate. Hard shadows cast one ray per pixel and light to the light's centre (what the reference's cube
+//! maps approximate); soft shadows cast `samples` rays to stratified points on a disc of `light_radius` centred
+//! at the light and facing the receiver (what PCSS approximates), visibility being the unoccluded fraction.
+//!
+//! Per frame:
+//! 1. Build the BVH on the CPU the first time a scene is seen ([`bvh::Bvh::from_geometry`], binned SAH), upload
+//!    it; it is cached by the scene's geometry (`GpuScene::geometry`, compared by pointer).
+//! 2. Cull each light's range sphere against the view frustum, as the reference does.
+//! 3. Per batch of `lights_per_step` lights (one step): a full-screen pass traces every pixel's shadow rays in
+//!    the fragment shader (`raytrace_shadow.wgsl`, stack-based any-hit traversal) and adds the lights' shading
+//!    (the reference's `shade_light`) times visibility into the HDR target.
+//!
+//! The ray origin is the G-buffer position pushed along the normal by `bias * max(1, camera distance)` (the
+//! reconstruction error grows with distance), and rays stop that far before the light.
+//!
+//! [`occluded_cpu`] is the CPU twin of the GPU traversal and [`gpu_occluded`] runs the GPU traversal on given
+//! rays, so the tests can compare GPU, CPU and brute force.
+
+pub mod bvh;
+
+use std::sync::{Arc, Weak};
+
+use wgpu::util::DeviceExt;
+
+pub use bvh::{occluded_brute_force, occluded_cpu, Bvh, BvhNode, BvhStats, BvhTriangle, Ray};
+
+use super::{
+    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, Overlay, OverlayLayer,
+    Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::gpu_data::GpuLight;
+use crate::renderer::SharedLayouts;
+use crate::scene::chunks::ChunkedGeometry;
+use crate::scene::PointLight;
+use crate::shaders;
+use crate::timing::PassTime;
+
+/// Mirrors `RtBatch` in `raytrace_shadow.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct RtBatchUniform {
+    first_light: u32,
+    light_count: u32,
+    soft: u32,
+    samples: u32,
+    light_radius: f32,
+    bias: f32,
+    seed: u32,
+    _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<RtBatchUniform>() == 32);
+
+/// The ray tracer's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RaytracedParams {
+    /// Soft shadows from disc lights instead of hard shadows from points.
+    pub soft: bool,
+    /// Radius of the disc light in world units (soft shadows).
+    pub light_radius: f32,
+    /// Shadow rays per pixel and light (soft shadows).
+    pub samples: u32,
+    /// Lights per step (one full-screen pass each).
+    pub lights_per_step: u32,
+    /// Ray origin offset along the normal, world units per metre of camera distance (at least one metre).
+    pub bias: f32,
+    /// Seed of the per-pixel rotation of the sample pattern (soft shadows).
+    pub seed: u32,
+}
+
+impl Default for RaytracedParams {
+    fn default() -> Self {
+        RaytracedParams { soft: false, light_radius: 0.1, samples: 16, lights_per_step: 32, bias: 0.002, seed: 0 }
+    }
+}
+
+/// A BVH on the GPU.
+struct GpuBvh {
+    nodes: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+}
+
+impl GpuBvh {
+    fn upload(gpu: &GpuContext, bvh: &Bvh) -> GpuBvh {
+        let storage = |label, contents: &[u8]| {
+            // Never empty: a binding needs at least one element.
+            let mut bytes = contents.to_vec();
+            bytes.resize(bytes.len().max(64), 0);
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        GpuBvh {
+            nodes: storage("bvh nodes", bytemuck::cast_slice(&bvh.nodes)),
+            triangles: storage("bvh triangles", bytemuck::cast_slice(&bvh.triangles)),
+        }
+    }
+}
+
+/// The BVH of the scene last seen, keyed by its geometry.
+struct CachedBvh {
+    geometry: Weak<ChunkedGeometry>,
+    gpu: GpuBvh,
+    stats: BvhStats,
+}
+
+pub struct Raytraced {
+    pub params: RaytracedParams,
+    pipeline: wgpu::RenderPipeline,
+    group_layout: wgpu::BindGroupLayout,
+    batch_uniform: wgpu::Buffer,
+    lights_buffer: GrowableBuffer,
+    bind_group: Option<wgpu::BindGroup>,
+    bvh: Option<CachedBvh>,
+    /// Indices of the visible lights of this frame, in batch order.
+    visible: Vec<usize>,
+    gpu_lights: Vec<GpuLight>,
+    batch_size: usize,
+    counts: TechniqueCounts,
+    /// BVH build time of this frame's `prepare`, when it built one.
+    build_ms: Option<f64>,
+}
+
+impl Raytraced {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Raytraced {
+        let device = &gpu.device;
+        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("raytraced shade"),
+            entries: &[storage_entry(0), storage_entry(1), storage_entry(2), uniform_entry(3)],
+        });
+        let module = shaders::create_module(device, "raytrace_shadow", shaders::RAYTRACE_SHADOW);
+        let pipeline = layouts.fullscreen_pipeline(
+            device,
+            "raytraced shade",
+            &module,
+            &[&group_layout],
+            SharedLayouts::HDR_FORMAT,
+            true,
+        );
+        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("raytraced batch"),
+            contents: bytemuck::bytes_of(&<RtBatchUniform as bytemuck::Zeroable>::zeroed()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        Raytraced {
+            params: RaytracedParams::default(),
+            pipeline,
+            group_layout,
+            batch_uniform,
+            lights_buffer: GrowableBuffer::new(device, "raytraced lights", 64 * 32),
+            bind_group: None,
+            bvh: None,
+            visible: Vec::new(),
+            gpu_lights: Vec::new(),
+            batch_size: 1,
+            counts: TechniqueCounts::default(),
+            build_ms: None,
+        }
+    }
+
+    /// The lights of this frame that passed view-frustum culling (indices into the frame's lights).
+    pub fn visible_lights(&self) -> &[usize] {
+        &self.visible
+    }
+
+    /// Facts about the BVH in use (None before the first frame).
+    pub fn bvh_stats(&self) -> Option<&BvhStats> {
+        self.bvh.as_ref().map(|b| &b.stats)
+    }
+
+    /// Build (or reuse) the BVH of `geometry`; returns true when it changed.
+    fn ensure_bvh(&mut self, gpu: &GpuContext, geometry: &Arc<ChunkedGeometry>) -> bool {
+        if let Some(cached) = &self.bvh {
+            if std::ptr::eq(cached.geometry.as_ptr(), Arc::as_ptr(geometry)) {
+                return false;
+            }
+        }
+        let bvh = Bvh::from_geometry(geometry);
+        self.build_ms = Some(bvh.stats.build_ms);
+        log::info!(
+            "ray tracer: BVH of {} triangles, {} nodes, depth {}, built in {:.1} ms",
+            bvh.stats.triangles,
+            bvh.stats.nodes,
+            bvh.stats.max_depth,
+            bvh.stats.build_ms
+        );
+        self.bvh =
+            Some(CachedBvh { geometry: Arc::downgrade(geometry), gpu: GpuBvh::upload(gpu, &bvh), stats: bvh.stats });
+        true
+    }
+}
+
+impl Technique for Raytraced {
+    fn key(&self) -> &'static str {
+        "raytraced"
+    }
+
+    fn label(&self) -> &'static str {
+        "Ray traced"
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let p = &self.params;
+        vec![
+            Param {
+                key: "soft",
+                label: "Soft shadows",
+                help: "Disc lights of the given radius (several rays per pixel and light) instead of points",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.soft),
+            },
+            Param {
+                key: "light_radius",
+                label: "Light radius",
+                help: "Radius of the disc light in world units (soft shadows)",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(p.light_radius),
+            },
+            Param {
+                key: "samples",
+                label: "Samples",
+                help: "Shadow rays per pixel and light (soft shadows)",
+                kind: ParamKind::Int { min: 1, max: 256 },
+                value: ParamValue::Int(p.samples as i64),
+            },
+            Param {
+                key: "lights_per_step",
+                label: "Lights per step",
+                help: "Lights traced in one full-screen pass; fewer means shorter steps",
+                kind: ParamKind::Int { min: 1, max: 4096 },
+                value: ParamValue::Int(p.lights_per_step as i64),
+            },
+            Param {
+                key: "bias",
+                label: "Ray offset",
+                help: "Ray origin offset along the normal, world units per metre of camera distance",
+                kind: ParamKind::Float { min: 0.0, max: 0.1 },
+                value: ParamValue::Float(p.bias),
+            },
+            Param {
+                key: "seed",
+                label: "Seed",
+                help: "Seed of the per-pixel rotation of the sample pattern (soft shadows)",
+                kind: ParamKind::Int { min: 0, max: u32::MAX as i64 },
+                value: ParamValue::Int(p.seed as i64),
+            },
+        ]
+    }
+
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        check_param(self.key(), &self.params(), key, value)?;
+        match (key, value) {
+            ("soft", ParamValue::Bool(v)) => self.params.soft = *v,
+            ("light_radius", ParamValue::Float(v)) => self.params.light_radius = *v,
+            ("samples", ParamValue::Int(v)) => self.params.samples = *v as u32,
+            ("lights_per_step", ParamValue::Int(v)) => self.params.lights_per_step = *v as u32,
+            ("bias", ParamValue::Float(v)) => self.params.bias = *v,
+            ("seed", ParamValue::Int(v)) => self.params.seed = *v as u32,
+            _ => unreachable!("check_param accepted an unknown key"),
+        }
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        self.build_ms = None;
+        // Step 1: view-frustum culling of range spheres.
+        self.visible.clear();
+        self.visible.extend(
+            ctx.lights
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
+                .map(|(i, _)| i),
+        );
+        self.gpu_lights.clear();
+        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
+
+        // Step 2: batches of lights.
+        self.batch_size = (self.params.lights_per_step as usize).min(ctx.max_lights_per_step).max(1);
+        let batches = self.visible.len().div_ceil(self.batch_size);
+        self.counts = TechniqueCounts { lights_visible: self.visible.len(), batches, ..Default::default() };
+        if self.visible.is_empty() {
+            return Ok(0);
+        }
+
+        // The BVH, built the first time this geometry is seen.
+        let mut rebind = self.bind_group.is_none();
+        rebind |= self.ensure_bvh(ctx.gpu, &ctx.scene.geometry);
+        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
+        if rebind {
+            let bvh = &self.bvh.as_ref().expect("ensure_bvh built it").gpu;
+            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("raytraced shade"),
+                layout: &self.group_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 3, resource: self.batch_uniform.as_entire_binding() },
+                ],
+            }));
+        }
+        Ok(batches)
+    }
+
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        // Step 3: trace and shade this batch.
+        let first = step * self.batch_size;
+        let last = (first + self.batch_size).min(self.visible.len());
+        let p = &self.params;
+        let uniform = RtBatchUniform {
+            first_light: first as u32,
+            light_count: (last - first) as u32,
+            soft: p.soft as u32,
+            samples: p.samples.clamp(1, 256),
+            light_radius: p.light_radius,
+            bias: p.bias,
+            seed: p.seed,
+            _pad: 0,
+        };
+        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = self.bind_group.as_ref().expect("prepare created the bind group");
+        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, group);
+        Ok(())
+    }
+
+    fn step_label(&self) -> &'static str {
+        "ray traced shading"
+    }
+
+    fn counts(&self) -> TechniqueCounts {
+        self.counts.clone()
+    }
+
+    fn cpu_times(&self) -> Vec<PassTime> {
+        self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 }).into_iter().collect()
+    }
+
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
+        let color = |l: &PointLight| {
+            let c = l.color / l.color.max_element().max(1e-6);
+            [c.x, c.y, c.z, 1.0]
+        };
+        let mut layers = vec![
+            OverlayLayer {
+                name: "lights",
+                visible_by_default: true,
+                primitives: lights
+                    .iter()
+                    .map(|l| Overlay::Point {
+                        position: l.position,
+                        color: color(l),
+                        radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
+                    })
+                    .collect(),
+            },
+            OverlayLayer {
+                name: "light ranges",
+                visible_by_default: false,
+                primitives: lights
+                    .iter()
+                    .map(|l| {
+                        let [r, g, b, _] = color(l);
+                        Overlay::Sphere { center: l.position, radius: l.range, color: [r, g, b, 0.35] }
+                    })
+                    .collect(),
+            },
+        ];
+        if self.params.soft {
+            layers.push(OverlayLayer {
+                name: "light discs",
+                visible_by_default: true,
+                primitives: lights
+                    .iter()
+                    .map(|l| Overlay::Sphere { center: l.position, radius: self.params.light_radius, color: color(l) })
+                    .collect(),
+            });
+        }
+        layers
+    }
+}
+
+/// Trace `rays` through `bvh` with the GPU traversal (`test_rays` in `raytrace_test.wgsl`): one hit flag per
+/// ray. For tests comparing the GPU with [`occluded_cpu`].
+pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<bool>, GpuError> {
+    if rays.is_empty() {
+        return Ok(Vec::new());
+    }
+    let device = &gpu.device;
+    let compute_entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("raytrace test"),
+        entries: &[compute_entry(0, true), compute_entry(1, true), compute_entry(2, true), compute_entry(3, false)],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("raytrace test"),
+        bind_group_layouts: &[Some(&empty), Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = shaders::create_module(device, "raytrace_test", shaders::RAYTRACE_TEST);
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("raytrace test"),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some("test_rays"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bvh_gpu = GpuBvh::upload(gpu, bvh);
+    let ray_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("test rays"),
+        contents: bytemuck::cast_slice(rays),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let hits_size = (rays.len() * 4) as u64;
+    let hits = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test hits"),
+        size: hits_size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test hits readback"),
+        size: hits_size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let empty_group =
+        device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &empty, entries: &[] });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("raytrace test"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: bvh_gpu.nodes.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: bvh_gpu.triangles.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: ray_buffer.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: hits.as_entire_binding() },
+        ],
+    });
+    let groups = (rays.len() as u32).div_ceil(64);
+    let (x, y) = if groups <= 65_535 { (groups, 1) } else { (65_535, groups.div_ceil(65_535)) };
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("test rays"), timestamp_writes: None });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &empty_group, &[]);
+        pass.set_bind_group(1, &group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+    encoder.copy_buffer_to_buffer(&hits, 0, &readback, 0, hits_size);
+    gpu.queue.submit([encoder.finish()]);
+    let slice = readback.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait_idle()?;
+    rx.recv()
+        .map_err(|_| GpuError::Readback("the map callback never ran".into()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+    let flags: Vec<bool> = bytemuck::cast_slice::<u8, u32>(&data).iter().map(|&h| h != 0).collect();
+    drop(data);
+    readback.unmap();
+    Ok(flags)
+}

@@ -1,0 +1,148 @@
+//! Unshadowed: all visible lights, visibility 1, no shadow maps. The app's cheap preview while the camera or a
+//! light moves, and the "no shadows" image that turns radiance into shadow factors for visibility comparisons.
+//!
+//! 1. Cull range spheres against the view frustum.
+//! 2. Per step, shade a batch of lights in one full-screen pass (the batch is bounded only by
+//!    `max_lights_per_step`; the whole frame is one step when unlimited).
+
+use wgpu::util::DeviceExt;
+
+use super::{
+    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, OverlayLayer, Param,
+    ParamError, ParamValue, Technique, TechniqueCounts,
+};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::gpu_data::GpuLight;
+use crate::renderer::SharedLayouts;
+use crate::scene::PointLight;
+use crate::shaders;
+
+/// Mirrors `Batch` in `unshadowed_shade.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct UnshadowedBatchUniform {
+    first_light: u32,
+    light_count: u32,
+    _pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<UnshadowedBatchUniform>() == 16);
+
+pub struct Unshadowed {
+    pipeline: wgpu::RenderPipeline,
+    group_layout: wgpu::BindGroupLayout,
+    batch_uniform: wgpu::Buffer,
+    lights_buffer: GrowableBuffer,
+    bind_group: Option<wgpu::BindGroup>,
+    gpu_lights: Vec<GpuLight>,
+    batch_size: usize,
+    counts: TechniqueCounts,
+}
+
+impl Unshadowed {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Unshadowed {
+        let device = &gpu.device;
+        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("unshadowed shade"),
+            entries: &[storage_entry(0), uniform_entry(1)],
+        });
+        let module = shaders::create_module(device, "unshadowed_shade", shaders::UNSHADOWED_SHADE);
+        let pipeline = layouts.fullscreen_pipeline(
+            device,
+            "unshadowed shade",
+            &module,
+            &[&group_layout],
+            SharedLayouts::HDR_FORMAT,
+            true,
+        );
+        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("unshadowed batch"),
+            contents: bytemuck::bytes_of(&<UnshadowedBatchUniform as bytemuck::Zeroable>::zeroed()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        Unshadowed {
+            pipeline,
+            group_layout,
+            batch_uniform,
+            lights_buffer: GrowableBuffer::new(device, "unshadowed lights", 64 * 32),
+            bind_group: None,
+            gpu_lights: Vec::new(),
+            batch_size: 1,
+            counts: TechniqueCounts::default(),
+        }
+    }
+}
+
+impl Technique for Unshadowed {
+    fn key(&self) -> &'static str {
+        "unshadowed"
+    }
+
+    fn label(&self) -> &'static str {
+        "Unshadowed"
+    }
+
+    fn params(&self) -> Vec<Param> {
+        Vec::new()
+    }
+
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        check_param(self.key(), &self.params(), key, value)
+    }
+
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        self.gpu_lights.clear();
+        self.gpu_lights.extend(
+            ctx.lights
+                .iter()
+                .filter(|l| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
+                .map(GpuLight::new),
+        );
+        self.batch_size = self.gpu_lights.len().clamp(1, ctx.max_lights_per_step);
+        let batches = self.gpu_lights.len().div_ceil(self.batch_size);
+        self.counts = TechniqueCounts { lights_visible: self.gpu_lights.len(), batches, ..Default::default() };
+        if self.gpu_lights.is_empty() {
+            return Ok(0);
+        }
+        let grown = self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
+        if grown || self.bind_group.is_none() {
+            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("unshadowed shade"),
+                layout: &self.group_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
+                ],
+            }));
+        }
+        Ok(batches)
+    }
+
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        let first = step * self.batch_size;
+        let last = (first + self.batch_size).min(self.gpu_lights.len());
+        let uniform =
+            UnshadowedBatchUniform { first_light: first as u32, light_count: (last - first) as u32, _pad: [0; 2] };
+        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = self.bind_group.as_ref().expect("prepare created the bind group");
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
+        Ok(())
+    }
+
+    fn step_label(&self) -> &'static str {
+        "shading"
+    }
+
+    fn counts(&self) -> TechniqueCounts {
+        self.counts.clone()
+    }
+
+    fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
+        Vec::new()
+    }
+}
