@@ -19,9 +19,18 @@ use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer, ToneMap}
     version,
     about = "See and measure how many-light shadow techniques trade quality for speed"
 )]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct Cli {
     #[command(subcommand)]
-    pub command: Command,
+    pub command: Option<Command>,
+    /// Open this scene file (.ron) or model (.obj, .gltf, .glb) in the app.
+    pub path: Option<PathBuf>,
+    /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
+    #[arg(long, hide = true)]
+    pub screenshot: Option<PathBuf>,
+    /// App: quit after this many seconds (smoke tests, README pictures).
+    #[arg(long, hide = true)]
+    pub quit_after: Option<f32>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -94,8 +103,8 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-pub fn run(cli: Cli) -> Result<()> {
-    match cli.command {
+pub fn run(command: Command) -> Result<()> {
+    match command {
         Command::Render(args) => render(args),
         Command::Info(args) => info(args),
     }

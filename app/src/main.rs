@@ -1,15 +1,23 @@
-//! `shadowlab`: the command line (and, in a later version, the interactive app).
-
-mod cli;
+//! `shadowlab`: with no arguments (or a scene path) the interactive app; with a subcommand the command line.
 
 use std::process::ExitCode;
 
 use clap::Parser;
+use shadowlab::{cli, gui};
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn,wgpu_hal::gles::egl=off")).init();
     let args = cli::Cli::parse();
-    match cli::run(args) {
+    let result = match args.command {
+        Some(command) => cli::run(command),
+        None => gui::run(gui::Startup {
+            path: args.path,
+            data_dir: None,
+            screenshot: args.screenshot,
+            quit_after_secs: args.quit_after,
+        }),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // One line: the error and its causes.

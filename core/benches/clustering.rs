@@ -88,13 +88,13 @@ fn main() {
             });
             let info = clusterer.grid_info();
             println!(
-                "| {n} | {} | {d_init} | {} | {:?} {}x{}x{} | {ms:.4} | {:.4} | {fresh:.4} |",
+                "| {n} | {} | {d_init} | {} | {:?}, {} levels, {:.2}..{:.2} m | {ms:.4} | {:.4} | {fresh:.4} |",
                 out.visible,
                 out.clusters.len(),
                 info.kind,
-                info.dims[0],
-                info.dims[1],
-                info.dims[2],
+                info.levels,
+                info.coarsest_cell,
+                info.finest_cell,
                 ms * 1000.0 / n as f64,
             );
         }

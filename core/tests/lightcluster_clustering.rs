@@ -339,7 +339,7 @@ fn check_all(case: &Case, c: &Clustering) {
 fn matches_brute_force_reference() {
     let mut clusterer = Clusterer::new();
     let mut reused = Clustering::default();
-    let mut kinds = [0usize; 3];
+    let mut kinds = [0usize; 4];
     for case in cases() {
         let expected = reference(&case.lights, case.camera.position, &case.frustum, &case.params);
         let got = run(&case);
@@ -349,8 +349,7 @@ fn matches_brute_force_reference() {
         assert_eq!(reused, expected, "{} (reused)", case.name);
         kinds[clusterer.grid_info().kind as usize] += 1;
     }
-    // Both grid kinds were exercised (tiny d_init over a 30 m box needs the hash grid).
-    assert!(kinds.iter().all(|&k| k > 0), "grid kinds used (none, dense, hash): {kinds:?}");
+    assert!(kinds[0] > 0 && kinds[1] > 0, "grid kinds used (none, dense, hash, mixed): {kinds:?}");
 }
 
 #[test]
@@ -646,23 +645,43 @@ fn dense_and_hash_grids_agree_with_the_reference() {
     let mut clusterer = Clusterer::new();
     for (seed, layout) in LAYOUTS.into_iter().enumerate() {
         let lights = make_lights(layout, 1200, 900 + seed as u64);
-        for (d_init, kind) in
-            [(0.002, GridKind::Hash), (0.01, GridKind::Hash), (0.5, GridKind::Dense), (3.0, GridKind::Dense)]
-        {
-            let params = ClusterParams { d_init, z_far: 30.0, adaptive: true };
-            let c = clusterer.cluster(&lights, camera.position, &frustum, &params);
-            assert_eq!(clusterer.grid_info().kind, kind, "{layout:?} d_init={d_init} {:?}", clusterer.grid_info());
-            assert_eq!(c, reference(&lights, camera.position, &frustum, &params), "{layout:?} d_init={d_init}");
+        for d_init in [0.002, 0.01, 0.5, 3.0] {
+            for adaptive in [true, false] {
+                let params = ClusterParams { d_init, z_far: 30.0, adaptive };
+                let c = clusterer.cluster(&lights, camera.position, &frustum, &params);
+                let info = clusterer.grid_info();
+                // Spread-out layouts fit dense arrays; clumps (blobs) may need the hash table.
+                if !matches!(layout, Layout::Blobs) {
+                    assert_eq!(info.kind, GridKind::Dense, "{layout:?} d_init={d_init} {info:?}");
+                }
+                assert!(info.levels == 1 || adaptive, "{info:?}");
+                assert_eq!(c, reference(&lights, camera.position, &frustum, &params), "{layout:?} d_init={d_init}");
+            }
         }
     }
-    // A few far lights stretch the bounding box: the hash grid keeps the cells small.
-    let mut lights = make_lights(Layout::Blobs, 1500, 5);
+    // Tight clumps of lights plus far-away lights stretch the bounding box: levels with cells near the clumps'
+    // spacing do not fit a dense array over the box, so they are hashed.
+    let mut rng = Rng(5);
+    let mut lights = Vec::new();
+    for blob in 0..4 {
+        let c = Vec3::new(blob as f32 * 3.0 - 6.0, 0.0, -10.0);
+        for _ in 0..500 {
+            lights.push(light(c + rng.vec3(Vec3::splat(-0.05), Vec3::splat(0.05)), rng.range(0.5, 7.0)));
+        }
+    }
     lights.push(light(Vec3::new(0.0, 0.0, -5000.0), 4990.0));
     lights.push(light(Vec3::new(3000.0, 0.0, -10.0), 3100.0));
-    let params = ClusterParams { d_init: 0.3, z_far: 30.0, adaptive: false };
-    let c = clusterer.cluster(&lights, camera.position, &frustum, &params);
-    assert_eq!(clusterer.grid_info().kind, GridKind::Hash, "{:?}", clusterer.grid_info());
-    assert_eq!(c, reference(&lights, camera.position, &frustum, &params));
+    for adaptive in [false, true] {
+        for d_init in [0.001, 0.005, 0.3] {
+            let params = ClusterParams { d_init, z_far: 30.0, adaptive };
+            let c = clusterer.cluster(&lights, camera.position, &frustum, &params);
+            let info = clusterer.grid_info();
+            if d_init < 0.01 {
+                assert!(matches!(info.kind, GridKind::Hash | GridKind::Mixed), "d_init={d_init} {info:?}");
+            }
+            assert_eq!(c, reference(&lights, camera.position, &frustum, &params), "d_init={d_init} {info:?}");
+        }
+    }
 }
 
 #[test]

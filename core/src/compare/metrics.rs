@@ -19,7 +19,7 @@ pub struct Visibility<'a> {
 pub struct CompareOptions<'a> {
     /// Relative luminance error above which a pixel counts in `share_over_threshold` (0.05 = 5%).
     pub threshold: f32,
-    /// Compute `flip_mean` (a few hundred ms for a 640x360 image on one core).
+    /// Compute `flip_mean` (about 0.15 s for a 640x360 image, one core).
     pub flip: bool,
     /// Exposure applied before the ACES tone mapping of the FLIP inputs; use the render's exposure.
     pub exposure: f32,

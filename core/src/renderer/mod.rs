@@ -662,6 +662,13 @@ impl Renderer {
         })
     }
 
+    /// Abandon an unfinished frame (the camera moved): its timings are collected and dropped, so they do not
+    /// leak into the next frame's report.
+    pub fn cancel_frame(&mut self, job: FrameJob) -> Result<(), GpuError> {
+        drop(job);
+        self.timer.finish_frame(&self.gpu).map(|_| ())
+    }
+
     /// Tone-map the HDR target into the output texture.
     pub fn tonemap(&mut self) -> Result<(), GpuError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());

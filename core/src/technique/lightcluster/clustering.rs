@@ -623,7 +623,7 @@ impl Grid {
         let smallest_cell = largest / (1u64 << (AXIS_BITS - 1)) as f64;
         // Slightly over 2 * d_init, so level 0 holds every d_min <= d_init.
         let cell0 = (2.0 * d_init as f64) * (1.0 + 1e-6);
-        let floor = if adaptive { self.spacing(positions, origin, extent) } else { cell0 };
+        let floor = self.spacing(positions, origin, extent);
         self.origin = origin;
         self.half_cell0 = cell0 / 2.0;
         self.prune = adaptive;
@@ -634,7 +634,8 @@ impl Grid {
         self.levels.clear();
         let mut cell = cell0;
         loop {
-            let last = cell <= floor || self.levels.len() + 1 == MAX_LEVELS;
+            // Without view-adaptive scaling every d_min is d_init: one level.
+            let last = !adaptive || cell <= floor || self.levels.len() + 1 == MAX_LEVELS;
             let mut size = if last { cell.max(floor) } else { cell };
             size = size.max(smallest_cell);
             if !(size.is_finite() && size > 0.0) {

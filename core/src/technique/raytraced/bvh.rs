@@ -173,9 +173,8 @@ impl Bvh {
         let mut bvh = Bvh::default();
         bvh.stats.degenerate_skipped = degenerate;
         if prims.is_empty() {
-            // One node with an inverted box: every ray misses the root.
-            bvh.nodes.push(BvhNode { min: [1.0; 3], first: 0, max: [-1.0; 3], count: 0 });
-            bvh.stats.nodes = 1;
+            // No nodes: every ray misses (the GPU copy is one leaf with one zero-area triangle, see
+            // `Bvh::gpu_buffers`).
             bvh.stats.build_ms = start.elapsed().as_secs_f64() * 1000.0;
             return bvh;
         }
@@ -209,6 +208,17 @@ impl Bvh {
         bvh.stats.nodes = bvh.nodes.len();
         bvh.stats.build_ms = start.elapsed().as_secs_f64() * 1000.0;
         bvh
+    }
+
+    /// The node and triangle arrays to upload. An empty BVH becomes one leaf holding one zero-area triangle,
+    /// which no ray hits (`det == 0`), so the GPU traversal needs no special case and no binding is empty.
+    pub fn gpu_buffers(&self) -> (Vec<BvhNode>, Vec<BvhTriangle>) {
+        if self.nodes.is_empty() {
+            let leaf = BvhNode { min: [0.0; 3], first: 0, max: [0.0; 3], count: 1 };
+            (vec![leaf], vec![bytemuck::Zeroable::zeroed()])
+        } else {
+            (self.nodes.clone(), self.triangles.clone())
+        }
     }
 
     /// The box of node `i`.

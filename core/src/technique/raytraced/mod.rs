@@ -72,7 +72,7 @@ pub struct RaytracedParams {
 
 impl Default for RaytracedParams {
     fn default() -> Self {
-        RaytracedParams { soft: false, light_radius: 0.1, samples: 16, lights_per_step: 32, bias: 0.002, seed: 0 }
+        RaytracedParams { soft: false, light_radius: 0.1, samples: 16, lights_per_step: 32, bias: 0.001, seed: 0 }
     }
 }
 
@@ -85,18 +85,16 @@ struct GpuBvh {
 impl GpuBvh {
     fn upload(gpu: &GpuContext, bvh: &Bvh) -> GpuBvh {
         let storage = |label, contents: &[u8]| {
-            // Never empty: a binding needs at least one element.
-            let mut bytes = contents.to_vec();
-            bytes.resize(bytes.len().max(64), 0);
             gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
-                contents: &bytes,
+                contents,
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
+        let (nodes, triangles) = bvh.gpu_buffers();
         GpuBvh {
-            nodes: storage("bvh nodes", bytemuck::cast_slice(&bvh.nodes)),
-            triangles: storage("bvh triangles", bytemuck::cast_slice(&bvh.triangles)),
+            nodes: storage("bvh nodes", bytemuck::cast_slice(&nodes)),
+            triangles: storage("bvh triangles", bytemuck::cast_slice(&triangles)),
         }
     }
 }

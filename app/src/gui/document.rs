@@ -1,0 +1,245 @@
+//! What a user edits and saves: the scene source, lights, camera, technique and its parameters, view settings.
+//! Saved as RON, atomically (temp file + rename); loading a broken file changes nothing and says why; fields
+//! from a newer version are reported, not fatal. Light edits go through [`History`] for undo/redo.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use shadowlab_core::scene::{Camera, PointLight, SceneSource};
+use shadowlab_core::technique::ParamValue;
+
+/// Version written into scene files.
+pub const FILE_VERSION: u32 = 1;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum ViewMode {
+    #[default]
+    Single,
+    /// Technique on the left, reference on the right.
+    SideBySide,
+    /// One image, technique left of a draggable line, reference right of it.
+    Split,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ViewSettings {
+    pub mode: ViewMode,
+    /// 0..1, position of the split line.
+    pub split: f32,
+    pub x_ray: bool,
+    /// Overlay layers by name: shown or not. Layers not listed use their default.
+    pub overlays: BTreeMap<String, bool>,
+    /// Render resolution relative to the viewport size.
+    pub resolution_scale: f32,
+    pub exposure: f32,
+    pub specular: bool,
+}
+
+impl Default for ViewSettings {
+    fn default() -> Self {
+        ViewSettings {
+            mode: ViewMode::Single,
+            split: 0.5,
+            x_ray: false,
+            overlays: BTreeMap::new(),
+            resolution_scale: 1.0,
+            exposure: 1.0,
+            specular: false,
+        }
+    }
+}
+
+/// A scene file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SceneFile {
+    pub version: u32,
+    pub scene: SceneSource,
+    pub lights: Vec<PointLight>,
+    pub camera: Camera,
+    pub technique: String,
+    /// Parameters per technique key, as set by the user.
+    #[serde(default)]
+    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
+    #[serde(default)]
+    pub view: ViewSettings,
+}
+
+const KNOWN_FIELDS: &[&str] = &["version", "scene", "lights", "camera", "technique", "params", "view"];
+
+impl SceneFile {
+    pub fn to_ron(&self) -> Result<String> {
+        ron::ser::to_string_pretty(self, ron::ser::PrettyConfig::default()).context("cannot encode the scene file")
+    }
+
+    /// Parse a scene file. Returns the file and warnings (unknown fields from a newer version).
+    pub fn from_ron(text: &str) -> Result<(SceneFile, Vec<String>)> {
+        let value: ron::Value = ron::from_str(text).map_err(|e| anyhow::anyhow!("not a ShadowLab scene file: {e}"))?;
+        let mut warnings = Vec::new();
+        if let ron::Value::Map(map) = &value {
+            for (k, _) in map.iter() {
+                if let ron::Value::String(key) = k {
+                    if !KNOWN_FIELDS.contains(&key.as_str()) {
+                        warnings.push(format!("unknown field '{key}' ignored (written by a newer ShadowLab?)"));
+                    }
+                }
+            }
+        }
+        let file: SceneFile = ron::from_str(text).map_err(|e| anyhow::anyhow!("broken scene file: {e}"))?;
+        if file.version > FILE_VERSION {
+            warnings.push(format!("file version {} is newer than this ShadowLab ({FILE_VERSION})", file.version));
+        }
+        if let Some(i) = file.lights.iter().position(|l| !l.is_valid()) {
+            bail!("light {i} has a non-finite or negative value");
+        }
+        if !file.camera.is_valid() {
+            bail!("the camera has non-finite or degenerate values");
+        }
+        Ok((file, warnings))
+    }
+
+    pub fn load(path: &Path) -> Result<(SceneFile, Vec<String>)> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        SceneFile::from_ron(&text).with_context(|| path.display().to_string())
+    }
+
+    /// Write atomically: a temporary file beside the target, then a rename; the old file survives any failure.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let text = self.to_ron()?;
+        crate::cli::write_atomic(path, text.as_bytes())
+    }
+}
+
+/// Undo/redo of light edits, as snapshots of the light list.
+#[derive(Default, Debug)]
+pub struct History {
+    undo: Vec<Vec<PointLight>>,
+    redo: Vec<Vec<PointLight>>,
+}
+
+/// Snapshots kept; older ones are dropped.
+const HISTORY_LIMIT: usize = 200;
+
+impl History {
+    /// Call before an edit with the lights as they are.
+    pub fn record(&mut self, before: &[PointLight]) {
+        self.undo.push(before.to_vec());
+        if self.undo.len() > HISTORY_LIMIT {
+            self.undo.remove(0);
+        }
+        self.redo.clear();
+    }
+    pub fn undo(&mut self, current: &mut Vec<PointLight>) -> bool {
+        match self.undo.pop() {
+            Some(prev) => {
+                self.redo.push(std::mem::replace(current, prev));
+                true
+            }
+            None => false,
+        }
+    }
+    pub fn redo(&mut self, current: &mut Vec<PointLight>) -> bool {
+        match self.redo.pop() {
+            Some(next) => {
+                self.undo.push(std::mem::replace(current, next));
+                true
+            }
+            None => false,
+        }
+    }
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+    pub fn clear(&mut self) {
+        self.undo.clear();
+        self.redo.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn file() -> SceneFile {
+        SceneFile {
+            version: FILE_VERSION,
+            scene: SceneSource::Builtin("cornell".into()),
+            lights: vec![PointLight::new(Vec3::ONE, Vec3::ONE, 2.0, 3.0)],
+            camera: Camera::look_at(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, 0.8, 0.05, 30.0),
+            technique: "reference".into(),
+            params: BTreeMap::from([(
+                "reference".to_string(),
+                BTreeMap::from([("shadow_res".to_string(), ParamValue::Int(256))]),
+            )]),
+            view: ViewSettings::default(),
+        }
+    }
+
+    #[test]
+    fn round_trips_through_ron() {
+        let f = file();
+        let (back, warnings) = SceneFile::from_ron(&f.to_ron().unwrap()).unwrap();
+        assert_eq!(back, f);
+        assert!(warnings.is_empty());
+    }
+
+    #[test]
+    fn unknown_fields_are_reported_not_fatal() {
+        let text = f_with_extra(&file().to_ron().unwrap());
+        let (back, warnings) = SceneFile::from_ron(&text).unwrap();
+        assert_eq!(back, file());
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(warnings[0].contains("future_feature"));
+    }
+
+    fn f_with_extra(ron_text: &str) -> String {
+        let i = ron_text.rfind(')').unwrap();
+        format!("{}    future_feature: 42,\n)", &ron_text[..i])
+    }
+
+    #[test]
+    fn broken_files_are_errors() {
+        assert!(SceneFile::from_ron("").is_err());
+        assert!(SceneFile::from_ron("(version: 1, scene: Builtin(\"x\")").is_err());
+        let mut f = file();
+        f.lights[0].range = f32::NAN;
+        let text = f.to_ron().unwrap();
+        assert!(SceneFile::from_ron(&text).is_err(), "NaN light must be rejected");
+    }
+
+    #[test]
+    fn a_failed_save_keeps_the_old_file() {
+        let dir = std::env::temp_dir().join(format!("shadowlab-doc-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("scene.ron");
+        file().save(&path).unwrap();
+        let before = std::fs::read_to_string(&path).unwrap();
+        // Saving into a path whose temp file cannot be created fails and leaves the original alone.
+        let blocker = dir.join("scene.ron.tmp");
+        std::fs::create_dir_all(&blocker).unwrap();
+        let mut changed = file();
+        changed.technique = "lightcluster".into();
+        assert!(changed.save(&path).is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), before);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn undo_redo_restore_lights() {
+        let mut h = History::default();
+        let mut lights = vec![PointLight::new(Vec3::ZERO, Vec3::ONE, 1.0, 1.0)];
+        h.record(&lights);
+        lights[0].position = Vec3::X;
+        assert!(h.undo(&mut lights));
+        assert_eq!(lights[0].position, Vec3::ZERO);
+        assert!(h.redo(&mut lights));
+        assert_eq!(lights[0].position, Vec3::X);
+        assert!(!h.redo(&mut lights));
+    }
+}

@@ -1,0 +1,921 @@
+//! The interactive app: a 3D view of the scene rendered by the core (progressively, on eframe's device),
+//! light editing with picking, a move gizmo and undo/redo, technique selection with generated parameter panels,
+//! overlays, side-by-side and split comparison with the reference, live timings, screenshots and scene files.
+
+pub mod camera;
+pub mod document;
+pub mod gizmo;
+pub mod panels;
+pub mod viewport;
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{anyhow, Context, Result};
+use eframe::{egui, egui_wgpu};
+use glam::Vec3;
+use shadowlab_core::scene::layout::{self, LightLayout};
+use shadowlab_core::scene::{PointLight, Scene, SceneSource};
+use shadowlab_core::technique::{Overlay, ParamValue};
+use shadowlab_core::timing::PassTime;
+use shadowlab_core::{GpuContext, RenderSettings, ToneMap};
+
+use camera::{CameraController, CameraInput, CameraMode};
+use document::{History, SceneFile, ViewMode, ViewSettings, FILE_VERSION};
+use gizmo::{Handle, Projection};
+use viewport::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
+
+/// What to open at start.
+#[derive(Clone, Debug, Default)]
+pub struct Startup {
+    /// A scene file (.ron) or a model (.obj/.gltf/.glb); the built-in `arcade` when None.
+    pub path: Option<PathBuf>,
+    /// Where screenshots and recent files go (tests point this at a temp folder).
+    pub data_dir: Option<PathBuf>,
+    /// Save a screenshot of the whole window to this path after `quit_after_secs` and quit (smoke tests,
+    /// README pictures).
+    pub screenshot: Option<PathBuf>,
+    pub quit_after_secs: Option<f32>,
+}
+
+/// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
+/// texture and buffer limits (cube-map atlases are large).
+pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
+    let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.device_descriptor = Arc::new(|adapter| {
+        let base = if adapter.get_info().backend == wgpu::Backend::Gl {
+            wgpu::Limits::downlevel_webgl2_defaults()
+        } else {
+            wgpu::Limits::default()
+        };
+        let a = adapter.limits();
+        wgpu::DeviceDescriptor {
+            label: Some("shadowlab"),
+            required_features: adapter.features() & shadowlab_core::gpu::TIMER_FEATURES,
+            required_limits: wgpu::Limits {
+                max_texture_dimension_2d: a.max_texture_dimension_2d.max(8192).min(a.max_texture_dimension_2d),
+                max_storage_buffer_binding_size: a.max_storage_buffer_binding_size,
+                max_buffer_size: a.max_buffer_size,
+                max_storage_buffers_per_shader_stage: a.max_storage_buffers_per_shader_stage.min(8),
+                ..base
+            },
+            ..Default::default()
+        }
+    });
+    egui_wgpu::WgpuSetup::CreateNew(setup)
+}
+
+/// Open the window.
+pub fn run(startup: Startup) -> Result<()> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 860.0]).with_title("ShadowLab"),
+        renderer: eframe::Renderer::Wgpu,
+        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() },
+        ..Default::default()
+    };
+    eframe::run_native("ShadowLab", options, Box::new(move |cc| Ok(Box::new(ShadowLabApp::new(cc, startup)?))))
+        .map_err(|e| anyhow!("cannot open the window: {e}"))
+}
+
+/// A short message shown over the view.
+struct Toast {
+    text: String,
+    error: bool,
+    until: Instant,
+}
+
+/// Light animation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Animation {
+    Off,
+    Orbit,
+    Bob,
+}
+
+/// GPU state, created from eframe's render state.
+pub struct Gpu {
+    pub ctx: GpuContext,
+    pub render_state: egui_wgpu::RenderState,
+    pub main: View,
+    pub reference: View,
+    pub sizer: StepSizer,
+}
+
+/// A drag of the gizmo in progress.
+#[derive(Clone, Copy, Debug)]
+struct GizmoDrag {
+    handle: Handle,
+    light: usize,
+    /// Position at the start of the drag (the undo snapshot is taken then).
+    start: Vec3,
+    accumulated: egui::Vec2,
+}
+
+pub struct ShadowLabApp {
+    pub scene: Scene,
+    pub lights: Vec<PointLight>,
+    pub camera: CameraController,
+    pub technique: String,
+    /// Parameters the user set, per technique.
+    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
+    pub view: ViewSettings,
+    pub history: History,
+    pub selected: Option<usize>,
+    pub gpu: Option<Gpu>,
+    pub animation: Animation,
+    animation_time: f32,
+    drag: Option<GizmoDrag>,
+    toasts: Vec<Toast>,
+    pub recent: Vec<PathBuf>,
+    data_dir: PathBuf,
+    /// Timings of completed frames: (seconds since start, GPU total ms, passes).
+    pub timings: VecDeque<(f64, f64, Vec<PassTime>)>,
+    /// Same-session reference time, for the speedup column.
+    started: Instant,
+    last_interaction: Option<Instant>,
+    pub last_viewport_rect: Option<egui::Rect>,
+    pub scene_file: Option<PathBuf>,
+    pub status: String,
+    window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
+    pub ui_frame_ms: VecDeque<f64>,
+    last_frame: Instant,
+    exit_screenshot: Option<PathBuf>,
+    quit_after_secs: Option<f32>,
+    quitting: bool,
+}
+
+fn default_data_dir() -> PathBuf {
+    std::env::var_os("XDG_DATA_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/share")))
+        .unwrap_or_else(std::env::temp_dir)
+        .join("shadowlab")
+}
+
+impl ShadowLabApp {
+    pub fn new(cc: &eframe::CreationContext<'_>, startup: Startup) -> Result<ShadowLabApp> {
+        let scene = Scene::builtin("arcade")?;
+        let data_dir = startup.data_dir.clone().unwrap_or_else(default_data_dir);
+        let mut app = ShadowLabApp {
+            lights: scene.lights.clone(),
+            camera: CameraController::from_camera(&scene.camera, &scene.bounds),
+            scene,
+            technique: "reference".into(),
+            params: BTreeMap::new(),
+            view: ViewSettings::default(),
+            history: History::default(),
+            selected: None,
+            gpu: None,
+            animation: Animation::Off,
+            animation_time: 0.0,
+            drag: None,
+            toasts: Vec::new(),
+            recent: load_recent(&data_dir),
+            data_dir,
+            timings: VecDeque::new(),
+            started: Instant::now(),
+            last_interaction: None,
+            last_viewport_rect: None,
+            scene_file: None,
+            status: String::new(),
+            window_shot: Default::default(),
+            ui_frame_ms: VecDeque::new(),
+            last_frame: Instant::now(),
+            exit_screenshot: startup.screenshot.clone(),
+            quit_after_secs: startup.quit_after_secs,
+            quitting: false,
+        };
+        let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
+        app.init_gpu(render_state)?;
+        if let Some(path) = startup.path {
+            app.open_path(&path);
+        }
+        Ok(app)
+    }
+
+    fn init_gpu(&mut self, rs: egui_wgpu::RenderState) -> Result<()> {
+        let ctx = GpuContext::from_device(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
+        let main = View::new(&ctx, &rs, &self.scene)?;
+        let reference = View::new(&ctx, &rs, &self.scene)?;
+        // A real GPU renders a whole frame in one step; a software one starts small and adapts, and starts at
+        // half resolution with 256-texel cube faces (lavapipe is ~100x slower; the user can raise both).
+        let software = rs.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let sizer = if software { StepSizer::default() } else { StepSizer { max_lights_per_step: 256 } };
+        if software {
+            self.view.resolution_scale = 0.5;
+            for key in ["reference", "lightcluster"] {
+                self.params.entry(key.into()).or_default().insert("shadow_res".into(), ParamValue::Int(256));
+            }
+        }
+        self.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });
+        Ok(())
+    }
+
+    pub fn toast(&mut self, text: impl Into<String>) {
+        let text = text.into();
+        log::info!("{text}");
+        self.toasts.push(Toast { text, error: false, until: Instant::now() + std::time::Duration::from_secs(4) });
+    }
+
+    pub fn error(&mut self, text: impl Into<String>) {
+        let text = text.into();
+        log::warn!("{text}");
+        self.toasts.push(Toast { text, error: true, until: Instant::now() + std::time::Duration::from_secs(8) });
+    }
+
+    // ----- scenes and files -----
+
+    /// Replace the scene (and its lights and camera). The previous scene stays when `scene` failed to load.
+    pub fn set_scene(&mut self, scene: Scene) {
+        for w in &scene.warnings {
+            self.toasts.push(Toast {
+                text: format!("warning: {w}"),
+                error: false,
+                until: Instant::now() + std::time::Duration::from_secs(6),
+            });
+        }
+        self.lights = scene.lights.clone();
+        self.camera = CameraController::from_camera(&scene.camera, &scene.bounds);
+        self.selected = None;
+        self.history.clear();
+        if let Some(gpu) = &mut self.gpu {
+            gpu.main.set_scene(&scene);
+            gpu.reference.set_scene(&scene);
+        }
+        self.scene = scene;
+    }
+
+    pub fn load_builtin(&mut self, name: &str) {
+        match Scene::builtin(name) {
+            Ok(s) => {
+                self.set_scene(s);
+                self.scene_file = None;
+            }
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    /// Open a scene file (.ron) or a model; errors become a message and the current state stays.
+    pub fn open_path(&mut self, path: &Path) {
+        let is_ron = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+        let result = if is_ron { self.load_scene_file(path) } else { self.load_model(path, 1.0) };
+        match result {
+            Ok(()) => {
+                self.remember_recent(path);
+                self.toast(format!("opened {}", path.display()));
+            }
+            Err(e) => self.error(format!("{:#}", e)),
+        }
+    }
+
+    fn load_model(&mut self, path: &Path, scale: f32) -> Result<()> {
+        let scene = Scene::load(path, scale)?;
+        self.set_scene(scene);
+        self.scene_file = None;
+        Ok(())
+    }
+
+    pub fn scene_file_data(&self) -> SceneFile {
+        SceneFile {
+            version: FILE_VERSION,
+            scene: self.scene.source.clone(),
+            lights: self.lights.clone(),
+            camera: self.camera.camera(),
+            technique: self.technique.clone(),
+            params: self.params.clone(),
+            view: self.view.clone(),
+        }
+    }
+
+    pub fn save_scene_file(&mut self, path: &Path) -> Result<()> {
+        self.scene_file_data().save(path)?;
+        self.scene_file = Some(path.to_path_buf());
+        self.remember_recent(path);
+        Ok(())
+    }
+
+    /// Load a scene file. Everything is checked before anything changes.
+    pub fn load_scene_file(&mut self, path: &Path) -> Result<()> {
+        let (file, warnings) = SceneFile::load(path)?;
+        let scene = match &file.scene {
+            SceneSource::Builtin(name) => Scene::builtin(name)?,
+            SceneSource::File { path: model, unit_scale } => {
+                // A relative model path is relative to the scene file.
+                let model = if model.is_relative() {
+                    path.parent().unwrap_or(Path::new(".")).join(model)
+                } else {
+                    model.clone()
+                };
+                Scene::load(&model, *unit_scale).with_context(|| "the scene file's model".to_string())?
+            }
+        };
+        if shadowlab_core::technique::REGISTRY.iter().all(|e| e.key != file.technique) {
+            return Err(anyhow!("unknown technique '{}'", file.technique));
+        }
+        self.set_scene(scene);
+        self.lights = file.lights;
+        self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
+        self.technique = file.technique;
+        self.params = file.params;
+        self.view = file.view;
+        self.scene_file = Some(path.to_path_buf());
+        for w in warnings {
+            self.toast(format!("{}: {w}", path.display()));
+        }
+        Ok(())
+    }
+
+    fn remember_recent(&mut self, path: &Path) {
+        let path = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+        self.recent.retain(|p| p != &path);
+        self.recent.insert(0, path);
+        self.recent.truncate(10);
+        save_recent(&self.data_dir, &self.recent);
+    }
+
+    // ----- lights -----
+
+    /// Record the current lights for undo; call before every light edit.
+    pub fn begin_edit(&mut self) {
+        self.history.record(&self.lights);
+    }
+
+    pub fn undo(&mut self) {
+        if self.history.undo(&mut self.lights) {
+            self.fix_selection();
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if self.history.redo(&mut self.lights) {
+            self.fix_selection();
+        }
+    }
+
+    fn fix_selection(&mut self) {
+        if self.selected.is_some_and(|i| i >= self.lights.len()) {
+            self.selected = None;
+        }
+    }
+
+    pub fn delete_selected(&mut self) {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            self.begin_edit();
+            self.lights.remove(i);
+            self.selected = None;
+        }
+    }
+
+    pub fn duplicate_selected(&mut self) {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            self.begin_edit();
+            let mut l = self.lights[i];
+            l.position += Vec3::new(0.1, 0.0, 0.1) * l.range.min(10.0);
+            self.lights.push(l);
+            self.selected = Some(self.lights.len() - 1);
+        }
+    }
+
+    /// Add a light at a surface point (slightly off the surface along its normal).
+    pub fn add_light_at(&mut self, point: Vec3, normal: Vec3) {
+        let template = self.selected.and_then(|i| self.lights.get(i).copied()).unwrap_or_else(|| {
+            let range = (self.scene.bounds.size().length() * 0.15).max(0.5);
+            PointLight::new(Vec3::ZERO, Vec3::new(1.0, 0.9, 0.8), layout::default_intensity_for_range(range), range)
+        });
+        self.begin_edit();
+        let offset = (template.range * 0.05).clamp(0.02, 0.5);
+        self.lights.push(PointLight { position: point + normal * offset, ..template });
+        self.selected = Some(self.lights.len() - 1);
+    }
+
+    pub fn apply_layout(&mut self, spec: &str) {
+        match layout::parse(spec).and_then(|l: LightLayout| layout::generate(&l, &self.scene)) {
+            Ok(lights) => {
+                self.begin_edit();
+                self.lights = lights;
+                self.selected = None;
+                self.toast(format!("{} lights from '{spec}'", self.lights.len()));
+            }
+            Err(e) => self.error(e.to_string()),
+        }
+    }
+
+    /// Lights as rendered this frame (animated when animation is on).
+    pub fn animated_lights(&self) -> Vec<PointLight> {
+        let t = self.animation_time;
+        match self.animation {
+            Animation::Off => self.lights.clone(),
+            Animation::Orbit => self
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let r = (l.range * 0.1).min(1.0);
+                    let a = t * 0.8 + i as f32 * 0.7;
+                    PointLight { position: l.position + Vec3::new(a.cos() * r, 0.0, a.sin() * r), ..*l }
+                })
+                .collect(),
+            Animation::Bob => self
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let h = (l.range * 0.05).min(0.5);
+                    PointLight { position: l.position + Vec3::Y * (t * 1.5 + i as f32).sin() * h, ..*l }
+                })
+                .collect(),
+        }
+    }
+
+    // ----- rendering -----
+
+    pub fn render_settings(&self, size: egui::Vec2, preview: bool) -> RenderSettings {
+        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.5 } else { 1.0 };
+        RenderSettings {
+            width: ((size.x * scale) as u32).clamp(16, 4096),
+            height: ((size.y * scale) as u32).clamp(16, 4096),
+            exposure: self.view.exposure,
+            tonemap: ToneMap::Aces,
+            specular: self.view.specular,
+            ..Default::default()
+        }
+    }
+
+    /// The overlay primitives of the current technique that the user has switched on, plus the selection.
+    fn overlay_primitives(&mut self, lights: &[PointLight]) -> Vec<Overlay> {
+        let mut out = Vec::new();
+        let Some(gpu) = &mut self.gpu else { return out };
+        let Ok(technique) = gpu.main.technique(&self.technique) else { return out };
+        let mut layers = technique.overlays(lights);
+        if self.technique != "reference" {
+            if let Ok(reference) = gpu.main.technique("reference") {
+                layers.extend(reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges"));
+            }
+        }
+        for layer in layers {
+            let on = *self.view.overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
+            if on {
+                out.extend(layer.primitives);
+            }
+        }
+        if let Some(l) = self.selected.and_then(|i| lights.get(i)) {
+            out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
+            out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
+        }
+        out
+    }
+
+    /// Names of the overlay layers the current technique offers, with their state.
+    pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
+        let lights = self.lights.clone();
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let mut names: Vec<(String, bool)> = Vec::new();
+        if let Ok(t) = gpu.main.technique(&self.technique) {
+            names.extend(t.overlays(&lights).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
+        }
+        if self.technique != "reference" {
+            names.push(("light ranges".into(), false));
+        }
+        names.into_iter().map(|(n, d)| (n.clone(), *self.view.overlays.get(&n).unwrap_or(&d))).collect()
+    }
+
+    fn render_views(&mut self, size: egui::Vec2, interacting: bool) -> Result<()> {
+        let lights = self.animated_lights();
+        let camera = self.camera.camera();
+        let overlays = self.overlay_primitives(&lights);
+        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.technique.clone() };
+        let two = self.view.mode != ViewMode::Single;
+        let per_view = if self.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
+        let settings = self.render_settings(per_view, interacting);
+        let params = self.params.get(&technique).cloned().unwrap_or_default();
+        let x_ray = self.view.x_ray;
+        let Some(gpu) = &mut self.gpu else { return Ok(()) };
+        let main_inputs = FrameInputs { camera, lights: lights.clone(), technique, params, settings: settings.clone() };
+        let budget = gpu.sizer.budget_ms();
+        let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
+        gpu.main.overlays(&camera, &overlays, x_ray)?;
+        let mut total_spent = spent;
+        let mut total_steps = steps;
+        if two {
+            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { "reference" };
+            let reference_inputs = FrameInputs {
+                camera,
+                lights,
+                technique: reference_technique.into(),
+                params: self.params.get(reference_technique).cloned().unwrap_or_default(),
+                settings,
+            };
+            // The reference gets what is left of the budget once the technique's image is complete.
+            let left = if gpu.main.is_converged() { budget - spent } else { budget * 0.25 };
+            let (s, n) = gpu.reference.update(
+                &gpu.render_state,
+                &reference_inputs,
+                left.max(1.0),
+                gpu.sizer.max_lights_per_step,
+            )?;
+            gpu.reference.overlays(&camera, &overlays, x_ray)?;
+            total_spent += s;
+            total_steps += n;
+        }
+        gpu.sizer.observe(total_spent, total_steps);
+        if gpu.main.progress >= 1.0 {
+            if let Some(r) = gpu.main.last_report.take() {
+                let t = self.started.elapsed().as_secs_f64();
+                if r.technique != PREVIEW_TECHNIQUE {
+                    self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
+                    while self.timings.front().is_some_and(|(t0, _, _)| t - t0 > 60.0) {
+                        self.timings.pop_front();
+                    }
+                }
+                gpu.main.last_report = Some(r);
+            }
+        }
+        Ok(())
+    }
+
+    // ----- screenshots -----
+
+    fn screenshot_name(&self, what: &str) -> PathBuf {
+        let params: String = self
+            .params
+            .get(&self.technique)
+            .map(|p| p.iter().map(|(k, v)| format!("-{k}{v}")).collect())
+            .unwrap_or_default();
+        let stamp = chrono_like_stamp();
+        let name = format!("shadowlab-{}-{}{}-{}-{}.png", self.scene.name, self.technique, params, what, stamp)
+            .replace(['/', '\\', ' ', ':'], "_");
+        self.data_dir.join("screenshots").join(name)
+    }
+
+    /// Save the 3D view at its render resolution (no UI). Returns the path.
+    pub fn save_view_screenshot(&mut self) -> Result<PathBuf> {
+        let path = self.screenshot_name("view");
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let image = gpu.main.renderer.read_output()?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    fn save_window_screenshot(&mut self, image: &egui::ColorImage) -> Result<PathBuf> {
+        let path = self.screenshot_name("window");
+        let [w, h] = image.size;
+        let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+        let img = image::RgbaImage::from_raw(w as u32, h as u32, bytes).ok_or_else(|| anyhow!("bad screenshot"))?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        img.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    // ----- UI -----
+
+    fn handle_shortcuts(&mut self, ctx: &egui::Context) {
+        let (undo, redo, delete, duplicate, f12, shift_f12, frame) = ctx.input_mut(|i| {
+            let redo = i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z)
+                || i.consume_key(egui::Modifiers::COMMAND, egui::Key::Y);
+            let undo = i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z);
+            let shift_f12 = i.consume_key(egui::Modifiers::SHIFT, egui::Key::F12);
+            let f12 = i.consume_key(egui::Modifiers::NONE, egui::Key::F12);
+            let duplicate = i.consume_key(egui::Modifiers::COMMAND, egui::Key::D);
+            (undo, redo, false, duplicate, f12, shift_f12, false)
+        });
+        let typing = ctx.egui_wants_keyboard_input();
+        let (delete, frame) = if typing {
+            (delete, frame)
+        } else {
+            ctx.input_mut(|i| {
+                (
+                    i.consume_key(egui::Modifiers::NONE, egui::Key::Delete),
+                    i.consume_key(egui::Modifiers::NONE, egui::Key::F) && self.camera.mode == CameraMode::Orbit,
+                )
+            })
+        };
+        if undo {
+            self.undo();
+        }
+        if redo {
+            self.redo();
+        }
+        if delete {
+            self.delete_selected();
+        }
+        if duplicate {
+            self.duplicate_selected();
+        }
+        if frame {
+            let b = self.scene.bounds;
+            self.camera.frame(&b);
+        }
+        if f12 {
+            match self.save_view_screenshot() {
+                Ok(p) => self.toast(format!("saved {}", p.display())),
+                Err(e) => self.error(format!("screenshot failed: {e:#}")),
+            }
+        }
+        if shift_f12 {
+            self.request_window_screenshot(ctx);
+        }
+    }
+
+    /// Ask the integration for a picture of the whole window; it arrives a frame or two later.
+    pub fn request_window_screenshot(&mut self, ctx: &egui::Context) {
+        let slot = self.window_shot.clone();
+        let repaint = ctx.clone();
+        ctx.request_screenshot(move |image| {
+            if let Ok(mut s) = slot.lock() {
+                *s = Some(image);
+            }
+            repaint.request_repaint();
+        });
+    }
+
+    fn receive_screenshots(&mut self, ctx: &egui::Context) {
+        let shot = self.window_shot.lock().ok().and_then(|mut s| s.take());
+        if let Some(image) = shot {
+            if let (true, Some(path)) = (self.quitting, self.exit_screenshot.take()) {
+                let [w, h] = image.size;
+                let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                match image::RgbaImage::from_raw(w as u32, h as u32, bytes).map(|img| img.save(&path)) {
+                    Some(Ok(())) => eprintln!("saved {}", path.display()),
+                    _ => eprintln!("error: cannot save {}", path.display()),
+                }
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                return;
+            }
+            match self.save_window_screenshot(&image) {
+                Ok(p) => self.toast(format!("saved {}", p.display())),
+                Err(e) => self.error(format!("screenshot failed: {e:#}")),
+            }
+        }
+    }
+
+    fn handle_dropped_files(&mut self, ctx: &egui::Context) {
+        let dropped: Vec<PathBuf> = ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).collect());
+        if let Some(path) = dropped.first() {
+            self.open_path(path);
+        }
+    }
+
+    /// Camera input from the view's response and the keyboard.
+    fn camera_input(&self, ctx: &egui::Context, response: &egui::Response, gizmo_active: bool) -> CameraInput {
+        let dt = ctx.input(|i| i.stable_dt).min(0.1);
+        let mut input = CameraInput { dt_secs: dt, ..Default::default() };
+        if !gizmo_active && response.dragged_by(egui::PointerButton::Primary) {
+            let d = response.drag_delta();
+            input.rotate = glam::Vec2::new(d.x, d.y);
+        }
+        if response.dragged_by(egui::PointerButton::Middle) || response.dragged_by(egui::PointerButton::Secondary) {
+            let d = response.drag_delta();
+            input.pan = glam::Vec2::new(d.x, d.y);
+        }
+        if response.hovered() {
+            input.zoom = ctx.input(|i| i.smooth_scroll_delta.y);
+        }
+        if self.camera.mode == CameraMode::Fly && !ctx.egui_wants_keyboard_input() {
+            ctx.input(|i| {
+                let axis = |pos: egui::Key, neg: egui::Key| (i.key_down(pos) as i32 - i.key_down(neg) as i32) as f32;
+                input.movement = Vec3::new(
+                    axis(egui::Key::W, egui::Key::S),
+                    axis(egui::Key::D, egui::Key::A),
+                    axis(egui::Key::E, egui::Key::Q),
+                );
+                input.fast = i.modifiers.shift;
+            });
+        }
+        input
+    }
+
+    /// The central 3D view: image(s), gizmo, picking, camera.
+    fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+        let rect = ui.available_rect_before_wrap();
+        let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
+        self.last_viewport_rect = Some(rect);
+        let projection_rect = if self.view.mode == ViewMode::SideBySide {
+            egui::Rect::from_min_size(rect.min, egui::vec2(rect.width() * 0.5, rect.height()))
+        } else {
+            rect
+        };
+        let camera = self.camera.camera();
+        let projection = Projection::new(&camera, projection_rect);
+
+        // Gizmo and picking.
+        let pointer = response.interact_pointer_pos().or(response.hover_pos());
+        let selected_pos = self.selected.and_then(|i| self.lights.get(i)).map(|l| l.position);
+        if response.drag_started_by(egui::PointerButton::Primary) {
+            if let (Some(pos), Some(at), Some(i)) = (pointer, selected_pos, self.selected) {
+                if let Some(handle) = gizmo::hit_handle(&projection, at, pos) {
+                    self.begin_edit();
+                    self.drag = Some(GizmoDrag { handle, light: i, start: at, accumulated: egui::Vec2::ZERO });
+                }
+            }
+        }
+        if let Some(drag) = &mut self.drag {
+            if response.dragged_by(egui::PointerButton::Primary) {
+                drag.accumulated += response.drag_delta();
+                let delta = gizmo::drag_delta(&projection, drag.start, drag.handle, drag.accumulated);
+                if let Some(l) = self.lights.get_mut(drag.light) {
+                    l.position = drag.start + delta;
+                }
+                self.last_interaction = Some(Instant::now());
+            }
+            if response.drag_stopped() || !ui.input(|i| i.pointer.primary_down()) {
+                self.drag = None;
+            }
+        }
+        let gizmo_active = self.drag.is_some();
+        if response.clicked() {
+            if let Some(pos) = response.interact_pointer_pos() {
+                let ctrl = ui.input(|i| i.modifiers.command);
+                if ctrl {
+                    let (o, d) = projection.ray(pos);
+                    if let Some((t, n)) = gizmo::pick_surface(&self.scene, o, d) {
+                        self.add_light_at(o + d * t, n);
+                    }
+                } else if selected_pos.and_then(|at| gizmo::hit_handle(&projection, at, pos)).is_none() {
+                    self.selected = gizmo::pick_light(&projection, &self.animated_lights(), pos, 12.0);
+                }
+            }
+        }
+        response.context_menu(|ui| {
+            if ui.button("Add light here").clicked() {
+                if let Some(pos) = ui.ctx().input(|i| i.pointer.interact_pos()) {
+                    let (o, d) = projection.ray(pos);
+                    if let Some((t, n)) = gizmo::pick_surface(&self.scene, o, d) {
+                        self.add_light_at(o + d * t, n);
+                    }
+                }
+                ui.close();
+            }
+        });
+
+        let input = self.camera_input(ui.ctx(), &response, gizmo_active);
+        if self.camera.update(&input) {
+            self.last_interaction = Some(Instant::now());
+        }
+        let interacting = gizmo_active
+            || input.is_active()
+            || self.last_interaction.is_some_and(|t| t.elapsed().as_secs_f32() < 0.25);
+
+        if let Err(e) = self.render_views(rect.size() * ui.ctx().pixels_per_point(), interacting) {
+            self.status = format!("render error: {e:#}");
+        }
+
+        // Show the images.
+        let painter = ui.painter_at(rect);
+        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+        if let Some(gpu) = &self.gpu {
+            match self.view.mode {
+                ViewMode::Single => {
+                    painter.image(gpu.main.texture_id, rect, uv, egui::Color32::WHITE);
+                }
+                ViewMode::SideBySide => {
+                    let (l, r) = rect.split_left_right_at_fraction(0.5);
+                    painter.image(gpu.main.texture_id, l, uv, egui::Color32::WHITE);
+                    painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
+                    painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
+                    label(&painter, l.left_top(), &self.technique);
+                    label(&painter, r.left_top(), "reference");
+                }
+                ViewMode::Split => {
+                    let x = rect.left() + rect.width() * self.view.split.clamp(0.0, 1.0);
+                    let s = self.view.split.clamp(0.0, 1.0);
+                    let left = egui::Rect::from_min_max(rect.min, egui::pos2(x, rect.bottom()));
+                    let right = egui::Rect::from_min_max(egui::pos2(x, rect.top()), rect.max);
+                    painter.image(
+                        gpu.main.texture_id,
+                        left,
+                        egui::Rect::from_min_max(uv.min, egui::pos2(s, 1.0)),
+                        egui::Color32::WHITE,
+                    );
+                    painter.image(
+                        gpu.reference.texture_id,
+                        right,
+                        egui::Rect::from_min_max(egui::pos2(s, 0.0), uv.max),
+                        egui::Color32::WHITE,
+                    );
+                    painter.line_segment(
+                        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
+                        egui::Stroke::new(2.0, egui::Color32::WHITE),
+                    );
+                    label(&painter, rect.left_top(), &self.technique);
+                    label(&painter, egui::pos2(x, rect.top()), "reference");
+                    // The split line is draggable from a handle at its middle.
+                    let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
+                    let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());
+                    painter.rect_filled(handle, 3.0, egui::Color32::from_white_alpha(200));
+                    if h.dragged() {
+                        self.view.split = ((x + h.drag_delta().x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+                    }
+                }
+            }
+            // Progress of the frame being refined.
+            let progress =
+                gpu.main.progress.min(if self.view.mode == ViewMode::Single { 1.0 } else { gpu.reference.progress });
+            if progress < 1.0 {
+                let bar = egui::Rect::from_min_size(
+                    rect.left_bottom() - egui::vec2(0.0, 4.0),
+                    egui::vec2(rect.width() * progress, 4.0),
+                );
+                painter.rect_filled(bar, 0.0, egui::Color32::from_rgb(90, 170, 255));
+                ui.ctx().request_repaint();
+            }
+        }
+        if let Some(at) = self.selected.and_then(|i| self.lights.get(i)).map(|l| l.position) {
+            let hover = pointer.and_then(|p| gizmo::hit_handle(&projection, at, p));
+            gizmo::paint(&painter, &projection, at, self.drag.map(|d| d.handle).or(hover));
+        }
+        if interacting || self.animation != Animation::Off {
+            ui.ctx().request_repaint();
+        }
+    }
+
+    fn toasts_ui(&mut self, ctx: &egui::Context) {
+        let now = Instant::now();
+        self.toasts.retain(|t| t.until > now);
+        if self.toasts.is_empty() {
+            return;
+        }
+        egui::Area::new(egui::Id::unique("toasts")).anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-12.0, -40.0)).show(
+            ctx,
+            |ui| {
+                for t in &self.toasts {
+                    let color =
+                        if t.error { egui::Color32::from_rgb(255, 120, 120) } else { egui::Color32::LIGHT_GREEN };
+                    egui::Frame::popup(ui.style()).show(ui, |ui| {
+                        ui.colored_label(color, &t.text);
+                    });
+                }
+            },
+        );
+        ctx.request_repaint_after(std::time::Duration::from_millis(500));
+    }
+}
+
+fn label(painter: &egui::Painter, at: egui::Pos2, text: &str) {
+    painter.text(
+        at + egui::vec2(6.0, 4.0),
+        egui::Align2::LEFT_TOP,
+        text,
+        egui::FontId::proportional(13.0),
+        egui::Color32::WHITE,
+    );
+}
+
+fn chrono_like_stamp() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_millis()).unwrap_or(0);
+    format!("{secs}")
+}
+
+fn recent_path(dir: &Path) -> PathBuf {
+    dir.join("recent.ron")
+}
+
+fn load_recent(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_to_string(recent_path(dir)).ok().and_then(|t| ron::from_str(&t).ok()).unwrap_or_default()
+}
+
+fn save_recent(dir: &Path, recent: &[PathBuf]) {
+    let write = || -> Result<()> {
+        std::fs::create_dir_all(dir)?;
+        crate::cli::write_atomic(&recent_path(dir), ron::to_string(recent)?.as_bytes())
+    };
+    if let Err(e) = write() {
+        log::warn!("cannot save the recent files list: {e:#}");
+    }
+}
+
+impl eframe::App for ShadowLabApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let ctx = ui.ctx().clone();
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_frame).as_secs_f64() * 1000.0;
+        self.last_frame = now;
+        self.ui_frame_ms.push_back(dt);
+        if self.ui_frame_ms.len() > 120 {
+            self.ui_frame_ms.pop_front();
+        }
+        if self.animation != Animation::Off {
+            self.animation_time += ctx.input(|i| i.stable_dt).min(0.1);
+        }
+        self.receive_screenshots(&ctx);
+        if let Some(secs) = self.quit_after_secs {
+            if !self.quitting && self.started.elapsed().as_secs_f32() >= secs {
+                self.quitting = true;
+                if self.exit_screenshot.is_some() {
+                    self.request_window_screenshot(&ctx);
+                } else {
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            }
+            ctx.request_repaint();
+        }
+        self.handle_dropped_files(&ctx);
+        self.handle_shortcuts(&ctx);
+        panels::menu_bar(self, ui);
+        panels::side_panels(self, ui);
+        egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| self.viewport_ui(ui));
+        self.toasts_ui(&ctx);
+    }
+}

@@ -1,0 +1,416 @@
+//! The panels around the 3D view: menu bar, technique and parameters (generated from the technique's parameter
+//! list), render and camera settings, overlays, the light list and inspector, scene statistics, timings.
+
+use eframe::egui;
+use egui_plot::{Legend, Line, Plot, PlotPoints};
+use glam::Vec3;
+use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
+
+use super::camera::CameraMode;
+use super::document::ViewMode;
+use super::{Animation, ShadowLabApp};
+
+pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    egui::Panel::top("menu").show(ui, |ui| {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open scene or model…").clicked() {
+                    if let Some(path) = rfd::FileDialog::new()
+                        .add_filter("ShadowLab scenes and models", &["ron", "obj", "gltf", "glb"])
+                        .pick_file()
+                    {
+                        app.open_path(&path);
+                    }
+                    ui.close();
+                }
+                ui.menu_button("Open recent", |ui| {
+                    if app.recent.is_empty() {
+                        ui.label("(none)");
+                    }
+                    for path in app.recent.clone() {
+                        if ui.button(path.display().to_string()).clicked() {
+                            app.open_path(&path);
+                            ui.close();
+                        }
+                    }
+                });
+                ui.separator();
+                if ui.button("Save scene file…").clicked() {
+                    if let Some(path) = rfd::FileDialog::new().add_filter("ShadowLab scene", &["ron"]).save_file() {
+                        match app.save_scene_file(&path) {
+                            Ok(()) => app.toast(format!("saved {}", path.display())),
+                            Err(e) => app.error(format!("save failed, nothing was overwritten: {e:#}")),
+                        }
+                    }
+                    ui.close();
+                }
+                if let Some(path) = app.scene_file.clone() {
+                    if ui
+                        .button(format!("Save to {}", path.file_name().unwrap_or_default().to_string_lossy()))
+                        .clicked()
+                    {
+                        match app.save_scene_file(&path) {
+                            Ok(()) => app.toast(format!("saved {}", path.display())),
+                            Err(e) => app.error(format!("save failed, nothing was overwritten: {e:#}")),
+                        }
+                        ui.close();
+                    }
+                }
+                ui.separator();
+                if ui.button("Screenshot of the 3D view (F12)").clicked() {
+                    match app.save_view_screenshot() {
+                        Ok(p) => app.toast(format!("saved {}", p.display())),
+                        Err(e) => app.error(format!("screenshot failed: {e:#}")),
+                    }
+                    ui.close();
+                }
+                if ui.button("Screenshot of the window (Shift+F12)").clicked() {
+                    app.request_window_screenshot(ui.ctx());
+                    ui.close();
+                }
+            });
+            ui.menu_button("Scene", |ui| {
+                for name in shadowlab_core::scene::builtin::NAMES {
+                    if ui.button(*name).clicked() {
+                        app.load_builtin(name);
+                        ui.close();
+                    }
+                }
+            });
+            ui.menu_button("Edit", |ui| {
+                if ui.add_enabled(app.history.can_undo(), egui::Button::new("Undo (Ctrl+Z)")).clicked() {
+                    app.undo();
+                }
+                if ui.add_enabled(app.history.can_redo(), egui::Button::new("Redo (Ctrl+Shift+Z)")).clicked() {
+                    app.redo();
+                }
+                ui.separator();
+                if ui.add_enabled(app.selected.is_some(), egui::Button::new("Duplicate light (Ctrl+D)")).clicked() {
+                    app.duplicate_selected();
+                }
+                if ui.add_enabled(app.selected.is_some(), egui::Button::new("Delete light (Del)")).clicked() {
+                    app.delete_selected();
+                }
+            });
+            ui.menu_button("View", |ui| {
+                ui.radio_value(&mut app.view.mode, ViewMode::Single, "Single view");
+                ui.radio_value(&mut app.view.mode, ViewMode::SideBySide, "Side by side with the reference");
+                ui.radio_value(&mut app.view.mode, ViewMode::Split, "Split view with the reference");
+                ui.separator();
+                ui.checkbox(&mut app.view.x_ray, "X-ray overlays");
+            });
+        });
+    });
+}
+
+/// A widget for one technique parameter; returns the new value when it changed.
+fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str, help: &str) -> Option<ParamValue> {
+    let mut out = None;
+    ui.horizontal(|ui| match (kind, value) {
+        (ParamKind::Float { min, max }, ParamValue::Float(v)) => {
+            let mut x = *v;
+            let logarithmic = *max / min.max(1e-6) > 1000.0;
+            let r = ui.add(egui::Slider::new(&mut x, *min..=*max).logarithmic(logarithmic).text(label));
+            if r.changed() {
+                out = Some(ParamValue::Float(x));
+            }
+        }
+        (ParamKind::Int { min, max }, ParamValue::Int(v)) => {
+            let mut x = *v;
+            let logarithmic = *max / (*min).max(1) > 100;
+            if ui.add(egui::Slider::new(&mut x, *min..=*max).logarithmic(logarithmic).text(label)).changed() {
+                out = Some(ParamValue::Int(x));
+            }
+        }
+        (ParamKind::Bool, ParamValue::Bool(v)) => {
+            let mut x = *v;
+            if ui.checkbox(&mut x, label).changed() {
+                out = Some(ParamValue::Bool(x));
+            }
+        }
+        (ParamKind::Choice(options), ParamValue::Choice(v)) => {
+            let mut x = v.clone();
+            egui::ComboBox::from_label(label).selected_text(&x).show_ui(ui, |ui| {
+                for o in options.iter() {
+                    ui.selectable_value(&mut x, o.to_string(), *o);
+                }
+            });
+            if &x != v {
+                out = Some(ParamValue::Choice(x));
+            }
+        }
+        _ => {
+            ui.label(format!("{label}: {value}"));
+        }
+    })
+    .response
+    .on_hover_text(help);
+    out
+}
+
+fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Technique");
+    egui::ComboBox::from_id_salt("technique")
+        .selected_text(REGISTRY.iter().find(|e| e.key == app.technique).map(|e| e.label).unwrap_or("?"))
+        .width(ui.available_width())
+        .show_ui(ui, |ui| {
+            for e in REGISTRY {
+                ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
+            }
+        });
+    let key = app.technique.clone();
+    let Some(gpu) = &mut app.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&key) else { return };
+    // Apply the user's values first, so the widgets show them.
+    let user = app.params.entry(key.clone()).or_default();
+    for (k, v) in user.iter() {
+        let _ = technique.set_param(k, v);
+    }
+    for p in technique.params() {
+        if let Some(v) = param_ui(ui, &p.kind, &p.value, p.label, p.help) {
+            if technique.set_param(p.key, &v).is_ok() {
+                user.insert(p.key.to_string(), v);
+            }
+        }
+    }
+    if ui.button("Reset parameters").clicked() {
+        app.params.remove(&key);
+        if let Some(t) = gpu.main.technique(&key).ok() {
+            // A fresh instance has the defaults.
+            let _ = t;
+        }
+        gpu.main = match super::viewport::View::new(&gpu.ctx, &gpu.render_state, &app.scene) {
+            Ok(v) => v,
+            Err(_) => return,
+        };
+    }
+}
+
+fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Render");
+    ui.add(egui::Slider::new(&mut app.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
+    ui.add(egui::Slider::new(&mut app.view.exposure, 0.05..=8.0).logarithmic(true).text("exposure"));
+    ui.checkbox(&mut app.view.specular, "Blinn-Phong specular");
+    ui.horizontal(|ui| {
+        ui.label("Animate lights");
+        ui.radio_value(&mut app.animation, Animation::Off, "off");
+        ui.radio_value(&mut app.animation, Animation::Orbit, "orbit");
+        ui.radio_value(&mut app.animation, Animation::Bob, "bob");
+    });
+    ui.heading("Camera");
+    ui.horizontal(|ui| {
+        let mut mode = app.camera.mode;
+        ui.radio_value(&mut mode, CameraMode::Orbit, "orbit");
+        ui.radio_value(&mut mode, CameraMode::Fly, "fly (WASD QE)");
+        app.camera.set_mode(mode);
+    });
+    ui.horizontal(|ui| {
+        if ui.button("Frame scene (F)").clicked() {
+            let b = app.scene.bounds;
+            app.camera.frame(&b);
+        }
+        if ui.button("Reset").clicked() {
+            app.camera = super::camera::CameraController::from_camera(&app.scene.camera, &app.scene.bounds);
+        }
+    });
+    let near = app.camera.near;
+    ui.add(egui::Slider::new(&mut app.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
+    ui.add(egui::Slider::new(&mut app.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
+    ui.heading("Overlays");
+    ui.checkbox(&mut app.view.x_ray, "X-ray (through geometry)");
+    for (name, on) in app.overlay_layers() {
+        let mut x = on;
+        if ui.checkbox(&mut x, &name).changed() {
+            app.view.overlays.insert(name, x);
+        }
+    }
+}
+
+fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading(format!("Lights ({})", app.lights.len()));
+    ui.label("Click a light to select it; drag the gizmo to move it. Ctrl+click on a surface adds one.");
+    thread_local! {
+        static SPEC: std::cell::RefCell<String> = std::cell::RefCell::new("circles:10:8:7".to_string());
+    }
+    ui.horizontal(|ui| {
+        let mut spec = SPEC.with(|s| s.borrow().clone());
+        ui.add(egui::TextEdit::singleline(&mut spec).desired_width(140.0).hint_text("random:64:2:1"))
+            .on_hover_text("random:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene");
+        if ui.button("Apply layout").clicked() {
+            app.apply_layout(&spec);
+        }
+        SPEC.with(|s| *s.borrow_mut() = spec);
+    });
+    ui.horizontal(|ui| {
+        if ui.add_enabled(app.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
+            app.duplicate_selected();
+        }
+        if ui.add_enabled(app.selected.is_some(), egui::Button::new("Delete")).clicked() {
+            app.delete_selected();
+        }
+    });
+    if let Some(i) = app.selected.filter(|&i| i < app.lights.len()) {
+        ui.separator();
+        ui.label(format!("Light {i}"));
+        let mut l = app.lights[i];
+        let mut changed = false;
+        let mut committed = false;
+        let track = |r: egui::Response, changed: &mut bool, committed: &mut bool| {
+            *changed |= r.changed();
+            *committed |= r.drag_started() || r.gained_focus();
+        };
+        ui.horizontal(|ui| {
+            for (axis, v) in ["x", "y", "z"].iter().zip([&mut l.position.x, &mut l.position.y, &mut l.position.z]) {
+                let r = ui.add(egui::DragValue::new(v).speed(0.01).prefix(format!("{axis} ")));
+                track(r, &mut changed, &mut committed);
+            }
+        });
+        let mut rgb = l.color.to_array();
+        let r = ui.horizontal(|ui| {
+            ui.label("colour");
+            ui.color_edit_button_rgb(&mut rgb)
+        });
+        track(r.inner, &mut changed, &mut committed);
+        let r = ui.add(egui::Slider::new(&mut l.intensity, 0.0..=1000.0).logarithmic(true).text("intensity"));
+        track(r, &mut changed, &mut committed);
+        let r = ui.add(egui::Slider::new(&mut l.range, 0.01..=1000.0).logarithmic(true).text("L_att"));
+        track(r, &mut changed, &mut committed);
+        l.color = Vec3::from_array(rgb);
+        if committed {
+            app.begin_edit();
+        }
+        if changed && l.is_valid() {
+            app.lights[i] = l;
+        }
+    }
+}
+
+fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Scene");
+    let b = app.scene.bounds;
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        ui.label("name");
+        ui.label(&app.scene.name);
+        ui.end_row();
+        ui.label("triangles");
+        ui.label(format!("{}", app.scene.triangle_count()));
+        ui.end_row();
+        ui.label("materials");
+        ui.label(format!("{}", app.scene.materials.len()));
+        ui.end_row();
+        ui.label("lights");
+        ui.label(format!("{}", app.lights.len()));
+        ui.end_row();
+        ui.label("bounds");
+        ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
+        ui.end_row();
+    });
+}
+
+/// Per-pass table of the last complete frame, a plot of recent frames, and the same-session comparison with
+/// the reference.
+pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    let Some(gpu) = &app.gpu else { return };
+    let ui_ms = app.ui_frame_ms.iter().copied().sum::<f64>() / app.ui_frame_ms.len().max(1) as f64;
+    ui.horizontal(|ui| {
+        ui.label(format!("adapter: {}", gpu.ctx.adapter_description()));
+        ui.separator();
+        ui.label(format!("UI {:.0} fps", 1000.0 / ui_ms.max(1e-3)));
+        ui.separator();
+        ui.label(format!("lights per step: {}", gpu.sizer.max_lights_per_step));
+        if !app.status.is_empty() {
+            ui.separator();
+            ui.colored_label(egui::Color32::LIGHT_RED, &app.status);
+        }
+    });
+    ui.columns(2, |cols| {
+        let ui = &mut cols[0];
+        if let Some(r) = &gpu.main.last_report {
+            egui::Grid::new("passes").striped(true).num_columns(3).show(ui, |ui| {
+                ui.strong("pass");
+                ui.strong("ms");
+                ui.strong("count");
+                ui.end_row();
+                for p in &r.passes {
+                    ui.label(&p.name);
+                    ui.label(format!("{:.2}", p.ms));
+                    ui.label(format!("{}", p.count));
+                    ui.end_row();
+                }
+                for p in &r.cpu_stages {
+                    ui.label(format!("{} (CPU)", p.name));
+                    ui.label(format!("{:.3}", p.ms));
+                    ui.label("1");
+                    ui.end_row();
+                }
+                ui.strong(format!("{} total", r.technique));
+                ui.strong(format!("{:.2}", r.gpu_total_ms));
+                ui.label(format!("{:?}", r.timing_source));
+                ui.end_row();
+            });
+            let c = &r.counts;
+            ui.label(format!(
+                "{} of {} lights visible · {} shadow maps in {} steps{} · shadow triangles {} drawn, {} culled",
+                c.technique.lights_visible,
+                c.lights_total,
+                c.technique.shadow_maps,
+                c.technique.batches,
+                c.technique.clusters.map(|n| format!(" · {n} clusters")).unwrap_or_default(),
+                c.technique.shadow_triangles_submitted,
+                c.technique.shadow_triangles_culled,
+            ));
+            if let Some(reference) = &gpu.reference.last_report {
+                if r.technique != "reference" && reference.technique == "reference" && reference.gpu_total_ms > 0.0 {
+                    ui.label(format!(
+                        "reference {:.1} ms → {} {:.1} ms: speedup ×{:.2} (same session)",
+                        reference.gpu_total_ms,
+                        r.technique,
+                        r.gpu_total_ms,
+                        reference.gpu_total_ms / r.gpu_total_ms.max(1e-6)
+                    ));
+                }
+            }
+        } else {
+            ui.label("rendering the first frame…");
+        }
+        let ui = &mut cols[1];
+        let mut names: Vec<String> = Vec::new();
+        for (_, _, passes) in &app.timings {
+            for p in passes {
+                if !names.contains(&p.name) {
+                    names.push(p.name.clone());
+                }
+            }
+        }
+        Plot::new("timings").legend(Legend::default()).height(140.0).y_axis_label("ms").show(ui, |plot| {
+            let total: PlotPoints = app.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
+            plot.line(Line::new("frame (GPU)", total));
+            for name in names {
+                let pts: PlotPoints = app
+                    .timings
+                    .iter()
+                    .map(|(t, _, passes)| [*t, passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>()])
+                    .collect();
+                plot.line(Line::new(name, pts));
+            }
+        });
+    });
+}
+
+pub fn side_panels(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    egui::Panel::bottom("timings").resizable(true).default_size(190.0).show(ui, |ui| timings_ui(app, ui));
+    egui::Panel::left("controls").resizable(true).default_size(300.0).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            technique_ui(app, ui);
+            ui.separator();
+            render_ui(app, ui);
+        });
+    });
+    egui::Panel::right("lights").resizable(true).default_size(280.0).show(ui, |ui| {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            lights_ui(app, ui);
+            ui.separator();
+            stats_ui(app, ui);
+        });
+    });
+}

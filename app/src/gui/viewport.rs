@@ -1,0 +1,215 @@
+//! The 3D view's GPU side: a core `Renderer` on eframe's device, rendering progressively into an offscreen
+//! texture shown by egui. A frame's steps (batches of lights) are spread over UI frames within a time budget,
+//! and the work per step adapts to the adapter's speed, so the UI stays responsive on a software GPU and a real
+//! GPU still finishes in one UI frame. While the user drags, a cheap preview (unshadowed, lower resolution)
+//! is shown instead, and the full technique restarts when the input settles.
+
+use std::collections::hash_map::DefaultHasher;
+use std::collections::BTreeMap;
+use std::hash::{Hash, Hasher};
+use std::time::Instant;
+
+use anyhow::{anyhow, Result};
+use eframe::{egui, egui_wgpu};
+use shadowlab_core::renderer::FrameJob;
+use shadowlab_core::scene::{Camera, PointLight, Scene};
+use shadowlab_core::technique::{Overlay, ParamValue, Technique};
+use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer};
+
+/// Milliseconds of GPU work one UI frame may wait for.
+const FRAME_BUDGET_MS: f64 = 30.0;
+/// The technique used while the camera or a light moves.
+pub const PREVIEW_TECHNIQUE: &str = "unshadowed";
+
+/// What an image depends on; a change restarts the progressive frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameInputs {
+    pub camera: Camera,
+    pub lights: Vec<PointLight>,
+    pub technique: String,
+    pub params: BTreeMap<String, ParamValue>,
+    pub settings: RenderSettings,
+}
+
+impl FrameInputs {
+    fn key(&self) -> u64 {
+        let mut h = DefaultHasher::new();
+        format!("{:?}", self).hash(&mut h);
+        h.finish()
+    }
+}
+
+/// One progressively rendered image: a renderer, its techniques, the egui texture that shows it.
+pub struct View {
+    pub renderer: Renderer,
+    techniques: BTreeMap<&'static str, Box<dyn Technique>>,
+    pub texture_id: egui::TextureId,
+    job: Option<(FrameJob, String)>,
+    key: u64,
+    pub last_report: Option<FrameReport>,
+    /// Progress of the current frame, 0..1 (1 when complete).
+    pub progress: f32,
+    pub size: (u32, u32),
+}
+
+impl View {
+    pub fn new(gpu: &GpuContext, render_state: &egui_wgpu::RenderState, scene: &Scene) -> Result<View> {
+        let settings = RenderSettings { width: 64, height: 64, max_lights_per_step: 4, ..Default::default() };
+        let renderer = Renderer::new(gpu, scene, settings)?;
+        let texture_id = render_state.renderer.write().register_native_texture(
+            &gpu.device,
+            &renderer.targets().output,
+            wgpu::FilterMode::Linear,
+        );
+        Ok(View {
+            renderer,
+            techniques: BTreeMap::new(),
+            texture_id,
+            job: None,
+            key: 0,
+            last_report: None,
+            progress: 0.0,
+            size: (64, 64),
+        })
+    }
+
+    /// The technique instance for `key`, created on first use.
+    pub fn technique(&mut self, key: &str) -> Result<&mut Box<dyn Technique>> {
+        let entry = shadowlab_core::technique::REGISTRY
+            .iter()
+            .find(|e| e.key == key)
+            .ok_or_else(|| anyhow!("unknown technique '{key}'"))?;
+        if !self.techniques.contains_key(entry.key) {
+            let t = self.renderer.create_technique(entry.key).ok_or_else(|| anyhow!("cannot create '{key}'"))?;
+            self.techniques.insert(entry.key, t);
+        }
+        Ok(self.techniques.get_mut(entry.key).expect("inserted above"))
+    }
+
+    pub fn set_scene(&mut self, scene: &Scene) {
+        self.renderer.set_scene(scene);
+        self.key = 0;
+    }
+
+    /// Resize the targets (and the egui texture) when needed.
+    fn ensure_size(&mut self, render_state: &egui_wgpu::RenderState, settings: &RenderSettings) -> Result<()> {
+        let mut s = settings.clone();
+        s.max_lights_per_step = self.renderer.settings().max_lights_per_step;
+        if (s.width, s.height) != self.size || s != *self.renderer.settings() {
+            let resized = (s.width, s.height) != self.size;
+            self.renderer.set_settings(s)?;
+            if resized {
+                self.size = (settings.width, settings.height);
+                render_state.renderer.write().update_egui_texture_from_wgpu_texture(
+                    &self.renderer.gpu().device,
+                    &self.renderer.targets().output,
+                    wgpu::FilterMode::Linear,
+                    self.texture_id,
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Restart when the inputs changed, then do up to `budget_ms` of work. Returns the ms spent and the
+    /// number of steps run.
+    pub fn update(
+        &mut self,
+        render_state: &egui_wgpu::RenderState,
+        inputs: &FrameInputs,
+        budget_ms: f64,
+        max_lights_per_step: usize,
+    ) -> Result<(f64, usize)> {
+        let start = Instant::now();
+        let mut steps = 0;
+        let key = inputs.key();
+        if key != self.key {
+            if let Some((job, _)) = self.job.take() {
+                self.renderer.cancel_frame(job)?;
+            }
+            self.ensure_size(render_state, &inputs.settings)?;
+            let mut settings = self.renderer.settings().clone();
+            settings.max_lights_per_step = max_lights_per_step;
+            self.renderer.set_settings(settings)?;
+            let technique = self.technique(&inputs.technique)?;
+            for (k, v) in &inputs.params {
+                // Parameters were validated when set in the UI or loaded; a stale one is skipped.
+                if let Err(e) = technique.set_param(k, v) {
+                    log::warn!("{e}");
+                }
+            }
+            let mut technique = self.techniques.remove(inputs.technique.as_str()).expect("created above");
+            let job = self.renderer.begin_frame(technique.as_mut(), &inputs.camera, &inputs.lights);
+            let key_name = technique.key();
+            self.techniques.insert(key_name, technique);
+            self.job = Some((job?, inputs.technique.clone()));
+            self.key = key;
+            self.progress = 0.0;
+        }
+        if let Some((mut job, name)) = self.job.take() {
+            let mut technique = self.techniques.remove(name.as_str()).ok_or_else(|| anyhow!("technique vanished"))?;
+            let result = (|| -> Result<()> {
+                while !job.is_done() && start.elapsed().as_secs_f64() * 1000.0 < budget_ms {
+                    self.renderer.advance(&mut job, technique.as_mut(), 1)?;
+                    steps += 1;
+                    // Wait, so this UI frame pays for exactly the work it submitted.
+                    self.renderer.gpu().wait_idle()?;
+                }
+                Ok(())
+            })();
+            self.progress = job.progress();
+            if result.is_ok() && job.is_done() {
+                self.last_report = Some(self.renderer.finish_frame(job, technique.as_ref())?);
+                self.progress = 1.0;
+            } else {
+                self.renderer.tonemap()?;
+                self.job = Some((job, name));
+            }
+            self.techniques.insert(technique.key(), technique);
+            result?;
+        } else {
+            self.renderer.tonemap()?;
+        }
+        Ok((start.elapsed().as_secs_f64() * 1000.0, steps))
+    }
+
+    pub fn overlays(&mut self, camera: &Camera, primitives: &[Overlay], x_ray: bool) -> Result<()> {
+        self.renderer.draw_overlays(camera, primitives, x_ray)?;
+        Ok(())
+    }
+
+    pub fn is_converged(&self) -> bool {
+        self.job.is_none() && self.key != 0
+    }
+}
+
+/// Steps get larger when they are fast and smaller when they are slow, so each UI frame does about
+/// `FRAME_BUDGET_MS` of GPU work.
+#[derive(Clone, Copy, Debug)]
+pub struct StepSizer {
+    pub max_lights_per_step: usize,
+}
+
+impl Default for StepSizer {
+    fn default() -> Self {
+        StepSizer { max_lights_per_step: 4 }
+    }
+}
+
+impl StepSizer {
+    /// Feed the time and steps of one UI frame's work.
+    pub fn observe(&mut self, spent_ms: f64, steps: usize) {
+        if steps == 0 {
+            return;
+        }
+        let per_step = spent_ms / steps as f64;
+        if per_step > FRAME_BUDGET_MS && self.max_lights_per_step > 1 {
+            self.max_lights_per_step /= 2;
+        } else if per_step < FRAME_BUDGET_MS * 0.25 {
+            self.max_lights_per_step = (self.max_lights_per_step * 2).min(1024);
+        }
+    }
+    pub fn budget_ms(&self) -> f64 {
+        FRAME_BUDGET_MS
+    }
+}

@@ -1,0 +1,4 @@
+//! ShadowLab's app crate: the command line (`cli`) and the interactive egui app (`gui`).
+
+pub mod cli;
+pub mod gui;

@@ -1,0 +1,631 @@
+//! The ray-traced ground truth: BVH traversal (CPU twin against brute force, GPU against the CPU twin) and
+//! images (hard shadows against the reference and the analytic answer, soft shadows against the analytic
+//! penumbra of a disc light behind a straight edge), on the software adapter.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
+use shadowlab_core::scene::chunks::ChunkedGeometry;
+use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
+use shadowlab_core::technique::raytraced::{gpu_occluded, occluded_brute_force, occluded_cpu, Bvh, Ray};
+use shadowlab_core::technique::{ParamError, ParamValue};
+use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+
+const W: u32 = 160;
+const H: u32 = 120;
+const AMBIENT: f32 = 0.1;
+/// The ray offset the image tests set ("bias": world units per metre of camera distance).
+const BIAS: f32 = 0.001;
+
+// ---------------------------------------------------------------------------------------------------------------
+// Helpers
+// ---------------------------------------------------------------------------------------------------------------
+
+/// SplitMix64: deterministic test randomness.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn direction(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0));
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+fn settings() -> RenderSettings {
+    RenderSettings {
+        width: W,
+        height: H,
+        ambient: Vec3::splat(AMBIENT),
+        background: Vec3::new(0.0, 0.0, 1.0),
+        tonemap: ToneMap::Linear,
+        ..Default::default()
+    }
+}
+
+fn render(
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[PointLight],
+    technique: &str,
+    params: &[(&str, ParamValue)],
+) -> (Vec<[f32; 4]>, FrameReport) {
+    let gpu = gpu();
+    let mut renderer = Renderer::new(&gpu, scene, settings()).unwrap();
+    let mut t = renderer.create_technique(technique).unwrap();
+    for (k, v) in params {
+        t.set_param(k, v).unwrap();
+    }
+    let report = renderer.render_frame(t.as_mut(), camera, lights, &mut |_, _| {}).unwrap();
+    (renderer.read_hdr().unwrap(), report)
+}
+
+fn raytraced(scene: &Scene, lights: &[PointLight], params: &[(&str, ParamValue)]) -> (Vec<[f32; 4]>, FrameReport) {
+    let mut all = vec![("bias", ParamValue::Float(BIAS))];
+    all.extend(params.iter().cloned());
+    render(scene, &scene.camera, lights, "raytraced", &all)
+}
+
+/// Share of pixels whose largest per-channel relative difference exceeds `tol`, and the largest difference.
+fn compare(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> (f32, f32) {
+    let mut worst = 0f32;
+    let mut over = 0usize;
+    for (p, q) in a.iter().zip(b) {
+        let d = (0..3).map(|c| (p[c] - q[c]).abs() / (1e-3 + q[c].abs())).fold(0f32, f32::max);
+        worst = worst.max(d);
+        if d > tol {
+            over += 1;
+        }
+    }
+    (over as f32 / a.len() as f32, worst)
+}
+
+/// Shadow-ray-like rays over a scene: half between random points on random triangles (they graze and hit
+/// geometry), half from random points in the bounds in random directions.
+fn random_rays(bvh: &Bvh, bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng(seed);
+    let size = bounds.size();
+    let diag = size.length();
+    let point_on_triangle = |rng: &mut Rng| {
+        let t = &bvh.triangles[(rng.next_u64() % bvh.triangles.len() as u64) as usize];
+        let [a, b, c] = t.vertices();
+        let (mut u, mut v) = (rng.unit(), rng.unit());
+        if u + v > 1.0 {
+            (u, v) = (1.0 - u, 1.0 - v);
+        }
+        let n = (b - a).cross(c - a).normalize();
+        (a + (b - a) * u + (c - a) * v, n)
+    };
+    (0..count)
+        .map(|i| {
+            if i % 2 == 0 {
+                let (p, n) = point_on_triangle(&mut rng);
+                let (q, _) = point_on_triangle(&mut rng);
+                let side = if rng.unit() < 0.5 { 1.0 } else { -1.0 };
+                let origin = p + n * side * 1e-3;
+                let to = q - origin;
+                let d = to.length().max(1e-6);
+                Ray::new(origin, to / d, d - 1e-3)
+            } else {
+                let origin = bounds.min - size * 0.1 + size * 1.2 * Vec3::new(rng.unit(), rng.unit(), rng.unit());
+                Ray::new(origin, rng.direction(), rng.range(0.0, diag))
+            }
+        })
+        .collect()
+}
+
+fn cpu_hits(bvh: &Bvh, rays: &[Ray]) -> Vec<bool> {
+    rays.iter().map(|r| occluded_cpu(bvh, Vec3::from_array(r.origin), Vec3::from_array(r.dir), r.t_max)).collect()
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Traversal
+// ---------------------------------------------------------------------------------------------------------------
+
+#[test]
+fn cpu_traversal_equals_brute_force_on_builtin_scenes() {
+    for name in ["cornell", "arcade"] {
+        let scene = Scene::builtin(name).unwrap();
+        let geometry = ChunkedGeometry::build(&scene);
+        let bvh = Bvh::from_geometry(&geometry);
+        let s = &bvh.stats;
+        eprintln!("{name}: {s:?}");
+        assert_eq!(s.triangles + s.degenerate_skipped, geometry.triangle_count());
+        assert!(s.max_depth <= shadowlab_core::technique::raytraced::bvh::MAX_DEPTH);
+        // Every input triangle is in exactly one leaf.
+        let mut ids = bvh.triangle_ids.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(ids.len(), bvh.triangles.len());
+
+        let rays = random_rays(&bvh, &scene.bounds, 4000, 7);
+        let bvh_hits = cpu_hits(&bvh, &rays);
+        let mut hits = 0;
+        for (r, &hit) in rays.iter().zip(&bvh_hits) {
+            let brute = occluded_brute_force(&bvh, Vec3::from_array(r.origin), Vec3::from_array(r.dir), r.t_max);
+            assert_eq!(hit, brute, "{name}: BVH and brute force disagree on {r:?}");
+            hits += hit as usize;
+        }
+        eprintln!("{name}: {hits} of {} rays occluded", rays.len());
+        assert!(hits > rays.len() / 10 && hits < rays.len() * 9 / 10, "{name}: {hits} hits is not a useful mix");
+    }
+}
+
+#[test]
+fn gpu_traversal_equals_cpu_traversal() {
+    let gpu = gpu();
+    for name in ["cornell", "arcade"] {
+        let scene = Scene::builtin(name).unwrap();
+        let bvh = Bvh::from_geometry(&ChunkedGeometry::build(&scene));
+        let rays = random_rays(&bvh, &scene.bounds, 20_000, 11);
+        let cpu = cpu_hits(&bvh, &rays);
+        let gpu_flags = gpu_occluded(&gpu, &bvh, &rays).unwrap();
+        assert_eq!(gpu_flags.len(), rays.len());
+        let differ: Vec<usize> = (0..rays.len()).filter(|&i| cpu[i] != gpu_flags[i]).collect();
+        let hits = cpu.iter().filter(|&&h| h).count();
+        eprintln!("{name}: GPU and CPU differ on {} of {} rays ({hits} occluded)", differ.len(), rays.len());
+        for &i in differ.iter().take(5) {
+            eprintln!("  {:?}: cpu {} gpu {}", rays[i], cpu[i], gpu_flags[i]);
+        }
+        // Floating-point ties (a ray through an edge or a vertex, FMA contraction on the GPU) may differ.
+        assert!(differ.len() * 1000 <= rays.len(), "{name}: {} of {} rays differ", differ.len(), rays.len());
+    }
+}
+
+#[test]
+fn gpu_traversal_of_an_empty_bvh_and_of_many_rays() {
+    let gpu = gpu();
+    let empty = Bvh::build(&[]);
+    let rays = vec![Ray::new(Vec3::ZERO, Vec3::X, 10.0); 3];
+    assert_eq!(gpu_occluded(&gpu, &empty, &rays).unwrap(), vec![false; 3]);
+    assert!(gpu_occluded(&gpu, &empty, &[]).unwrap().is_empty());
+    // One triangle, rays in a row straddling it: exercises a partly filled last workgroup.
+    let bvh = Bvh::build(&[[Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)]]);
+    let rays: Vec<Ray> =
+        (0..1000).map(|i| Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::NEG_Z, i as f32 * 0.002 + 0.0005)).collect();
+    let flags = gpu_occluded(&gpu, &bvh, &rays).unwrap();
+    for (i, f) in flags.iter().enumerate() {
+        assert_eq!(*f, rays[i].t_max > 1.0, "ray {i}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Hard shadows
+// ---------------------------------------------------------------------------------------------------------------
+
+fn lights_around_occluder() -> Vec<PointLight> {
+    vec![
+        white_light(Vec3::new(-1.5, 3.0, 0.2), 12.0, 8.0),
+        PointLight::new(Vec3::new(1.2, 2.5, -0.5), Vec3::new(1.0, 0.6, 0.3), 10.0, 7.0),
+        white_light(Vec3::new(0.0, 3.5, 1.5), 8.0, 8.0),
+    ]
+}
+
+#[test]
+fn hard_shadows_match_the_reference_at_1024() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (reference, _) = render(&scene, &scene.camera, &lights, "reference", &[("shadow_res", ParamValue::Int(1024))]);
+    let (traced, report) = raytraced(&scene, &lights, &[]);
+    let c = &report.counts.technique;
+    assert_eq!((c.lights_visible, c.shadow_maps, c.batches), (3, 0, 1));
+    let (over, worst) = compare(&traced, &reference, 0.02);
+    eprintln!("ray traced vs reference: {:.3}% of pixels over 2%, worst {worst}", over * 100.0);
+    if over > 0.01 {
+        let bad: Vec<bool> = traced.iter().zip(&reference).map(|(p, q)| compare(&[*p], &[*q], 0.02).0 > 0.0).collect();
+        let exp: Vec<Option<[f32; 4]>> = reference.iter().map(|p| Some(*p)).collect();
+        let dir = write_failure_images("raytraced-vs-reference", W, H, &traced, &exp, &bad);
+        panic!("{:.2}% of pixels differ from the reference by more than 2%; images in {}", over * 100.0, dir.display());
+    }
+}
+
+/// What a camera ray through a pixel centre hits in `plane_and_occluder`.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Hit {
+    Background,
+    Ground(Vec3),
+    Plate(Vec3),
+}
+
+fn camera_ray(camera: &Camera, px: u32, py: u32) -> (Vec3, Vec3) {
+    let world_from_clip = camera.clip_from_world(W as f32 / H as f32).inverse();
+    let ndc_x = (px as f32 + 0.5) / W as f32 * 2.0 - 1.0;
+    let ndc_y = 1.0 - (py as f32 + 0.5) / H as f32 * 2.0;
+    let a = world_from_clip * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+    let b = world_from_clip * Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let origin = a.xyz() / a.w;
+    (origin, (b.xyz() / b.w - origin).normalize())
+}
+
+fn cast(camera: &Camera, px: u32, py: u32) -> Hit {
+    let (origin, dir) = camera_ray(camera, px, py);
+    let hit_plane = |y: f32, half: f32| -> Option<(f32, Vec3)> {
+        let t = (y - origin.y) / dir.y;
+        let p = origin + dir * t;
+        (t > 0.0 && p.x.abs() <= half && p.z.abs() <= half).then_some((t, p))
+    };
+    let plate = hit_plane(PLATE_CENTER.y, PLATE_SIZE * 0.5);
+    let ground = hit_plane(0.0, GROUND_SIZE * 0.5);
+    match (plate, ground) {
+        (Some((tp, p)), Some((tg, _))) if tp < tg => Hit::Plate(p),
+        (Some((_, p)), None) => Hit::Plate(p),
+        (_, Some((_, g))) => Hit::Ground(g),
+        (None, None) => Hit::Background,
+    }
+}
+
+/// Visibility of `light` from ground point `p`, None within `margin` of the shadow boundary (ray tracing is
+/// exact, so the margin only covers the G-buffer's position reconstruction and the ray offset).
+fn ground_visibility(p: Vec3, light: &PointLight, margin: f32) -> Option<bool> {
+    if light.position.y <= PLATE_CENTER.y {
+        return Some(true);
+    }
+    let t = (PLATE_CENTER.y - p.y) / (light.position.y - p.y);
+    let q = p + (light.position - p) * t;
+    let inf = (q.x - PLATE_CENTER.x).abs().max((q.z - PLATE_CENTER.z).abs());
+    if inf < PLATE_SIZE * 0.5 - margin {
+        Some(false)
+    } else if inf > PLATE_SIZE * 0.5 + margin {
+        Some(true)
+    } else {
+        None
+    }
+}
+
+fn expected(camera: &Camera, lights: &[PointLight], px: u32, py: u32, margin: f32) -> Option<[f32; 4]> {
+    let hit = cast(camera, px, py);
+    for (dx, dy) in [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)] {
+        let (nx, ny) = (px as i32 + dx, py as i32 + dy);
+        if nx >= 0 && ny >= 0 && nx < W as i32 && ny < H as i32 {
+            let other = cast(camera, nx as u32, ny as u32);
+            if std::mem::discriminant(&other) != std::mem::discriminant(&hit) {
+                return None;
+            }
+        }
+    }
+    let p = match hit {
+        Hit::Background => return Some([0.0, 0.0, 1.0, 1.0]),
+        Hit::Ground(p) | Hit::Plate(p) => p,
+    };
+    let mut radiance = Vec3::splat(AMBIENT * ALBEDO);
+    for light in lights {
+        let to_light = light.position - p;
+        let d = to_light.length();
+        let n_dot_l = (to_light / d).dot(Vec3::Y);
+        if n_dot_l <= 0.0 || d >= light.range {
+            continue;
+        }
+        // Shadow rays start at the surface point pushed along the normal by the technique's offset.
+        let origin = p + Vec3::Y * BIAS * (p - camera.position).length().max(1.0);
+        let visible = match hit {
+            Hit::Ground(_) => ground_visibility(origin, light, margin)?,
+            _ => true,
+        };
+        if visible {
+            radiance +=
+                ALBEDO / std::f32::consts::PI * light.color * light.intensity * attenuation(d, light.range) * n_dot_l;
+        }
+    }
+    Some([radiance.x, radiance.y, radiance.z, 1.0])
+}
+
+#[test]
+fn hard_shadows_match_the_analytic_answer() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (hdr, _) = raytraced(&scene, &lights, &[]);
+    let mut exp = vec![None; (W * H) as usize];
+    let mut bad = vec![false; (W * H) as usize];
+    let (mut checked, mut wrong, mut umbra) = (0, 0, 0);
+    for y in 0..H {
+        for x in 0..W {
+            let i = (y * W + x) as usize;
+            // A 2 mm band around each shadow boundary is left out (the reference's test needs 6 cm).
+            exp[i] = expected(&scene.camera, &lights, x, y, 0.002);
+            if let Some(e) = exp[i] {
+                checked += 1;
+                if let Hit::Ground(p) = cast(&scene.camera, x, y) {
+                    umbra += lights.iter().any(|l| ground_visibility(p, l, 0.01) == Some(false)) as usize;
+                }
+                if !(0..3).all(|c| (hdr[i][c] - e[c]).abs() <= 0.02 * e[c].abs() + 2e-3) {
+                    wrong += 1;
+                    bad[i] = true;
+                }
+            }
+        }
+    }
+    if wrong > 0 {
+        let dir = write_failure_images("raytraced-analytic", W, H, &hdr, &exp, &bad);
+        panic!("{wrong} of {checked} pixels differ from the analytic answer; images in {}", dir.display());
+    }
+    assert!(checked > (W * H * 9 / 10) as usize, "too few pixels checked: {checked}");
+    assert!(umbra > 300, "the test must see shadowed ground: {umbra}");
+}
+
+#[test]
+fn soft_shadows_of_a_zero_radius_light_are_the_hard_shadows() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let (hard, _) = raytraced(&scene, &lights, &[]);
+    let (soft, _) = raytraced(
+        &scene,
+        &lights,
+        &[("soft", ParamValue::Bool(true)), ("light_radius", ParamValue::Float(0.0)), ("samples", ParamValue::Int(3))],
+    );
+    assert_eq!(hard, soft);
+}
+
+#[test]
+fn batches_and_culling_change_counts_not_the_image() {
+    let scene = plane_and_occluder();
+    let mut lights: Vec<PointLight> = (0..12)
+        .map(|i| {
+            let a = i as f32 / 12.0 * std::f32::consts::TAU;
+            white_light(Vec3::new(2.0 * a.cos(), 2.0 + 0.1 * i as f32, 2.0 * a.sin()), 2.0, 6.0)
+        })
+        .collect();
+    // Out of view: culled.
+    lights.push(white_light(Vec3::new(0.0, 6.0, 30.0), 100.0, 2.0));
+    let (one, r1) = raytraced(&scene, &lights, &[("lights_per_step", ParamValue::Int(1))]);
+    let (all, r32) = raytraced(&scene, &lights, &[("lights_per_step", ParamValue::Int(32))]);
+    assert_eq!(r1.counts.technique.lights_visible, 12);
+    assert_eq!(r1.counts.technique.batches, 12);
+    assert_eq!(r32.counts.technique.batches, 1);
+    assert_eq!(r32.counts.technique.shadow_maps, 0);
+    let (over, worst) = compare(&one, &all, 0.01);
+    assert!(over == 0.0, "batching changed the image: worst {worst}");
+}
+
+#[test]
+fn zero_lights_render_ambient_only() {
+    let scene = plane_and_occluder();
+    let (traced, report) = raytraced(&scene, &[], &[]);
+    let c = &report.counts.technique;
+    assert_eq!((c.lights_visible, c.batches, c.shadow_maps), (0, 0, 0));
+    let (reference, _) = render(&scene, &scene.camera, &[], "reference", &[]);
+    assert_eq!(traced, reference);
+    for y in 0..H {
+        for x in 0..W {
+            if let Some(e) = expected(&scene.camera, &[], x, y, 0.0) {
+                let a = traced[(y * W + x) as usize];
+                assert!((0..3).all(|c| (a[c] - e[c]).abs() <= 2e-3), "pixel {x},{y}: {a:?} vs {e:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn parameters_are_checked() {
+    let gpu = gpu();
+    let scene = plane_and_occluder();
+    let renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
+    let mut t = renderer.create_technique("raytraced").unwrap();
+    assert_eq!(t.key(), "raytraced");
+    assert!(t.set_param("samples", &ParamValue::Int(0)).is_err());
+    assert!(t.set_param("samples", &ParamValue::Int(257)).is_err());
+    assert!(t.set_param("light_radius", &ParamValue::Float(-1.0)).is_err());
+    assert!(matches!(t.set_param("shadow_res", &ParamValue::Int(64)), Err(ParamError::Unknown { .. })));
+    t.set_param("samples", &ParamValue::Int(256)).unwrap();
+    let p = t.params();
+    assert_eq!(p.iter().find(|p| p.key == "samples").unwrap().value, ParamValue::Int(256));
+    for key in ["soft", "light_radius", "samples", "lights_per_step", "bias", "seed"] {
+        assert!(p.iter().any(|p| p.key == key), "{key}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Soft shadows: a disc light behind a straight edge
+// ---------------------------------------------------------------------------------------------------------------
+
+/// Height of the half-plane occluder `{y = EDGE_HEIGHT, x < 0}`.
+const EDGE_HEIGHT: f32 = 1.0;
+
+fn rect(name: &str, y: f32, x0: f32, x1: f32, z0: f32, z1: f32) -> Mesh {
+    Mesh {
+        name: name.into(),
+        positions: vec![Vec3::new(x0, y, z0), Vec3::new(x1, y, z0), Vec3::new(x1, y, z1), Vec3::new(x0, y, z1)],
+        normals: vec![Vec3::Y; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        indices: vec![0, 2, 1, 0, 3, 2],
+        material: 0,
+    }
+}
+
+/// A ground plane (y = 0) and a large occluder covering x < 0 at `EDGE_HEIGHT`; the camera sits below the
+/// occluder, looking down at the penumbra across the edge's shadow.
+fn edge_scene() -> Scene {
+    let grey =
+        Material { name: "grey".into(), base_color: Vec4::new(ALBEDO, ALBEDO, ALBEDO, 1.0), ..Default::default() };
+    let mut scene = Scene {
+        name: "edge".into(),
+        source: SceneSource::Builtin("test".into()),
+        meshes: vec![rect("ground", 0.0, -30.0, 30.0, -30.0, 30.0), rect("edge", EDGE_HEIGHT, -30.0, 0.0, -30.0, 30.0)],
+        materials: vec![grey],
+        textures: vec![],
+        lights: vec![],
+        camera: Camera::look_at(Vec3::new(1.2, 0.9, 0.0), Vec3::new(-0.3, 0.0, 0.0), 70f32.to_radians(), 0.05, 50.0),
+        bounds: Aabb::EMPTY,
+        warnings: vec![],
+    };
+    scene.finalize(std::path::Path::new("edge")).unwrap();
+    scene
+}
+
+/// Fraction of a disc light (centre `light`, radius `r`, facing `p`) visible from `p` past the half-plane
+/// `{y = EDGE_HEIGHT, x < 0}`. A disc point s is hidden when the segment p-s crosses the occluder, i.e. when
+/// f(s) = n·s - c < 0 for the plane through p and the edge (n = (h - p.y, p.x, 0), c = h p.x). On the disc,
+/// f = f(L) + r m a with a uniform over the unit disc along the in-plane direction of n (m = |n| without
+/// its component along the disc normal), so the hidden part is a circular segment.
+fn disc_visibility(p: Vec3, light: Vec3, r: f32) -> f32 {
+    let h = EDGE_HEIGHT;
+    let n = Vec3::new(h - p.y, p.x, 0.0);
+    let c = h * p.x;
+    let w = (light - p).normalize();
+    let m = (n.length_squared() - n.dot(w).powi(2)).max(0.0).sqrt();
+    let f = n.dot(light) - c;
+    if r * m <= 0.0 {
+        return if f >= 0.0 { 1.0 } else { 0.0 };
+    }
+    let delta = (f / (r * m)).clamp(-1.0, 1.0);
+    // Share of the unit disc beyond a chord at distance |delta| from the centre.
+    let segment = |d: f32| (d.acos() - d * (1.0 - d * d).sqrt()) / std::f32::consts::PI;
+    let hidden = if delta >= 0.0 { segment(delta) } else { 1.0 - segment(-delta) };
+    1.0 - hidden
+}
+
+#[test]
+fn soft_penumbra_follows_the_visible_fraction_of_the_disc() {
+    let scene = edge_scene();
+    let light = white_light(Vec3::new(0.1, 3.0, 0.0), 20.0, 12.0);
+    let radius = 0.5;
+    let samples = 128;
+    let (hdr, _) = raytraced(
+        &scene,
+        &[light],
+        &[
+            ("soft", ParamValue::Bool(true)),
+            ("light_radius", ParamValue::Float(radius)),
+            ("samples", ParamValue::Int(samples)),
+        ],
+    );
+    // The albedo as the GPU sees it (8-bit sRGB: 0.5 becomes 0.497), from the ambient term alone.
+    let (ambient_only, _) = raytraced(&scene, &[], &[]);
+    let camera = &scene.camera;
+    let mut measured = vec![[0.0f32; 4]; hdr.len()];
+    let mut analytic = vec![None; hdr.len()];
+    let mut errors = Vec::new();
+    let mut penumbra = 0;
+    for y in 0..H {
+        for x in 0..W {
+            let i = (y * W + x) as usize;
+            let (o, d) = camera_ray(camera, x, y);
+            if d.y >= -1e-3 {
+                continue;
+            }
+            let p = o + d * (-o.y / d.y);
+            if p.x.abs() > 3.0 || p.z.abs() > 3.0 {
+                continue;
+            }
+            let to_light = light.position - p;
+            let dist = to_light.length();
+            let albedo = ambient_only[i][0] / AMBIENT;
+            let unshadowed =
+                albedo / std::f32::consts::PI * light.intensity * attenuation(dist, light.range) * (to_light / dist).y;
+            let vis = (hdr[i][0] - ambient_only[i][0]) / unshadowed;
+            // The shader's ray origin: the surface point pushed up by the offset.
+            let eps = BIAS * (p - camera.position).length().max(1.0);
+            let expected = disc_visibility(p + Vec3::Y * eps, light.position, radius);
+            measured[i] = [vis, vis, vis, 1.0];
+            analytic[i] = Some([expected, expected, expected, 1.0]);
+            let is_penumbra = expected > 0.02 && expected < 0.98;
+            penumbra += is_penumbra as usize;
+            errors.push((vis - expected, x, y, is_penumbra));
+        }
+    }
+    save_hdr("raytraced-penumbra-visibility.png", W, H, &measured, 1.0);
+    // Statistics over the penumbra, where sampling errs; everywhere else the answer is 0 or 1.
+    let in_penumbra: Vec<f32> = errors.iter().filter(|e| e.3).map(|e| e.0).collect();
+    let n = in_penumbra.len().max(1) as f32;
+    let mean_abs = in_penumbra.iter().map(|e| e.abs()).sum::<f32>() / n;
+    let mean = in_penumbra.iter().sum::<f32>() / n;
+    let worst = errors.iter().copied().fold((0f32, 0, 0, false), |a, e| if e.0.abs() > a.0.abs() { e } else { a });
+    eprintln!(
+        "soft penumbra: {} ground pixels, {penumbra} in the penumbra: mean |error| {mean_abs:.4}, mean error \
+         {mean:.4}; worst {worst:?}",
+        errors.len()
+    );
+    // 128 stratified samples: errors of about 1/128^(3/4) = 0.026 at most.
+    let ok = mean_abs < 0.01 && mean.abs() < 0.004 && worst.0.abs() < 0.05;
+    if !ok {
+        let bad: Vec<bool> =
+            measured.iter().zip(&analytic).map(|(m, a)| a.is_some_and(|a| (m[0] - a[0]).abs() > 0.04)).collect();
+        let dir = write_failure_images("raytraced-penumbra", W, H, &measured, &analytic, &bad);
+        panic!("the penumbra does not follow the disc fraction; images in {}", dir.display());
+    }
+    assert!(penumbra > 1500, "the test must see the penumbra: {penumbra} pixels");
+    assert!(errors.len() > (W * H / 2) as usize);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Timings (not a test: `cargo test --release -p shadowlab-core --test raytraced -- --ignored --nocapture`)
+// ---------------------------------------------------------------------------------------------------------------
+
+#[test]
+#[ignore = "measurement; needs ../shared/scenes"]
+fn frame_times_against_the_reference() {
+    let sponza =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/dabrovic-sponza/sponza.obj");
+    let mut scenes = vec![("arcade", Scene::builtin("arcade").unwrap())];
+    match Scene::load(&sponza, 1.0) {
+        Ok(mut s) => {
+            // Inside, from the -X end down the nave at eye height (the framing camera sees the outside walls).
+            s.camera = Camera::look_at(
+                Vec3::new(s.bounds.min.x + 3.0, 1.7, 0.0),
+                Vec3::new(0.0, 3.0, 0.0),
+                60f32.to_radians(),
+                0.05,
+                30.0,
+            );
+            scenes.push(("sponza", s))
+        }
+        Err(e) => eprintln!("no Sponza ({e}): {}", sponza.display()),
+    }
+    for (name, scene) in &scenes {
+        let geometry = ChunkedGeometry::build(scene);
+        let bvh = Bvh::from_geometry(&geometry);
+        eprintln!("{name}: {} triangles, BVH {:?}", geometry.triangle_count(), bvh.stats);
+        let layout = shadowlab_core::scene::layout::parse("paper").unwrap();
+        let lights = shadowlab_core::scene::layout::generate(&layout, scene).unwrap();
+        let gpu = gpu();
+        let (w, h) = (160, 120);
+        let settings = RenderSettings { width: w, height: h, ..Default::default() };
+        let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
+        let variants: [(&str, &[(&str, ParamValue)]); 3] = [
+            ("reference", &[("shadow_res", ParamValue::Int(512))]),
+            ("raytraced", &[]),
+            ("raytraced", &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(16))]),
+        ];
+        for (v, (key, params)) in variants.into_iter().enumerate() {
+            let mut t = renderer.create_technique(key).unwrap();
+            for (k, v) in params {
+                t.set_param(k, v).unwrap();
+            }
+            let first = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+            let second = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+            renderer
+                .read_output()
+                .unwrap()
+                .save(output_dir().join(format!("raytraced-timing-{name}-{v}.png")))
+                .unwrap();
+            eprintln!(
+                "{name} {w}x{h}, {} lights ({} visible), {key} {params:?}: first frame {:.0} ms wall (cpu stages \
+                 {:?}), second frame {:.0} ms wall, {:.0} ms in passes {:?}",
+                lights.len(),
+                second.counts.technique.lights_visible,
+                first.wall_ms,
+                first.cpu_stages,
+                second.wall_ms,
+                second.gpu_total_ms,
+                second.passes
+            );
+        }
+    }
+}
