@@ -15,6 +15,7 @@ fn main() -> ExitCode {
             data_dir: None,
             screenshot: args.screenshot,
             quit_after_secs: args.quit_after,
+            synchronous: false,
         }),
     };
     match result {

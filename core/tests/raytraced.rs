@@ -609,23 +609,73 @@ fn frame_times_against_the_reference() {
                 t.set_param(k, v).unwrap();
             }
             let first = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
-            let second = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+            // The machine is shared: the best of three frames, by wall time and by CPU time of this process
+            // (lavapipe's threads included; less sensitive to other processes).
+            let mut best_cpu = f64::INFINITY;
+            let best = (0..3)
+                .map(|_| {
+                    let cpu = process_cpu_ms();
+                    let r = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+                    best_cpu = best_cpu.min(process_cpu_ms() - cpu);
+                    r
+                })
+                .min_by(|a, b| a.wall_ms.total_cmp(&b.wall_ms))
+                .unwrap();
             renderer
                 .read_output()
                 .unwrap()
                 .save(output_dir().join(format!("raytraced-timing-{name}-{v}.png")))
                 .unwrap();
+            let passes: Vec<String> =
+                best.passes.iter().map(|p| format!("{} {:.0} ms x{}", p.name, p.ms, p.count)).collect();
             eprintln!(
-                "{name} {w}x{h}, {} lights ({} visible), {key} {params:?}: first frame {:.0} ms wall (cpu stages \
-                 {:?}), second frame {:.0} ms wall, {:.0} ms in passes {:?}",
+                "{name} {w}x{h}, {} lights ({} visible), {key} {params:?}: first frame {:.0} ms (cpu stages {:?}); \
+                 best frame {:.0} ms wall, {best_cpu:.0} ms CPU: {}",
                 lights.len(),
-                second.counts.technique.lights_visible,
+                best.counts.technique.lights_visible,
                 first.wall_ms,
-                first.cpu_stages,
-                second.wall_ms,
-                second.gpu_total_ms,
-                second.passes
+                first.cpu_stages.iter().map(|c| format!("{} {:.1} ms", c.name, c.ms)).collect::<Vec<_>>(),
+                best.wall_ms,
+                passes.join(", ")
             );
         }
+    }
+}
+
+/// CPU time of this process (all threads) in milliseconds, from /proc (10 ms resolution).
+fn process_cpu_ms() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the command name (which is in parentheses): utime and stime are fields 14 and 15.
+    let rest = stat.rsplit_once(')').map(|r| r.1).unwrap_or("");
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) * 10.0
+}
+
+#[test]
+#[ignore]
+fn zz_traversal_ab() {
+    let gpu = gpu();
+    let sponza =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/dabrovic-sponza/sponza.obj");
+    let scene = Scene::load(&sponza, 1.0).unwrap();
+    let bvh = Bvh::from_geometry(&ChunkedGeometry::build(&scene));
+    let rays = random_rays(&bvh, &scene.bounds, 300_000, 3);
+    let test = include_str!("../../shaders/raytrace_test.wgsl");
+    let variants: Vec<(String, String)> = std::env::var("RT_AB")
+        .unwrap()
+        .split(',')
+        .map(|f| (f.to_string(), std::fs::read_to_string(f).unwrap() + test))
+        .collect();
+    let mut best = vec![f64::INFINITY; variants.len()];
+    for _round in 0..7 {
+        for (i, (_, src)) in variants.iter().enumerate() {
+            let t = std::time::Instant::now();
+            let _ = shadowlab_core::technique::raytraced::gpu_occluded_source(&gpu, &bvh, &rays, src).unwrap();
+            best[i] = best[i].min(t.elapsed().as_secs_f64() * 1000.0);
+        }
+    }
+    for (i, (name, _)) in variants.iter().enumerate() {
+        eprintln!("AB {name}: {:.0} ms", best[i]);
     }
 }

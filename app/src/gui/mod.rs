@@ -38,6 +38,8 @@ pub struct Startup {
     /// README pictures).
     pub screenshot: Option<PathBuf>,
     pub quit_after_secs: Option<f32>,
+    /// Finish every frame within one UI frame, whatever it costs (deterministic tests).
+    pub synchronous: bool,
 }
 
 /// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
@@ -189,6 +191,11 @@ impl ShadowLabApp {
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
+        if startup.synchronous {
+            if let Some(gpu) = &mut app.gpu {
+                gpu.sizer = StepSizer { max_lights_per_step: 1 << 20, budget_ms: f64::INFINITY };
+            }
+        }
         if let Some(path) = startup.path {
             app.open_path(&path);
         }
@@ -202,7 +209,8 @@ impl ShadowLabApp {
         // A real GPU renders a whole frame in one step; a software one starts small and adapts, and starts at
         // half resolution with 256-texel cube faces (lavapipe is ~100x slower; the user can raise both).
         let software = rs.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let sizer = if software { StepSizer::default() } else { StepSizer { max_lights_per_step: 256 } };
+        let sizer =
+            if software { StepSizer::default() } else { StepSizer { max_lights_per_step: 256, ..Default::default() } };
         if software {
             self.view.resolution_scale = 0.5;
             for key in ["reference", "lightcluster"] {
@@ -481,14 +489,21 @@ impl ShadowLabApp {
         names.into_iter().map(|(n, d)| (n.clone(), *self.view.overlays.get(&n).unwrap_or(&d))).collect()
     }
 
-    fn render_views(&mut self, size: egui::Vec2, interacting: bool) -> Result<()> {
+    fn render_views(&mut self, size: egui::Vec2, pixels_per_point: f32, interacting: bool) -> Result<()> {
         let lights = self.animated_lights();
         let camera = self.camera.camera();
-        let overlays = self.overlay_primitives(&lights);
+        let mut overlays = self.overlay_primitives(&lights);
         let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.technique.clone() };
         let two = self.view.mode != ViewMode::Single;
         let per_view = if self.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
         let settings = self.render_settings(per_view, interacting);
+        // Dot sizes are in screen points; the render target may be smaller or larger than the view.
+        let render_pixels_per_point = pixels_per_point * settings.width as f32 / per_view.x.max(1.0);
+        for o in &mut overlays {
+            if let Overlay::Point { radius_px, .. } = o {
+                *radius_px *= render_pixels_per_point;
+            }
+        }
         let params = self.params.get(&technique).cloned().unwrap_or_default();
         let x_ray = self.view.x_ray;
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
@@ -520,8 +535,8 @@ impl ShadowLabApp {
             total_steps += n;
         }
         gpu.sizer.observe(total_spent, total_steps);
-        if gpu.main.progress >= 1.0 {
-            if let Some(r) = gpu.main.last_report.take() {
+        if std::mem::take(&mut gpu.main.new_report) {
+            if let Some(r) = &gpu.main.last_report {
                 let t = self.started.elapsed().as_secs_f64();
                 if r.technique != PREVIEW_TECHNIQUE {
                     self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
@@ -529,7 +544,6 @@ impl ShadowLabApp {
                         self.timings.pop_front();
                     }
                 }
-                gpu.main.last_report = Some(r);
             }
         }
         Ok(())
@@ -758,7 +772,8 @@ impl ShadowLabApp {
             || input.is_active()
             || self.last_interaction.is_some_and(|t| t.elapsed().as_secs_f32() < 0.25);
 
-        if let Err(e) = self.render_views(rect.size() * ui.ctx().pixels_per_point(), interacting) {
+        let ppp = ui.ctx().pixels_per_point();
+        if let Err(e) = self.render_views(rect.size() * ppp, ppp, interacting) {
             self.status = format!("render error: {e:#}");
         }
 

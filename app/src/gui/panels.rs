@@ -149,10 +149,11 @@ fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str
 }
 
 fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    ui.heading("Technique");
-    egui::ComboBox::from_id_salt("technique")
+    ui.heading("Shadows");
+    egui::ComboBox::from_label("Technique")
         .selected_text(REGISTRY.iter().find(|e| e.key == app.technique).map(|e| e.label).unwrap_or("?"))
-        .width(ui.available_width())
+        .width(150.0)
+        .truncate()
         .show_ui(ui, |ui| {
             for e in REGISTRY {
                 ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
@@ -175,14 +176,7 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     }
     if ui.button("Reset parameters").clicked() {
         app.params.remove(&key);
-        if let Some(t) = gpu.main.technique(&key).ok() {
-            // A fresh instance has the defaults.
-            let _ = t;
-        }
-        gpu.main = match super::viewport::View::new(&gpu.ctx, &gpu.render_state, &app.scene) {
-            Ok(v) => v,
-            Err(_) => return,
-        };
+        gpu.main.reset_technique(&key);
     }
 }
 

@@ -47,6 +47,8 @@ pub struct View {
     job: Option<(FrameJob, String)>,
     key: u64,
     pub last_report: Option<FrameReport>,
+    /// Set when `last_report` is a frame that completed since the caller last looked.
+    pub new_report: bool,
     /// Progress of the current frame, 0..1 (1 when complete).
     pub progress: f32,
     pub size: (u32, u32),
@@ -68,6 +70,7 @@ impl View {
             job: None,
             key: 0,
             last_report: None,
+            new_report: false,
             progress: 0.0,
             size: (64, 64),
         })
@@ -160,15 +163,17 @@ impl View {
             self.progress = job.progress();
             if result.is_ok() && job.is_done() {
                 self.last_report = Some(self.renderer.finish_frame(job, technique.as_ref())?);
+                self.new_report = true;
                 self.progress = 1.0;
             } else {
-                self.renderer.tonemap()?;
+                self.renderer.preview_tonemap()?;
                 self.job = Some((job, name));
             }
             self.techniques.insert(technique.key(), technique);
             result?;
         } else {
-            self.renderer.tonemap()?;
+            // Overlays are drawn over the output each UI frame; start again from the clean image.
+            self.renderer.preview_tonemap()?;
         }
         Ok((start.elapsed().as_secs_f64() * 1000.0, steps))
     }
@@ -176,6 +181,12 @@ impl View {
     pub fn overlays(&mut self, camera: &Camera, primitives: &[Overlay], x_ray: bool) -> Result<()> {
         self.renderer.draw_overlays(camera, primitives, x_ray)?;
         Ok(())
+    }
+
+    /// Forget a technique instance, so the next use creates it with default parameters.
+    pub fn reset_technique(&mut self, key: &str) {
+        self.techniques.retain(|k, _| *k != key);
+        self.key = 0;
     }
 
     pub fn is_converged(&self) -> bool {
@@ -188,11 +199,13 @@ impl View {
 #[derive(Clone, Copy, Debug)]
 pub struct StepSizer {
     pub max_lights_per_step: usize,
+    /// GPU work a UI frame may wait for.
+    pub budget_ms: f64,
 }
 
 impl Default for StepSizer {
     fn default() -> Self {
-        StepSizer { max_lights_per_step: 4 }
+        StepSizer { max_lights_per_step: 4, budget_ms: FRAME_BUDGET_MS }
     }
 }
 
@@ -202,14 +215,17 @@ impl StepSizer {
         if steps == 0 {
             return;
         }
+        if !self.budget_ms.is_finite() {
+            return;
+        }
         let per_step = spent_ms / steps as f64;
-        if per_step > FRAME_BUDGET_MS && self.max_lights_per_step > 1 {
+        if per_step > self.budget_ms && self.max_lights_per_step > 1 {
             self.max_lights_per_step /= 2;
-        } else if per_step < FRAME_BUDGET_MS * 0.25 {
+        } else if per_step < self.budget_ms * 0.25 {
             self.max_lights_per_step = (self.max_lights_per_step * 2).min(1024);
         }
     }
     pub fn budget_ms(&self) -> f64 {
-        FRAME_BUDGET_MS
+        self.budget_ms
     }
 }

@@ -669,39 +669,45 @@ impl Renderer {
         self.timer.finish_frame(&self.gpu).map(|_| ())
     }
 
-    /// Tone-map the HDR target into the output texture.
+    /// Tone-map the HDR target into the output texture (timed as the frame's "tonemap" pass).
     pub fn tonemap(&mut self) -> Result<(), GpuError> {
+        self.encode_tonemap(true)
+    }
+
+    /// Tone-map what has been accumulated so far, for progressive display; not counted in the frame's timings.
+    pub fn preview_tonemap(&mut self) -> Result<(), GpuError> {
+        self.encode_tonemap(false)
+    }
+
+    fn encode_tonemap(&mut self, timed: bool) -> Result<(), GpuError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let pipeline = &self.tonemap_pipeline;
-        let screen = &self.screen_bind_group;
-        let tonemap_bg = &self.tonemap_bind_group;
-        self.timer.render_pass(
-            &mut encoder,
-            "tonemap",
-            wgpu::RenderPassDescriptor {
-                label: None,
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.targets.output,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            },
-            |pass| {
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, screen, &[]);
-                pass.set_bind_group(1, tonemap_bg, &[]);
-                pass.draw(0..3, 0..1);
-            },
-        );
-        self.timer.submit(&self.gpu, encoder, "tonemap")
+        let desc = wgpu::RenderPassDescriptor {
+            label: Some("tonemap"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.targets.output,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        };
+        let record = |pass: &mut wgpu::RenderPass<'_>| {
+            pass.set_pipeline(&self.tonemap_pipeline);
+            pass.set_bind_group(0, &self.screen_bind_group, &[]);
+            pass.set_bind_group(1, &self.tonemap_bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        };
+        if timed {
+            self.timer.render_pass(&mut encoder, "tonemap", desc, record);
+            self.timer.submit(&self.gpu, encoder, "tonemap")
+        } else {
+            record(&mut encoder.begin_render_pass(&desc));
+            self.gpu.queue.submit([encoder.finish()]);
+            Ok(())
+        }
     }
 
     /// Draw overlay primitives over the output (call after [`Renderer::tonemap`]). Depth-tested against the

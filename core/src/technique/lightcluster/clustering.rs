@@ -95,8 +95,13 @@ const EMPTY_KEY: u64 = u64::MAX;
 const AXIS_BITS: u32 = 19;
 /// Levels of the grid at most (level 0 has cells of `2 * d_init`, each level halves them).
 const MAX_LEVELS: usize = 24;
+/// From this many lights left for step 4 on, they are visited in grid order (better cache use).
+const SPATIAL_ORDER_MIN: usize = 2048;
 /// Below this many visible lights the comparison sort beats the radix sort.
-const RADIX_MIN: usize = 256;
+const RADIX_MIN: usize = 4096;
+/// The radix sort's digit: 11 bits, so three passes cover the 32 bits of a range.
+const RADIX_BITS: usize = 11;
+const RADIX_BUCKETS: usize = 1 << RADIX_BITS;
 
 /// Parameters of the clustering.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -254,20 +259,62 @@ pub struct Clusterer {
     /// Step 1/2: per visible light `(!range_bits) << 32 | input index`; sorted ascending = step 2's order.
     keys: Vec<u64>,
     keys_tmp: Vec<u64>,
+    radix_counts: Vec<[u32; RADIX_BUCKETS]>,
     /// Per visible light in sorted order: input index, position, range, distance to the camera.
     ids: Vec<u32>,
     pos: Vec<Vec3>,
     range: Vec<f32>,
     to_camera: Vec<f32>,
-    /// Per visible light in sorted order: its cluster when it is a center, else [`NONE`].
-    center_slot: Vec<u32>,
-    /// Per visible light in sorted order that is no center: distance to the center that covered it in step 3.
+    /// Per visible light in sorted order: its cluster ([`NONE`] until assigned).
+    cluster: Vec<u32>,
+    /// Per visible light in sorted order that is no center: the distance to the center that covered it in
+    /// step 3, then the distance `d_C` to its cluster's center after step 4.
     cover: Vec<f32>,
-    /// Per center (cluster index): position, `d_min`, next center in the same grid cell.
-    center_pos: Vec<Vec3>,
-    center_d_min: Vec<f32>,
-    next: Vec<u32>,
+    /// Per visible light in sorted order: its `d_min` were it a center.
+    d_min: Vec<f32>,
+    /// Per center (cluster index), in selection order: its visible light (sorted order) and position.
+    center_light: Vec<u32>,
+    centers: Vec<Vec3>,
+    /// Step 4 scratch: per grid slot the end of its non-centers in `by_slot`, and the non-centers by slot.
+    cursor: Vec<u32>,
+    by_slot: Vec<u32>,
     grid: Grid,
+}
+
+/// Bound on the distance of any center that can cover a light (view-adaptive only): with
+/// `k = d_init / z_far < 1`, a center `c` covering `p` satisfies
+/// `|p - c| <= d_min(c) <= d_init (1 - (|p| - |p - c|) / z_far)`, so `|p - c| <= d_init (1 - |p| / z_far) / (1 - k)`
+/// (distances to the camera). Widened by a relative 1e-4 plus `d_init * 1e-5` for rounding.
+#[derive(Clone, Copy, Debug)]
+struct CoverBound {
+    enabled: bool,
+    scale: f32,
+    inv_z_far: f32,
+    slack: f32,
+}
+
+impl CoverBound {
+    fn new(params: &ClusterParams) -> Self {
+        let d_init = params.effective_d_init();
+        let k = d_init as f64 / params.z_far as f64;
+        let enabled = params.is_view_adaptive() && params.z_far.is_finite() && k <= 0.5;
+        CoverBound {
+            enabled,
+            scale: if enabled { (d_init as f64 / (1.0 - k) * 1.0001) as f32 } else { 0.0 },
+            inv_z_far: if enabled { 1.0 / params.z_far } else { 0.0 },
+            slack: d_init * 1e-5,
+        }
+    }
+
+    /// Largest distance of a center that can cover a light `to_camera` from the camera (may be negative: none).
+    #[inline(always)]
+    fn radius(&self, to_camera: f32) -> f32 {
+        if self.enabled && to_camera.is_finite() {
+            self.scale * (1.0 - to_camera * self.inv_z_far) + self.slack
+        } else {
+            f32::INFINITY
+        }
+    }
 }
 
 impl Clusterer {
@@ -302,24 +349,23 @@ impl Clusterer {
     ) {
         assert!(lights.len() < NONE as usize, "at most {} lights can be clustered", NONE - 1);
         self.cull(lights, frustum);
-        sort_by_range(&mut self.keys, &mut self.keys_tmp);
-        self.gather(lights, camera_position, params);
+        sort_by_range(&mut self.keys, &mut self.keys_tmp, &mut self.radix_counts);
+        let (min, max) = self.gather(lights, camera_position, params);
 
         let d_init = params.effective_d_init();
-        out.visible = self.ids.len();
         out.cluster_of.clear();
         out.cluster_of.resize(lights.len(), None);
         if d_init > 0.0 && self.ids.len() > 1 {
-            self.grid.build(&self.pos, d_init, params.is_view_adaptive());
+            self.grid.build(&self.pos, &self.d_min, min, max, d_init, params.is_view_adaptive());
         } else {
             self.grid.clear();
         }
 
-        let clusters = self.select_centers(params, out);
-        out.clusters.truncate(clusters);
-        if clusters < self.ids.len() {
-            self.assign_remaining(out);
+        self.select_centers(params);
+        if self.centers.len() < self.ids.len() {
+            self.assign_remaining();
         }
+        self.write_output(out);
     }
 
     /// Information about the grid of the last call.
@@ -330,109 +376,96 @@ impl Clusterer {
     /// Step 1: keep the lights that are valid and whose bounding sphere of radius `L_att` touches the frustum,
     /// as sort keys (`!range_bits << 32 | index`) in input order.
     fn cull(&mut self, lights: &[PointLight], frustum: &Frustum) {
-        self.keys.clear();
+        // Branch-free compaction: write every key, keep it by advancing only past visible ones.
+        self.keys.resize(lights.len(), 0);
+        let mut visible = 0;
         for (i, light) in lights.iter().enumerate() {
-            if light.is_valid() && frustum.intersects_sphere(light.position, light.range) {
-                // A valid range is positive and finite, so its bits order like its value; `!` makes the
-                // ascending key order the descending range order.
-                self.keys.push(((!light.range.to_bits()) as u64) << 32 | i as u64);
-            }
+            // A valid range is positive and finite, so its bits order like its value; `!` makes the ascending
+            // key order the descending range order.
+            self.keys[visible] = ((!light.range.to_bits()) as u64) << 32 | i as u64;
+            visible += (light.is_valid() & frustum.intersects_sphere(light.position, light.range)) as usize;
         }
+        self.keys.truncate(visible);
     }
 
-    /// Lay out the visible lights in sorted order for steps 3 and 4.
-    fn gather(&mut self, lights: &[PointLight], camera: Vec3, params: &ClusterParams) {
-        self.ids.clear();
-        self.pos.clear();
-        self.range.clear();
-        self.to_camera.clear();
+    /// Lay out the visible lights in sorted order for steps 3 and 4, with their distance to the camera and
+    /// `d_min`; returns their bounding box.
+    fn gather(&mut self, lights: &[PointLight], camera: Vec3, params: &ClusterParams) -> (Vec3, Vec3) {
+        let n = self.keys.len();
+        for v in [&mut self.range, &mut self.to_camera, &mut self.d_min] {
+            v.resize(n, 0.0);
+        }
+        self.ids.resize(n, 0);
+        self.pos.resize(n, Vec3::ZERO);
         let adaptive = params.is_view_adaptive();
-        for &key in &self.keys {
+        let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for (i, &key) in self.keys.iter().enumerate() {
             let id = key as u32;
             let light = &lights[id as usize];
-            self.ids.push(id);
-            self.pos.push(light.position);
-            self.range.push(light.range);
-            // Only view-adaptive d_min and level pruning need it.
-            self.to_camera.push(if adaptive { light.position.distance(camera) } else { 0.0 });
+            self.ids[i] = id;
+            self.pos[i] = light.position;
+            self.range[i] = light.range;
+            min = min.min(light.position);
+            max = max.max(light.position);
+            // The same expression as `ClusterParams::d_min_at(position, camera)`.
+            let to_camera = if adaptive { light.position.distance(camera) } else { 0.0 };
+            self.to_camera[i] = to_camera;
+            self.d_min[i] = params.d_min_at_distance(to_camera);
         }
+        (min, max)
     }
 
-    /// Step 3: select the cluster centers in sorted order; writes a cluster per center into `out` and returns
-    /// how many there are. Non-centers get `center_slot = NONE` and their covering distance in `cover`.
-    fn select_centers(&mut self, params: &ClusterParams, out: &mut Clustering) -> usize {
+    /// Step 3: select the cluster centers in sorted order. Centers get their cluster index in `cluster`;
+    /// the others keep [`NONE`] and get their covering distance in `cover`.
+    fn select_centers(&mut self, params: &ClusterParams) {
         let n = self.ids.len();
-        self.center_slot.clear();
-        self.center_slot.resize(n, NONE);
+        self.cluster.clear();
+        self.cluster.resize(n, NONE);
         self.cover.clear();
         self.cover.resize(n, 0.0);
-        self.center_pos.clear();
-        self.center_d_min.clear();
-        self.next.clear();
+        self.centers.clear();
+        self.center_light.clear();
+        let bound = CoverBound::new(params);
         for i in 0..n {
             let p = self.pos[i];
             let to_camera = self.to_camera[i];
-            if let Some(d) = self.covering_distance(p, to_camera) {
+            if let Some(d) = self.covering_distance(p, to_camera, bound.radius(to_camera)) {
                 self.cover[i] = d;
                 continue;
             }
-            let k = self.center_pos.len() as u32;
-            // Same expression as `ClusterParams::d_min_at(p, camera)`.
-            let d_min = params.d_min_at_distance(to_camera);
-            self.center_slot[i] = k;
-            self.center_pos.push(p);
-            self.center_d_min.push(d_min);
-            self.next.push(NONE);
-            self.grid.insert(p, to_camera, d_min, k, &mut self.next);
-
-            let id = self.ids[i] as usize;
-            let range = self.range[i];
-            out.cluster_of[id] = Some(k);
-            match out.clusters.get_mut(k as usize) {
-                Some(c) => {
-                    c.center = id;
-                    c.members.clear();
-                    c.members.push(id);
-                    c.d_min = d_min;
-                    c.c_att = range;
-                    c.position = p;
-                    c.radius = 0.0;
-                }
-                None => out.clusters.push(Cluster {
-                    center: id,
-                    members: vec![id],
-                    d_min,
-                    c_att: range,
-                    position: p,
-                    radius: 0.0,
-                }),
-            }
+            let k = self.centers.len() as u32;
+            self.cluster[i] = k;
+            self.centers.push(p);
+            self.center_light.push(i as u32);
+            self.grid.insert(i, p, to_camera, self.d_min[i], k);
         }
-        self.center_pos.len()
     }
 
     /// Step 3's test: the distance to some center `c` with `distance <= d_min(c)` and `d_min(c) > 0`, or `None`
     /// when `p` is farther than `d_min(c)` from every center (so it becomes a center). Each level is searched
-    /// with the largest `d_min` of its centers: no center can cover a light farther away.
+    /// with the smaller of the largest `d_min` of its centers and `bound` (see [`CoverBound`]); the light's own
+    /// cell first, where a covering center is most likely.
     #[inline]
-    fn covering_distance(&self, p: Vec3, to_camera: f32) -> Option<f32> {
-        for level in 0..self.grid.levels.len() {
-            let Some((lo, hi)) = self.grid.search_box(level, p, to_camera, self.grid.levels[level].max_d_min) else {
+    fn covering_distance(&self, p: Vec3, to_camera: f32, bound: f32) -> Option<f32> {
+        if !(bound >= 0.0) {
+            return None;
+        }
+        let grid = &self.grid;
+        for level in 0..grid.levels.len() {
+            let radius = grid.levels[level].max_d_min.min(bound);
+            let Some(b) = grid.search_box(level, p, to_camera, radius) else {
                 continue;
             };
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        let mut k = self.grid.head(level, [x, y, z]);
-                        while k != NONE {
-                            let d_min = self.center_d_min[k as usize];
-                            if d_min > 0.0 {
-                                let d = p.distance(self.center_pos[k as usize]);
-                                if d <= d_min {
-                                    return Some(d);
-                                }
+            if let Some(d) = grid.cover_in_cell(grid.slot(level, b.own), p) {
+                return Some(d);
+            }
+            for z in b.lo[2]..=b.hi[2] {
+                for y in b.lo[1]..=b.hi[1] {
+                    for x in b.lo[0]..=b.hi[0] {
+                        if [x, y, z] != b.own {
+                            if let Some(d) = grid.cover_in_cell(grid.slot(level, [x, y, z]), p) {
+                                return Some(d);
                             }
-                            k = self.next[k as usize];
                         }
                     }
                 }
@@ -441,25 +474,88 @@ impl Clusterer {
         None
     }
 
-    /// Step 4: assign every light that is no center to its nearest center and grow that cluster's `C_att`.
-    fn assign_remaining(&self, out: &mut Clustering) {
-        for i in 0..self.ids.len() {
-            if self.center_slot[i] != NONE {
-                continue;
+    /// Step 4: assign every light that is no center to its nearest center (`cluster`, and `d_C` in `cover`).
+    /// Many lights are visited grid slot by grid slot, so that neighbours share cached cells.
+    fn assign_remaining(&mut self) {
+        let n = self.ids.len();
+        let remaining = n - self.centers.len();
+        if remaining < SPATIAL_ORDER_MIN || self.grid.levels.is_empty() {
+            for i in 0..n {
+                if self.cluster[i] == NONE {
+                    self.assign(i);
+                }
             }
-            let p = self.pos[i];
-            let (k, d2) = match self.nearest_center(p, self.to_camera[i], self.cover[i]) {
-                Some(found) => found,
-                // Unreachable (the covering center is within the searched boxes); kept exact and panic-free.
-                None => self.nearest_center_brute_force(p),
-            };
-            let d_c = d2.sqrt();
+            return;
+        }
+        let runs = &self.grid.runs;
+        self.cursor.clear();
+        self.cursor.extend(runs.iter().map(|r| r[0]));
+        self.by_slot.resize(n, 0);
+        for i in 0..n {
+            if self.cluster[i] == NONE {
+                let c = &mut self.cursor[self.grid.light_slot[i] as usize];
+                self.by_slot[*c as usize] = i as u32;
+                *c += 1;
+            }
+        }
+        for s in 0..self.cursor.len() {
+            for j in self.grid.runs[s][0]..self.cursor[s] {
+                self.assign(self.by_slot[j as usize] as usize);
+            }
+        }
+    }
+
+    /// Step 4 for visible light `i`.
+    #[inline]
+    fn assign(&mut self, i: usize) {
+        let p = self.pos[i];
+        let (k, d2) = match self.nearest_center(p, self.to_camera[i], self.cover[i]) {
+            Some(found) => found,
+            // Unreachable (the covering center is within the searched boxes); kept exact and panic-free.
+            None => self.nearest_center_brute_force(p),
+        };
+        self.cluster[i] = k;
+        self.cover[i] = d2.sqrt();
+    }
+
+    /// Write the clusters: centers first (in selection order), then every other light in sorted order, growing
+    /// its cluster's `C_att = max(C_att, d_C + L_att)`.
+    fn write_output(&self, out: &mut Clustering) {
+        out.visible = self.ids.len();
+        out.clusters.truncate(self.centers.len());
+        for (k, &i) in self.center_light.iter().enumerate() {
+            let i = i as usize;
+            let (id, d_min, range, position) = (self.ids[i] as usize, self.d_min[i], self.range[i], self.pos[i]);
+            match out.clusters.get_mut(k) {
+                Some(c) => {
+                    c.center = id;
+                    c.members.clear();
+                    c.members.push(id);
+                    c.d_min = d_min;
+                    c.c_att = range;
+                    c.position = position;
+                    c.radius = 0.0;
+                }
+                None => out.clusters.push(Cluster {
+                    center: id,
+                    members: vec![id],
+                    d_min,
+                    c_att: range,
+                    position,
+                    radius: 0.0,
+                }),
+            }
+        }
+        for (i, &k) in self.cluster.iter().enumerate() {
             let id = self.ids[i] as usize;
-            let cluster = &mut out.clusters[k as usize];
-            cluster.members.push(id);
-            cluster.c_att = cluster.c_att.max(d_c + self.range[i]);
-            cluster.radius = cluster.radius.max(d_c);
             out.cluster_of[id] = Some(k);
+            if self.center_light[k as usize] as usize != i {
+                let d_c = self.cover[i];
+                let cluster = &mut out.clusters[k as usize];
+                cluster.members.push(id);
+                cluster.c_att = cluster.c_att.max(d_c + self.range[i]);
+                cluster.radius = cluster.radius.max(d_c);
+            }
         }
     }
 
@@ -467,23 +563,26 @@ impl Clusterer {
     /// within `radius`, with its squared distance.
     #[inline]
     fn nearest_center(&self, p: Vec3, to_camera: f32, radius: f32) -> Option<(u32, f32)> {
+        let grid = &self.grid;
         let mut best = NONE;
         let mut best_d2 = f32::INFINITY;
-        for level in 0..self.grid.levels.len() {
-            let Some((lo, hi)) = self.grid.search_box(level, p, to_camera, radius) else {
+        for level in 0..grid.levels.len() {
+            let Some(b) = grid.search_box(level, p, to_camera, radius) else {
                 continue;
             };
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        let mut k = self.grid.head(level, [x, y, z]);
-                        while k != NONE {
-                            let d2 = p.distance_squared(self.center_pos[k as usize]);
-                            if d2 < best_d2 || (d2 == best_d2 && k < best) {
-                                best = k;
-                                best_d2 = d2;
+            for z in b.lo[2]..=b.hi[2] {
+                for y in b.lo[1]..=b.hi[1] {
+                    for x in b.lo[0]..=b.hi[0] {
+                        let (entries, first) = grid.centers_in_cell(grid.slot(level, [x, y, z]));
+                        for (e, entry) in entries.iter().enumerate() {
+                            let d2 = p.distance_squared(Vec3::new(entry[0], entry[1], entry[2]));
+                            if d2 <= best_d2 {
+                                let k = grid.entry_k[first + e];
+                                if d2 < best_d2 || k < best {
+                                    best = k;
+                                    best_d2 = d2;
+                                }
                             }
-                            k = self.next[k as usize];
                         }
                     }
                 }
@@ -494,8 +593,8 @@ impl Clusterer {
 
     fn nearest_center_brute_force(&self, p: Vec3) -> (u32, f32) {
         let mut best = (0, f32::INFINITY);
-        for (k, c) in self.center_pos.iter().enumerate() {
-            let d2 = p.distance_squared(*c);
+        for (k, &c) in self.centers.iter().enumerate() {
+            let d2 = p.distance_squared(c);
             if d2 < best.1 {
                 best = (k as u32, d2);
             }
@@ -504,39 +603,40 @@ impl Clusterer {
     }
 }
 
-/// Step 2: sort the keys made by step 1 ascending, i.e. by `L_att` descending, then by input index. A stable
-/// LSD radix sort over the 32 range bits (skipping bytes all keys share); small inputs use `sort_unstable`,
-/// which gives the same order because keys are unique.
-fn sort_by_range(keys: &mut Vec<u64>, tmp: &mut Vec<u64>) {
+/// Step 2: sort the keys made by step 1 ascending, i.e. by `L_att` descending, then by input index. Large inputs
+/// use a stable LSD radix sort over the 32 range bits in three 11-bit digits (skipping digits all keys share),
+/// small ones `sort_unstable`, which gives the same order because keys are unique.
+fn sort_by_range(keys: &mut Vec<u64>, tmp: &mut Vec<u64>, hist: &mut Vec<[u32; RADIX_BUCKETS]>) {
     let n = keys.len();
     if n < RADIX_MIN {
         keys.sort_unstable();
         return;
     }
-    let mut hist = [[0u32; 256]; 4];
+    hist.clear();
+    hist.resize(3, [0; RADIX_BUCKETS]);
     for &key in keys.iter() {
-        let hi = (key >> 32) as u32;
-        for (byte, h) in hist.iter_mut().enumerate() {
-            h[((hi >> (8 * byte)) & 0xFF) as usize] += 1;
+        let hi = (key >> 32) as usize;
+        for (digit, h) in hist.iter_mut().enumerate() {
+            h[(hi >> (RADIX_BITS * digit)) & (RADIX_BUCKETS - 1)] += 1;
         }
     }
     tmp.clear();
     tmp.resize(n, 0);
-    for (byte, h) in hist.iter().enumerate() {
+    for (digit, h) in hist.iter_mut().enumerate() {
         if h.iter().any(|&c| c as usize == n) {
-            continue; // every key has the same byte here
+            continue; // every key has the same digit here
         }
-        let mut offsets = [0usize; 256];
-        let mut sum = 0usize;
-        for (o, &c) in offsets.iter_mut().zip(h.iter()) {
-            *o = sum;
-            sum += c as usize;
+        let mut sum = 0u32;
+        for c in h.iter_mut() {
+            let count = *c;
+            *c = sum;
+            sum += count;
         }
-        let shift = 32 + 8 * byte;
+        let shift = 32 + RADIX_BITS * digit;
         for &key in keys.iter() {
-            let b = ((key >> shift) & 0xFF) as usize;
-            tmp[offsets[b]] = key;
-            offsets[b] += 1;
+            let b = &mut h[(key >> shift) as usize & (RADIX_BUCKETS - 1)];
+            tmp[*b as usize] = key;
+            *b += 1;
         }
         std::mem::swap(keys, tmp);
     }
@@ -551,31 +651,52 @@ struct Level {
     top: [f64; 3],
     dims: [u32; 3],
     dense: bool,
-    /// Start of this level's cells in `Grid::dense_heads`, once `count > 0` (dense levels).
-    offset: usize,
+    /// Whether any light belongs to the level (then a dense level has its slots from `offset` on).
+    used: bool,
+    offset: u32,
+    /// Centers so far, the largest `d_min` among them (no center of the level covers a light farther away),
+    /// and the smallest and largest distance to the camera among them (for pruning; view-adaptive only).
     count: u32,
-    /// Largest `d_min` of the level's centers: no center of the level covers a light farther away.
     max_d_min: f32,
-    /// Smallest and largest distance to the camera of the level's centers (for pruning; view-adaptive only).
     near: f32,
     far: f32,
 }
 
-/// A multi-level uniform grid of cluster centers: per cell the head of a linked list through
-/// `Clusterer::next`. See the module docs (Performance).
+/// Cells to visit: inclusive corners and the cell of the light itself.
+#[derive(Clone, Copy, Debug)]
+struct CellBox {
+    lo: [u32; 3],
+    hi: [u32; 3],
+    own: [u32; 3],
+}
+
+/// A multi-level uniform grid of cluster centers; see the module docs (Performance).
+///
+/// Every visible light knows in advance the level and cell ("slot") it would occupy as a center, because its
+/// `d_min` depends only on its distance to the camera. So the slots are laid out up front by a counting sort,
+/// each with room for all its lights, and a center is appended to its slot's contiguous run of entries: no
+/// linked lists, and a cell's centers are read sequentially (in selection order).
 #[derive(Debug, Default)]
 struct Grid {
     /// World position of every level's cell (0, 0, 0) minimum corner (the visible lights' bounding box min).
     origin: [f64; 3],
-    /// Level 0's cell size over 2 (`d_init` plus a hair), for choosing a center's level.
-    half_cell0: f64,
+    d_init: f64,
+    inv_d_init: f64,
     /// Prune levels by distance to the camera (view-adaptive only).
     prune: bool,
     levels: Vec<Level>,
-    dense_heads: Vec<u32>,
+    /// Per slot: the first entry and one past the last center so far. Slots are the cells of the dense levels
+    /// in use, then the hash table's slots.
+    runs: Vec<[u32; 2]>,
+    /// Per visible light (sorted order): its level and slot.
+    light_level: Vec<u8>,
+    light_slot: Vec<u32>,
+    /// Center entries `[x, y, z, d_min]` and cluster indices, grouped by slot.
+    entries: Vec<[f32; 4]>,
+    entry_k: Vec<u32>,
     dense_budget: u64,
     hash_keys: Vec<u64>,
-    hash_heads: Vec<u32>,
+    hash_base: u32,
     hash_slots: usize,
     hash_ready: bool,
     mask: usize,
@@ -583,6 +704,12 @@ struct Grid {
     /// Scratch: occupancy bitmap for the spacing estimate.
     occupied: Vec<u64>,
 }
+
+/// Level `l` has cells of `CELL_PER_D_MIN * d_init / 2^l`: at least this many times the largest `d_min` it
+/// holds (except the floor level, whose cells may be larger).
+const CELL_PER_D_MIN: f64 = 1.0;
+/// The floor level's cells, in estimated light spacings.
+const FLOOR_PER_SPACING: f64 = 3.0;
 
 impl Grid {
     fn clear(&mut self) {
@@ -609,30 +736,26 @@ impl Grid {
         }
     }
 
-    /// Prepare empty levels over the bounding box of `positions` (finite, at least two) for `d_init > 0`.
-    fn build(&mut self, positions: &[Vec3], d_init: f32, adaptive: bool) {
-        let (mut min, mut max) = (positions[0], positions[0]);
-        for &p in positions {
-            min = min.min(p);
-            max = max.max(p);
-        }
+    /// Prepare the levels over the bounding box `min..max` of `positions` (finite, at least two) for
+    /// `d_init > 0`, and lay out every light's slot.
+    fn build(&mut self, positions: &[Vec3], d_min: &[f32], min: Vec3, max: Vec3, d_init: f32, adaptive: bool) {
+        let n = positions.len();
         let origin = [min.x as f64, min.y as f64, min.z as f64];
         let extent = [max.x as f64 - origin[0], max.y as f64 - origin[1], max.z as f64 - origin[2]];
         let largest = extent[0].max(extent[1]).max(extent[2]);
         // Cells at least this large keep cell coordinates within AXIS_BITS bits.
         let smallest_cell = largest / (1u64 << (AXIS_BITS - 1)) as f64;
-        // Slightly over 2 * d_init, so level 0 holds every d_min <= d_init.
-        let cell0 = (2.0 * d_init as f64) * (1.0 + 1e-6);
-        let floor = self.spacing(positions, origin, extent);
+        let floor = self.spacing(positions, origin, extent) * FLOOR_PER_SPACING;
+        // Slightly more than d_init, so level 0 holds every d_min <= d_init.
+        self.d_init = d_init as f64 * (1.0 + 1e-6);
+        self.inv_d_init = 1.0 / self.d_init;
         self.origin = origin;
-        self.half_cell0 = cell0 / 2.0;
         self.prune = adaptive;
-        self.dense_budget = 4 * positions.len() as u64 + 4096;
-        self.dense_heads.clear();
+        self.dense_budget = 4 * n as u64 + 4096;
         self.hash_ready = false;
-        self.hash_slots = (2 * positions.len()).next_power_of_two().max(64);
+        self.hash_slots = (2 * n).next_power_of_two().max(64);
         self.levels.clear();
-        let mut cell = cell0;
+        let mut cell = CELL_PER_D_MIN * self.d_init;
         loop {
             // Without view-adaptive scaling every d_min is d_init: one level.
             let last = !adaptive || cell <= floor || self.levels.len() + 1 == MAX_LEVELS;
@@ -649,6 +772,7 @@ impl Grid {
                 top: dims.map(|d| (d - 1) as f64),
                 dims,
                 dense: cells <= self.dense_budget,
+                used: false,
                 offset: 0,
                 count: 0,
                 max_d_min: 0.0,
@@ -660,6 +784,27 @@ impl Grid {
             }
             cell /= 2.0;
         }
+
+        // Every light's slot (as if it were a center), counted per slot.
+        self.runs.clear();
+        self.light_slot.clear();
+        self.light_level.clear();
+        for (i, &p) in positions.iter().enumerate() {
+            let level = self.level_of(d_min[i]);
+            let slot = self.slot_for_insert(level, p);
+            self.runs[slot as usize][1] += 1;
+            self.light_slot.push(slot);
+            self.light_level.push(level as u8);
+        }
+        // Runs start where the previous slot's lights end; empty for now.
+        let mut start = 0u32;
+        for run in self.runs.iter_mut() {
+            let count = run[1];
+            *run = [start, start];
+            start += count;
+        }
+        self.entries.resize(n, [0.0; 4]);
+        self.entry_k.resize(n, 0);
     }
 
     /// Estimated spacing of the lights: the cell size at which the bounding box has about one cell per light
@@ -676,8 +821,7 @@ impl Grid {
             }
             let volume: f64 = (0..3).filter(|&a| used[a]).map(|a| extent[a]).product();
             cell = (volume / n).powf(1.0 / axes as f64);
-            let thin = (0..3).filter(|&a| used[a] && extent[a] < cell).count();
-            if thin == 0 {
+            if (0..3).all(|a| !used[a] || extent[a] >= cell) {
                 break;
             }
             for a in 0..3 {
@@ -695,11 +839,14 @@ impl Grid {
         }
         self.occupied.clear();
         self.occupied.resize(cells.div_ceil(64) as usize, 0);
-        let inv = 1.0 / cell;
+        // Only an estimate: f32 is precise enough.
+        let inv = (1.0 / cell) as f32;
+        let origin = Vec3::new(origin[0] as f32, origin[1] as f32, origin[2] as f32);
+        let top = dims.map(|d| (d - 1) as f32);
         let mut count = 0u64;
-        for p in positions {
-            let q = [p.x, p.y, p.z];
-            let c: [u64; 3] = std::array::from_fn(|a| (((q[a] as f64 - origin[a]) * inv) as u64).min(dims[a] - 1));
+        for &p in positions {
+            let q = (p - origin) * inv;
+            let c = [q.x.clamp(0.0, top[0]) as u64, q.y.clamp(0.0, top[1]) as u64, q.z.clamp(0.0, top[2]) as u64];
             let index = c[0] + dims[0] * (c[1] + dims[1] * c[2]);
             let (word, bit) = ((index / 64) as usize, 1u64 << (index % 64));
             count += (self.occupied[word] & bit == 0) as u64;
@@ -708,33 +855,74 @@ impl Grid {
         cell * (count as f64 / n).powf(1.0 / axes as f64)
     }
 
-    /// The level for a center with `d_min`: the finest whose cells are at least `2 * d_min`.
+    /// The level for a center with `d_min`: the finest `l` with `d_init / 2^l >= d_min` (the last for 0).
     #[inline]
     fn level_of(&self, d_min: f32) -> usize {
         let last = self.levels.len() - 1;
-        let ratio = self.half_cell0 / d_min as f64; // >= 1; infinite for d_min = 0
-        if !(ratio >= 2.0) {
-            return 0;
-        }
-        if ratio.is_infinite() {
+        // x = d_min / d_init in (0, 1): with x = m 2^e (1 <= m < 2), floor(log2(1 / x)) is -e - 1, or -e when
+        // m = 1. Every positive f32 is a normal f64.
+        let x = d_min as f64 * self.inv_d_init;
+        if !(x > 0.0) {
             return last;
         }
-        // floor(log2(ratio)) from the exponent bits (ratio is a normal number >= 2).
-        let exponent = ((ratio.to_bits() >> 52) & 0x7FF) as usize - 1023;
-        exponent.min(last)
+        let bits = x.to_bits();
+        let exponent = ((bits >> 52) & 0x7FF) as i64 - 1023;
+        let level = -exponent - (bits & ((1 << 52) - 1) != 0) as i64;
+        (level.max(0) as usize).min(last)
     }
 
-    /// The inclusive cell corners of `level` overlapping the box of half-width `radius` around `p`, or `None`
-    /// when the level has no center that can be within `radius` of `p` (empty, or its centers' distances to the
-    /// camera are all farther than `radius` from `to_camera`).
+    #[inline(always)]
+    fn cell_of(&self, l: &Level, p: Vec3) -> [u32; 3] {
+        let q = [p.x, p.y, p.z];
+        std::array::from_fn(|a| ((q[a] as f64 - self.origin[a]) * l.inv_cell).clamp(0.0, l.top[a]) as u32)
+    }
+
+    /// The slot of `p`'s cell in `level`, creating the level's slots or the hash entry as needed.
+    fn slot_for_insert(&mut self, level: usize, p: Vec3) -> u32 {
+        let l = &mut self.levels[level];
+        if !l.used && l.dense {
+            l.offset = self.runs.len() as u32;
+            let cells = l.dims.iter().map(|&d| d as usize).product::<usize>();
+            self.runs.resize(self.runs.len() + cells, [0, 0]);
+        }
+        l.used = true;
+        let l = *l;
+        let c = self.cell_of(&l, p);
+        if l.dense {
+            return l.offset + c[0] + l.dims[0] * (c[1] + l.dims[1] * c[2]);
+        }
+        if !self.hash_ready {
+            self.hash_ready = true;
+            self.hash_base = self.runs.len() as u32;
+            self.runs.resize(self.runs.len() + self.hash_slots, [0, 0]);
+            self.hash_keys.clear();
+            self.hash_keys.resize(self.hash_slots, EMPTY_KEY);
+            self.mask = self.hash_slots - 1;
+            self.shift = 64 - self.hash_slots.trailing_zeros();
+        }
+        let key = Self::key(level, c);
+        let mut slot = self.hash_start(key);
+        while self.hash_keys[slot] != key {
+            if self.hash_keys[slot] == EMPTY_KEY {
+                self.hash_keys[slot] = key;
+                break;
+            }
+            slot = (slot + 1) & self.mask;
+        }
+        self.hash_base + slot as u32
+    }
+
+    /// The cells of `level` overlapping the box of half-width `radius` around `p`, or `None` when the level has
+    /// no center that can be within `radius` of `p` (none yet, or its centers' distances to the camera are all
+    /// farther than `radius` from `to_camera`).
     ///
     /// Conservative: the half-width is widened by a relative 1e-4 (covering `f32` distance rounding) and 1e-6
     /// cells (covering `f64` rounding of coordinates, which are below 2^19 cells), and the distance band by a
     /// relative 1e-4, so every center whose computed `f32` distance to `p` is at most `radius` is visited.
-    #[inline]
-    fn search_box(&self, level: usize, p: Vec3, to_camera: f32, radius: f32) -> Option<([u32; 3], [u32; 3])> {
+    #[inline(always)]
+    fn search_box(&self, level: usize, p: Vec3, to_camera: f32, radius: f32) -> Option<CellBox> {
         let l = &self.levels[level];
-        if l.count == 0 || !(radius > 0.0) && radius != 0.0 {
+        if l.count == 0 || !(radius >= 0.0) {
             return None;
         }
         if self.prune && to_camera.is_finite() && l.far.is_finite() {
@@ -745,15 +933,15 @@ impl Grid {
         }
         let q = [p.x, p.y, p.z];
         let r = radius as f64 * 1.0001 * l.inv_cell + 1e-6;
-        let mut lo = [0u32; 3];
-        let mut hi = [0u32; 3];
+        let mut b = CellBox { lo: [0; 3], hi: [0; 3], own: [0; 3] };
         for a in 0..3 {
             let x = (q[a] as f64 - self.origin[a]) * l.inv_cell;
             // `as u32` truncates, which is floor for the non-negative values the clamp leaves.
-            lo[a] = (x - r).clamp(0.0, l.top[a]) as u32;
-            hi[a] = (x + r).clamp(0.0, l.top[a]) as u32;
+            b.lo[a] = (x - r).clamp(0.0, l.top[a]) as u32;
+            b.hi[a] = (x + r).clamp(0.0, l.top[a]) as u32;
+            b.own[a] = x.clamp(0.0, l.top[a]) as u32;
         }
-        Some((lo, hi))
+        Some(b)
     }
 
     #[inline]
@@ -762,28 +950,23 @@ impl Grid {
     }
 
     #[inline]
-    fn slot_of_key(&self, key: u64) -> usize {
+    fn hash_start(&self, key: u64) -> usize {
         (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize
     }
 
-    #[inline]
-    fn dense_index(l: &Level, c: [u32; 3]) -> usize {
-        l.offset + c[0] as usize + l.dims[0] as usize * (c[1] as usize + l.dims[1] as usize * c[2] as usize)
-    }
-
-    /// The first center in cell `c` of `level` (which has centers), or [`NONE`].
-    #[inline]
-    fn head(&self, level: usize, c: [u32; 3]) -> u32 {
+    /// The slot of cell `c` of `level` (which has centers), or [`NONE`] for a hashed cell no light maps to.
+    #[inline(always)]
+    fn slot(&self, level: usize, c: [u32; 3]) -> u32 {
         let l = &self.levels[level];
         if l.dense {
-            return self.dense_heads[Self::dense_index(l, c)];
+            return l.offset + c[0] + l.dims[0] * (c[1] + l.dims[1] * c[2]);
         }
         let key = Self::key(level, c);
-        let mut slot = self.slot_of_key(key);
+        let mut slot = self.hash_start(key);
         loop {
             let k = self.hash_keys[slot];
             if k == key {
-                return self.hash_heads[slot];
+                return self.hash_base + slot as u32;
             }
             if k == EMPTY_KEY {
                 return NONE;
@@ -792,56 +975,44 @@ impl Grid {
         }
     }
 
-    /// Add center `k` at `p` (`to_camera` from the camera, with `d_min`) to its level and cell.
-    fn insert(&mut self, p: Vec3, to_camera: f32, d_min: f32, k: u32, next: &mut [u32]) {
+    /// The centers in `slot` so far (entries `[x, y, z, d_min]`) and the index of the first.
+    #[inline(always)]
+    fn centers_in_cell(&self, slot: u32) -> (&[[f32; 4]], usize) {
+        match self.runs.get(slot as usize) {
+            Some(&[first, end]) => (&self.entries[first as usize..end as usize], first as usize),
+            None => (&[], 0),
+        }
+    }
+
+    /// Step 3's test within one cell: the distance to a center there that covers `p`.
+    #[inline(always)]
+    fn cover_in_cell(&self, slot: u32, p: Vec3) -> Option<f32> {
+        for e in self.centers_in_cell(slot).0 {
+            let d_min = e[3];
+            if d_min > 0.0 {
+                let d = p.distance(Vec3::new(e[0], e[1], e[2]));
+                if d <= d_min {
+                    return Some(d);
+                }
+            }
+        }
+        None
+    }
+
+    /// Make visible light `i` (sorted order) at `p` center `k`, with `d_min`, `to_camera` from the camera.
+    fn insert(&mut self, i: usize, p: Vec3, to_camera: f32, d_min: f32, k: u32) {
         if self.levels.is_empty() {
             return;
         }
-        let level = self.level_of(d_min);
-        let l = &mut self.levels[level];
-        if l.count == 0 && l.dense {
-            // First center of a dense level: its cells are cleared now.
-            l.offset = self.dense_heads.len();
-            let cells = l.dims.iter().map(|&d| d as usize).product::<usize>();
-            self.dense_heads.resize(l.offset + cells, NONE);
-        }
+        let l = &mut self.levels[self.light_level[i] as usize];
         l.count += 1;
         l.max_d_min = l.max_d_min.max(d_min);
         l.near = l.near.min(to_camera);
         l.far = l.far.max(to_camera);
-        let l = *l;
-        let q = [p.x, p.y, p.z];
-        let c: [u32; 3] =
-            std::array::from_fn(|a| ((q[a] as f64 - self.origin[a]) * l.inv_cell).clamp(0.0, l.top[a]) as u32);
-        let heads = if l.dense {
-            &mut self.dense_heads[Self::dense_index(&l, c)]
-        } else {
-            if !self.hash_ready {
-                self.hash_ready = true;
-                self.hash_keys.clear();
-                self.hash_keys.resize(self.hash_slots, EMPTY_KEY);
-                self.hash_heads.clear();
-                self.hash_heads.resize(self.hash_slots, NONE);
-                self.mask = self.hash_slots - 1;
-                self.shift = 64 - self.hash_slots.trailing_zeros();
-            }
-            let key = Self::key(level, c);
-            let mut slot = self.slot_of_key(key);
-            loop {
-                let existing = self.hash_keys[slot];
-                if existing == key {
-                    break;
-                }
-                if existing == EMPTY_KEY {
-                    self.hash_keys[slot] = key;
-                    self.hash_heads[slot] = NONE;
-                    break;
-                }
-                slot = (slot + 1) & self.mask;
-            }
-            &mut self.hash_heads[slot]
-        };
-        next[k as usize] = *heads;
-        *heads = k;
+        let run = &mut self.runs[self.light_slot[i] as usize];
+        let e = run[1] as usize;
+        run[1] += 1;
+        self.entries[e] = [p.x, p.y, p.z, d_min];
+        self.entry_k[e] = k;
     }
 }

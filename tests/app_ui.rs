@@ -1,0 +1,189 @@
+//! The app driven through egui_kittest on the software adapter: snapshots of the main window, the light
+//! inspector and the timings panel, and a whole edit session (select, move with the gizmo, undo, redo, save,
+//! load in a fresh app).
+
+use std::path::PathBuf;
+
+use eframe::egui;
+use egui_kittest::kittest::Queryable;
+use egui_kittest::Harness;
+use shadowlab::gui::gizmo::{self, Projection};
+use shadowlab::gui::{ShadowLabApp, Startup};
+
+fn data_dir(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/app").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const SIZE: (f32, f32) = (900.0, 560.0);
+
+/// Snapshots without the timings panel (its milliseconds change from run to run) and toasts.
+fn snapshot(h: &mut Harness<'static, ShadowLabApp>, name: &str) {
+    h.mask(egui::Rect::from_min_max(egui::pos2(0.0, SIZE.1 - 220.0), egui::pos2(SIZE.0, SIZE.1)));
+    h.snapshot(name);
+}
+
+fn harness(startup: Startup) -> Harness<'static, ShadowLabApp> {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(SIZE.0, SIZE.1))
+        .wgpu_setup(shadowlab::gui::wgpu_setup())
+        .with_max_steps(40)
+        .build_eframe(move |cc| ShadowLabApp::new(cc, startup).expect("the app starts on the software adapter"));
+    h.run_steps(3);
+    h
+}
+
+fn start(name: &str, scene: &str) -> Harness<'static, ShadowLabApp> {
+    let mut h = harness(Startup { data_dir: Some(data_dir(name)), synchronous: true, ..Default::default() });
+    h.state_mut().load_builtin(scene);
+    h.run_steps(3);
+    h
+}
+
+fn press(h: &mut Harness<'static, ShadowLabApp>, pos: egui::Pos2, pressed: bool, modifiers: egui::Modifiers) {
+    h.event(egui::Event::PointerButton { pos, button: egui::PointerButton::Primary, pressed, modifiers });
+    h.step();
+}
+
+fn move_to(h: &mut Harness<'static, ShadowLabApp>, pos: egui::Pos2) {
+    h.event(egui::Event::PointerMoved(pos));
+    h.step();
+}
+
+fn projection(h: &Harness<'static, ShadowLabApp>) -> Projection {
+    let app = h.state();
+    Projection::new(&app.camera.camera(), app.last_viewport_rect.expect("the view was laid out"))
+}
+
+#[test]
+fn main_window_on_a_builtin_scene() {
+    let mut h = start("main", "cornell");
+    assert_eq!(h.state().lights.len(), 32);
+    h.get_by_label("Technique");
+    h.get_by_label("Lights (32)");
+    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    assert_eq!(report.counts.technique.shadow_maps, 32);
+    snapshot(&mut h, "main_window_cornell");
+}
+
+#[test]
+fn light_inspector_shows_the_selected_light() {
+    let mut h = start("inspector", "cornell");
+    h.state_mut().selected = Some(3);
+    h.run_steps(2);
+    h.get_by_label("Light 3");
+    assert!(h.query_all_by_label("L_att").count() >= 1, "the L_att slider is shown");
+    snapshot(&mut h, "light_inspector");
+}
+
+#[test]
+fn timings_panel_lists_passes_and_counts() {
+    let mut h = start("timings", "restaurant");
+    h.run_steps(2);
+    for pass in ["gbuffer", "shadow maps", "shading", "tonemap"] {
+        // In the table and in the plot's legend.
+        assert!(h.query_all_by_label(pass).count() >= 1, "no '{pass}' in the timings panel");
+    }
+    h.get_by_label_contains("14 of 14 lights visible");
+    h.get_by_label_contains("adapter:");
+}
+
+#[test]
+fn edit_session_select_move_undo_redo_save_and_reload() {
+    let dir = data_dir("session");
+    let mut h = start("session", "cornell");
+    // Select light 5 by clicking on it.
+    let target = 5;
+    let at = h.state().lights[target].position;
+    let p = projection(&h);
+    let pos = p.to_screen(at).unwrap();
+    let picked = gizmo::pick_light(&p, &h.state().lights, pos, 12.0).unwrap();
+    move_to(&mut h, pos);
+    press(&mut h, pos, true, egui::Modifiers::NONE);
+    press(&mut h, pos, false, egui::Modifiers::NONE);
+    assert_eq!(h.state().selected, Some(picked), "a click on a light selects it");
+    let start_pos = h.state().lights[picked].position;
+
+    // Drag the X handle of the gizmo by 60 points, in small moves.
+    let p = projection(&h);
+    let center = p.to_screen(start_pos).unwrap();
+    let handle_end = (0..=70)
+        .map(|d| center + egui::vec2(d as f32, 0.0))
+        .chain((0..=70).map(|d| center - egui::vec2(d as f32, 0.0)))
+        .find(|&q| q.distance(center) > 30.0 && gizmo::hit_handle(&p, start_pos, q) == Some(gizmo::Handle::Axis(0)));
+    let grab = handle_end.unwrap_or_else(|| {
+        // The x axis may point elsewhere on screen; search around the center.
+        (0..360)
+            .step_by(5)
+            .map(|a| center + egui::Vec2::angled((a as f32).to_radians()) * 45.0)
+            .find(|&q| gizmo::hit_handle(&p, start_pos, q) == Some(gizmo::Handle::Axis(0)))
+            .expect("the x handle is on screen")
+    });
+    move_to(&mut h, grab);
+    press(&mut h, grab, true, egui::Modifiers::NONE);
+    let dir_on_screen = (grab - center).normalized();
+    for i in 1..=6 {
+        move_to(&mut h, grab + dir_on_screen * (10.0 * i as f32));
+    }
+    press(&mut h, grab + dir_on_screen * 60.0, false, egui::Modifiers::NONE);
+    let moved = h.state().lights[picked].position;
+    assert!((moved.x - start_pos.x).abs() > 0.01, "the light moved along x: {start_pos} -> {moved}");
+    assert!((moved.y - start_pos.y).abs() < 1e-5 && (moved.z - start_pos.z).abs() < 1e-5, "only along x");
+
+    // Undo and redo with the keyboard.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().lights[picked].position, start_pos, "Ctrl+Z restores the position");
+    h.key_press_modifiers(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
+    h.run_steps(2);
+    assert_eq!(h.state().lights[picked].position, moved, "Ctrl+Shift+Z moves it again");
+
+    // Save, then load in a fresh app.
+    let file = dir.join("edited.ron");
+    h.state_mut().save_scene_file(&file).unwrap();
+    let saved_lights = h.state().lights.clone();
+    let saved_camera = h.state().camera.camera();
+    let mut fresh = harness(Startup {
+        path: Some(file.clone()),
+        data_dir: Some(dir.clone()),
+        synchronous: true,
+        ..Default::default()
+    });
+    fresh.run_steps(2);
+    assert_eq!(fresh.state().scene.name, "cornell");
+    assert_eq!(fresh.state().lights, saved_lights);
+    let c = fresh.state().camera.camera();
+    assert!((c.position - saved_camera.position).length() < 1e-4, "{} vs {}", c.position, saved_camera.position);
+    assert!(c.forward().dot(saved_camera.forward()) > 0.99999);
+    assert!((c.fov_y - saved_camera.fov_y).abs() < 1e-6 && (c.z_far - saved_camera.z_far).abs() < 1e-4);
+}
+
+#[test]
+fn a_broken_scene_file_keeps_the_current_scene() {
+    let dir = data_dir("broken");
+    let mut h = start("broken", "restaurant");
+    let bad = dir.join("bad.ron");
+    std::fs::write(&bad, "(version: 1, scene: Builtin(\"cornell\"), lights: [ (position: (1, 2").unwrap();
+    h.state_mut().open_path(&bad);
+    h.run_steps(2);
+    assert_eq!(h.state().scene.name, "restaurant");
+    assert_eq!(h.state().lights.len(), 14);
+    h.get_by_label_contains("bad.ron");
+    let missing = dir.join("nope.obj");
+    h.state_mut().open_path(&missing);
+    h.run_steps(1);
+    assert_eq!(h.state().scene.name, "restaurant");
+}
+
+#[test]
+fn view_screenshot_writes_a_png_at_render_resolution() {
+    let mut h = start("shot", "cornell");
+    let path = h.state_mut().save_view_screenshot().unwrap();
+    let img = image::open(&path).unwrap();
+    let (w, _) = h.state().gpu.as_ref().unwrap().main.size;
+    assert_eq!(img.width(), w);
+    let name = path.file_name().unwrap().to_string_lossy().to_string();
+    assert!(name.contains("cornell") && name.contains("reference"), "{name}");
+}
