@@ -37,6 +37,10 @@ pub struct Cli {
 pub enum Command {
     /// Render a scene with a technique to a PNG, with a JSON frame report.
     Render(RenderArgs),
+    /// Render a technique and a comparison target; write the difference image and the error metrics.
+    Compare(CompareArgs),
+    /// Render a technique for every combination of parameter values, compared with the reference; CSV rows.
+    Sweep(SweepArgs),
     /// Print a scene's statistics (triangles, materials, lights, bounds) and the GPU adapter.
     Info(SceneArgs),
 }
@@ -55,13 +59,9 @@ pub struct SceneArgs {
     pub lights: String,
 }
 
-#[derive(Args, Debug)]
-pub struct RenderArgs {
-    #[command(flatten)]
-    pub scene: SceneArgs,
-    /// Technique key (see `--technique help`).
-    #[arg(long, default_value = "reference")]
-    pub technique: String,
+/// Image size, camera and shading settings shared by `render`, `compare` and `sweep`.
+#[derive(Args, Debug, Clone)]
+pub struct FrameArgs {
     #[arg(long, default_value_t = 640)]
     pub width: u32,
     #[arg(long, default_value_t = 360)]
@@ -69,9 +69,6 @@ pub struct RenderArgs {
     /// Texels per cube-map face (the technique's `shadow_res` parameter).
     #[arg(long)]
     pub shadow_res: Option<u32>,
-    /// A technique parameter, `key=value`; repeatable.
-    #[arg(long = "param", value_name = "KEY=VALUE")]
-    pub params: Vec<String>,
     /// Camera `EX,EY,EZ,TX,TY,TZ` (eye and target); the scene's camera when absent.
     #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ")]
     pub camera: Option<String>,
@@ -89,23 +86,105 @@ pub struct RenderArgs {
     /// Blinn-Phong specular on top of Lambert.
     #[arg(long)]
     pub specular: bool,
+    /// Frames rendered and thrown away before the measured ones (the first frame also compiles pipelines).
+    #[arg(long, default_value_t = 1)]
+    pub warmup: u32,
+    /// Measured frames; timings report the median, the minimum and the mean of the 3 fastest.
+    #[arg(long, default_value_t = 1)]
+    pub repeat: u32,
+    /// No progress output.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Technique key (reference, lightcluster, unshadowed, ...).
+    #[arg(long, default_value = "reference")]
+    pub technique: String,
+    /// A technique parameter, `key=value`; repeatable.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
     /// Output PNG.
     #[arg(long)]
     pub out: PathBuf,
     /// Frame report as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Frames rendered and thrown away before the measured one (the first frame also compiles pipelines).
-    #[arg(long, default_value_t = 1)]
-    pub warmup: u32,
-    /// No progress output.
+}
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    #[arg(long, default_value = "lightcluster")]
+    pub technique: String,
+    /// A technique parameter, `key=value`; repeatable.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
+    #[arg(long, default_value = "reference")]
+    pub against: String,
+    /// A parameter of the comparison target, `key=value`; repeatable.
+    #[arg(long = "against-param", value_name = "KEY=VALUE")]
+    pub against_params: Vec<String>,
+    /// Difference image mode.
+    #[arg(long, value_enum, default_value = "absolute")]
+    pub mode: crate::measure::DiffKind,
+    /// Gain of the difference image (1, 5, 10, ...).
+    #[arg(long, default_value_t = 1.0)]
+    pub gain: f32,
+    /// Skip the FLIP metric (the slowest one).
     #[arg(long)]
-    pub quiet: bool,
+    pub no_flip: bool,
+    /// Difference image (PNG).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The technique's own image (PNG).
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// Metrics and timings as JSON.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    #[arg(long, default_value = "lightcluster")]
+    pub technique: String,
+    /// A swept parameter: `key=START:END:STEP`, `key=v1,v2,...` or `key=value`; repeatable (all combinations).
+    #[arg(long = "param", value_name = "KEY=VALUES")]
+    pub params: Vec<String>,
+    #[arg(long, default_value = "reference")]
+    pub against: String,
+    #[arg(long = "against-param", value_name = "KEY=VALUE")]
+    pub against_params: Vec<String>,
+    /// Skip the FLIP metric.
+    #[arg(long)]
+    pub no_flip: bool,
+    /// One row per setting (CSV).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The same rows as a Markdown table.
+    #[arg(long)]
+    pub markdown: Option<PathBuf>,
 }
 
 pub fn run(command: Command) -> Result<()> {
     match command {
         Command::Render(args) => render(args),
+        Command::Compare(args) => compare(args),
+        Command::Sweep(args) => sweep(args),
         Command::Info(args) => info(args),
     }
 }
@@ -133,7 +212,7 @@ fn parse_vec3s(text: &str) -> Result<(Vec3, Vec3)> {
     Ok((Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
 }
 
-fn camera_from_args(scene: &Scene, args: &RenderArgs) -> Result<Camera> {
+fn camera_from_args(scene: &Scene, args: &FrameArgs) -> Result<Camera> {
     let mut camera = scene.camera;
     if let Some(text) = &args.camera {
         let (eye, target) = parse_vec3s(text)?;
@@ -195,6 +274,7 @@ struct RenderReport<'a> {
     height: u32,
     camera: Camera,
     frame: &'a FrameReport,
+    timing: &'a crate::measure::TimingSummary,
 }
 
 /// Progress on stderr: a rewritten line on a terminal, a line per 10% otherwise.
@@ -258,34 +338,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-fn render(args: RenderArgs) -> Result<()> {
-    check_output_path(&args.out, "png")?;
-    if let Some(r) = &args.report {
-        check_output_path(r, "json")?;
-    }
-    let tonemap = match args.tonemap.as_str() {
+/// Settings, scene, lights, camera and a renderer for the frame arguments.
+fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Renderer, Scene, Vec<PointLight>, Camera)> {
+    let tonemap = match frame.tonemap.as_str() {
         "aces" => ToneMap::Aces,
         "reinhard" => ToneMap::Reinhard,
         "linear" => ToneMap::Linear,
         other => bail!("--tonemap '{other}': choose aces, reinhard or linear"),
     };
     let settings = RenderSettings {
-        width: args.width,
-        height: args.height,
-        exposure: args.exposure,
+        width: frame.width,
+        height: frame.height,
+        exposure: frame.exposure,
         tonemap,
-        specular: args.specular,
+        specular: frame.specular,
         ..Default::default()
     };
     settings.validate()?;
-    if technique::REGISTRY.iter().all(|e| e.key != args.technique) {
-        bail!("unknown technique '{}' (choose one of: {})", args.technique, technique::keys());
+    if frame.warmup > 20 || frame.repeat > 1000 {
+        bail!("--warmup {} / --repeat {}: at most 20 warm-up and 1000 measured frames", frame.warmup, frame.repeat);
     }
-
     let load_start = Instant::now();
-    let (scene, lights) = load_scene(&args.scene)?;
-    let camera = camera_from_args(&scene, &args)?;
-    if !args.quiet {
+    let (scene, lights) = load_scene(scene_args)?;
+    let camera = camera_from_args(&scene, frame)?;
+    if !frame.quiet {
         eprintln!(
             "{}: {} triangles, {} lights, loaded in {:.2} s",
             scene.name,
@@ -295,26 +371,54 @@ fn render(args: RenderArgs) -> Result<()> {
         );
     }
     let gpu = GpuContext::headless()?;
-    let mut renderer = Renderer::new(&gpu, &scene, settings)?;
-    let mut technique =
-        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
-    apply_params(technique.as_mut(), args.shadow_res, &args.params)?;
+    let renderer = Renderer::new(&gpu, &scene, settings)?;
+    Ok((gpu, renderer, scene, lights, camera))
+}
 
-    if args.warmup > 20 {
-        bail!("--warmup {}: at most 20 frames", args.warmup);
+fn check_technique(key: &str) -> Result<()> {
+    if technique::REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown technique '{key}' (choose one of: {})", technique::keys());
     }
-    for i in 0..args.warmup {
-        let mut progress = Progress::new(&format!("warm-up {}/{}", i + 1, args.warmup), args.quiet);
-        renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
-    }
-    let mut progress = Progress::new(&format!("{} / {}", scene.name, technique.key()), args.quiet);
-    let report = renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
-    let image = renderer.read_output()?;
+    Ok(())
+}
+
+fn encode_png(image: &image::RgbaImage) -> Result<Vec<u8>> {
     let mut png = Vec::new();
     image.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).context("cannot encode the PNG")?;
-    write_atomic(&args.out, &png)?;
+    Ok(png)
+}
 
-    if !args.quiet {
+fn render(args: RenderArgs) -> Result<()> {
+    check_output_path(&args.out, "png")?;
+    if let Some(r) = &args.report {
+        check_output_path(r, "json")?;
+    }
+    check_technique(&args.technique)?;
+    let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let frame = &args.frame;
+    let mut technique =
+        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
+    apply_params(technique.as_mut(), frame.shadow_res, &args.params)?;
+
+    let mut reports = Vec::new();
+    let total = frame.warmup + frame.repeat.max(1);
+    for i in 0..total {
+        let label = if i < frame.warmup {
+            format!("warm-up {}/{}", i + 1, frame.warmup)
+        } else {
+            format!("{} / {} {}/{}", scene.name, technique.key(), i + 1 - frame.warmup, frame.repeat.max(1))
+        };
+        let mut progress = Progress::new(&label, frame.quiet);
+        let r = renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
+        if i >= frame.warmup {
+            reports.push(r);
+        }
+    }
+    let timing = crate::measure::summarize(&reports);
+    let report = reports.pop().expect("at least one measured frame");
+    write_atomic(&args.out, &encode_png(&renderer.read_output()?)?)?;
+
+    if !frame.quiet {
         eprintln!(
             "{}x{} on {}: {:.1} ms GPU ({:?}), {:.0} ms wall; {} of {} lights visible, {} shadow maps in {} batches; \
              {} shadow triangles drawn, {} culled",
@@ -343,6 +447,12 @@ fn render(args: RenderArgs) -> Result<()> {
         for p in &report.cpu_stages {
             eprintln!("  {:<14} {:>10.3} ms  (CPU)", p.name, p.ms);
         }
+        if timing.frames > 1 {
+            eprintln!(
+                "  {} frames: median {:.2} ms, min {:.2} ms, mean of 3 best {:.2} ms",
+                timing.frames, timing.median_ms, timing.min_ms, timing.best3_mean_ms
+            );
+        }
         eprintln!("wrote {}", args.out.display());
     }
     if let Some(path) = &args.report {
@@ -359,11 +469,274 @@ fn render(args: RenderArgs) -> Result<()> {
             height: report.height,
             camera,
             frame: &report,
+            timing: &timing,
         };
         write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
-        if !args.quiet {
+        if !frame.quiet {
             eprintln!("wrote {}", path.display());
         }
+    }
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct CompareReport<'a> {
+    adapter: String,
+    scene: &'a str,
+    lights: usize,
+    width: u32,
+    height: u32,
+    technique: &'a str,
+    technique_parameters: &'a std::collections::BTreeMap<String, String>,
+    against: &'a str,
+    against_parameters: &'a std::collections::BTreeMap<String, String>,
+    metrics: &'a shadowlab_core::compare::Metrics,
+    technique_timing: &'a crate::measure::TimingSummary,
+    against_timing: &'a crate::measure::TimingSummary,
+    /// Same-run speedup of the technique over the comparison target (median frame times).
+    speedup: f64,
+    technique_counts: &'a shadowlab_core::renderer::FrameCounts,
+}
+
+fn compare(args: CompareArgs) -> Result<()> {
+    check_output_path(&args.out, "png")?;
+    if let Some(r) = &args.report {
+        check_output_path(r, "json")?;
+    }
+    if let Some(r) = &args.image {
+        check_output_path(r, "png")?;
+    }
+    check_technique(&args.technique)?;
+    check_technique(&args.against)?;
+    if !(args.gain.is_finite() && args.gain > 0.0) {
+        bail!("--gain {}: must be a number > 0", args.gain);
+    }
+    let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let f = &args.frame;
+    let quiet = f.quiet;
+    let mut say = |m: &str| {
+        if !quiet {
+            eprintln!("{m}");
+        }
+    };
+    let target = crate::measure::render_technique(
+        &mut renderer,
+        &args.against,
+        f.shadow_res,
+        &args.against_params,
+        &camera,
+        &lights,
+        f.warmup,
+        f.repeat,
+        &mut say,
+    )?;
+    let tech = crate::measure::render_technique(
+        &mut renderer,
+        &args.technique,
+        f.shadow_res,
+        &args.params,
+        &camera,
+        &lights,
+        f.warmup,
+        f.repeat,
+        &mut say,
+    )?;
+    if let Some(path) = &args.image {
+        write_atomic(path, &encode_png(&renderer.read_output()?)?)?;
+    }
+    let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
+    let (metrics, diff) = crate::measure::compare_images(
+        &tech.image,
+        &target.image,
+        &inputs,
+        args.mode,
+        args.gain,
+        !args.no_flip,
+        f.exposure,
+    )?;
+    write_atomic(&args.out, &encode_png(&diff)?)?;
+    let speedup = target.timing.median_ms / tech.timing.median_ms.max(1e-9);
+    if !quiet {
+        eprintln!(
+            "{} vs {} on {} ({}x{}): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over {:.0}%",
+            args.technique,
+            args.against,
+            scene.name,
+            f.width,
+            f.height,
+            metrics.rmse,
+            metrics.psnr_db.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "inf".into()),
+            metrics.flip_mean.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            metrics.shadow_intensity_error.map(|v| format!("{:.2}%", v * 100.0)).unwrap_or_else(|| "-".into()),
+            metrics.share_over_threshold * 100.0,
+            metrics.threshold * 100.0,
+        );
+        eprintln!(
+            "time (median of {}): {} {:.2} ms, {} {:.2} ms, speedup x{:.2}",
+            tech.timing.frames, args.technique, tech.timing.median_ms, args.against, target.timing.median_ms, speedup
+        );
+        eprintln!("wrote {}", args.out.display());
+    }
+    if let Some(path) = &args.report {
+        let r = CompareReport {
+            adapter: gpu.adapter_description(),
+            scene: &args.scene.scene,
+            lights: lights.len(),
+            width: f.width,
+            height: f.height,
+            technique: &args.technique,
+            technique_parameters: &tech.parameters,
+            against: &args.against,
+            against_parameters: &target.parameters,
+            metrics: &metrics,
+            technique_timing: &tech.timing,
+            against_timing: &target.timing,
+            speedup,
+            technique_counts: &tech.report.counts,
+        };
+        write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn sweep(args: SweepArgs) -> Result<()> {
+    check_output_path(&args.out, "csv")?;
+    if let Some(m) = &args.markdown {
+        check_output_path(m, "md")?;
+    }
+    check_technique(&args.technique)?;
+    check_technique(&args.against)?;
+    let swept: Vec<(String, Vec<String>)> =
+        args.params.iter().map(|p| crate::measure::sweep_values(p)).collect::<Result<_>>()?;
+    let settings = crate::measure::combinations(&swept);
+    let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let f = &args.frame;
+    let quiet = f.quiet;
+    let no_progress = &mut |_: &str| {};
+    // Check every setting before the first (slow) render.
+    {
+        let mut probe = renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique"))?;
+        for setting in &settings {
+            let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            apply_params(probe.as_mut(), f.shadow_res, &strings)?;
+        }
+    }
+    let target = crate::measure::render_technique(
+        &mut renderer,
+        &args.against,
+        f.shadow_res,
+        &args.against_params,
+        &camera,
+        &lights,
+        f.warmup,
+        f.repeat,
+        no_progress,
+    )?;
+    let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
+    let keys: Vec<&str> = swept.iter().map(|(k, _)| k.as_str()).collect();
+    let mut header: Vec<String> = keys.iter().map(|k| k.to_string()).collect();
+    header.extend(
+        [
+            "clusters",
+            "visible_lights",
+            "shadow_maps",
+            "batches",
+            "shadow_maps_ms",
+            "shading_ms",
+            "total_ms",
+            "min_ms",
+            "against_ms",
+            "speedup",
+            "rmse",
+            "psnr_db",
+            "flip",
+            "shadow_error",
+            "share_over_5pct",
+            "fallback",
+        ]
+        .map(String::from),
+    );
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    let started = Instant::now();
+    for (i, setting) in settings.iter().enumerate() {
+        let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        if !quiet {
+            eprintln!(
+                "[{}/{}] {} ({:.0} s)",
+                i + 1,
+                settings.len(),
+                strings.join(" "),
+                started.elapsed().as_secs_f32()
+            );
+        }
+        let r = crate::measure::render_technique(
+            &mut renderer,
+            &args.technique,
+            f.shadow_res,
+            &strings,
+            &camera,
+            &lights,
+            f.warmup,
+            f.repeat,
+            no_progress,
+        )?;
+        let (m, _) = crate::measure::compare_images(
+            &r.image,
+            &target.image,
+            &inputs,
+            crate::measure::DiffKind::Absolute,
+            1.0,
+            !args.no_flip,
+            f.exposure,
+        )?;
+        let c = &r.report.counts.technique;
+        let pass = |name: &str| r.timing.passes_median_ms.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>();
+        let mut row: Vec<String> = setting.iter().map(|(_, v)| v.clone()).collect();
+        row.extend([
+            c.clusters.map(|n| n.to_string()).unwrap_or_default(),
+            c.lights_visible.to_string(),
+            c.shadow_maps.to_string(),
+            c.batches.to_string(),
+            format!("{:.2}", pass("shadow maps")),
+            format!("{:.2}", pass("shading")),
+            format!("{:.2}", r.timing.median_ms),
+            format!("{:.2}", r.timing.min_ms),
+            format!("{:.2}", target.timing.median_ms),
+            format!("{:.2}", target.timing.median_ms / r.timing.median_ms.max(1e-9)),
+            format!("{:.5}", m.rmse),
+            m.psnr_db.map(|p| format!("{p:.2}")).unwrap_or_else(|| "inf".into()),
+            m.flip_mean.map(|v| format!("{v:.4}")).unwrap_or_default(),
+            m.shadow_intensity_error.map(|v| format!("{:.4}", v)).unwrap_or_default(),
+            format!("{:.4}", m.share_over_threshold),
+            c.fell_back_to_reference.to_string(),
+        ]);
+        rows.push(row);
+    }
+    let mut csv = header.join(",") + "\n";
+    for row in &rows {
+        csv += &(row.join(",") + "\n");
+    }
+    write_atomic(&args.out, csv.as_bytes())?;
+    let mut md = format!("| {} |\n|{}\n", header.join(" | "), "---|".repeat(header.len()));
+    for row in &rows {
+        md += &format!("| {} |\n", row.join(" | "));
+    }
+    if !quiet {
+        eprintln!(
+            "{} on {} ({} lights, {}x{}), against {} at {:.2} ms:",
+            args.technique,
+            scene.name,
+            lights.len(),
+            f.width,
+            f.height,
+            args.against,
+            target.timing.median_ms
+        );
+        eprint!("{md}");
+        eprintln!("wrote {}", args.out.display());
+    }
+    if let Some(path) = &args.markdown {
+        write_atomic(path, md.as_bytes())?;
     }
     Ok(())
 }

@@ -684,6 +684,33 @@ fn dense_and_hash_grids_agree_with_the_reference() {
     }
 }
 
+/// Thousands of lights: the radix sort (4096 or more visible lights) and step 4 in grid order (2048 or more lights
+/// left for it) against the reference.
+#[test]
+fn large_sets_match_the_reference() {
+    let camera = cameras()[0];
+    let frustum = frustum_of(&camera);
+    let mut clusterer = Clusterer::new();
+    let mut big_step4 = 0;
+    for (layout, n, d_init, adaptive) in [
+        (Layout::Blobs, 8000, 1.0f32, false),
+        (Layout::Blobs, 8000, 0.3, true),
+        (Layout::Uniform, 7000, 1.6, true),
+        (Layout::EqualRanges, 7000, 0.8, false),
+        (Layout::Lattice, 7000, 1.0, true),
+        (Layout::Duplicates, 7000, 0.5, true),
+    ] {
+        let lights = make_lights(layout, n, n as u64 + d_init.to_bits() as u64);
+        let params = ClusterParams { d_init, z_far: 30.0, adaptive };
+        let c = clusterer.cluster(&lights, camera.position, &frustum, &params);
+        let name = format!("{layout:?} n={n} d_init={d_init} adaptive={adaptive}");
+        assert!(c.visible >= 4096, "{name}: {} visible", c.visible);
+        big_step4 += (c.visible - c.clusters.len() >= 2048) as usize;
+        assert_eq!(c, reference(&lights, camera.position, &frustum, &params), "{name}");
+    }
+    assert!(big_step4 >= 2, "step 4 in grid order was exercised {big_step4} times");
+}
+
 #[test]
 fn extreme_coordinates_and_ranges() {
     // Positions up to 1e30 with ranges to match, seen by a camera with a huge far plane.

@@ -595,15 +595,17 @@ fn frame_times_against_the_reference() {
         let layout = shadowlab_core::scene::layout::parse("paper").unwrap();
         let lights = shadowlab_core::scene::layout::generate(&layout, scene).unwrap();
         let gpu = gpu();
-        let (w, h) = (160, 120);
-        let settings = RenderSettings { width: w, height: h, ..Default::default() };
-        let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
-        let variants: [(&str, &[(&str, ParamValue)]); 3] = [
-            ("reference", &[("shadow_res", ParamValue::Int(512))]),
-            ("raytraced", &[]),
-            ("raytraced", &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(16))]),
+        let soft: &[(&str, ParamValue)] = &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(16))];
+        let runs: [(u32, u32, &str, &[(&str, ParamValue)]); 5] = [
+            (160, 120, "reference", &[("shadow_res", ParamValue::Int(512))]),
+            (160, 120, "raytraced", &[]),
+            (160, 120, "raytraced", soft),
+            (320, 240, "reference", &[("shadow_res", ParamValue::Int(512))]),
+            (320, 240, "raytraced", &[]),
         ];
-        for (v, (key, params)) in variants.into_iter().enumerate() {
+        for (v, (w, h, key, params)) in runs.into_iter().enumerate() {
+            let settings = RenderSettings { width: w, height: h, ..Default::default() };
+            let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
             let mut t = renderer.create_technique(key).unwrap();
             for (k, v) in params {
                 t.set_param(k, v).unwrap();
@@ -650,32 +652,4 @@ fn process_cpu_ms() -> f64 {
     let fields: Vec<&str> = rest.split_whitespace().collect();
     let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
     (ticks(11) + ticks(12)) * 10.0
-}
-
-#[test]
-#[ignore]
-fn zz_traversal_ab() {
-    let gpu = gpu();
-    let sponza =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes/dabrovic-sponza/sponza.obj");
-    let scene = Scene::load(&sponza, 1.0).unwrap();
-    let bvh = Bvh::from_geometry(&ChunkedGeometry::build(&scene));
-    let rays = random_rays(&bvh, &scene.bounds, 300_000, 3);
-    let test = include_str!("../../shaders/raytrace_test.wgsl");
-    let variants: Vec<(String, String)> = std::env::var("RT_AB")
-        .unwrap()
-        .split(',')
-        .map(|f| (f.to_string(), std::fs::read_to_string(f).unwrap() + test))
-        .collect();
-    let mut best = vec![f64::INFINITY; variants.len()];
-    for _round in 0..7 {
-        for (i, (_, src)) in variants.iter().enumerate() {
-            let t = std::time::Instant::now();
-            let _ = shadowlab_core::technique::raytraced::gpu_occluded_source(&gpu, &bvh, &rays, src).unwrap();
-            best[i] = best[i].min(t.elapsed().as_secs_f64() * 1000.0);
-        }
-    }
-    for (i, (name, _)) in variants.iter().enumerate() {
-        eprintln!("AB {name}: {:.0} ms", best[i]);
-    }
 }

@@ -764,6 +764,13 @@ impl Renderer {
         image::RgbaImage::from_raw(t.width, t.height, bytes).ok_or_else(|| GpuError::Readback("size mismatch".into()))
     }
 
+    /// Per pixel, true where the G-buffer holds geometry (not background): the pixels comparisons count.
+    pub fn read_geometry_mask(&self) -> Result<Vec<bool>, GpuError> {
+        let t = &self.targets;
+        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
+        Ok(bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]]) < 1.0).collect())
+    }
+
     /// The HDR radiance, linear RGBA, row-major.
     pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, GpuError> {
         let t = &self.targets;

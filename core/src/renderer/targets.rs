@@ -10,6 +10,7 @@ pub struct FrameTargets {
     pub normal: wgpu::TextureView,
     pub emissive: wgpu::TextureView,
     pub depth: wgpu::TextureView,
+    pub depth_texture: wgpu::Texture,
     pub hdr_texture: wgpu::Texture,
     pub hdr: wgpu::TextureView,
     /// sRGB output; the app shows it, the CLI saves it.
@@ -39,13 +40,15 @@ impl FrameTargets {
         let view = |t: wgpu::Texture| t.create_view(&Default::default());
         let hdr_texture = target(gpu, "hdr", width, height, SharedLayouts::HDR_FORMAT, true);
         let output_texture = target(gpu, "output", width, height, SharedLayouts::OUTPUT_FORMAT, true);
+        let depth_texture = target(gpu, "gbuffer depth", width, height, SharedLayouts::DEPTH_FORMAT, true);
         FrameTargets {
             width,
             height,
             albedo: view(target(gpu, "gbuffer albedo", width, height, SharedLayouts::ALBEDO_FORMAT, false)),
             normal: view(target(gpu, "gbuffer normal", width, height, SharedLayouts::NORMAL_FORMAT, false)),
             emissive: view(target(gpu, "gbuffer emissive", width, height, SharedLayouts::EMISSIVE_FORMAT, false)),
-            depth: view(target(gpu, "gbuffer depth", width, height, SharedLayouts::DEPTH_FORMAT, false)),
+            depth: depth_texture.create_view(&Default::default()),
+            depth_texture,
             hdr: hdr_texture.create_view(&Default::default()),
             hdr_texture,
             output: output_texture.create_view(&Default::default()),

@@ -29,8 +29,8 @@
 //!    center `c` (`d_min` is per center: `distance(light, c) > d_min(c)` for all `c`). Otherwise it is marked
 //!    unclustered for step 4 (it does *not* join the center that covered it).
 //! 4. **Assign the remaining lights** (`Clusterer::assign_remaining`, section 3.1.3): every unclustered light
-//!    joins its *nearest* center (smallest squared distance; on an exact tie the center selected first) and
-//!    grows that cluster's `C_att = max(C_att, d_C + L_att)`.
+//!    joins its *nearest* center (smallest squared distance; on an exact tie the center selected first);
+//!    `Clusterer::write_output` then lists the members and grows each cluster's `C_att = max(C_att, d_C + L_att)`.
 //!
 //! # Conventions beyond the paper
 //!
@@ -49,37 +49,43 @@
 //!
 //! # Performance
 //!
-//! Steps 3 and 4 never compare a light against all centers: centers go into a multi-level uniform grid (a
-//! "loose" grid per level of `d_min`), and every search visits only the cells overlapping the axis-aligned box
-//! whose half-width is the search radius, then applies the exact distance test.
+//! Steps 3 and 4 never compare a light against all centers: centers go into a multi-level uniform grid, and
+//! every search visits only the cells overlapping the axis-aligned box whose half-width is the search radius,
+//! then applies the exact distance test.
 //!
 //! - **Levels.** View-adaptive `d_min` shrinks from `d_init` at the camera to 0 at `z_far`, so the spacing of
-//!   centers varies a lot across the frustum and no single cell size fits. Level `l` has cells of size
-//!   `2 * d_init / 2^l` and holds the centers with `d_min` in `(size / 4, size / 2]`, so a search of radius
-//!   `<= d_min` spans at most 2 x 2 x 2 cells of its level and the centers in a cell are few (they are more
-//!   than `d_min` apart). Levels stop at a floor cell size, the estimated spacing of the visible lights (from
-//!   the cells their bounding box occupies, so flat, linear and clumped layouts are estimated well); all finer
-//!   `d_min` (and 0) share the floor level, whose cells then hold about one light. Without view-adaptive
-//!   scaling there is one level.
-//! - **Dense or hash.** A level is a dense array of cells over the visible lights' bounding box when that has
+//!   centers varies a lot across the frustum and no single cell size fits. Level `l` has cells of
+//!   `d_init / 2^l` and holds the centers with `d_min` in `(d_init / 2^(l+1), d_init / 2^l]`, so a search of
+//!   radius `<= d_min` spans at most 3 cells per axis of its level, and a cell holds few centers (they are more
+//!   than `d_min` apart). Levels stop at a floor cell size, twice the estimated spacing of the visible lights
+//!   (from the share of cells of their bounding box they occupy, so flat, linear and clumped layouts are
+//!   estimated well); all smaller `d_min` (and 0) share the floor level, whose cells hold a few lights. Without
+//!   view-adaptive scaling there is one level.
+//! - **Slots laid out up front.** A light's `d_min`, so its level and cell (its "slot"), are known before step
+//!   3, from its distance to the camera alone. A counting sort gives every slot a contiguous run with room for
+//!   all its lights; a new center is appended to its slot's run. So a cell's centers are read sequentially, in
+//!   selection order, without linked lists.
+//! - **Dense or hash.** A level is a dense array of slots over the visible lights' bounding box when that has
 //!   at most `4 * lights + 4096` cells; otherwise its cells live in a hash table (open addressing, keyed by
 //!   level and cell coordinates), so a tiny `d_init` or a few far-away lights cost memory proportional to the
-//!   lights, never to the scene's volume. Levels are initialised lazily, when their first center arrives.
-//! - **Pruning levels.** A level also records the range of its centers' distances to the camera; a light at
-//!   distance `D` from the camera searches a level with radius `h` only when that range meets `[D - h, D + h]`
-//!   (a center within `h` is within `h` of `D`, by the triangle inequality), so most searches visit one level.
-//! - **Step 3** searches each level with the largest `d_min` of its centers: a center can only cover lights
-//!   within its own `d_min`.
+//!   lights, never to the scene's volume.
+//! - **Pruning levels.** A level records the range of its centers' distances to the camera; a light at distance
+//!   `D` from the camera searches a level with radius `h` only when that range meets `[D - h, D + h]` (a center
+//!   within `h` of the light is within `h` of `D`, by the triangle inequality), so most searches visit one level.
+//! - **Step 3** searches each level with the smaller of the largest `d_min` of its centers and a bound from the
+//!   light's own distance to the camera (`CoverBound`), starting with the light's own cell.
 //! - **Step 4 is exact**: a light reached step 4 because some center `c` covered it at distance
 //!   `r = distance(light, c) <= d_min(c) <= d_init` (recorded per light in step 3). The nearest center is at
-//!   most `r` away, so searching every level with radius `r` finds it and every tie.
+//!   most `r` away, so searching every level with radius `r` finds it and every tie. With many such lights
+//!   they are visited slot by slot, so neighbours share cached cells; the results do not depend on the order.
 //! - **Rounding.** Boxes are computed in `f64` and widened by a relative `1e-4` plus `1e-6` cells, and level
 //!   pruning by a relative `1e-4`, far more than `f32` distance rounding, so no candidate is ever missed: the
 //!   result is exactly that of the brute-force `O(lights * centers)` algorithm (the tests compare the two).
 //!
-//! The sort is a stable LSD radix sort on the range's bits. [`Clusterer`] keeps every buffer between calls and
-//! reuses the output's clusters (and their member vectors) through [`Clusterer::cluster_into`], so a frame
-//! allocates nothing once buffers have grown. [`cluster_lights`] is the allocating convenience wrapper.
+//! The sort is a stable LSD radix sort on the range's bits for many lights. [`Clusterer`] keeps every buffer
+//! between calls and reuses the output's clusters (and their member vectors) through
+//! [`Clusterer::cluster_into`], so a frame allocates nothing once buffers have grown. [`cluster_lights`] is the
+//! allocating convenience wrapper.
 
 use glam::Vec3;
 
@@ -88,12 +94,14 @@ use crate::scene::PointLight;
 
 /// "No center / no cluster" in the internal `u32` index arrays.
 const NONE: u32 = u32::MAX;
+/// Inputs must be shorter (a hash grid has up to `2 * lights` slots, all `u32` indices).
+const MAX_LIGHTS: usize = 1 << 30;
 /// Unused slot of the hash grid (cell keys use 63 bits at most).
 const EMPTY_KEY: u64 = u64::MAX;
 /// Cell coordinates use at most this many bits per axis (the cell size grows to keep them in range); the hash
 /// key holds three of them and the level.
 const AXIS_BITS: u32 = 19;
-/// Levels of the grid at most (level 0 has cells of `2 * d_init`, each level halves them).
+/// Levels of the grid at most (level 0 has cells of `d_init`, each level halves them).
 const MAX_LEVELS: usize = 24;
 /// From this many lights left for step 4 on, they are visited in grid order (better cache use).
 const SPATIAL_ORDER_MIN: usize = 2048;
@@ -228,7 +236,7 @@ pub enum GridKind {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridInfo {
     pub kind: GridKind,
-    /// Levels prepared (from `2 * d_init` down to the floor cell size).
+    /// Levels prepared (cells from `d_init` down to the floor cell size).
     pub levels: usize,
     /// Levels that received centers, dense and hashed.
     pub dense_levels: usize,
@@ -338,7 +346,7 @@ impl Clusterer {
     /// Cluster `lights` into `out`, overwriting it and reusing its vectors (steps 1 to 4).
     ///
     /// # Panics
-    /// When `lights` has `u32::MAX` or more entries (cluster indices are `u32`).
+    /// When `lights` has 2^30 or more entries (indices are `u32`, grid slots need headroom).
     pub fn cluster_into(
         &mut self,
         lights: &[PointLight],
@@ -347,7 +355,7 @@ impl Clusterer {
         params: &ClusterParams,
         out: &mut Clustering,
     ) {
-        assert!(lights.len() < NONE as usize, "at most {} lights can be clustered", NONE - 1);
+        assert!(lights.len() < MAX_LIGHTS, "at most {} lights can be clustered", MAX_LIGHTS - 1);
         self.cull(lights, frustum);
         sort_by_range(&mut self.keys, &mut self.keys_tmp, &mut self.radix_counts);
         let (min, max) = self.gather(lights, camera_position, params);
@@ -452,7 +460,11 @@ impl Clusterer {
         }
         let grid = &self.grid;
         for level in 0..grid.levels.len() {
+            // A level whose centers all have d_min 0 covers nothing.
             let radius = grid.levels[level].max_d_min.min(bound);
+            if !(radius > 0.0) {
+                continue;
+            }
             let Some(b) = grid.search_box(level, p, to_camera, radius) else {
                 continue;
             };
@@ -709,7 +721,7 @@ struct Grid {
 /// holds (except the floor level, whose cells may be larger).
 const CELL_PER_D_MIN: f64 = 1.0;
 /// The floor level's cells, in estimated light spacings.
-const FLOOR_PER_SPACING: f64 = 3.0;
+const FLOOR_PER_SPACING: f64 = 2.0;
 
 impl Grid {
     fn clear(&mut self) {
@@ -758,7 +770,12 @@ impl Grid {
         let mut cell = CELL_PER_D_MIN * self.d_init;
         loop {
             // Without view-adaptive scaling every d_min is d_init: one level.
-            let last = !adaptive || cell <= floor || self.levels.len() + 1 == MAX_LEVELS;
+            // Finer cells than `smallest_cell` (or than a point) are pointless.
+            let last = !adaptive
+                || cell <= floor
+                || cell <= smallest_cell
+                || largest == 0.0
+                || self.levels.len() + 1 == MAX_LEVELS;
             let mut size = if last { cell.max(floor) } else { cell };
             size = size.max(smallest_cell);
             if !(size.is_finite() && size > 0.0) {
@@ -881,9 +898,13 @@ impl Grid {
     fn slot_for_insert(&mut self, level: usize, p: Vec3) -> u32 {
         let l = &mut self.levels[level];
         if !l.used && l.dense {
-            l.offset = self.runs.len() as u32;
             let cells = l.dims.iter().map(|&d| d as usize).product::<usize>();
-            self.runs.resize(self.runs.len() + cells, [0, 0]);
+            if self.runs.len() + cells < (NONE / 4) as usize {
+                l.offset = self.runs.len() as u32;
+                self.runs.resize(self.runs.len() + cells, [0, 0]);
+            } else {
+                l.dense = false; // slot indices must stay far below u32::MAX
+            }
         }
         l.used = true;
         let l = *l;
@@ -927,7 +948,7 @@ impl Grid {
         }
         if self.prune && to_camera.is_finite() && l.far.is_finite() {
             let slack = (to_camera + radius) * 1e-4;
-            if to_camera + radius + slack < l.near || to_camera - radius - slack > l.far {
+            if to_camera + 0.5 * radius < l.near || to_camera - 0.5 * radius > l.far {
                 return None;
             }
         }

@@ -413,19 +413,21 @@ pub fn ray_triangle(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) -> b
 }
 
 /// Any-hit traversal, the CPU twin of `bvh_occluded` in `raytrace_bvh.wgsl`: same layout, same order, same
-/// stack (far children's `(first, count)`). True when a triangle lies on `origin + t * dir` for `0 < t < t_max`.
+/// stack bound. True when a triangle lies on `origin + t * dir` for `0 < t < t_max`.
 pub fn occluded_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
     let inv = safe_inverse(dir);
     let nodes = &bvh.nodes;
     if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
         return false;
     }
-    let mut stack = [(0u32, 0u32); MAX_DEPTH];
+    let mut stack = [0u32; MAX_DEPTH];
     let mut sp = 0usize;
-    let (mut first, mut count) = (nodes[0].first, nodes[0].count);
+    let mut node = 0usize;
     loop {
-        if count > 0 {
-            for tri in &bvh.triangles[first as usize..(first + count) as usize] {
+        let n = &nodes[node];
+        if n.count > 0 {
+            let first = n.first as usize;
+            for tri in &bvh.triangles[first..first + n.count as usize] {
                 if ray_triangle(origin, dir, tri, t_max) {
                     return true;
                 }
@@ -434,26 +436,26 @@ pub fn occluded_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
                 return false;
             }
             sp -= 1;
-            (first, count) = stack[sp];
+            node = stack[sp] as usize;
             continue;
         }
-        let (na, nb) = (&nodes[first as usize], &nodes[first as usize + 1]);
-        let ta = ray_box(origin, inv, na.min, na.max, t_max);
-        let tb = ray_box(origin, inv, nb.min, nb.max, t_max);
-        let (near, far, t_near, t_far) = if ta <= tb { (na, nb, ta, tb) } else { (nb, na, tb, ta) };
+        let a = n.first as usize;
+        let ta = ray_box(origin, inv, nodes[a].min, nodes[a].max, t_max);
+        let tb = ray_box(origin, inv, nodes[a + 1].min, nodes[a + 1].max, t_max);
+        let (near, far, t_near, t_far) = if ta <= tb { (a, a + 1, ta, tb) } else { (a + 1, a, tb, ta) };
         if t_near == f32::INFINITY {
             if sp == 0 {
                 return false;
             }
             sp -= 1;
-            (first, count) = stack[sp];
+            node = stack[sp] as usize;
             continue;
         }
+        node = near;
         if t_far != f32::INFINITY && sp < MAX_DEPTH {
-            stack[sp] = (far.first, far.count);
+            stack[sp] = far as u32;
             sp += 1;
         }
-        (first, count) = (near.first, near.count);
     }
 }
 

@@ -391,11 +391,6 @@ impl Technique for Raytraced {
 /// Trace `rays` through `bvh` with the GPU traversal (`test_rays` in `raytrace_test.wgsl`): one hit flag per
 /// ray. For tests comparing the GPU with [`occluded_cpu`].
 pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<bool>, GpuError> {
-    gpu_occluded_source(gpu, bvh, rays, shaders::RAYTRACE_TEST)
-}
-
-#[doc(hidden)]
-pub fn gpu_occluded_source(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray], source: &str) -> Result<Vec<bool>, GpuError> {
     if rays.is_empty() {
         return Ok(Vec::new());
     }
@@ -420,7 +415,7 @@ pub fn gpu_occluded_source(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray], source: &s
         bind_group_layouts: &[Some(&empty), Some(&layout)],
         immediate_size: 0,
     });
-    let module = shaders::create_module(device, "raytrace_test", source);
+    let module = shaders::create_module(device, "raytrace_test", shaders::RAYTRACE_TEST);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("raytrace test"),
         layout: Some(&pipeline_layout),

@@ -1,0 +1,280 @@
+//! Measurement shared by `shadowlab compare`, `sweep` and `bench`: render a technique (with warm-up and
+//! repeated frames for trustworthy timings), render a comparison target, compute metrics and difference images.
+
+use std::collections::BTreeMap;
+
+use anyhow::{anyhow, Result};
+use serde::Serialize;
+use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Metrics, Visibility};
+use shadowlab_core::scene::{Camera, PointLight};
+use shadowlab_core::timing::PassTime;
+use shadowlab_core::{FrameReport, Renderer};
+
+use crate::cli::apply_params;
+
+/// Timings of repeated frames of one technique.
+#[derive(Clone, Debug, Serialize)]
+pub struct TimingSummary {
+    pub frames: usize,
+    pub median_ms: f64,
+    pub min_ms: f64,
+    /// Mean of the three fastest frames (the fuzzy-clustering paper's "mean of the 3 best of 10").
+    pub best3_mean_ms: f64,
+    /// Per pass, the median over frames.
+    pub passes_median_ms: Vec<PassTime>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
+    let totals: Vec<f64> = reports.iter().map(|r| r.gpu_total_ms).collect();
+    let mut sorted = totals.clone();
+    sorted.sort_by(f64::total_cmp);
+    let best = &sorted[..sorted.len().min(3)];
+    let mut names: Vec<String> = Vec::new();
+    for r in reports {
+        for p in &r.passes {
+            if !names.contains(&p.name) {
+                names.push(p.name.clone());
+            }
+        }
+    }
+    let passes_median_ms = names
+        .into_iter()
+        .map(|name| {
+            let v: Vec<f64> =
+                reports.iter().map(|r| r.passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum()).collect();
+            let count =
+                reports.last().map(|r| r.passes.iter().filter(|p| p.name == name).map(|p| p.count).sum()).unwrap_or(0);
+            PassTime { name, ms: median(v), count }
+        })
+        .collect();
+    TimingSummary {
+        frames: reports.len(),
+        median_ms: median(totals),
+        min_ms: sorted.first().copied().unwrap_or(0.0),
+        best3_mean_ms: if best.is_empty() { 0.0 } else { best.iter().sum::<f64>() / best.len() as f64 },
+        passes_median_ms,
+    }
+}
+
+/// One rendered technique: its HDR image, the last frame's report and the timing summary.
+pub struct Rendered {
+    pub image: Image,
+    pub report: FrameReport,
+    pub timing: TimingSummary,
+    pub parameters: BTreeMap<String, String>,
+}
+
+/// Render `technique` with `params` (`key=value`) `warmup` + `repeat` times.
+#[allow(clippy::too_many_arguments)]
+pub fn render_technique(
+    renderer: &mut Renderer,
+    technique: &str,
+    shadow_res: Option<u32>,
+    params: &[String],
+    camera: &Camera,
+    lights: &[PointLight],
+    warmup: u32,
+    repeat: u32,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Rendered> {
+    let mut t = renderer.create_technique(technique).ok_or_else(|| {
+        anyhow!("unknown technique '{technique}' (choose one of: {})", shadowlab_core::technique::keys())
+    })?;
+    apply_params(t.as_mut(), shadow_res, params)?;
+    let mut reports = Vec::new();
+    for i in 0..warmup + repeat.max(1) {
+        progress(&format!("{technique}: frame {}/{}", i + 1, warmup + repeat.max(1)));
+        let r = renderer.render_frame(t.as_mut(), camera, lights, &mut |_, _| {})?;
+        if i >= warmup {
+            reports.push(r);
+        }
+    }
+    let (w, h) = (renderer.settings().width, renderer.settings().height);
+    let image = Image::new(w, h, renderer.read_hdr()?)?;
+    let parameters = t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
+    Ok(Rendered { image, timing: summarize(&reports), report: reports.pop().expect("at least one frame"), parameters })
+}
+
+/// Difference-image mode of `compare`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DiffKind {
+    /// |luminance difference|, dark blue (none) to red (high).
+    Absolute,
+    /// Red where the technique is too bright, green where too dark.
+    Signed,
+    /// Difference of shadow factors (visibility) instead of final colour.
+    Visibility,
+}
+
+/// What a comparison needs besides the two images: the geometry mask and, for shadow factors, the
+/// unshadowed and ambient-only images.
+pub struct CompareInputs {
+    pub mask: Vec<bool>,
+    pub unshadowed: Image,
+    pub ambient: Image,
+}
+
+pub fn compare_inputs(renderer: &mut Renderer, camera: &Camera, lights: &[PointLight]) -> Result<CompareInputs> {
+    let no_progress = &mut |_: &str| {};
+    let unshadowed = render_technique(renderer, "unshadowed", None, &[], camera, lights, 0, 1, no_progress)?.image;
+    let ambient = render_technique(renderer, "unshadowed", None, &[], camera, &[], 0, 1, no_progress)?.image;
+    Ok(CompareInputs { mask: renderer.read_geometry_mask()?, unshadowed, ambient })
+}
+
+/// Metrics of `technique` against `target` and the difference image.
+pub fn compare_images(
+    technique: &Image,
+    target: &Image,
+    inputs: &CompareInputs,
+    kind: DiffKind,
+    gain: f32,
+    flip: bool,
+    exposure: f32,
+) -> Result<(Metrics, image::RgbaImage)> {
+    let v_t = compare::visibility_image(technique, &inputs.unshadowed, Some(&inputs.ambient))?;
+    let v_r = compare::visibility_image(target, &inputs.unshadowed, Some(&inputs.ambient))?;
+    let options = CompareOptions {
+        flip,
+        exposure,
+        visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
+        ..Default::default()
+    };
+    let metrics = compare::compare(technique, target, Some(&inputs.mask), &options)?;
+    let diff = match kind {
+        DiffKind::Absolute => {
+            compare::difference_image(technique, target, Some(&inputs.mask), DiffMode::Absolute, gain)?
+        }
+        DiffKind::Signed => compare::difference_image(technique, target, Some(&inputs.mask), DiffMode::Signed, gain)?,
+        DiffKind::Visibility => compare::visibility_difference_image(
+            &v_t,
+            &v_r,
+            technique.width,
+            technique.height,
+            Some(&inputs.mask),
+            DiffMode::Absolute,
+            gain,
+        )?,
+    };
+    Ok((metrics, diff))
+}
+
+/// Values of a sweep parameter: `a:b:step` (inclusive numeric range), `v1,v2,...` or a single value.
+pub fn sweep_values(spec: &str) -> Result<(String, Vec<String>)> {
+    let (key, values) = spec.split_once('=').ok_or_else(|| anyhow!("--param '{spec}': expected KEY=VALUES"))?;
+    let key = key.trim().to_string();
+    let parts: Vec<&str> = values.split(':').collect();
+    if parts.len() == 3 {
+        let nums: Vec<f64> = parts
+            .iter()
+            .map(|p| p.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| anyhow!("--param '{spec}': a range is START:END:STEP with numbers"))?;
+        let (a, b, step) = (nums[0], nums[1], nums[2]);
+        if !(a.is_finite() && b.is_finite() && step.is_finite() && step > 0.0 && b >= a) {
+            bail_range(spec)?;
+        }
+        let count = ((b - a) / step + 1e-9).floor() as usize + 1;
+        if count > 1000 {
+            return Err(anyhow!("--param '{spec}': {count} values; at most 1000"));
+        }
+        let decimals = format!("{step}").split('.').nth(1).map(|d| d.len()).unwrap_or(0);
+        let integers = [a, step].iter().all(|v| v.fract() == 0.0);
+        let values = (0..count)
+            .map(|i| {
+                let v = a + step * i as f64;
+                if integers {
+                    format!("{}", v as i64)
+                } else {
+                    format!("{v:.decimals$}")
+                }
+            })
+            .collect();
+        return Ok((key, values));
+    }
+    let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).filter(|v| !v.is_empty()).collect();
+    if values.is_empty() {
+        return Err(anyhow!("--param '{spec}': no values"));
+    }
+    Ok((key, values))
+}
+
+fn bail_range(spec: &str) -> Result<()> {
+    Err(anyhow!("--param '{spec}': a range needs finite START <= END and STEP > 0"))
+}
+
+/// Every combination of the swept values, in order (the last parameter varies fastest).
+pub fn combinations(params: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
+    let mut out: Vec<Vec<(String, String)>> = vec![Vec::new()];
+    for (key, values) in params {
+        out = out
+            .into_iter()
+            .flat_map(|prefix| {
+                values.iter().map(move |v| {
+                    let mut c = prefix.clone();
+                    c.push((key.clone(), v.clone()));
+                    c
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_lists_and_single_values() {
+        assert_eq!(sweep_values("d_init=0.1:0.5:0.2").unwrap().1, vec!["0.1", "0.3", "0.5"]);
+        assert_eq!(sweep_values("d_init=0.1:1.6:0.1").unwrap().1.len(), 16);
+        assert_eq!(sweep_values("samples=8:32:8").unwrap().1, vec!["8", "16", "24", "32"]);
+        assert_eq!(sweep_values("filter=pcf,pcss").unwrap(), ("filter".into(), vec!["pcf".into(), "pcss".into()]));
+        assert_eq!(sweep_values("adaptive=on").unwrap().1, vec!["on"]);
+        assert!(sweep_values("d_init=1:0:0.1").is_err());
+        assert!(sweep_values("d_init=0:1:0").is_err());
+        assert!(sweep_values("d_init=0:1e9:1").is_err());
+        assert!(sweep_values("nokey").is_err());
+    }
+
+    #[test]
+    fn combinations_are_the_cartesian_product() {
+        let c = combinations(&[("a".into(), vec!["1".into(), "2".into()]), ("b".into(), vec!["x".into(), "y".into()])]);
+        assert_eq!(c.len(), 4);
+        assert_eq!(c[1], vec![("a".to_string(), "1".to_string()), ("b".to_string(), "y".to_string())]);
+    }
+
+    #[test]
+    fn timing_summary_takes_median_min_and_best_three() {
+        let r = |ms: f64| FrameReport {
+            technique: "t".into(),
+            width: 1,
+            height: 1,
+            timing_source: shadowlab_core::timing::TimingSource::GpuTimestamps,
+            passes: vec![PassTime { name: "shading".into(), ms, count: 1 }],
+            gpu_total_ms: ms,
+            cpu_stages: vec![],
+            wall_ms: ms,
+            counts: Default::default(),
+        };
+        let s = summarize(&[r(5.0), r(1.0), r(3.0), r(9.0), r(2.0)]);
+        assert_eq!(s.median_ms, 3.0);
+        assert_eq!(s.min_ms, 1.0);
+        assert_eq!(s.best3_mean_ms, 2.0);
+        assert_eq!(s.passes_median_ms[0].ms, 3.0);
+    }
+}
