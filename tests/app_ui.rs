@@ -187,3 +187,21 @@ fn view_screenshot_writes_a_png_at_render_resolution() {
     let name = path.file_name().unwrap().to_string_lossy().to_string();
     assert!(name.contains("cornell") && name.contains("reference"), "{name}");
 }
+
+#[test]
+fn difference_view_measures_the_technique_against_the_reference() {
+    use shadowlab::gui::document::ViewMode;
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("difference", "cornell");
+    h.state_mut().view.mode = ViewMode::Difference;
+    h.run_steps(4);
+    let d = h.state().difference.as_ref().expect("a difference once both images are complete");
+    assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
+    let app = h.state_mut();
+    app.technique = "lightcluster".into();
+    app.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
+    h.run_steps(4);
+    let m = &h.state().difference.as_ref().unwrap().metrics;
+    assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
+    h.get_by_label("RMSE");
+}

@@ -5,6 +5,8 @@
 //! 16:9, `z_far` 30 as in the paper); view-adaptive `d_min`. "median ms" is the steady state of a frame: a
 //! long-lived `Clusterer` writing into a reused `Clustering`. "fresh ms" is `cluster_lights`, which allocates
 //! its buffers and every cluster's member list on each call. `CLUSTERING_LIGHTS=2048` runs one light count only.
+//! The goals: 2,048 lights in under 0.05 ms, 100,000 in under 10 ms. Timings are wall-clock medians of
+//! 31 samples, so a busy machine inflates them.
 
 use std::hint::black_box;
 use std::time::Instant;

@@ -1,12 +1,45 @@
 //! LightCluster's min-distance clustering (paper section 3.1): properties over many seeded random light sets,
 //! and equality with a brute-force O(n * k) reference implementation of the same four steps.
 
+use std::alloc::{GlobalAlloc, Layout as AllocLayout, System};
+use std::cell::Cell;
+
 use glam::Vec3;
 use shadowlab_core::math::Frustum;
 use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::lightcluster::clustering::{
     cluster_lights, ClusterParams, Clusterer, Clustering, GridKind,
 };
+
+/// Counts this thread's allocations, to check that a reused `Clusterer` does not allocate.
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; counting touches only a thread-local
+// `Cell` without destructor.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: AllocLayout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: AllocLayout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: AllocLayout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: CountingAllocator = CountingAllocator;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
 
 // ---------------------------------------------------------------------------------------------------------------
 // Inputs
@@ -405,6 +438,38 @@ fn deterministic_for_the_same_input() {
         let c = clusterer.cluster(&case.lights, case.camera.position, &case.frustum, &case.params);
         assert_eq!(a, b, "{}", case.name);
         assert_eq!(a, c, "{}", case.name);
+    }
+}
+
+#[test]
+fn a_reused_clusterer_does_not_allocate_in_steady_state() {
+    let camera = cameras()[0];
+    let frustum = frustum_of(&camera);
+    // Frames alternating between inputs with different cluster counts, view-adaptive and not.
+    let frames = [
+        (make_lights(Layout::Uniform, 3000, 1), ClusterParams { d_init: 0.5, z_far: 30.0, adaptive: true }),
+        (make_lights(Layout::Blobs, 6000, 2), ClusterParams { d_init: 1.6, z_far: 30.0, adaptive: true }),
+        (make_lights(Layout::Uniform, 500, 3), ClusterParams { d_init: 1.0, z_far: 30.0, adaptive: false }),
+        (make_lights(Layout::Blobs, 6000, 2), ClusterParams { d_init: 0.001, z_far: 30.0, adaptive: false }),
+    ];
+    let mut clusterer = Clusterer::new();
+    let mut out = Clustering::default();
+    let run_all = |clusterer: &mut Clusterer, out: &mut Clustering| {
+        for (lights, params) in &frames {
+            clusterer.cluster_into(lights, camera.position, &frustum, params, out);
+            assert_eq!(*out, reference(lights, camera.position, &frustum, params));
+        }
+    };
+    // Warm up: buffers grow to the largest frame.
+    for _ in 0..3 {
+        run_all(&mut clusterer, &mut out);
+    }
+    for _ in 0..3 {
+        for (lights, params) in &frames {
+            let before = allocations();
+            clusterer.cluster_into(lights, camera.position, &frustum, params, &mut out);
+            assert_eq!(allocations() - before, 0, "{} lights {params:?}", lights.len());
+        }
     }
 }
 

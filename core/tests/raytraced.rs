@@ -98,8 +98,9 @@ fn compare(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> (f32, f32) {
     (over as f32 / a.len() as f32, worst)
 }
 
-/// Shadow-ray-like rays over a scene: half between random points on random triangles (they graze and hit
-/// geometry), half from random points in the bounds in random directions.
+/// Shadow-ray-like rays over a scene: between random points on random triangles (they graze and hit geometry),
+/// from random points in the bounds in random directions, and, one in four, ties: rays aimed exactly at a
+/// vertex or an edge midpoint, half of them along a coordinate axis (zero direction components).
 fn random_rays(bvh: &Bvh, bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
     let mut rng = Rng(seed);
     let size = bounds.size();
@@ -116,7 +117,21 @@ fn random_rays(bvh: &Bvh, bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
     };
     (0..count)
         .map(|i| {
-            if i % 2 == 0 {
+            if i % 4 == 3 {
+                let t = &bvh.triangles[(rng.next_u64() % bvh.triangles.len() as u64) as usize];
+                let v = t.vertices();
+                let k = (rng.next_u64() % 3) as usize;
+                let target = if rng.unit() < 0.5 { v[k] } else { (v[k] + v[(k + 1) % 3]) * 0.5 };
+                let dir = if i % 8 == 3 {
+                    let axis = (rng.next_u64() % 3) as usize;
+                    let sign = if rng.unit() < 0.5 { 1.0 } else { -1.0 };
+                    Vec3::AXES[axis] * sign
+                } else {
+                    rng.direction()
+                };
+                let back = rng.range(0.01, diag * 0.5);
+                Ray::new(target - dir * back, dir, back * 2.0)
+            } else if i % 2 == 0 {
                 let (p, n) = point_on_triangle(&mut rng);
                 let (q, _) = point_on_triangle(&mut rng);
                 let side = if rng.unit() < 0.5 { 1.0 } else { -1.0 };
@@ -568,6 +583,9 @@ fn soft_penumbra_follows_the_visible_fraction_of_the_disc() {
 // Timings (not a test: `cargo test --release -p shadowlab-core --test raytraced -- --ignored --nocapture`)
 // ---------------------------------------------------------------------------------------------------------------
 
+/// A technique's parameter settings.
+type Params<'a> = &'a [(&'a str, ParamValue)];
+
 #[test]
 #[ignore = "measurement; needs ../shared/scenes"]
 fn frame_times_against_the_reference() {
@@ -595,8 +613,8 @@ fn frame_times_against_the_reference() {
         let layout = shadowlab_core::scene::layout::parse("paper").unwrap();
         let lights = shadowlab_core::scene::layout::generate(&layout, scene).unwrap();
         let gpu = gpu();
-        let soft: &[(&str, ParamValue)] = &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(16))];
-        let runs: [(u32, u32, &str, &[(&str, ParamValue)]); 5] = [
+        let soft: Params = &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(16))];
+        let runs: [(u32, u32, &str, Params); 5] = [
             (160, 120, "reference", &[("shadow_res", ParamValue::Int(512))]),
             (160, 120, "raytraced", &[]),
             (160, 120, "raytraced", soft),

@@ -21,6 +21,8 @@ pub enum ViewMode {
     SideBySide,
     /// One image, technique left of a draggable line, reference right of it.
     Split,
+    /// The difference image of the technique against the reference, with its error metrics.
+    Difference,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -36,6 +38,12 @@ pub struct ViewSettings {
     pub resolution_scale: f32,
     pub exposure: f32,
     pub specular: bool,
+    /// Difference view: signed (red too bright, green too dark) instead of absolute.
+    pub diff_signed: bool,
+    /// Difference view: compare shadow factors (visibility) instead of final colour.
+    pub diff_visibility: bool,
+    /// Difference view gain (1, 5, 10, ...).
+    pub diff_gain: f32,
 }
 
 impl Default for ViewSettings {
@@ -48,6 +56,9 @@ impl Default for ViewSettings {
             resolution_scale: 1.0,
             exposure: 1.0,
             specular: false,
+            diff_signed: false,
+            diff_visibility: false,
+            diff_gain: 1.0,
         }
     }
 }

@@ -97,6 +97,14 @@ pub enum Animation {
 }
 
 /// GPU state, created from eframe's render state.
+/// The difference view's image and metrics, for one pair of converged frames.
+pub struct Difference {
+    pub texture: egui::TextureHandle,
+    pub metrics: shadowlab_core::compare::Metrics,
+    /// What it was computed from (both views' frame keys and the diff settings).
+    key: (u64, u64, bool, bool, u32),
+}
+
 pub struct Gpu {
     pub ctx: GpuContext,
     pub render_state: egui_wgpu::RenderState,
@@ -142,6 +150,7 @@ pub struct ShadowLabApp {
     pub status: String,
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub ui_frame_ms: VecDeque<f64>,
+    pub difference: Option<Difference>,
     last_frame: Instant,
     exit_screenshot: Option<PathBuf>,
     quit_after_secs: Option<f32>,
@@ -184,6 +193,7 @@ impl ShadowLabApp {
             status: String::new(),
             window_shot: Default::default(),
             ui_frame_ms: VecDeque::new(),
+            difference: None,
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
             quit_after_secs: startup.quit_after_secs,
@@ -549,6 +559,58 @@ impl ShadowLabApp {
         Ok(())
     }
 
+    /// Recompute the difference image when both views have converged on new frames.
+    fn update_difference(&mut self, ctx: &egui::Context) -> Result<()> {
+        let camera = self.camera.camera();
+        let lights = self.animated_lights();
+        let Some(gpu) = &mut self.gpu else { return Ok(()) };
+        if !(gpu.main.is_converged() && gpu.reference.is_converged()) {
+            return Ok(());
+        }
+        let key = (
+            gpu.main.frame_key(),
+            gpu.reference.frame_key(),
+            self.view.diff_signed,
+            self.view.diff_visibility,
+            self.view.diff_gain.to_bits(),
+        );
+        if self.difference.as_ref().is_some_and(|d| d.key == key) {
+            return Ok(());
+        }
+        use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Visibility};
+        let (w, h) = gpu.main.size;
+        let technique = Image::new(w, h, gpu.main.renderer.read_hdr()?)?;
+        let reference = Image::new(w, h, gpu.reference.renderer.read_hdr()?)?;
+        let mask = gpu.main.renderer.read_geometry_mask()?;
+        let mode = if self.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
+        let gain = self.view.diff_gain;
+        let (metrics, image) = if self.view.diff_visibility {
+            // Shadow factors need the unshadowed and ambient-only images of the same view.
+            let settings = gpu.main.renderer.settings().clone();
+            let mut aux = shadowlab_core::Renderer::new(&gpu.ctx, &self.scene, settings)?;
+            let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
+            aux.render_frame(unshadowed.as_mut(), &camera, &lights, &mut |_, _| {})?;
+            let lit = Image::new(w, h, aux.read_hdr()?)?;
+            aux.render_frame(unshadowed.as_mut(), &camera, &[], &mut |_, _| {})?;
+            let ambient = Image::new(w, h, aux.read_hdr()?)?;
+            let v_t = compare::visibility_image(&technique, &lit, Some(&ambient))?;
+            let v_r = compare::visibility_image(&reference, &lit, Some(&ambient))?;
+            let options = CompareOptions {
+                visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
+                ..Default::default()
+            };
+            let m = compare::compare(&technique, &reference, Some(&mask), &options)?;
+            (m, compare::visibility_difference_image(&v_t, &v_r, w, h, Some(&mask), mode, gain)?)
+        } else {
+            let m = compare::compare(&technique, &reference, Some(&mask), &CompareOptions::default())?;
+            (m, compare::difference_image(&technique, &reference, Some(&mask), mode, gain)?)
+        };
+        let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
+        let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
+        self.difference = Some(Difference { texture, metrics, key });
+        Ok(())
+    }
+
     // ----- screenshots -----
 
     fn screenshot_name(&self, what: &str) -> PathBuf {
@@ -776,6 +838,11 @@ impl ShadowLabApp {
         if let Err(e) = self.render_views(rect.size() * ppp, ppp, interacting) {
             self.status = format!("render error: {e:#}");
         }
+        if self.view.mode == ViewMode::Difference {
+            if let Err(e) = self.update_difference(ui.ctx()) {
+                self.status = format!("difference: {e:#}");
+            }
+        }
 
         // Show the images.
         let painter = ui.painter_at(rect);
@@ -793,6 +860,31 @@ impl ShadowLabApp {
                     label(&painter, l.left_top(), &self.technique);
                     label(&painter, r.left_top(), "reference");
                 }
+                ViewMode::Difference => match &self.difference {
+                    Some(d) => {
+                        painter.image(d.texture.id(), rect, uv, egui::Color32::WHITE);
+                        let m = &d.metrics;
+                        label(
+                            &painter,
+                            rect.left_top(),
+                            &format!(
+                                "{} vs reference: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
+                                self.technique,
+                                m.rmse,
+                                m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
+                                m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
+                                m.shadow_intensity_error
+                                    .map(|e| format!("{:.2}%", e * 100.0))
+                                    .unwrap_or_else(|| "-".into()),
+                            ),
+                        );
+                        legend(&painter, rect, self.view.diff_signed, self.view.diff_gain);
+                    }
+                    None => {
+                        painter.image(gpu.main.texture_id, rect, uv, egui::Color32::from_gray(90));
+                        label(&painter, rect.left_top(), "computing the difference when both images are complete…");
+                    }
+                },
                 ViewMode::Split => {
                     let x = rect.left() + rect.width() * self.view.split.clamp(0.0, 1.0);
                     let s = self.view.split.clamp(0.0, 1.0);
@@ -874,6 +966,51 @@ fn label(painter: &egui::Painter, at: egui::Pos2, text: &str) {
         egui::Align2::LEFT_TOP,
         text,
         egui::FontId::proportional(13.0),
+        egui::Color32::WHITE,
+    );
+}
+
+/// Colour legend of the difference view.
+fn legend(painter: &egui::Painter, rect: egui::Rect, signed: bool, gain: f32) {
+    let w = 160.0;
+    let origin = rect.right_bottom() - egui::vec2(w + 16.0, 34.0);
+    for i in 0..w as usize {
+        let t = i as f32 / (w - 1.0);
+        let color = if signed {
+            let s = t * 2.0 - 1.0;
+            let v = (s.abs() * 255.0) as u8;
+            if s >= 0.0 {
+                egui::Color32::from_rgb(v, 0, 0)
+            } else {
+                egui::Color32::from_rgb(0, v, 0)
+            }
+        } else {
+            let [r, g, b] = shadowlab_core::compare::colormap(t);
+            egui::Color32::from_rgb(r, g, b)
+        };
+        painter.rect_filled(
+            egui::Rect::from_min_size(origin + egui::vec2(i as f32, 0.0), egui::vec2(1.0, 10.0)),
+            0.0,
+            color,
+        );
+    }
+    let (lo, hi) = if signed {
+        (format!("-{:.2}", 1.0 / gain), format!("+{:.2}", 1.0 / gain))
+    } else {
+        ("0".into(), format!("{:.2}", 1.0 / gain))
+    };
+    painter.text(
+        origin + egui::vec2(0.0, 12.0),
+        egui::Align2::LEFT_TOP,
+        lo,
+        egui::FontId::proportional(11.0),
+        egui::Color32::WHITE,
+    );
+    painter.text(
+        origin + egui::vec2(w, 12.0),
+        egui::Align2::RIGHT_TOP,
+        hi,
+        egui::FontId::proportional(11.0),
         egui::Color32::WHITE,
     );
 }

@@ -96,6 +96,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.radio_value(&mut app.view.mode, ViewMode::Single, "Single view");
                 ui.radio_value(&mut app.view.mode, ViewMode::SideBySide, "Side by side with the reference");
                 ui.radio_value(&mut app.view.mode, ViewMode::Split, "Split view with the reference");
+                ui.radio_value(&mut app.view.mode, ViewMode::Difference, "Difference against the reference");
                 ui.separator();
                 ui.checkbox(&mut app.view.x_ray, "X-ray overlays");
             });
@@ -210,6 +211,48 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     let near = app.camera.near;
     ui.add(egui::Slider::new(&mut app.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
     ui.add(egui::Slider::new(&mut app.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
+    ui.heading("Compare");
+    ui.horizontal(|ui| {
+        ui.selectable_value(&mut app.view.mode, ViewMode::Single, "single");
+        ui.selectable_value(&mut app.view.mode, ViewMode::SideBySide, "side by side");
+        ui.selectable_value(&mut app.view.mode, ViewMode::Split, "split");
+        ui.selectable_value(&mut app.view.mode, ViewMode::Difference, "difference");
+    });
+    if app.view.mode == ViewMode::Difference {
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut app.view.diff_signed, "signed");
+            ui.checkbox(&mut app.view.diff_visibility, "shadow factors");
+        });
+        ui.horizontal(|ui| {
+            ui.label("gain");
+            for g in [1.0, 5.0, 10.0] {
+                ui.selectable_value(&mut app.view.diff_gain, g, format!("×{g}"));
+            }
+        });
+        if let Some(d) = &app.difference {
+            let m = &d.metrics;
+            egui::Grid::new("metrics").num_columns(2).show(ui, |ui| {
+                ui.label("RMSE");
+                ui.label(format!("{:.5}", m.rmse));
+                ui.end_row();
+                ui.label("MSE");
+                ui.label(format!("{:.3e}", m.mse));
+                ui.end_row();
+                ui.label("PSNR");
+                ui.label(m.psnr_db.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "inf".into()));
+                ui.end_row();
+                ui.label("FLIP mean");
+                ui.label(m.flip_mean.map(|f| format!("{f:.4}")).unwrap_or_else(|| "-".into()));
+                ui.end_row();
+                ui.label("shadow error");
+                ui.label(m.shadow_intensity_error.map(|e| format!("{:.2}%", e * 100.0)).unwrap_or_else(|| "-".into()));
+                ui.end_row();
+                ui.label(format!("pixels > {:.0}%", m.threshold * 100.0));
+                ui.label(format!("{:.2}%", m.share_over_threshold * 100.0));
+                ui.end_row();
+            });
+        }
+    }
     ui.heading("Overlays");
     ui.checkbox(&mut app.view.x_ray, "X-ray (through geometry)");
     for (name, on) in app.overlay_layers() {
@@ -356,7 +399,7 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             if let Some(reference) = &gpu.reference.last_report {
                 if r.technique != "reference" && reference.technique == "reference" && reference.gpu_total_ms > 0.0 {
                     ui.label(format!(
-                        "reference {:.1} ms → {} {:.1} ms: speedup ×{:.2} (same session)",
+                        "reference {:.1} ms -> {} {:.1} ms: speedup ×{:.2} (same session)",
                         reference.gpu_total_ms,
                         r.technique,
                         r.gpu_total_ms,

@@ -183,6 +183,11 @@ impl View {
         Ok(())
     }
 
+    /// Identifies the inputs of the current frame (0 before the first).
+    pub fn frame_key(&self) -> u64 {
+        self.key
+    }
+
     /// Forget a technique instance, so the next use creates it with default parameters.
     pub fn reset_technique(&mut self, key: &str) {
         self.techniques.retain(|k, _| *k != key);

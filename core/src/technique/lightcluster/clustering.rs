@@ -138,7 +138,7 @@ impl ClusterParams {
         if !(self.d_init.is_finite() && self.d_init >= 0.0) {
             return Err(format!("d_init must be a finite distance >= 0, got {}", self.d_init));
         }
-        if !(self.z_far > 0.0) {
+        if self.z_far.is_nan() || self.z_far <= 0.0 {
             return Err(format!("z_far must be > 0, got {}", self.z_far));
         }
         Ok(())
@@ -286,6 +286,8 @@ pub struct Clusterer {
     /// Step 4 scratch: per grid slot the end of its non-centers in `by_slot`, and the non-centers by slot.
     cursor: Vec<u32>,
     by_slot: Vec<u32>,
+    /// Member vectors of clusters dropped from an output, for reuse.
+    spare_members: Vec<Vec<usize>>,
     grid: Grid,
 }
 
@@ -455,14 +457,14 @@ impl Clusterer {
     /// cell first, where a covering center is most likely.
     #[inline]
     fn covering_distance(&self, p: Vec3, to_camera: f32, bound: f32) -> Option<f32> {
-        if !(bound >= 0.0) {
+        if bound.is_nan() || bound < 0.0 {
             return None;
         }
         let grid = &self.grid;
         for level in 0..grid.levels.len() {
             // A level whose centers all have d_min 0 covers nothing.
             let radius = grid.levels[level].max_d_min.min(bound);
-            if !(radius > 0.0) {
+            if radius.is_nan() || radius <= 0.0 {
                 continue;
             }
             let Some(b) = grid.search_box(level, p, to_camera, radius) else {
@@ -532,9 +534,12 @@ impl Clusterer {
 
     /// Write the clusters: centers first (in selection order), then every other light in sorted order, growing
     /// its cluster's `C_att = max(C_att, d_C + L_att)`.
-    fn write_output(&self, out: &mut Clustering) {
+    fn write_output(&mut self, out: &mut Clustering) {
         out.visible = self.ids.len();
-        out.clusters.truncate(self.centers.len());
+        // Keep the member vectors of clusters no longer needed for later frames with more clusters.
+        let keep = self.centers.len().min(out.clusters.len());
+        // Reversed, so that popping hands each vector back to the same cluster index next time.
+        self.spare_members.extend(out.clusters.drain(keep..).rev().map(|c| c.members));
         for (k, &i) in self.center_light.iter().enumerate() {
             let i = i as usize;
             let (id, d_min, range, position) = (self.ids[i] as usize, self.d_min[i], self.range[i], self.pos[i]);
@@ -550,7 +555,12 @@ impl Clusterer {
                 }
                 None => out.clusters.push(Cluster {
                     center: id,
-                    members: vec![id],
+                    members: {
+                        let mut members = self.spare_members.pop().unwrap_or_default();
+                        members.clear();
+                        members.push(id);
+                        members
+                    },
                     d_min,
                     c_att: range,
                     position,
@@ -879,7 +889,7 @@ impl Grid {
         // x = d_min / d_init in (0, 1): with x = m 2^e (1 <= m < 2), floor(log2(1 / x)) is -e - 1, or -e when
         // m = 1. Every positive f32 is a normal f64.
         let x = d_min as f64 * self.inv_d_init;
-        if !(x > 0.0) {
+        if x.is_nan() || x <= 0.0 {
             return last;
         }
         let bits = x.to_bits();
@@ -943,20 +953,20 @@ impl Grid {
     #[inline(always)]
     fn search_box(&self, level: usize, p: Vec3, to_camera: f32, radius: f32) -> Option<CellBox> {
         let l = &self.levels[level];
-        if l.count == 0 || !(radius >= 0.0) {
+        if l.count == 0 || radius.is_nan() || radius < 0.0 {
             return None;
         }
         if self.prune && to_camera.is_finite() && l.far.is_finite() {
             let slack = (to_camera + radius) * 1e-4;
-            if to_camera + 0.5 * radius < l.near || to_camera - 0.5 * radius > l.far {
+            if to_camera + radius + slack < l.near || to_camera - radius - slack > l.far {
                 return None;
             }
         }
         let q = [p.x, p.y, p.z];
         let r = radius as f64 * 1.0001 * l.inv_cell + 1e-6;
         let mut b = CellBox { lo: [0; 3], hi: [0; 3], own: [0; 3] };
-        for a in 0..3 {
-            let x = (q[a] as f64 - self.origin[a]) * l.inv_cell;
+        for (a, &v) in q.iter().enumerate() {
+            let x = (v as f64 - self.origin[a]) * l.inv_cell;
             // `as u32` truncates, which is floor for the non-negative values the clamp leaves.
             b.lo[a] = (x - r).clamp(0.0, l.top[a]) as u32;
             b.hi[a] = (x + r).clamp(0.0, l.top[a]) as u32;

@@ -453,7 +453,7 @@ impl Technique for LightCluster {
         vec![
             OverlayLayer { name: "lights by cluster", visible_by_default: true, primitives: by_cluster },
             OverlayLayer { name: "cluster centers", visible_by_default: true, primitives: centers },
-            OverlayLayer { name: "member → center", visible_by_default: true, primitives: lines },
+            OverlayLayer { name: "member -> center", visible_by_default: true, primitives: lines },
             OverlayLayer { name: "d_min spheres", visible_by_default: false, primitives: d_min_spheres },
             OverlayLayer { name: "C_att spheres", visible_by_default: false, primitives: c_att_spheres },
         ]
