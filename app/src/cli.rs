@@ -31,6 +31,9 @@ pub struct Cli {
     /// App: quit after this many seconds (smoke tests, README pictures).
     #[arg(long, hide = true)]
     pub quit_after: Option<f32>,
+    /// App: orbit the camera continuously (UI frame-rate measurement).
+    #[arg(long, hide = true)]
+    pub orbit_demo: bool,
 }
 
 #[derive(Subcommand, Debug)]

@@ -16,6 +16,7 @@ fn main() -> ExitCode {
             screenshot: args.screenshot,
             quit_after_secs: args.quit_after,
             synchronous: false,
+            orbit_demo: args.orbit_demo,
         }),
     };
     match result {

@@ -40,6 +40,8 @@ pub struct Startup {
     pub quit_after_secs: Option<f32>,
     /// Finish every frame within one UI frame, whatever it costs (deterministic tests).
     pub synchronous: bool,
+    /// Orbit the camera continuously, as a user dragging would (UI frame-rate measurements).
+    pub orbit_demo: bool,
 }
 
 /// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
@@ -155,6 +157,8 @@ pub struct ShadowLabApp {
     exit_screenshot: Option<PathBuf>,
     quit_after_secs: Option<f32>,
     quitting: bool,
+    orbit_demo: bool,
+    ui_frames: u64,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -198,6 +202,8 @@ impl ShadowLabApp {
             exit_screenshot: startup.screenshot.clone(),
             quit_after_secs: startup.quit_after_secs,
             quitting: false,
+            orbit_demo: startup.orbit_demo,
+            ui_frames: 0,
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -518,7 +524,8 @@ impl ShadowLabApp {
         let x_ray = self.view.x_ray;
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
         let main_inputs = FrameInputs { camera, lights: lights.clone(), technique, params, settings: settings.clone() };
-        let budget = gpu.sizer.budget_ms();
+        // While the user drags, keep the UI fluid: the preview gets a third of the budget.
+        let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
         let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
         gpu.main.overlays(&camera, &overlays, x_ray)?;
         let mut total_spent = spent;
@@ -826,7 +833,12 @@ impl ShadowLabApp {
             }
         });
 
-        let input = self.camera_input(ui.ctx(), &response, gizmo_active);
+        let mut input = self.camera_input(ui.ctx(), &response, gizmo_active);
+        if self.orbit_demo {
+            // About 40 points of drag per second, like a slow orbit by hand.
+            input.rotate.x += 40.0 * input.dt_secs;
+            ui.ctx().request_repaint();
+        }
         if self.camera.update(&input) {
             self.last_interaction = Some(Instant::now());
         }
@@ -1041,6 +1053,7 @@ fn save_recent(dir: &Path, recent: &[PathBuf]) {
 impl eframe::App for ShadowLabApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
+        self.ui_frames += 1;
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f64() * 1000.0;
         self.last_frame = now;
@@ -1055,6 +1068,8 @@ impl eframe::App for ShadowLabApp {
         if let Some(secs) = self.quit_after_secs {
             if !self.quitting && self.started.elapsed().as_secs_f32() >= secs {
                 self.quitting = true;
+                let t = self.started.elapsed().as_secs_f64();
+                eprintln!("UI frames: {} in {t:.1} s ({:.1} fps)", self.ui_frames, self.ui_frames as f64 / t);
                 if self.exit_screenshot.is_some() {
                     self.request_window_screenshot(&ctx);
                 } else {

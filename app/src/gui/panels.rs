@@ -151,15 +151,14 @@ fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str
 
 fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Shadows");
-    egui::ComboBox::from_label("Technique")
-        .selected_text(REGISTRY.iter().find(|e| e.key == app.technique).map(|e| e.label).unwrap_or("?"))
-        .width(150.0)
-        .truncate()
-        .show_ui(ui, |ui| {
+    egui::ComboBox::from_label("Technique").selected_text(app.technique.clone()).width(150.0).truncate().show_ui(
+        ui,
+        |ui| {
             for e in REGISTRY {
                 ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
             }
-        });
+        },
+    );
     let key = app.technique.clone();
     let Some(gpu) = &mut app.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
