@@ -25,6 +25,15 @@ pub struct Cli {
     pub command: Option<Command>,
     /// Open this scene file (.ron) or model (.obj, .gltf, .glb) in the app.
     pub path: Option<PathBuf>,
+    /// App: start with this technique (e.g. lightcluster).
+    #[arg(long = "app-technique", value_name = "KEY")]
+    pub app_technique: Option<String>,
+    /// App: start in this view: single, side, split or difference.
+    #[arg(long = "app-view", value_name = "VIEW")]
+    pub app_view: Option<String>,
+    /// App: start on this built-in scene (cornell, arcade, restaurant).
+    #[arg(long = "app-scene", value_name = "NAME")]
+    pub app_scene: Option<String>,
     /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
     #[arg(long, hide = true)]
     pub screenshot: Option<PathBuf>,

@@ -17,6 +17,9 @@ fn main() -> ExitCode {
             quit_after_secs: args.quit_after,
             synchronous: false,
             orbit_demo: args.orbit_demo,
+            technique: args.app_technique,
+            view: args.app_view,
+            builtin: args.app_scene,
         }),
     };
     match result {

@@ -42,6 +42,12 @@ pub struct Startup {
     pub synchronous: bool,
     /// Orbit the camera continuously, as a user dragging would (UI frame-rate measurements).
     pub orbit_demo: bool,
+    /// Start with this technique key.
+    pub technique: Option<String>,
+    /// Start in this view: single, side, split or difference.
+    pub view: Option<String>,
+    /// Start on this built-in scene.
+    pub builtin: Option<String>,
 }
 
 /// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
@@ -212,8 +218,26 @@ impl ShadowLabApp {
                 gpu.sizer = StepSizer { max_lights_per_step: 1 << 20, budget_ms: f64::INFINITY };
             }
         }
+        if let Some(name) = &startup.builtin {
+            app.load_builtin(name);
+        }
         if let Some(path) = startup.path {
             app.open_path(&path);
+        }
+        if let Some(t) = startup.technique {
+            if shadowlab_core::technique::REGISTRY.iter().any(|e| e.key == t) {
+                app.technique = t;
+            } else {
+                app.error(format!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()));
+            }
+        }
+        match startup.view.as_deref() {
+            None => {}
+            Some("single") => app.view.mode = ViewMode::Single,
+            Some("side") => app.view.mode = ViewMode::SideBySide,
+            Some("split") => app.view.mode = ViewMode::Split,
+            Some("difference") => app.view.mode = ViewMode::Difference,
+            Some(other) => app.error(format!("unknown view '{other}' (single, side, split, difference)")),
         }
         Ok(app)
     }
