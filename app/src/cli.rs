@@ -251,7 +251,8 @@ fn camera_from_args(scene: &Scene, args: &FrameArgs) -> Result<Camera> {
 /// Apply `--shadow-res` and `--param key=value` to a technique.
 pub fn apply_params(technique: &mut dyn Technique, shadow_res: Option<u32>, params: &[String]) -> Result<()> {
     let mut all: Vec<(String, String)> = Vec::new();
-    if let Some(r) = shadow_res {
+    // `--shadow-res` applies to the techniques that have cube maps (not to the ray-traced truth, say).
+    if let Some(r) = shadow_res.filter(|_| technique.params().iter().any(|p| p.key == "shadow_res")) {
         all.push(("shadow_res".into(), r.to_string()));
     }
     for p in params {
