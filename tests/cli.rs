@@ -195,3 +195,151 @@ fn info_prints_scene_statistics() {
     assert!(text.contains("lights     80"), "{text}");
     assert!(text.contains("triangles"), "{text}");
 }
+
+#[test]
+fn compare_writes_a_difference_image_and_metrics() {
+    let dir = out_dir("compare");
+    let diff = dir.join("diff.png");
+    let json = dir.join("metrics.json");
+    let out = shadowlab(&[
+        "compare",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--technique",
+        "lightcluster",
+        "--param",
+        "d_init=0.6",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--shadow-res",
+        "64",
+        "--warmup",
+        "0",
+        "--repeat",
+        "3",
+        "--mode",
+        "signed",
+        "--gain",
+        "5",
+        "--out",
+        diff.to_str().unwrap(),
+        "--report",
+        json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let img = image::open(&diff).unwrap();
+    assert_eq!((img.width(), img.height()), (96, 64));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0);
+    assert!(r["metrics"]["flip_mean"].as_f64().is_some());
+    assert!(r["metrics"]["shadow_intensity_error"].as_f64().is_some());
+    assert_eq!(r["technique_timing"]["frames"], 3);
+    assert!(r["speedup"].as_f64().unwrap() > 0.0);
+    assert!(r["technique_counts"]["clusters"].as_u64().unwrap() < 32);
+    // The reference against itself is exact.
+    let out = shadowlab(&[
+        "compare",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--technique",
+        "reference",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--shadow-res",
+        "64",
+        "--warmup",
+        "0",
+        "--no-flip",
+        "--out",
+        diff.to_str().unwrap(),
+        "--report",
+        json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(r["metrics"]["rmse"].as_f64().unwrap(), 0.0);
+    assert!(r["metrics"]["psnr_db"].is_null());
+}
+
+#[test]
+fn sweep_writes_one_row_per_setting() {
+    let dir = out_dir("sweep");
+    let csv = dir.join("sweep.csv");
+    let md = dir.join("sweep.md");
+    let out = shadowlab(&[
+        "sweep",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--technique",
+        "lightcluster",
+        "--param",
+        "d_init=0.4:0.6:0.2",
+        "--param",
+        "filter=pcf,pcss",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--shadow-res",
+        "32",
+        "--warmup",
+        "0",
+        "--no-flip",
+        "--out",
+        csv.to_str().unwrap(),
+        "--markdown",
+        md.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 4, "{text}");
+    assert!(lines[0].starts_with("d_init,filter,clusters"));
+    assert!(lines[1].starts_with("0.4,pcf,") && lines[4].starts_with("0.6,pcss,"), "{text}");
+    // Fewer or equal clusters for the larger d_init.
+    let clusters = |l: &str| l.split(',').nth(2).unwrap().parse::<u32>().unwrap();
+    assert!(clusters(lines[4]) <= clusters(lines[1]));
+    assert!(std::fs::read_to_string(&md).unwrap().starts_with("| d_init | filter |"));
+    assert_fails_with(
+        &["sweep", "--scene", "cornell", "--param", "d_init=1:0:0.1", "--out", csv.to_str().unwrap()],
+        "START <= END",
+    );
+    assert_fails_with(
+        &["sweep", "--scene", "cornell", "--param", "d_init=-5", "--out", csv.to_str().unwrap()],
+        "d_init",
+    );
+}
+
+#[test]
+fn bench_runs_the_standard_suite_on_the_builtin_scenes() {
+    let dir = out_dir("bench");
+    let md = dir.join("bench.md");
+    let out = shadowlab(&[
+        "bench",
+        "--builtin-only",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--shadow-res",
+        "32",
+        "--warmup",
+        "0",
+        "--repeat",
+        "1",
+        "--out",
+        md.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&md).unwrap();
+    for needle in ["| cornell | reference |", "| arcade | lightcluster |", "| restaurant | raytraced |"] {
+        assert!(text.contains(needle), "{needle} missing in\n{text}");
+    }
+}

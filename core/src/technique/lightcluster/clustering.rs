@@ -132,7 +132,8 @@ impl Default for ClusterParams {
 }
 
 impl ClusterParams {
-    /// Check the parameters for a UI or CLI. Clustering never panics on invalid values (see
+    /// Check the parameters for a UI or CLI: `d_init` finite and `>= 0`, `z_far > 0` (infinity allowed: no
+    /// view-adaptive shrinking), whether or not `adaptive` is on. Clustering never panics on invalid values (see
     /// [`ClusterParams::effective_d_init`] and [`ClusterParams::scale_at`] for what it does instead).
     pub fn validate(&self) -> Result<(), String> {
         if !(self.d_init.is_finite() && self.d_init >= 0.0) {
@@ -812,16 +813,27 @@ impl Grid {
             cell /= 2.0;
         }
 
-        // Every light's slot (as if it were a center), counted per slot.
+        // Every light's level, then the slots of the levels in use, then every light's slot (as if it were a
+        // center), counted per slot.
         self.runs.clear();
-        self.light_slot.clear();
-        self.light_level.clear();
-        for (i, &p) in positions.iter().enumerate() {
-            let level = self.level_of(d_min[i]);
-            let slot = self.slot_for_insert(level, p);
+        let mut light_level = std::mem::take(&mut self.light_level);
+        light_level.clear();
+        light_level.extend(d_min.iter().map(|&d| self.level_of(d) as u8));
+        self.light_level = light_level;
+        for &level in &self.light_level {
+            self.levels[level as usize].used = true;
+        }
+        for level in 0..self.levels.len() {
+            self.prepare_level(level);
+        }
+        self.light_slot.resize(n, 0);
+        for i in 0..n {
+            let level = self.light_level[i] as usize;
+            let l = &self.levels[level];
+            let c = self.cell_of(l, positions[i]);
+            let slot = if l.dense { Self::dense_slot(l, c) } else { self.insert_hash_key(level, c) };
+            self.light_slot[i] = slot;
             self.runs[slot as usize][1] += 1;
-            self.light_slot.push(slot);
-            self.light_level.push(level as u8);
         }
         // Runs start where the previous slot's lights end; empty for now.
         let mut start = 0u32;
@@ -904,23 +916,21 @@ impl Grid {
         std::array::from_fn(|a| ((q[a] as f64 - self.origin[a]) * l.inv_cell).clamp(0.0, l.top[a]) as u32)
     }
 
-    /// The slot of `p`'s cell in `level`, creating the level's slots or the hash entry as needed.
-    fn slot_for_insert(&mut self, level: usize, p: Vec3) -> u32 {
+    /// Give a level in use its slots: a dense level its cells (unless slot indices would grow too large, then
+    /// it is hashed), a hashed level the hash table (shared by all hashed levels).
+    fn prepare_level(&mut self, level: usize) {
         let l = &mut self.levels[level];
-        if !l.used && l.dense {
+        if !l.used {
+            return;
+        }
+        if l.dense {
             let cells = l.dims.iter().map(|&d| d as usize).product::<usize>();
             if self.runs.len() + cells < (NONE / 4) as usize {
                 l.offset = self.runs.len() as u32;
                 self.runs.resize(self.runs.len() + cells, [0, 0]);
-            } else {
-                l.dense = false; // slot indices must stay far below u32::MAX
+                return;
             }
-        }
-        l.used = true;
-        let l = *l;
-        let c = self.cell_of(&l, p);
-        if l.dense {
-            return l.offset + c[0] + l.dims[0] * (c[1] + l.dims[1] * c[2]);
+            l.dense = false; // slot indices must stay far below u32::MAX
         }
         if !self.hash_ready {
             self.hash_ready = true;
@@ -931,6 +941,15 @@ impl Grid {
             self.mask = self.hash_slots - 1;
             self.shift = 64 - self.hash_slots.trailing_zeros();
         }
+    }
+
+    #[inline(always)]
+    fn dense_slot(l: &Level, c: [u32; 3]) -> u32 {
+        l.offset + c[0] + l.dims[0] * (c[1] + l.dims[1] * c[2])
+    }
+
+    /// The slot of cell `c` of a hashed `level`, adding the cell to the table when new.
+    fn insert_hash_key(&mut self, level: usize, c: [u32; 3]) -> u32 {
         let key = Self::key(level, c);
         let mut slot = self.hash_start(key);
         while self.hash_keys[slot] != key {
@@ -990,7 +1009,7 @@ impl Grid {
     fn slot(&self, level: usize, c: [u32; 3]) -> u32 {
         let l = &self.levels[level];
         if l.dense {
-            return l.offset + c[0] + l.dims[0] * (c[1] + l.dims[1] * c[2]);
+            return Self::dense_slot(l, c);
         }
         let key = Self::key(level, c);
         let mut slot = self.hash_start(key);
