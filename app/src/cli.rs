@@ -833,8 +833,8 @@ fn bench(args: BenchArgs) -> Result<()> {
         ("lightcluster", &["d_init=0.5", "filter=pcf"]),
         ("raytraced", &[]),
     ];
-    let mut md = format!(
-        "| scene | technique | parameters | shadow maps | median ms | min ms | speedup vs reference | RMSE | shadow error |\n|---|---|---|---|---|---|---|---|---|\n"
+    let mut md = String::from(
+        "| scene | technique | parameters | shadow maps | median ms | min ms | speedup vs reference | RMSE | shadow error |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut adapter = String::new();
     for s in &suite {

@@ -827,10 +827,10 @@ impl Grid {
             self.prepare_level(level);
         }
         self.light_slot.resize(n, 0);
-        for i in 0..n {
+        for (i, &p) in positions.iter().enumerate() {
             let level = self.light_level[i] as usize;
             let l = &self.levels[level];
-            let c = self.cell_of(l, positions[i]);
+            let c = self.cell_of(l, p);
             let slot = if l.dense { Self::dense_slot(l, c) } else { self.insert_hash_key(level, c) };
             self.light_slot[i] = slot;
             self.runs[slot as usize][1] += 1;
