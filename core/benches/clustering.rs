@@ -73,8 +73,11 @@ fn main() {
     let frustum = Frustum::from_clip_from_world(&camera.clip_from_world(16.0 / 9.0));
     println!("| lights | visible | d_init | clusters | grid | median ms | ms per 1000 lights | fresh ms |");
     println!("|---:|---:|---:|---:|---|---:|---:|---:|");
-    // `CLUSTERING_LIGHTS=2048` restricts the run to one light count (for profiling).
-    let only: Option<usize> = std::env::var("CLUSTERING_LIGHTS").ok().and_then(|v| v.parse().ok());
+    // `CLUSTERING_LIGHTS=2048` restricts the run to one light count (for profiling). `cargo test --all-targets`
+    // runs this file without `--bench`: then only the smallest count runs, as a smoke test.
+    let smoke = !std::env::args().any(|a| a == "--bench");
+    let only: Option<usize> =
+        std::env::var("CLUSTERING_LIGHTS").ok().and_then(|v| v.parse().ok()).or(smoke.then_some(COUNTS[0]));
     for &n in COUNTS.iter().filter(|&&n| only.is_none_or(|o| o == n)) {
         let lights = lights(n, n as u64);
         for &d_init in &D_INITS {
