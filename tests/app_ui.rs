@@ -205,3 +205,33 @@ fn difference_view_measures_the_technique_against_the_reference() {
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
     h.get_by_label("RMSE");
 }
+
+#[test]
+fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("sweep", "cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(2);
+    let values: Vec<ParamValue> = [0.3f32, 0.45, 0.6].iter().map(|v| ParamValue::Float(*v)).collect();
+    h.state_mut().start_sweep("d_init", values).unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while h.state_mut().sweep.as_mut().unwrap().poll() {
+        assert!(std::time::Instant::now() < deadline, "the sweep did not finish");
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let s = h.state().sweep.as_ref().unwrap();
+    assert!(s.error.is_none(), "{:?}", s.error);
+    assert_eq!(s.rows.len(), 3);
+    assert!(s.rows.windows(2).all(|w| w[0].value < w[1].value));
+    assert!(s.rows.iter().all(|r| r.ms > 0.0 && r.rmse > 0.0 && r.reference_ms > 0.0));
+    // Cancelled right away, a long sweep stops early.
+    let many: Vec<ParamValue> = (0..40).map(|i| ParamValue::Float(0.1 + i as f32 * 0.05)).collect();
+    h.state_mut().start_sweep("d_init", many).unwrap();
+    h.state().sweep.as_ref().unwrap().cancel();
+    while h.state_mut().sweep.as_mut().unwrap().poll() {
+        assert!(std::time::Instant::now() < deadline + std::time::Duration::from_secs(60));
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    assert!(h.state().sweep.as_ref().unwrap().rows.len() < 40);
+}

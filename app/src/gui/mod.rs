@@ -6,6 +6,7 @@ pub mod camera;
 pub mod document;
 pub mod gizmo;
 pub mod panels;
+pub mod sweep;
 pub mod viewport;
 
 use std::collections::{BTreeMap, VecDeque};
@@ -159,6 +160,9 @@ pub struct ShadowLabApp {
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub ui_frame_ms: VecDeque<f64>,
     pub difference: Option<Difference>,
+    pub sweep: Option<sweep::Sweep>,
+    /// Sweep panel inputs: parameter key, start, end, number of values.
+    pub sweep_input: (String, f64, f64, usize),
     last_frame: Instant,
     exit_screenshot: Option<PathBuf>,
     quit_after_secs: Option<f32>,
@@ -204,6 +208,8 @@ impl ShadowLabApp {
             window_shot: Default::default(),
             ui_frame_ms: VecDeque::new(),
             difference: None,
+            sweep: None,
+            sweep_input: ("d_init".into(), 0.1, 1.6, 6),
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
             quit_after_secs: startup.quit_after_secs,
@@ -639,6 +645,29 @@ impl ShadowLabApp {
         let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
         let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
         self.difference = Some(Difference { texture, metrics, key });
+        Ok(())
+    }
+
+    /// Start a sweep of `key` over `values` for the current technique, view and lights.
+    pub fn start_sweep(&mut self, key: &str, values: Vec<ParamValue>) -> Result<()> {
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let settings = gpu.main.renderer.settings().clone();
+        let fixed: Vec<(String, ParamValue)> = self
+            .params
+            .get(&self.technique)
+            .map(|p| p.iter().filter(|(k, _)| k.as_str() != key).map(|(k, v)| (k.clone(), v.clone())).collect())
+            .unwrap_or_default();
+        self.sweep = Some(sweep::Sweep::start(sweep::SweepJob {
+            gpu: gpu.ctx.clone(),
+            scene: self.scene.clone(),
+            lights: self.animated_lights(),
+            camera: self.camera.camera(),
+            settings,
+            technique: self.technique.clone(),
+            fixed,
+            key: key.to_string(),
+            values,
+        }));
         Ok(())
     }
 

@@ -433,6 +433,84 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     });
 }
 
+/// Sweep one numeric parameter of the current technique against the reference, plotted live.
+fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Sweep");
+    let key = app.technique.clone();
+    let Some(gpu) = &mut app.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&key) else { return };
+    let numeric: Vec<_> = technique
+        .params()
+        .into_iter()
+        .filter(|p| matches!(p.kind, ParamKind::Float { .. } | ParamKind::Int { .. }))
+        .collect();
+    if numeric.is_empty() {
+        ui.label("this technique has no numeric parameter");
+        return;
+    }
+    let (param_key, start, end, count) = &mut app.sweep_input;
+    if !numeric.iter().any(|p| p.key == param_key.as_str()) {
+        *param_key = numeric[0].key.to_string();
+    }
+    egui::ComboBox::from_label("parameter").selected_text(param_key.clone()).show_ui(ui, |ui| {
+        for p in &numeric {
+            ui.selectable_value(param_key, p.key.to_string(), p.label);
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.add(egui::DragValue::new(start).speed(0.01).prefix("from "));
+        ui.add(egui::DragValue::new(end).speed(0.01).prefix("to "));
+        ui.add(egui::DragValue::new(count).range(2..=64).prefix("values "));
+    });
+    let (param_key, start, end, count) = (param_key.clone(), *start, *end, *count);
+    let running = app.sweep.as_mut().is_some_and(|s| s.poll());
+    let (mut run, mut cancel) = (false, false);
+    ui.horizontal(|ui| {
+        run = !running && ui.button("Run sweep").clicked();
+        cancel = running && ui.button("Cancel").clicked();
+    });
+    if run {
+        if let Some(kind) = numeric.iter().find(|p| p.key == param_key.as_str()).map(|p| p.kind.clone()) {
+            let values = super::sweep::values(&kind, start, end, count);
+            if let Err(e) = app.start_sweep(&param_key, values) {
+                app.error(format!("sweep: {e:#}"));
+            }
+        }
+    }
+    if cancel {
+        if let Some(s) = &app.sweep {
+            s.cancel();
+        }
+    }
+    if let Some(s) = &app.sweep {
+        if running {
+            ui.add(egui::ProgressBar::new(s.rows.len() as f32 / s.total.max(1) as f32).show_percentage());
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
+        }
+        if let Some(e) = &s.error {
+            ui.colored_label(egui::Color32::LIGHT_RED, e);
+        }
+        if !s.rows.is_empty() {
+            let time: PlotPoints = s.rows.iter().map(|r| [r.value, r.ms]).collect();
+            let reference: PlotPoints = s.rows.iter().map(|r| [r.value, r.reference_ms]).collect();
+            Plot::new("sweep time").legend(Legend::default()).height(110.0).x_axis_label(s.key.clone()).show(
+                ui,
+                |plot| {
+                    plot.line(Line::new("ms", time));
+                    plot.line(Line::new("reference ms", reference));
+                },
+            );
+            let error: PlotPoints = s.rows.iter().map(|r| [r.value, r.rmse]).collect();
+            Plot::new("sweep error").legend(Legend::default()).height(110.0).x_axis_label(s.key.clone()).show(
+                ui,
+                |plot| {
+                    plot.line(Line::new("RMSE", error));
+                },
+            );
+        }
+    }
+}
+
 pub fn side_panels(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     egui::Panel::bottom("timings").resizable(true).default_size(190.0).show(ui, |ui| timings_ui(app, ui));
     egui::Panel::left("controls").resizable(true).default_size(300.0).show(ui, |ui| {
@@ -447,6 +525,8 @@ pub fn side_panels(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             lights_ui(app, ui);
             ui.separator();
             stats_ui(app, ui);
+            ui.separator();
+            sweep_ui(app, ui);
         });
     });
 }

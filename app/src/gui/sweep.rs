@@ -1,0 +1,156 @@
+//! The sweep panel: renders the current technique for a range of one parameter's values on a worker thread
+//! (its own renderer on the shared device), compares each image with the reference, and plots time and error
+//! against the parameter while it runs. Cancel stops it after the current setting.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{channel, Receiver};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use anyhow::{anyhow, Result};
+use shadowlab_core::compare::{self, CompareOptions, Image};
+use shadowlab_core::scene::{Camera, PointLight, Scene};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::{GpuContext, RenderSettings, Renderer};
+
+/// One finished setting.
+#[derive(Clone, Debug)]
+pub struct SweepRow {
+    pub value: f64,
+    pub ms: f64,
+    pub rmse: f64,
+    pub reference_ms: f64,
+}
+
+pub enum SweepMessage {
+    Row(SweepRow),
+    Done,
+    Failed(String),
+}
+
+/// A sweep in progress or finished.
+pub struct Sweep {
+    pub key: String,
+    pub rows: Vec<SweepRow>,
+    pub total: usize,
+    pub finished: bool,
+    pub error: Option<String>,
+    cancel: Arc<AtomicBool>,
+    receiver: Receiver<SweepMessage>,
+    worker: Option<JoinHandle<()>>,
+}
+
+/// What the worker renders.
+pub struct SweepJob {
+    pub gpu: GpuContext,
+    pub scene: Scene,
+    pub lights: Vec<PointLight>,
+    pub camera: Camera,
+    pub settings: RenderSettings,
+    pub technique: String,
+    pub fixed: Vec<(String, ParamValue)>,
+    pub key: String,
+    pub values: Vec<ParamValue>,
+}
+
+fn number(v: &ParamValue) -> f64 {
+    match v {
+        ParamValue::Float(x) => *x as f64,
+        ParamValue::Int(x) => *x as f64,
+        ParamValue::Bool(b) => *b as i32 as f64,
+        ParamValue::Choice(_) => 0.0,
+    }
+}
+
+fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Result<()> {
+    let mut settings = job.settings.clone();
+    settings.max_lights_per_step = 0;
+    let mut renderer = Renderer::new(&job.gpu, &job.scene, settings)?;
+    let (w, h) = (renderer.settings().width, renderer.settings().height);
+    let mut reference = renderer.create_technique("reference").ok_or_else(|| anyhow!("no reference"))?;
+    let mut technique = renderer.create_technique(&job.technique).ok_or_else(|| anyhow!("unknown technique"))?;
+    for (k, v) in &job.fixed {
+        let _ = technique.set_param(k, v);
+        let _ = reference.set_param(k, v);
+    }
+    let r = renderer.render_frame(reference.as_mut(), &job.camera, &job.lights, &mut |_, _| {})?;
+    let reference_ms = r.gpu_total_ms;
+    let reference_image = Image::new(w, h, renderer.read_hdr()?)?;
+    let mask = renderer.read_geometry_mask()?;
+    for value in &job.values {
+        if cancel.load(Ordering::Relaxed) {
+            break;
+        }
+        technique.set_param(&job.key, value)?;
+        let report = renderer.render_frame(technique.as_mut(), &job.camera, &job.lights, &mut |_, _| {})?;
+        let image = Image::new(w, h, renderer.read_hdr()?)?;
+        let options = CompareOptions { flip: false, ..Default::default() };
+        let m = compare::compare(&image, &reference_image, Some(&mask), &options)?;
+        send(SweepMessage::Row(SweepRow { value: number(value), ms: report.gpu_total_ms, rmse: m.rmse, reference_ms }));
+    }
+    Ok(())
+}
+
+impl Sweep {
+    pub fn start(job: SweepJob) -> Sweep {
+        let (tx, rx) = channel();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let key = job.key.clone();
+        let total = job.values.len();
+        let flag = cancel.clone();
+        let worker = std::thread::spawn(move || {
+            let send = |m| {
+                let _ = tx.send(m);
+            };
+            match run(job, &flag, &send) {
+                Ok(()) => send(SweepMessage::Done),
+                Err(e) => send(SweepMessage::Failed(format!("{e:#}"))),
+            }
+        });
+        Sweep { key, rows: Vec::new(), total, finished: false, error: None, cancel, receiver: rx, worker: Some(worker) }
+    }
+
+    /// Collect what the worker sent; true while it runs.
+    pub fn poll(&mut self) -> bool {
+        while let Ok(m) = self.receiver.try_recv() {
+            match m {
+                SweepMessage::Row(r) => self.rows.push(r),
+                SweepMessage::Done => self.finished = true,
+                SweepMessage::Failed(e) => {
+                    self.error = Some(e);
+                    self.finished = true;
+                }
+            }
+        }
+        if self.finished {
+            if let Some(w) = self.worker.take() {
+                let _ = w.join();
+            }
+        }
+        !self.finished
+    }
+
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+impl Drop for Sweep {
+    fn drop(&mut self) {
+        self.cancel();
+    }
+}
+
+/// `count` evenly spaced values from `start` to `end` for a numeric parameter kind.
+pub fn values(kind: &shadowlab_core::technique::ParamKind, start: f64, end: f64, count: usize) -> Vec<ParamValue> {
+    use shadowlab_core::technique::ParamKind;
+    let count = count.clamp(2, 64);
+    (0..count)
+        .map(|i| start + (end - start) * i as f64 / (count - 1) as f64)
+        .filter_map(|v| match kind {
+            ParamKind::Float { min, max } => Some(ParamValue::Float((v as f32).clamp(*min, *max))),
+            ParamKind::Int { min, max } => Some(ParamValue::Int((v.round() as i64).clamp(*min, *max))),
+            _ => None,
+        })
+        .collect()
+}
