@@ -486,7 +486,7 @@ impl ShadowLabApp {
     // ----- rendering -----
 
     pub fn render_settings(&self, size: egui::Vec2, preview: bool) -> RenderSettings {
-        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.5 } else { 1.0 };
+        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.35 } else { 1.0 };
         RenderSettings {
             width: ((size.x * scale) as u32).clamp(16, 4096),
             height: ((size.y * scale) as u32).clamp(16, 4096),
