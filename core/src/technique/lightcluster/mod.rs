@@ -24,12 +24,12 @@ use wgpu::util::DeviceExt;
 
 use super::reference::Reference;
 use super::{
-    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, FrameContext, GrowableBuffer,
-    Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, CubeMapParams, FrameContext,
+    GrowableBuffer, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer, DEFAULT_ATLAS_BUDGET_BYTES};
+use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
@@ -80,10 +80,8 @@ pub struct LightClusterParams {
     pub adaptive: bool,
     pub filter: Filter,
     pub samples: u32,
-    pub shadow_resolution: u32,
-    pub bias_world: f32,
-    pub normal_offset_texels: f32,
-    pub atlas_budget_mib: u32,
+    /// Cube-map resolution, bias, normal offset, batch memory.
+    pub cube: CubeMapParams,
     /// Render the reference path when clustering merges nothing (the paper's worst case).
     pub fallback: bool,
 }
@@ -96,10 +94,7 @@ impl Default for LightClusterParams {
             adaptive: true,
             filter: Filter::Pcss,
             samples: 8,
-            shadow_resolution: 1024,
-            bias_world: 0.01,
-            normal_offset_texels: 1.5,
-            atlas_budget_mib: (DEFAULT_ATLAS_BUDGET_BYTES >> 20) as u32,
+            cube: CubeMapParams::default(),
             fallback: true,
         }
     }
@@ -174,11 +169,7 @@ impl LightCluster {
     }
 
     fn sync_reference_params(&mut self) {
-        let r = &mut self.reference.params;
-        r.shadow_resolution = self.params.shadow_resolution;
-        r.bias_world = self.params.bias_world;
-        r.normal_offset_texels = self.params.normal_offset_texels;
-        r.atlas_budget_mib = self.params.atlas_budget_mib;
+        self.reference.params = self.params.cube.clone();
     }
 }
 
@@ -203,7 +194,7 @@ impl Technique for LightCluster {
 
     fn params(&self) -> Vec<Param> {
         let p = &self.params;
-        vec![
+        let mut params = vec![
             Param {
                 key: "d_init",
                 label: "d_init",
@@ -240,41 +231,15 @@ impl Technique for LightCluster {
                 value: ParamValue::Int(p.samples as i64),
             },
             Param {
-                key: "shadow_res",
-                label: "Cube resolution",
-                help: "Texels per cube-map face",
-                kind: ParamKind::Int { min: 16, max: 4096 },
-                value: ParamValue::Int(p.shadow_resolution as i64),
-            },
-            Param {
-                key: "bias",
-                label: "Depth bias",
-                help: "Constant bias in world units",
-                kind: ParamKind::Float { min: 0.0, max: 1.0 },
-                value: ParamValue::Float(p.bias_world),
-            },
-            Param {
-                key: "normal_offset",
-                label: "Normal offset",
-                help: "Receiver offset along its normal, in shadow-map texels",
-                kind: ParamKind::Float { min: 0.0, max: 16.0 },
-                value: ParamValue::Float(p.normal_offset_texels),
-            },
-            Param {
-                key: "atlas_mib",
-                label: "Batch memory (MiB)",
-                help: "Memory of one batch of cube maps",
-                kind: ParamKind::Int { min: 1, max: 4096 },
-                value: ParamValue::Int(p.atlas_budget_mib as i64),
-            },
-            Param {
                 key: "fallback",
                 label: "Reference when nothing clusters",
                 help: "Use the reference path when every visible light is its own cluster (the paper's worst case)",
                 kind: ParamKind::Bool,
                 value: ParamValue::Bool(p.fallback),
             },
-        ]
+        ];
+        params.extend(p.cube.params());
+        params
     }
 
     fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
@@ -286,12 +251,11 @@ impl Technique for LightCluster {
             ("adaptive", ParamValue::Bool(v)) => p.adaptive = *v,
             ("filter", ParamValue::Choice(v)) => p.filter = if v == "pcf" { Filter::Pcf } else { Filter::Pcss },
             ("samples", ParamValue::Int(v)) => p.samples = *v as u32,
-            ("shadow_res", ParamValue::Int(v)) => p.shadow_resolution = *v as u32,
-            ("bias", ParamValue::Float(v)) => p.bias_world = *v,
-            ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
-            ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("fallback", ParamValue::Bool(v)) => p.fallback = *v,
-            _ => unreachable!("check_param accepted an unknown key"),
+            _ => {
+                let known = p.cube.set(key, value);
+                debug_assert!(known, "check_param accepted an unknown key");
+            }
         }
         Ok(())
     }
@@ -340,8 +304,7 @@ impl Technique for LightCluster {
                 light_count: cluster.members.len() as u32,
             });
         }
-        let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
-        let budget = self.params.atlas_budget_mib as u64 * (1 << 20);
+        let (res, budget) = self.params.cube.resolution_and_budget(ctx.gpu);
         self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step);
         let batches = cluster_count.div_ceil(self.batch_size);
         self.counts =
@@ -401,8 +364,8 @@ impl Technique for LightCluster {
             first_cluster: first as u32,
             cluster_count: (last - first) as u32,
             resolution: atlas.resolution as f32,
-            bias_world: self.params.bias_world,
-            normal_offset_texels: self.params.normal_offset_texels,
+            bias_world: self.params.cube.bias_world,
+            normal_offset_texels: self.params.cube.normal_offset_texels,
             tiles_per_row: atlas.tiles_per_row,
             samples: self.params.samples,
             pcss: u32::from(self.params.filter == Filter::Pcss),

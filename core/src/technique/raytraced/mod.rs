@@ -344,43 +344,18 @@ impl Technique for Raytraced {
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
-        let color = |l: &PointLight| {
-            let c = l.color / l.color.max_element().max(1e-6);
-            [c.x, c.y, c.z, 1.0]
-        };
-        let mut layers = vec![
-            OverlayLayer {
-                name: "lights",
-                visible_by_default: true,
-                primitives: lights
-                    .iter()
-                    .map(|l| Overlay::Point {
-                        position: l.position,
-                        color: color(l),
-                        radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
-                    })
-                    .collect(),
-            },
-            OverlayLayer {
-                name: "light ranges",
-                visible_by_default: false,
-                primitives: lights
-                    .iter()
-                    .map(|l| {
-                        let [r, g, b, _] = color(l);
-                        Overlay::Sphere { center: l.position, radius: l.range, color: [r, g, b, 0.35] }
-                    })
-                    .collect(),
-            },
-        ];
+        let mut layers = super::light_overlays(lights);
         if self.params.soft {
             layers.push(OverlayLayer {
                 name: "light discs",
                 visible_by_default: true,
                 primitives: lights
                     .iter()
-                    .map(|l| Overlay::Sphere { center: l.position, radius: self.params.light_radius, color: color(l) })
+                    .map(|l| Overlay::Sphere {
+                        center: l.position,
+                        radius: self.params.light_radius,
+                        color: super::light_overlay_color(l),
+                    })
                     .collect(),
             });
         }

@@ -14,11 +14,11 @@ use wgpu::util::DeviceExt;
 
 use super::{
     accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, FrameContext, GrowableBuffer,
-    Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+    OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer, DEFAULT_ATLAS_BUDGET_BYTES};
+use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer};
 use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
@@ -38,29 +38,8 @@ struct ReferenceBatchUniform {
 }
 const _: () = assert!(std::mem::size_of::<ReferenceBatchUniform>() == 32);
 
-/// The reference's parameters.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReferenceParams {
-    /// Texels per cube face.
-    pub shadow_resolution: u32,
-    /// Constant depth bias in world units.
-    pub bias_world: f32,
-    /// Normal offset in shadow-map texels.
-    pub normal_offset_texels: f32,
-    /// Memory for one batch's atlas, in MiB.
-    pub atlas_budget_mib: u32,
-}
-
-impl Default for ReferenceParams {
-    fn default() -> Self {
-        ReferenceParams {
-            shadow_resolution: 1024,
-            bias_world: 0.01,
-            normal_offset_texels: 1.5,
-            atlas_budget_mib: (DEFAULT_ATLAS_BUDGET_BYTES >> 20) as u32,
-        }
-    }
-}
+/// The reference's parameters: those of every cube-map technique.
+pub type ReferenceParams = super::CubeMapParams;
 
 pub struct Reference {
     pub params: ReferenceParams,
@@ -136,48 +115,13 @@ impl Technique for Reference {
     }
 
     fn params(&self) -> Vec<Param> {
-        let p = &self.params;
-        vec![
-            Param {
-                key: "shadow_res",
-                label: "Cube resolution",
-                help: "Texels per cube-map face",
-                kind: ParamKind::Int { min: 16, max: 4096 },
-                value: ParamValue::Int(p.shadow_resolution as i64),
-            },
-            Param {
-                key: "bias",
-                label: "Depth bias",
-                help: "Constant bias in world units",
-                kind: ParamKind::Float { min: 0.0, max: 1.0 },
-                value: ParamValue::Float(p.bias_world),
-            },
-            Param {
-                key: "normal_offset",
-                label: "Normal offset",
-                help: "Receiver offset along its normal, in shadow-map texels",
-                kind: ParamKind::Float { min: 0.0, max: 16.0 },
-                value: ParamValue::Float(p.normal_offset_texels),
-            },
-            Param {
-                key: "atlas_mib",
-                label: "Batch memory (MiB)",
-                help: "Memory of one batch of cube maps; more lights per batch means fewer passes",
-                kind: ParamKind::Int { min: 1, max: 4096 },
-                value: ParamValue::Int(p.atlas_budget_mib as i64),
-            },
-        ]
+        self.params.params()
     }
 
     fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
         check_param(self.key(), &self.params(), key, value)?;
-        match (key, value) {
-            ("shadow_res", ParamValue::Int(v)) => self.params.shadow_resolution = *v as u32,
-            ("bias", ParamValue::Float(v)) => self.params.bias_world = *v,
-            ("normal_offset", ParamValue::Float(v)) => self.params.normal_offset_texels = *v,
-            ("atlas_mib", ParamValue::Int(v)) => self.params.atlas_budget_mib = *v as u32,
-            _ => unreachable!("check_param accepted an unknown key"),
-        }
+        let known = self.params.set(key, value);
+        debug_assert!(known, "check_param accepted an unknown key");
         Ok(())
     }
 
@@ -195,8 +139,7 @@ impl Technique for Reference {
         self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
 
         // Step 2: batches sized to the atlas budget.
-        let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
-        let budget = self.params.atlas_budget_mib as u64 * (1 << 20);
+        let (res, budget) = self.params.resolution_and_budget(ctx.gpu);
         self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step);
         let batches = self.visible.len().div_ceil(self.batch_size);
         self.counts = TechniqueCounts {
@@ -272,35 +215,6 @@ impl Technique for Reference {
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
-        let color = |l: &PointLight| {
-            let c = l.color / l.color.max_element().max(1e-6);
-            [c.x, c.y, c.z, 1.0]
-        };
-        vec![
-            OverlayLayer {
-                name: "lights",
-                visible_by_default: true,
-                primitives: lights
-                    .iter()
-                    .map(|l| Overlay::Point {
-                        position: l.position,
-                        color: color(l),
-                        radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
-                    })
-                    .collect(),
-            },
-            OverlayLayer {
-                name: "light ranges",
-                visible_by_default: false,
-                primitives: lights
-                    .iter()
-                    .map(|l| {
-                        let [r, g, b, _] = color(l);
-                        Overlay::Sphere { center: l.position, radius: l.range, color: [r, g, b, 0.35] }
-                    })
-                    .collect(),
-            },
-        ]
+        super::light_overlays(lights)
     }
 }
