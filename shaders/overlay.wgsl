@@ -69,3 +69,19 @@ fn dot_fs(in: DotOut) -> @location(0) vec4<f32> {
     let rim = smoothstep(0.7, 0.85, d);
     return vec4<f32>(mix(in.color.rgb, vec3<f32>(0.0), rim * 0.8), in.color.a);
 }
+
+// Per-pixel ID map, coloured on the CPU (transparent where there is no ID), stretched over the view.
+@group(1) @binding(0) var id_colors: texture_2d<f32>;
+
+@vertex
+fn idmap_vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn idmap_fs(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let size = vec2<f32>(textureDimensions(id_colors));
+    let texel = vec2<i32>(position.xy * view.viewport.zw * size);
+    return textureLoad(id_colors, texel, 0);
+}

@@ -235,3 +235,20 @@ fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
     }
     assert!(h.state().sweep.as_ref().unwrap().rows.len() < 40);
 }
+
+#[test]
+fn lightcluster_offers_a_per_pixel_cluster_id_map() {
+    let mut h = start("idmap", "cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(3);
+    assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "cluster per pixel" && !on));
+    h.state_mut().view.overlays.insert("cluster per pixel".into(), true);
+    h.run_steps(3);
+    let (_, name, ids, (w, hgt)) = h.state().pixel_ids.clone().expect("an ID map once the frame is complete");
+    assert_eq!(name, "cluster per pixel");
+    assert_eq!(ids.len(), (w * hgt) as usize);
+    let clusters =
+        h.state().gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().counts.technique.clusters.unwrap();
+    let distinct: std::collections::BTreeSet<u32> = ids.iter().copied().filter(|&i| i != u32::MAX).collect();
+    assert!(distinct.len() > 1 && distinct.iter().all(|&i| (i as usize) < clusters), "{distinct:?} of {clusters}");
+}

@@ -161,6 +161,8 @@ pub struct ShadowLabApp {
     pub ui_frame_ms: VecDeque<f64>,
     pub difference: Option<Difference>,
     pub sweep: Option<sweep::Sweep>,
+    /// The technique's per-pixel ID map for a converged frame: (frame key, layer name, ids, size).
+    pub pixel_ids: Option<(u64, &'static str, Arc<Vec<u32>>, (u32, u32))>,
     /// Sweep panel inputs: parameter key, start, end, number of values.
     pub sweep_input: (String, f64, f64, usize),
     last_frame: Instant,
@@ -209,6 +211,7 @@ impl ShadowLabApp {
             ui_frame_ms: VecDeque::new(),
             difference: None,
             sweep: None,
+            pixel_ids: None,
             sweep_input: ("d_init".into(), 0.1, 1.6, 6),
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
@@ -532,6 +535,11 @@ impl ShadowLabApp {
         if self.technique != "reference" {
             names.push(("light ranges".into(), false));
         }
+        if let Ok(t) = gpu.main.technique(&self.technique) {
+            if let Some((name, _)) = t.pixel_ids(&[]) {
+                names.push((name.to_string(), false));
+            }
+        }
         names.into_iter().map(|(n, d)| (n.clone(), *self.view.overlays.get(&n).unwrap_or(&d))).collect()
     }
 
@@ -557,6 +565,27 @@ impl ShadowLabApp {
         // While the user drags, keep the UI fluid: the preview gets a third of the budget.
         let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
         let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
+        // The technique's per-pixel ID map, once per converged frame, when its layer is on.
+        if gpu.main.is_converged() {
+            let key = gpu.main.frame_key();
+            let technique_key = main_inputs.technique.clone();
+            let view_overlays = &self.view.overlays;
+            let technique = gpu.main.technique(&technique_key)?;
+            let layer = technique.pixel_ids(&[]).map(|(name, _)| name);
+            let wanted = layer.is_some_and(|name| *view_overlays.get(name).unwrap_or(&false));
+            if wanted && self.pixel_ids.as_ref().is_none_or(|(k, ..)| *k != key) {
+                let positions = gpu.main.renderer.read_world_positions(&camera)?;
+                let technique = gpu.main.technique(&technique_key)?;
+                if let Some((name, ids)) = technique.pixel_ids(&positions) {
+                    self.pixel_ids = Some((key, name, Arc::new(ids), gpu.main.size));
+                }
+            }
+            if let Some((k, name, ids, (w, h))) = &self.pixel_ids {
+                if *k == key && wanted && layer == Some(*name) {
+                    overlays.insert(0, Overlay::IdMap { width: *w, height: *h, ids: ids.clone(), alpha: 0.45 });
+                }
+            }
+        }
         gpu.main.overlays(&camera, &overlays, x_ray)?;
         let mut total_spent = spent;
         let mut total_steps = steps;

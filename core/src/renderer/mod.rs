@@ -771,6 +771,27 @@ impl Renderer {
         Ok(bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]]) < 1.0).collect())
     }
 
+    /// World position of every pixel of the last frame (None for background), from the G-buffer depth.
+    pub fn read_world_positions(&self, camera: &Camera) -> Result<Vec<Option<Vec3>>, GpuError> {
+        let t = &self.targets;
+        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
+        let world_from_clip = camera.clip_from_world(t.width as f32 / t.height as f32).inverse();
+        Ok(bytes
+            .chunks_exact(4)
+            .enumerate()
+            .map(|(i, d)| {
+                let depth = f32::from_le_bytes([d[0], d[1], d[2], d[3]]);
+                if depth >= 1.0 {
+                    return None;
+                }
+                let (x, y) = ((i as u32 % t.width) as f32 + 0.5, (i as u32 / t.width) as f32 + 0.5);
+                let ndc = glam::Vec4::new(x / t.width as f32 * 2.0 - 1.0, 1.0 - y / t.height as f32 * 2.0, depth, 1.0);
+                let w = world_from_clip * ndc;
+                Some(w.truncate() / w.w)
+            })
+            .collect())
+    }
+
     /// The HDR radiance, linear RGBA, row-major.
     pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, GpuError> {
         let t = &self.targets;

@@ -43,6 +43,27 @@ pub struct OverlayRenderer {
     /// [depth tested, x-ray]
     line_pipelines: [wgpu::RenderPipeline; 2],
     dot_pipelines: [wgpu::RenderPipeline; 2],
+    idmap_pipeline: wgpu::RenderPipeline,
+    idmap_layout: wgpu::BindGroupLayout,
+}
+
+/// Colour an ID map on the CPU: a distinct colour per ID at `alpha`, transparent where there is no ID.
+fn colorize_ids(ids: &[u32], alpha: f32) -> Vec<u8> {
+    ids.iter()
+        .flat_map(|&id| {
+            if id == u32::MAX {
+                [0, 0, 0, 0]
+            } else {
+                let c = crate::technique::index_color(id as usize);
+                [
+                    (c[0] * 255.0) as u8,
+                    (c[1] * 255.0) as u8,
+                    (c[2] * 255.0) as u8,
+                    (alpha.clamp(0.0, 1.0) * 255.0) as u8,
+                ]
+            }
+        })
+        .collect()
 }
 
 /// Line-list vertices and dot triangles for a set of primitives.
@@ -90,6 +111,19 @@ fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Ve
                     seg(c[2 * i], c[2 * i + 1], *color);
                 }
             }
+            Overlay::Rect { center, half_u, half_v, color } => {
+                let c = [
+                    *center - *half_u - *half_v,
+                    *center + *half_u - *half_v,
+                    *center + *half_u + *half_v,
+                    *center - *half_u + *half_v,
+                ];
+                for i in 0..4 {
+                    seg(c[i], c[(i + 1) % 4], *color);
+                }
+            }
+            // Drawn as a texture, not as lines or dots.
+            Overlay::IdMap { .. } => {}
             Overlay::Point { position, color, radius_px } => {
                 if !position.is_finite() {
                     continue;
@@ -110,7 +144,7 @@ impl OverlayRenderer {
             label: Some("overlay"),
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: false,
@@ -134,6 +168,55 @@ impl OverlayRenderer {
             label: Some("overlay"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
+        });
+        let idmap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("overlay id map"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let idmap_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("overlay id map"),
+            bind_group_layouts: &[Some(&layout), Some(&idmap_layout)],
+            immediate_size: 0,
+        });
+        let idmap_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("overlay id map"),
+            layout: Some(&idmap_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("idmap_vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: SharedLayouts::DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("idmap_fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: SharedLayouts::OUTPUT_FORMAT,
+                    blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
         });
         let make = |vs: &str, fs: &str, topology, buffer: wgpu::VertexBufferLayout, x_ray: bool| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -198,6 +281,8 @@ impl OverlayRenderer {
                 make("dot_vs", "dot_fs", tris, dot_layout(), false),
                 make("dot_vs", "dot_fs", tris, dot_layout(), true),
             ],
+            idmap_pipeline,
+            idmap_layout,
         }
     }
 
@@ -217,7 +302,42 @@ impl OverlayRenderer {
         let mut lines = Vec::new();
         let mut dots = Vec::new();
         tessellate(primitives, &mut lines, &mut dots);
-        if lines.is_empty() && dots.is_empty() {
+        // ID maps become textures, drawn first (under the lines and dots).
+        let id_maps: Vec<wgpu::BindGroup> = primitives
+            .iter()
+            .filter_map(|p| match p {
+                Overlay::IdMap { width, height, ids, alpha }
+                    if *width > 0 && *height > 0 && ids.len() == (*width as usize) * (*height as usize) =>
+                {
+                    let texture = gpu.device.create_texture_with_data(
+                        &gpu.queue,
+                        &wgpu::TextureDescriptor {
+                            label: Some("id map"),
+                            size: wgpu::Extent3d { width: *width, height: *height, depth_or_array_layers: 1 },
+                            mip_level_count: 1,
+                            sample_count: 1,
+                            dimension: wgpu::TextureDimension::D2,
+                            format: wgpu::TextureFormat::Rgba8Unorm,
+                            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                            view_formats: &[],
+                        },
+                        wgpu::util::TextureDataOrder::LayerMajor,
+                        &colorize_ids(ids, *alpha),
+                    );
+                    let view = texture.create_view(&Default::default());
+                    Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("id map"),
+                        layout: &self.idmap_layout,
+                        entries: &[wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::TextureView(&view),
+                        }],
+                    }))
+                }
+                _ => None,
+            })
+            .collect();
+        if lines.is_empty() && dots.is_empty() && id_maps.is_empty() {
             return;
         }
         let (w, h) = (size.0 as f32, size.1 as f32);
@@ -252,6 +372,11 @@ impl OverlayRenderer {
         });
         let i = usize::from(x_ray);
         pass.set_bind_group(0, &self.bind_group, &[]);
+        for group in &id_maps {
+            pass.set_pipeline(&self.idmap_pipeline);
+            pass.set_bind_group(1, group, &[]);
+            pass.draw(0..3, 0..1);
+        }
         if let Some(b) = &line_buffer {
             pass.set_pipeline(&self.line_pipelines[i]);
             pass.set_vertex_buffer(0, b.slice(..));
@@ -280,12 +405,19 @@ mod tests {
                 Overlay::Frustum { clip_from_world: Mat4::IDENTITY, color: c },
                 Overlay::Point { position: Vec3::Y, color: c, radius_px: 3.0 },
                 Overlay::Point { position: Vec3::NAN, color: c, radius_px: 3.0 },
+                Overlay::Rect { center: Vec3::ZERO, half_u: Vec3::X, half_v: Vec3::Y, color: c },
+                Overlay::IdMap { width: 2, height: 1, ids: std::sync::Arc::new(vec![0, u32::MAX]), alpha: 0.5 },
             ],
             &mut lines,
             &mut dots,
         );
-        assert_eq!(lines.len(), 2 + 3 * CIRCLE_SEGMENTS * 2 + 12 * 2);
+        assert_eq!(lines.len(), 2 + 3 * CIRCLE_SEGMENTS * 2 + 12 * 2 + 4 * 2);
         assert_eq!(dots.len(), 6, "a NaN point is skipped");
+        let colored = colorize_ids(&[0, u32::MAX, 1], 0.5);
+        assert_eq!(colored.len(), 12);
+        assert_eq!(colored[7], 0, "no ID is transparent");
+        assert_eq!(colored[3], 127);
+        assert_ne!(colored[0..3], colored[8..11], "two IDs, two colours");
         // Sphere points lie on the sphere.
         for v in &lines[2..2 + 3 * CIRCLE_SEGMENTS * 2] {
             assert!((Vec3::from_array(v.position).length() - 1.0).abs() < 1e-5);

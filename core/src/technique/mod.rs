@@ -190,6 +190,31 @@ pub enum Overlay {
         clip_from_world: Mat4,
         color: [f32; 4],
     },
+    /// A rectangle outline: `center ± half_u ± half_v` (image planes, rectangular lights).
+    Rect {
+        center: Vec3,
+        half_u: Vec3,
+        half_v: Vec3,
+        color: [f32; 4],
+    },
+    /// A per-pixel ID map over the whole view (e.g. the cluster of each pixel): `ids` row-major at
+    /// `width x height`, `u32::MAX` = no ID; each ID gets a distinct colour, blended with `alpha`.
+    IdMap {
+        width: u32,
+        height: u32,
+        ids: std::sync::Arc<Vec<u32>>,
+        alpha: f32,
+    },
+}
+
+/// A distinct, stable colour per index (golden-ratio hue walk), for clusters and ID maps.
+pub fn index_color(index: usize) -> [f32; 4] {
+    let h = (index as f32 * 0.618_034) % 1.0;
+    let k = |n: f32| {
+        let k = (n + h * 6.0) % 6.0;
+        1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * 0.85
+    };
+    [k(5.0), k(3.0), k(1.0), 1.0]
 }
 
 /// An overlay layer a technique offers; the app toggles layers individually.
@@ -225,6 +250,11 @@ pub trait Technique {
         Vec::new()
     }
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
+    /// A per-pixel ID map of the last frame, from the world position of each pixel (None: background), with
+    /// the name of its overlay layer; None when the technique has none.
+    fn pixel_ids(&self, _positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
+        None
+    }
 }
 
 /// A full-screen pass that adds `pipeline`'s output into the HDR target: group 0 is the screen bind group,

@@ -173,14 +173,9 @@ impl LightCluster {
     }
 }
 
-/// A distinct, stable colour per cluster index (golden-ratio hue walk).
+/// A distinct, stable colour per cluster index.
 pub fn cluster_color(index: usize) -> [f32; 4] {
-    let h = (index as f32 * 0.618_034) % 1.0;
-    let k = |n: f32| {
-        let k = (n + h * 6.0) % 6.0;
-        1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * 0.85
-    };
-    [k(5.0), k(3.0), k(1.0), 1.0]
+    super::index_color(index)
 }
 
 impl Technique for LightCluster {
@@ -386,6 +381,27 @@ impl Technique for LightCluster {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         vec![PassTime { name: "clustering".into(), ms: self.clustering_ms, count: 1 }]
+    }
+
+    /// Per pixel, the cluster whose center is nearest among those whose `C_att` reaches the pixel: the cluster
+    /// whose shadow map shades it most.
+    fn pixel_ids(&self, positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
+        let clusters = &self.clustering.clusters;
+        let ids = positions
+            .iter()
+            .map(|p| {
+                let Some(p) = p else { return u32::MAX };
+                let mut best = (u32::MAX, f32::INFINITY);
+                for (i, c) in clusters.iter().enumerate() {
+                    let d = c.position.distance_squared(*p);
+                    if d <= c.c_att * c.c_att && d < best.1 {
+                        best = (i as u32, d);
+                    }
+                }
+                best.0
+            })
+            .collect();
+        Some(("cluster per pixel", ids))
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
