@@ -122,6 +122,9 @@ pub struct Gpu {
     pub sizer: StepSizer,
 }
 
+/// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
+pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
+
 /// A drag of the gizmo in progress.
 #[derive(Clone, Copy, Debug)]
 struct GizmoDrag {
@@ -161,8 +164,8 @@ pub struct ShadowLabApp {
     pub ui_frame_ms: VecDeque<f64>,
     pub difference: Option<Difference>,
     pub sweep: Option<sweep::Sweep>,
-    /// The technique's per-pixel ID map for a converged frame: (frame key, layer name, ids, size).
-    pub pixel_ids: Option<(u64, &'static str, Arc<Vec<u32>>, (u32, u32))>,
+    /// The technique's per-pixel ID map for a converged frame.
+    pub pixel_ids: Option<PixelIds>,
     /// Sweep panel inputs: parameter key, start, end, number of values.
     pub sweep_input: (String, f64, f64, usize),
     last_frame: Instant,
