@@ -204,6 +204,11 @@ fn difference_view_measures_the_technique_against_the_reference() {
     let m = &h.state().difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
     h.get_by_label("RMSE");
+    // The session's comparison table has both techniques.
+    let times = &h.state().session_times;
+    assert!(times.contains_key("reference") && times.contains_key("lightcluster"), "{times:?}");
+    assert!(times["lightcluster"].1.contains("d_init=0.6"));
+    h.get_by_label("technique (this session)");
 }
 
 #[test]

@@ -164,6 +164,9 @@ pub struct ShadowLabApp {
     pub ui_frame_ms: VecDeque<f64>,
     pub difference: Option<Difference>,
     pub sweep: Option<sweep::Sweep>,
+    /// Last complete frame time (GPU ms) of every technique seen this session, with its parameters, for the
+    /// comparison table (technique vs reference, same session).
+    pub session_times: BTreeMap<String, (f64, String)>,
     /// The technique's per-pixel ID map for a converged frame.
     pub pixel_ids: Option<PixelIds>,
     /// Sweep panel inputs: parameter key, start, end, number of values.
@@ -215,6 +218,7 @@ impl ShadowLabApp {
             difference: None,
             sweep: None,
             pixel_ids: None,
+            session_times: BTreeMap::new(),
             sweep_input: ("d_init".into(), 0.1, 1.6, 6),
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
@@ -614,7 +618,20 @@ impl ShadowLabApp {
             total_steps += n;
         }
         gpu.sizer.observe(total_spent, total_steps);
+        let describe = |params: &BTreeMap<String, ParamValue>| {
+            params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
+        };
+        if std::mem::take(&mut gpu.reference.new_report) {
+            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique == "reference") {
+                let p = describe(&self.params.get("reference").cloned().unwrap_or_default());
+                self.session_times.insert("reference".into(), (r.gpu_total_ms, p));
+            }
+        }
         if std::mem::take(&mut gpu.main.new_report) {
+            if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+                let p = describe(&main_inputs.params);
+                self.session_times.insert(r.technique.clone(), (r.gpu_total_ms, p));
+            }
             if let Some(r) = &gpu.main.last_report {
                 let t = self.started.elapsed().as_secs_f64();
                 if r.technique != PREVIEW_TECHNIQUE {

@@ -360,55 +360,63 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         }
     });
     ui.columns(2, |cols| {
-        let ui = &mut cols[0];
-        if let Some(r) = &gpu.main.last_report {
-            egui::Grid::new("passes").striped(true).num_columns(3).show(ui, |ui| {
-                ui.strong("pass");
-                ui.strong("ms");
-                ui.strong("count");
-                ui.end_row();
-                for p in &r.passes {
-                    ui.label(&p.name);
-                    ui.label(format!("{:.2}", p.ms));
-                    ui.label(format!("{}", p.count));
+        // A scroll area, so more rows never resize the panel (and with it the 3D view, which would restart).
+        egui::ScrollArea::vertical().id_salt("timings table").auto_shrink([false, false]).show(&mut cols[0], |ui| {
+            if let Some(r) = &gpu.main.last_report {
+                egui::Grid::new("passes").striped(true).num_columns(3).show(ui, |ui| {
+                    ui.strong("pass");
+                    ui.strong("ms");
+                    ui.strong("count");
                     ui.end_row();
-                }
-                for p in &r.cpu_stages {
-                    ui.label(format!("{} (CPU)", p.name));
-                    ui.label(format!("{:.3}", p.ms));
-                    ui.label("1");
+                    for p in &r.passes {
+                        ui.label(&p.name);
+                        ui.label(format!("{:.2}", p.ms));
+                        ui.label(format!("{}", p.count));
+                        ui.end_row();
+                    }
+                    for p in &r.cpu_stages {
+                        ui.label(format!("{} (CPU)", p.name));
+                        ui.label(format!("{:.3}", p.ms));
+                        ui.label("1");
+                        ui.end_row();
+                    }
+                    ui.strong(format!("{} total", r.technique));
+                    ui.strong(format!("{:.2}", r.gpu_total_ms));
+                    ui.label(format!("{:?}", r.timing_source));
                     ui.end_row();
+                });
+                let c = &r.counts;
+                ui.label(format!(
+                    "{} of {} lights visible · {} shadow maps in {} steps{} · shadow triangles {} drawn, {} culled",
+                    c.technique.lights_visible,
+                    c.lights_total,
+                    c.technique.shadow_maps,
+                    c.technique.batches,
+                    c.technique.clusters.map(|n| format!(" · {n} clusters")).unwrap_or_default(),
+                    c.technique.shadow_triangles_submitted,
+                    c.technique.shadow_triangles_culled,
+                ));
+                // Every technique seen this session against the reference, same session and adapter.
+                if let Some((reference_ms, _)) = app.session_times.get("reference") {
+                    egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
+                        ui.strong("technique (this session)");
+                        ui.strong("GPU ms");
+                        ui.strong("speedup");
+                        ui.strong("parameters");
+                        ui.end_row();
+                        for (name, (ms, params)) in &app.session_times {
+                            ui.label(name);
+                            ui.label(format!("{ms:.1}"));
+                            ui.label(format!("×{:.2}", reference_ms / ms.max(1e-6)));
+                            ui.label(params);
+                            ui.end_row();
+                        }
+                    });
                 }
-                ui.strong(format!("{} total", r.technique));
-                ui.strong(format!("{:.2}", r.gpu_total_ms));
-                ui.label(format!("{:?}", r.timing_source));
-                ui.end_row();
-            });
-            let c = &r.counts;
-            ui.label(format!(
-                "{} of {} lights visible · {} shadow maps in {} steps{} · shadow triangles {} drawn, {} culled",
-                c.technique.lights_visible,
-                c.lights_total,
-                c.technique.shadow_maps,
-                c.technique.batches,
-                c.technique.clusters.map(|n| format!(" · {n} clusters")).unwrap_or_default(),
-                c.technique.shadow_triangles_submitted,
-                c.technique.shadow_triangles_culled,
-            ));
-            if let Some(reference) = &gpu.reference.last_report {
-                if r.technique != "reference" && reference.technique == "reference" && reference.gpu_total_ms > 0.0 {
-                    ui.label(format!(
-                        "reference {:.1} ms -> {} {:.1} ms: speedup ×{:.2} (same session)",
-                        reference.gpu_total_ms,
-                        r.technique,
-                        r.gpu_total_ms,
-                        reference.gpu_total_ms / r.gpu_total_ms.max(1e-6)
-                    ));
-                }
+            } else {
+                ui.label("rendering the first frame…");
             }
-        } else {
-            ui.label("rendering the first frame…");
-        }
+        });
         let ui = &mut cols[1];
         let mut names: Vec<String> = Vec::new();
         for (_, _, passes) in &app.timings {
