@@ -272,6 +272,7 @@ fn sweep_writes_one_row_per_setting() {
     let dir = out_dir("sweep");
     let csv = dir.join("sweep.csv");
     let md = dir.join("sweep.md");
+    let png = dir.join("sweep.png");
     let out = shadowlab(&[
         "sweep",
         "--quiet",
@@ -296,6 +297,8 @@ fn sweep_writes_one_row_per_setting() {
         csv.to_str().unwrap(),
         "--markdown",
         md.to_str().unwrap(),
+        "--plot",
+        png.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -307,6 +310,22 @@ fn sweep_writes_one_row_per_setting() {
     let clusters = |l: &str| l.split(',').nth(2).unwrap().parse::<u32>().unwrap();
     assert!(clusters(lines[4]) <= clusters(lines[1]));
     assert!(std::fs::read_to_string(&md).unwrap().starts_with("| d_init | filter |"));
+    let plot = image::open(&png).unwrap();
+    assert_eq!((plot.width(), plot.height()), (1200, 480));
+    assert_fails_with(
+        &[
+            "sweep",
+            "--scene",
+            "cornell",
+            "--param",
+            "filter=pcf,pcss",
+            "--out",
+            csv.to_str().unwrap(),
+            "--plot",
+            png.to_str().unwrap(),
+        ],
+        "numeric first --param",
+    );
     assert_fails_with(
         &["sweep", "--scene", "cornell", "--param", "d_init=1:0:0.1", "--out", csv.to_str().unwrap()],
         "START <= END",

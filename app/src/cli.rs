@@ -216,6 +216,9 @@ pub struct SweepArgs {
     /// The same rows as a Markdown table.
     #[arg(long)]
     pub markdown: Option<PathBuf>,
+    /// A PNG plot of time and RMSE against the first swept (numeric) parameter.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -646,6 +649,9 @@ fn sweep(args: SweepArgs) -> Result<()> {
     }
     check_technique(&args.technique)?;
     check_technique(&args.against)?;
+    if let Some(p) = &args.plot {
+        check_output_path(p, "png")?;
+    }
     let swept: Vec<(String, Vec<String>)> =
         args.params.iter().map(|p| crate::measure::sweep_values(p)).collect::<Result<_>>()?;
     let settings = crate::measure::combinations(&swept);
@@ -696,7 +702,11 @@ fn sweep(args: SweepArgs) -> Result<()> {
         ]
         .map(String::from),
     );
+    if args.plot.is_some() && swept.first().is_none_or(|(_, v)| v.iter().any(|x| x.parse::<f64>().is_err())) {
+        bail!("--plot needs a numeric first --param (the x axis)");
+    }
     let mut rows: Vec<Vec<String>> = Vec::new();
+    let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
     let started = Instant::now();
     for (i, setting) in settings.iter().enumerate() {
         let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
@@ -729,6 +739,12 @@ fn sweep(args: SweepArgs) -> Result<()> {
             !args.no_flip,
             f.exposure,
         )?;
+        plot_rows.push(crate::plot::PlotRow {
+            x: setting[0].1.parse().unwrap_or(0.0),
+            series: setting[1..].iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" "),
+            ms: r.timing.median_ms,
+            rmse: m.rmse,
+        });
         let c = &r.report.counts.technique;
         let pass = |name: &str| r.timing.passes_median_ms.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>();
         let mut row: Vec<String> = setting.iter().map(|(_, v)| v.clone()).collect();
@@ -777,6 +793,16 @@ fn sweep(args: SweepArgs) -> Result<()> {
     }
     if let Some(path) = &args.markdown {
         write_atomic(path, md.as_bytes())?;
+    }
+    if let Some(path) = &args.plot {
+        // Drawn to a temporary file, then renamed, like every output.
+        let tmp = path.with_extension("png.tmp.png");
+        let title = format!("{} on {} ({} lights, {}x{})", args.technique, scene.name, lights.len(), f.width, f.height);
+        crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, target.timing.median_ms)?;
+        std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
+        if !quiet {
+            eprintln!("wrote {}", path.display());
+        }
     }
     Ok(())
 }
