@@ -209,6 +209,14 @@ fn difference_view_measures_the_technique_against_the_reference() {
     assert!(times.contains_key("reference") && times.contains_key("lightcluster"), "{times:?}");
     assert!(times["lightcluster"].1.contains("d_init=0.6"));
     h.get_by_label("technique (this session)");
+    // Against the ray-traced ground truth instead: the reference itself differs a little.
+    let app = h.state_mut();
+    app.technique = "reference".into();
+    app.view.compare_against = "raytraced".into();
+    h.run_steps(4);
+    let m = &h.state().difference.as_ref().unwrap().metrics;
+    assert!(m.rmse > 0.0 && m.share_over_threshold < 0.05, "reference vs ray traced: {m:?}");
+    assert!(h.state().session_times.contains_key("raytraced"));
 }
 
 #[test]

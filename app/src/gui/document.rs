@@ -44,6 +44,8 @@ pub struct ViewSettings {
     pub diff_visibility: bool,
     /// Difference view gain (1, 5, 10, ...).
     pub diff_gain: f32,
+    /// What side-by-side, split and difference views compare with: `reference` or `raytraced`.
+    pub compare_against: String,
 }
 
 impl Default for ViewSettings {
@@ -59,6 +61,7 @@ impl Default for ViewSettings {
             diff_signed: false,
             diff_visibility: false,
             diff_gain: 1.0,
+            compare_against: "reference".into(),
         }
     }
 }

@@ -597,7 +597,8 @@ impl ShadowLabApp {
         let mut total_spent = spent;
         let mut total_steps = steps;
         if two {
-            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { "reference" };
+            let against = self.view.compare_against.clone();
+            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { against.as_str() };
             let reference_inputs = FrameInputs {
                 camera,
                 lights,
@@ -622,9 +623,9 @@ impl ShadowLabApp {
             params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
         };
         if std::mem::take(&mut gpu.reference.new_report) {
-            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique == "reference") {
-                let p = describe(&self.params.get("reference").cloned().unwrap_or_default());
-                self.session_times.insert("reference".into(), (r.gpu_total_ms, p));
+            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+                let p = describe(&self.params.get(&r.technique).cloned().unwrap_or_default());
+                self.session_times.insert(r.technique.clone(), (r.gpu_total_ms, p));
             }
         }
         if std::mem::take(&mut gpu.main.new_report) {
@@ -972,7 +973,7 @@ impl ShadowLabApp {
                     painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
                     painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
                     label(&painter, l.left_top(), &self.technique);
-                    label(&painter, r.left_top(), "reference");
+                    label(&painter, r.left_top(), &self.view.compare_against);
                 }
                 ViewMode::Difference => match &self.difference {
                     Some(d) => {
@@ -1021,7 +1022,7 @@ impl ShadowLabApp {
                         egui::Stroke::new(2.0, egui::Color32::WHITE),
                     );
                     label(&painter, rect.left_top(), &self.technique);
-                    label(&painter, egui::pos2(x, rect.top()), "reference");
+                    label(&painter, egui::pos2(x, rect.top()), &self.view.compare_against);
                     // The split line is draggable from a handle at its middle.
                     let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
                     let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());

@@ -217,6 +217,11 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.selectable_value(&mut app.view.mode, ViewMode::Split, "split");
         ui.selectable_value(&mut app.view.mode, ViewMode::Difference, "difference");
     });
+    ui.horizontal(|ui| {
+        ui.label("against");
+        ui.selectable_value(&mut app.view.compare_against, "reference".to_string(), "reference");
+        ui.selectable_value(&mut app.view.compare_against, "raytraced".to_string(), "ray traced");
+    });
     if app.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {
             ui.checkbox(&mut app.view.diff_signed, "signed");
