@@ -323,6 +323,7 @@ struct RenderReport<'a> {
 /// Progress on stderr: a rewritten line on a terminal, a line per 10% otherwise.
 pub struct Progress {
     label: String,
+    unit: &'static str,
     tty: bool,
     last_decile: usize,
     started: Instant,
@@ -333,19 +334,34 @@ impl Progress {
     pub fn new(label: &str, quiet: bool) -> Progress {
         Progress {
             label: label.into(),
+            unit: "batch",
             tty: std::io::stderr().is_terminal(),
             last_decile: usize::MAX,
             started: Instant::now(),
             quiet,
         }
     }
+    /// Count `unit`s instead of batches.
+    pub fn with_unit(mut self, unit: &'static str) -> Progress {
+        self.unit = unit;
+        self
+    }
+
     pub fn update(&mut self, done: usize, total: usize) {
         if self.quiet || total == 0 {
             return;
         }
         let secs = self.started.elapsed().as_secs_f32();
         if self.tty {
-            eprint!("\r{}: batch {done}/{total} ({secs:.1} s)", self.label);
+            let width = 30;
+            let filled = done * width / total;
+            eprint!(
+                "\r{}: [{}{}] {} {done}/{total} ({secs:.1} s)",
+                self.label,
+                "#".repeat(filled),
+                "-".repeat(width - filled),
+                self.unit
+            );
             if done == total {
                 eprintln!();
             }
@@ -354,7 +370,7 @@ impl Progress {
             let decile = done * 10 / total;
             if decile != self.last_decile {
                 self.last_decile = decile;
-                eprintln!("{}: batch {done}/{total} ({secs:.1} s)", self.label);
+                eprintln!("{}: {} {done}/{total} ({secs:.1} s)", self.label, self.unit);
             }
         }
     }
@@ -707,18 +723,10 @@ fn sweep(args: SweepArgs) -> Result<()> {
     }
     let mut rows: Vec<Vec<String>> = Vec::new();
     let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
-    let started = Instant::now();
+    let mut progress = Progress::new(&format!("sweep {}", args.technique), quiet).with_unit("setting");
+    progress.update(0, settings.len());
     for (i, setting) in settings.iter().enumerate() {
         let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
-        if !quiet {
-            eprintln!(
-                "[{}/{}] {} ({:.0} s)",
-                i + 1,
-                settings.len(),
-                strings.join(" "),
-                started.elapsed().as_secs_f32()
-            );
-        }
         let r = crate::measure::render_technique(
             &mut renderer,
             &args.technique,
@@ -767,6 +775,7 @@ fn sweep(args: SweepArgs) -> Result<()> {
             c.fell_back_to_reference.to_string(),
         ]);
         rows.push(row);
+        progress.update(i + 1, settings.len());
     }
     let mut csv = header.join(",") + "\n";
     for row in &rows {
