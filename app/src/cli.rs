@@ -40,6 +40,9 @@ pub struct Cli {
     /// App: quit after this many seconds (smoke tests, README pictures).
     #[arg(long, hide = true)]
     pub quit_after: Option<f32>,
+    /// App: window size in points, `WIDTHxHEIGHT` (default 1400x860).
+    #[arg(long = "window-size", value_name = "WxH")]
+    pub window_size: Option<String>,
     /// App: orbit the camera continuously (UI frame-rate measurement).
     #[arg(long, hide = true)]
     pub orbit_demo: bool,

@@ -5,12 +5,32 @@ use std::process::ExitCode;
 use clap::Parser;
 use shadowlab::{cli, gui};
 
+/// `1280x800` -> (1280.0, 800.0).
+fn parse_size(text: &str) -> Result<(f32, f32), String> {
+    let bad = || format!("--window-size '{text}': expected WIDTHxHEIGHT, e.g. 1280x800");
+    let (w, h) = text.split_once('x').ok_or_else(bad)?;
+    let (w, h): (f32, f32) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if !(320.0..=16384.0).contains(&w) || !(240.0..=16384.0).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn,wgpu_hal::gles::egl=off")).init();
     let args = cli::Cli::parse();
+    let window_size = match args.window_size.as_deref().map(parse_size) {
+        Some(Err(e)) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+        Some(Ok(s)) => Some(s),
+        None => None,
+    };
     let result = match args.command {
         Some(command) => cli::run(command),
         None => gui::run(gui::Startup {
+            window_size,
             path: args.path,
             data_dir: None,
             screenshot: args.screenshot,

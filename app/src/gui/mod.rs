@@ -49,6 +49,8 @@ pub struct Startup {
     pub view: Option<String>,
     /// Start on this built-in scene.
     pub builtin: Option<String>,
+    /// Window size in points.
+    pub window_size: Option<(f32, f32)>,
 }
 
 /// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
@@ -81,7 +83,9 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
 /// Open the window.
 pub fn run(startup: Startup) -> Result<()> {
     let options = eframe::NativeOptions {
-        viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 860.0]).with_title("ShadowLab"),
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size(startup.window_size.map(|(w, h)| [w, h]).unwrap_or([1400.0, 860.0]))
+            .with_title("ShadowLab"),
         renderer: eframe::Renderer::Wgpu,
         wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() },
         ..Default::default()
