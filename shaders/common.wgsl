@@ -31,7 +31,7 @@ struct Light {
 @group(0) @binding(1) var gbuffer_albedo: texture_2d<f32>;
 @group(0) @binding(2) var gbuffer_normal: texture_2d<f32>;
 @group(0) @binding(3) var gbuffer_emissive: texture_2d<f32>;
-@group(0) @binding(4) var gbuffer_depth: texture_depth_2d;
+@group(0) @binding(4) var gbuffer_depth: texture_2d<f32>;
 
 const PI: f32 = 3.14159265358979;
 
@@ -61,7 +61,7 @@ struct Surface {
 
 fn load_surface(pixel: vec2<i32>) -> Surface {
     var s: Surface;
-    let depth = textureLoad(gbuffer_depth, pixel, 0);
+    let depth = textureLoad(gbuffer_depth, pixel, 0).r;
     s.is_geometry = depth < 1.0;
     let uv = (vec2<f32>(pixel) + 0.5) * frame.viewport.zw;
     let ndc = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, depth, 1.0);

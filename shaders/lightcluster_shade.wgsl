@@ -31,7 +31,7 @@ struct Cluster {
 @group(1) @binding(0) var<storage, read> lights: array<Light>;
 @group(1) @binding(1) var<storage, read> clusters: array<Cluster>;
 @group(1) @binding(2) var<uniform> batch: Batch;
-@group(1) @binding(3) var shadow_atlas: texture_depth_2d;
+@group(1) @binding(3) var shadow_atlas: texture_2d<f32>;
 
 // Mitchell best-candidate points in the unit disc: every prefix is well spread, so the first N serve any N.
 var<private> POISSON: array<vec2<f32>, 64> = array<vec2<f32>, 64>(
@@ -112,7 +112,7 @@ struct ShadowSample {
 
 fn shadow_sample(q: vec3<f32>, cluster: Cluster, cube_index: u32) -> ShadowSample {
     let look = cube_lookup(q - cluster.position, cube_index, batch.resolution, batch.tiles_per_row);
-    let depth = textureLoad(shadow_atlas, look.texel, 0);
+    let depth = textureLoad(shadow_atlas, look.texel, 0).r;
     var out: ShadowSample;
     out.receiver = look.axis_distance;
     out.occluder = cube_depth_to_distance(depth, cluster.shadow_near, cluster.c_att);

@@ -18,7 +18,7 @@ struct Batch {
 
 @group(1) @binding(0) var<storage, read> lights: array<Light>;
 @group(1) @binding(1) var<uniform> batch: Batch;
-@group(1) @binding(2) var shadow_atlas: texture_depth_2d;
+@group(1) @binding(2) var shadow_atlas: texture_2d<f32>;
 
 fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
     let d = distance(s.position, light.position);
@@ -26,7 +26,7 @@ fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
     let texel_world = 2.0 * d / batch.resolution;
     let p = s.position + s.normal * (texel_world * batch.normal_offset_texels);
     let look = cube_lookup(p - light.position, cube_index, batch.resolution, batch.tiles_per_row);
-    let depth = textureLoad(shadow_atlas, look.texel, 0);
+    let depth = textureLoad(shadow_atlas, look.texel, 0).r;
     if depth >= 1.0 {
         return 1.0;
     }

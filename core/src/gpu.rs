@@ -20,7 +20,18 @@ impl GpuContext {
     /// Create a device without a window. Honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`), `WGPU_ADAPTER_NAME` and
     /// the debug/validation variables. Works on Mesa lavapipe and GL llvmpipe.
     pub fn headless() -> Result<GpuContext, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::headless_with(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    }
+
+    /// A headless device on the given backends only (e.g. `wgpu::Backends::GL`), for tests of one backend.
+    pub fn headless_on(backends: wgpu::Backends) -> Result<GpuContext, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        desc.backends = backends;
+        Self::headless_with(desc)
+    }
+
+    fn headless_with(desc: wgpu::InstanceDescriptor) -> Result<GpuContext, GpuError> {
+        let instance = wgpu::Instance::new(desc);
         // `initialize_adapter_from_env_or_default` panics when WGPU_ADAPTER_NAME matches nothing; check first so a
         // typo gives an error, not a panic.
         if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {

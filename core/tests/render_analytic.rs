@@ -30,7 +30,16 @@ struct Rendered {
 }
 
 fn render_with(scene: &Scene, lights: &[PointLight], shadow_res: i64, atlas_mib: i64) -> Rendered {
-    let gpu = gpu();
+    render_on(gpu(), scene, lights, shadow_res, atlas_mib)
+}
+
+fn render_on(
+    gpu: shadowlab_core::GpuContext,
+    scene: &Scene,
+    lights: &[PointLight],
+    shadow_res: i64,
+    atlas_mib: i64,
+) -> Rendered {
     let mut renderer = Renderer::new(&gpu, scene, settings()).unwrap();
     let mut technique = renderer.create_technique("reference").unwrap();
     technique.set_param("shadow_res", &ParamValue::Int(shadow_res)).unwrap();
@@ -275,4 +284,17 @@ fn a_thousand_lights_render_in_bounded_batches_with_the_same_result() {
     // And the lights did light the plane.
     let center = small.hdr[(H / 2 * W + W / 2) as usize][0];
     assert!(center > AMBIENT * ALBEDO * 1.5, "centre radiance {center}");
+}
+
+#[test]
+fn the_gl_backend_renders_the_same_analytic_image() {
+    // llvmpipe through EGL, the second software path (scripts/setup installs it).
+    let gl = shadowlab_core::GpuContext::headless_on(wgpu::Backends::GL)
+        .unwrap_or_else(|e| panic!("no GL adapter ({e}): install libegl1 libegl-mesa0 libgl1-mesa-dri"));
+    assert_eq!(gl.adapter_info.backend, wgpu::Backend::Gl);
+    let scene = plane_and_occluder();
+    let light = white_light(Vec3::new(-1.5, 3.0, 0.2), 20.0, 8.0);
+    let r = render_on(gl, &scene, &[light], 256, 128);
+    assert_matches_analytic("gl-umbra", &scene.camera, &[light], &r.hdr);
+    assert_eq!(r.report.counts.technique.shadow_maps, 1);
 }

@@ -139,7 +139,8 @@ impl SharedLayouts {
                 tex(1, unfilterable),
                 tex(2, unfilterable),
                 tex(3, unfilterable),
-                tex(4, wgpu::TextureSampleType::Depth),
+                // Depth bound as an unfilterable float texture: textureLoad on depth textures has no GLSL form.
+                tex(4, unfilterable),
             ],
         });
         let camera = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

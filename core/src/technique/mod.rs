@@ -319,13 +319,14 @@ pub fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// A depth-texture layout entry (cube shadow atlases) for fragment shaders.
+/// A depth-texture layout entry (cube shadow atlases) for fragment shaders. Bound as an unfilterable float
+/// texture (allowed for Depth32Float): `textureLoad` on a depth texture has no GLSL form, so the GL backend needs this.
 pub fn depth_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Depth,
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
             view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
         },
