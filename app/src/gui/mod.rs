@@ -762,18 +762,19 @@ impl ShadowLabApp {
     // ----- UI -----
 
     fn handle_shortcuts(&mut self, ctx: &egui::Context) {
-        let (undo, redo, delete, duplicate, f12, shift_f12, frame) = ctx.input_mut(|i| {
+        let (undo, redo, duplicate, f12, shift_f12) = ctx.input_mut(|i| {
+            // Redo first: Ctrl+Shift+Z would otherwise also match Ctrl+Z.
             let redo = i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z)
                 || i.consume_key(egui::Modifiers::COMMAND, egui::Key::Y);
             let undo = i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z);
             let shift_f12 = i.consume_key(egui::Modifiers::SHIFT, egui::Key::F12);
             let f12 = i.consume_key(egui::Modifiers::NONE, egui::Key::F12);
             let duplicate = i.consume_key(egui::Modifiers::COMMAND, egui::Key::D);
-            (undo, redo, false, duplicate, f12, shift_f12, false)
+            (undo, redo, duplicate, f12, shift_f12)
         });
-        let typing = ctx.egui_wants_keyboard_input();
-        let (delete, frame) = if typing {
-            (delete, frame)
+        // Plain keys belong to a text field when one has the focus.
+        let (delete, frame) = if ctx.egui_wants_keyboard_input() {
+            (false, false)
         } else {
             ctx.input_mut(|i| {
                 (
