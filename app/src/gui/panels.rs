@@ -462,6 +462,7 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         return;
     }
     let (param_key, start, end, count) = &mut app.sweep_input;
+    let before = param_key.clone();
     if !numeric.iter().any(|p| p.key == param_key.as_str()) {
         *param_key = numeric[0].key.to_string();
     }
@@ -470,6 +471,17 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             ui.selectable_value(param_key, p.key.to_string(), p.label);
         }
     });
+    // A new parameter gets a range around its current value, inside its limits.
+    if *param_key != before {
+        if let Some(p) = numeric.iter().find(|p| p.key == param_key.as_str()) {
+            let (lo, hi, v) = match (&p.kind, &p.value) {
+                (ParamKind::Float { min, max }, ParamValue::Float(v)) => (*min as f64, *max as f64, *v as f64),
+                (ParamKind::Int { min, max }, ParamValue::Int(v)) => (*min as f64, *max as f64, *v as f64),
+                _ => (0.0, 1.0, 0.5),
+            };
+            (*start, *end) = if v > 0.0 { ((v * 0.25).max(lo), (v * 2.0).min(hi)) } else { (lo, (lo + 1.0).min(hi)) };
+        }
+    }
     ui.horizontal(|ui| {
         ui.add(egui::DragValue::new(start).speed(0.01).prefix("from "));
         ui.add(egui::DragValue::new(end).speed(0.01).prefix("to "));
