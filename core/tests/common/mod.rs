@@ -2,6 +2,8 @@
 //! `actual` and `difference` PNGs on failure.
 #![allow(dead_code)]
 
+pub mod analytic;
+
 use std::path::PathBuf;
 
 use glam::{Vec2, Vec3, Vec4};
