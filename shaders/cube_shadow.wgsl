@@ -1,6 +1,6 @@
 // Cube shadow map lookup. The cube maps of a batch of lights live as square tiles in one depth atlas: tile
-// `6 * cube + face`, `tiles_per_row` tiles per row, each rendered with the face table below (keep in sync with
-// `CUBE_FACES` in core/src/math.rs). A tile holds hardware depth of a 90 degree perspective view;
+// `6 * cube + face`, `tiles_per_row` tiles per row, each rendered with the face table of `cube_lookup` (keep in
+// sync with `CUBE_FACES` and `cube_face_of` in core/src/math.rs). A tile holds hardware depth of a 90 degree perspective view;
 // `cube_depth_to_distance` turns it back into the world-space distance along the face axis, so bias and
 // comparisons are in world units. One atlas instead of a texture array lets a batch render in a single
 // render pass (one viewport per face), which matters on lavapipe where each pass has a fixed cost.
@@ -12,40 +12,10 @@ struct CubeLookup {
     axis_distance: f32,
 }
 
-fn cube_face_of(v: vec3<f32>) -> u32 {
-    let a = abs(v);
-    if a.x >= a.y && a.x >= a.z {
-        return select(1u, 0u, v.x >= 0.0);
-    }
-    if a.y >= a.z {
-        return select(3u, 2u, v.y >= 0.0);
-    }
-    return select(5u, 4u, v.z >= 0.0);
-}
-
-fn cube_face_forward(face: u32) -> vec3<f32> {
-    switch face {
-        case 0u: { return vec3<f32>(1.0, 0.0, 0.0); }
-        case 1u: { return vec3<f32>(-1.0, 0.0, 0.0); }
-        case 2u: { return vec3<f32>(0.0, 1.0, 0.0); }
-        case 3u: { return vec3<f32>(0.0, -1.0, 0.0); }
-        case 4u: { return vec3<f32>(0.0, 0.0, 1.0); }
-        default: { return vec3<f32>(0.0, 0.0, -1.0); }
-    }
-}
-
-fn cube_face_up(face: u32) -> vec3<f32> {
-    switch face {
-        case 2u: { return vec3<f32>(0.0, 0.0, 1.0); }
-        case 3u: { return vec3<f32>(0.0, 0.0, -1.0); }
-        default: { return vec3<f32>(0.0, 1.0, 0.0); }
-    }
-}
-
 // Where direction `v` (from the light) lands in cube map `cube_index` of an atlas with `resolution` texels per
-// face and `tiles_per_row` tiles per row. Written out per major axis instead of through `cube_face_forward` and
-// `cube_face_up` (same table): this runs per pixel per light, and the selects are much cheaper than the switches
-// on lavapipe. `right = cross(forward, up)` gives the signs below.
+// face and `tiles_per_row` tiles per row. The face table (forward, up) is written out per major axis: this runs
+// per pixel per light, and selects are much cheaper than switches on lavapipe. `right = cross(forward, up)`
+// gives the signs below.
 fn cube_lookup(v: vec3<f32>, cube_index: u32, resolution: f32, tiles_per_row: u32) -> CubeLookup {
     let a = abs(v);
     var face: u32;

@@ -54,7 +54,7 @@ impl Frustum {
 }
 
 /// One face of a cube shadow map: the axis it looks down and its up vector.
-/// Keep in sync with `cube_shadow.wgsl` (`face_basis`), which selects faces by the same table.
+/// Keep in sync with `cube_lookup` in `cube_shadow.wgsl`, which selects faces by the same table.
 #[derive(Clone, Copy, Debug)]
 pub struct CubeFace {
     pub forward: Vec3,

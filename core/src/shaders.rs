@@ -2,9 +2,6 @@
 //! shared files it uses (plain concatenation, no preprocessor). `MODULES` lists every composed module; a test
 //! validates each with naga and checks that every `.wgsl` file in `shaders/` is used.
 
-pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
-pub const CUBE_SHADOW: &str = include_str!("../../shaders/cube_shadow.wgsl");
-
 pub const GBUFFER: &str = include_str!("../../shaders/gbuffer.wgsl");
 pub const SHADOW_DEPTH: &str = include_str!("../../shaders/shadow_depth.wgsl");
 pub const AMBIENT: &str =

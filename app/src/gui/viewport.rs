@@ -32,9 +32,22 @@ pub struct FrameInputs {
 }
 
 impl FrameInputs {
+    /// Runs every UI frame over every light: hash the bits, never format (100k lights would cost milliseconds).
     fn key(&self) -> u64 {
         let mut h = DefaultHasher::new();
-        format!("{:?}", self).hash(&mut h);
+        let mut floats = |v: &[f32]| v.iter().for_each(|x| x.to_bits().hash(&mut h));
+        let c = &self.camera;
+        floats(&c.position.to_array());
+        floats(&c.orientation.to_array());
+        floats(&[c.fov_y, c.near, c.z_far]);
+        for l in &self.lights {
+            floats(&l.position.to_array());
+            floats(&l.color.to_array());
+            floats(&[l.intensity, l.range]);
+        }
+        self.technique.hash(&mut h);
+        // Parameters and settings are a handful of values.
+        format!("{:?}{:?}", self.params, self.settings).hash(&mut h);
         h.finish()
     }
 }

@@ -92,11 +92,6 @@ impl Reference {
             counts: TechniqueCounts::default(),
         }
     }
-
-    /// The lights of this frame that passed view-frustum culling (indices into the frame's lights).
-    pub fn visible_lights(&self) -> &[usize] {
-        &self.visible
-    }
 }
 
 impl ReferenceBatchUniform {
