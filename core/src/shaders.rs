@@ -27,6 +27,7 @@ pub const RAYTRACE_SHADOW: &str = concat!(
 );
 pub const RAYTRACE_TEST: &str =
     concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/raytrace_test.wgsl"));
+pub const INSM_TRIANGULATE: &str = include_str!("../../shaders/insm_triangulate.wgsl");
 pub const OVERLAY: &str = include_str!("../../shaders/overlay.wgsl");
 
 /// Every composed shader module: (name, the files it is made of, source).
@@ -41,6 +42,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("lightcluster_shade", &["common.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"], LIGHTCLUSTER_SHADE),
     ("raytrace_shadow", &["common.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"], RAYTRACE_SHADOW),
     ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
+    ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
 ];
 
 /// Create a shader module from one of the sources above.

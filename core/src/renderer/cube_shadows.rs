@@ -1,6 +1,8 @@
 //! Rendering cube shadow maps into a reused depth atlas, with per-light and per-face chunk culling.
 //!
-//! Shared by every technique that renders cube maps (the reference per light, LightCluster per cluster).
+//! Shared by every technique that renders cube maps (the reference per light, LightCluster per cluster, INSM per
+//! light from its reconstructed meshes). What is drawn is a [`CubeGeometry`]: a vertex and an index buffer cut into
+//! chunks with bounds, which is the scene's geometry for most techniques.
 //! A batch of up to `capacity` cube maps is drawn in a single render pass: each face is a square tile of the
 //! atlas, selected with a viewport; clip-space clipping keeps triangles inside their tile. The atlas is
 //! reused batch after batch, so memory depends on the batch size, never on the number of lights.
@@ -15,7 +17,7 @@ use super::gpu_data::MatrixUniform;
 use super::gpu_scene::GpuScene;
 use crate::gpu::GpuContext;
 use crate::math::CUBE_FACES;
-use crate::scene::chunks::merge_draw_ranges;
+use crate::scene::chunks::{merge_draw_ranges, Chunk};
 use crate::shaders;
 use crate::timing::PassTimer;
 
@@ -34,6 +36,29 @@ pub struct CubeCaster {
     pub far: f32,
 }
 
+/// Geometry drawn into cube maps: positions (`Float32x3` at offset 0 of each `vertex_stride`-byte vertex), `u32`
+/// indices, and chunks (index ranges with bounds) for culling.
+#[derive(Clone, Copy)]
+pub struct CubeGeometry<'a> {
+    pub vertex_buffer: &'a wgpu::Buffer,
+    pub index_buffer: &'a wgpu::Buffer,
+    pub chunks: &'a [Chunk],
+    /// Triangles of all chunks, for the culled count.
+    pub triangle_count: u64,
+}
+
+impl GpuScene {
+    /// The scene's triangles as cube-map geometry (32-byte vertices, [`CubeShadowRenderer::new`]).
+    pub fn cube_geometry(&self) -> CubeGeometry<'_> {
+        CubeGeometry {
+            vertex_buffer: &self.vertex_buffer,
+            index_buffer: &self.index_buffer,
+            chunks: &self.chunks,
+            triangle_count: self.triangle_count,
+        }
+    }
+}
+
 /// The atlas of the current batch, as the shading passes see it.
 pub struct CubeAtlas {
     pub texture: wgpu::Texture,
@@ -42,6 +67,8 @@ pub struct CubeAtlas {
     pub tiles_per_row: u32,
     /// Cube maps it holds.
     pub capacity: usize,
+    /// Square tiles it holds (6 per cube map).
+    pub tiles: usize,
 }
 
 /// Triangles drawn and culled by one `render` call.
@@ -63,7 +90,13 @@ pub struct CubeShadowRenderer {
 }
 
 impl CubeShadowRenderer {
+    /// A renderer for the scene's geometry ([`GpuScene::cube_geometry`]).
     pub fn new(gpu: &GpuContext) -> CubeShadowRenderer {
+        Self::with_vertex_stride(gpu, std::mem::size_of::<crate::scene::chunks::Vertex>() as u64)
+    }
+
+    /// A renderer for geometry whose vertices are `vertex_stride` bytes with the position first.
+    pub fn with_vertex_stride(gpu: &GpuContext, vertex_stride: u64) -> CubeShadowRenderer {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cube face"),
@@ -110,7 +143,7 @@ impl CubeShadowRenderer {
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
+                    array_stride: vertex_stride,
                     step_mode: wgpu::VertexStepMode::Vertex,
                     attributes: &wgpu::vertex_attr_array![0 => Float32x3],
                 })],
@@ -157,14 +190,19 @@ impl CubeShadowRenderer {
     /// Make sure the atlas holds `cubes` cube maps of `resolution`; reuses it when it is big enough.
     /// Returns true when a new atlas was created (bind groups that use its view must be rebuilt).
     pub fn ensure_atlas(&mut self, gpu: &GpuContext, resolution: u32, cubes: usize) -> bool {
+        self.ensure_tiles(gpu, resolution, cubes * 6)
+    }
+
+    /// Make sure the atlas holds `tiles` square tiles of `resolution` (for [`Self::render_views`]).
+    pub fn ensure_tiles(&mut self, gpu: &GpuContext, resolution: u32, tiles: usize) -> bool {
         if let Some(a) = &self.atlas {
-            if a.resolution == resolution && a.capacity >= cubes {
+            if a.resolution == resolution && a.tiles >= tiles {
                 return false;
             }
         }
         let max_dim = gpu.device.limits().max_texture_dimension_2d;
         let max_tiles_per_row = (max_dim / resolution).max(1);
-        let tiles = (cubes * 6) as u32;
+        let tiles = tiles.max(1) as u32;
         // A near-square atlas: as many columns as needed for a square, at most what the device allows.
         let tiles_per_row = ((tiles as f32).sqrt().ceil() as u32).clamp(1, max_tiles_per_row);
         let rows = tiles.div_ceil(tiles_per_row);
@@ -179,20 +217,62 @@ impl CubeShadowRenderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
-        self.atlas = Some(CubeAtlas { texture, view, resolution, tiles_per_row, capacity: cubes });
+        let tiles = tiles as usize;
+        self.atlas = Some(CubeAtlas { texture, view, resolution, tiles_per_row, capacity: tiles / 6, tiles });
         true
     }
 
-    /// Render `casters` into tiles `6*i .. 6*i+6` of the atlas (which `ensure_atlas` must have sized),
-    /// in one render pass named `label`.
+    /// Render `geometry` seen through each of `views` (clip-from-world matrices of square images) into atlas tile
+    /// `i`, chunks culled against each view's frustum, in one render pass named `label`. `ensure_tiles` must have
+    /// sized the atlas.
+    pub fn render_views(
+        &mut self,
+        gpu: &GpuContext,
+        geometry: CubeGeometry<'_>,
+        timer: &PassTimer,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        views: &[glam::Mat4],
+    ) -> CubeStats {
+        let atlas = self.atlas.as_ref().expect("ensure_tiles before render_views");
+        assert!(views.len() <= atlas.tiles && views.len() <= MAX_CUBES_PER_BATCH * 6);
+        let matrices: Vec<MatrixUniform> = views.iter().map(|m| MatrixUniform::new(*m)).collect();
+        gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
+        let mut stats = CubeStats::default();
+        let mut draws: Vec<(u32, usize, usize)> = Vec::new();
+        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        for (vi, m) in views.iter().enumerate() {
+            let frustum = crate::math::Frustum::from_clip_from_world(m);
+            self.visible.clear();
+            let mut tris = 0u64;
+            for (i, c) in geometry.chunks.iter().enumerate() {
+                if frustum.intersects_aabb(&c.bounds) {
+                    self.visible.push(i as u32);
+                    tris += c.triangle_count() as u64;
+                }
+            }
+            stats.triangles_submitted += tris;
+            stats.triangles_culled += geometry.triangle_count - tris;
+            merge_draw_ranges(geometry.chunks, self.visible.iter().copied(), &mut self.ranges);
+            draws.push((vi as u32, all_ranges.len(), self.ranges.len()));
+            all_ranges.extend_from_slice(&self.ranges);
+        }
+        self.record(geometry, timer, encoder, label, &draws, &all_ranges);
+        stats
+    }
+
+    /// Render `geometry` for `casters` into tiles `6*i .. 6*i+6` of the atlas (which `ensure_atlas` must have
+    /// sized), in one render pass named `label`.
     pub fn render(
         &mut self,
         gpu: &GpuContext,
-        scene: &GpuScene,
+        scene: CubeGeometry<'_>,
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
@@ -233,12 +313,28 @@ impl CubeShadowRenderer {
                 }
                 stats.triangles_submitted += tris;
                 stats.triangles_culled += total_triangles - tris;
-                merge_draw_ranges(&scene.chunks, self.face_visible.iter().copied(), &mut self.ranges);
+                merge_draw_ranges(scene.chunks, self.face_visible.iter().copied(), &mut self.ranges);
                 draws.push(((ci * 6 + fi) as u32, all_ranges.len(), self.ranges.len()));
                 all_ranges.extend_from_slice(&self.ranges);
             }
         }
 
+        self.record(scene, timer, encoder, label, &draws, &all_ranges);
+        stats
+    }
+
+    /// One depth pass over the atlas: for each `(tile, first range, range count)` of `draws`, the ranges
+    /// `all_ranges[first..first + count]` drawn with tile `tile`'s matrix and viewport.
+    fn record(
+        &self,
+        geometry: CubeGeometry<'_>,
+        timer: &PassTimer,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        draws: &[(u32, usize, usize)],
+        all_ranges: &[(u32, u32)],
+    ) {
+        let atlas = self.atlas.as_ref().expect("the atlas exists when recording");
         let res = atlas.resolution;
         let tiles_per_row = atlas.tiles_per_row;
         let pipeline = &self.pipeline;
@@ -260,9 +356,9 @@ impl CubeShadowRenderer {
             },
             |pass| {
                 pass.set_pipeline(pipeline);
-                pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
-                pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                for &(tile, first, count) in &draws {
+                pass.set_vertex_buffer(0, geometry.vertex_buffer.slice(..));
+                pass.set_index_buffer(geometry.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                for &(tile, first, count) in draws {
                     if count == 0 {
                         continue;
                     }
@@ -278,6 +374,5 @@ impl CubeShadowRenderer {
                 }
             },
         );
-        stats
     }
 }

@@ -447,6 +447,11 @@ impl Renderer {
     }
 
     /// Create a technique by key on this renderer's device.
+    /// The bind group layouts techniques are created with (to create one directly, by its type).
+    pub fn layouts(&self) -> &SharedLayouts {
+        &self.layouts
+    }
+
     pub fn create_technique(&self, key: &str) -> Option<Box<dyn Technique>> {
         crate::technique::create(key, &self.gpu, &self.layouts)
     }

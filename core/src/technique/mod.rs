@@ -10,6 +10,7 @@
 //! The renderer owns what all techniques share: the G-buffer, the HDR accumulation target (already holding
 //! ambient and emission when steps run), tone mapping and timing.
 
+pub mod insm;
 pub mod lightcluster;
 pub mod raytraced;
 pub mod reference;
@@ -59,6 +60,12 @@ pub struct TechniqueCounts {
     /// Light clusters (LightCluster), when the technique clusters.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clusters: Option<usize>,
+    /// Triangles of INSM's reconstructed meshes (all `k` intermediate shadow maps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub insm_mesh_triangles: Option<u64>,
+    /// INSM's bound on rendered triangles, `k*N + 2*n*k*w²` (paper section 4.2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub insm_triangle_budget: Option<u64>,
     /// True when the technique handed the frame to the reference path (LightCluster's worst case).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub fell_back_to_reference: bool,
@@ -517,6 +524,11 @@ pub const REGISTRY: &[TechniqueEntry] = &[
         key: "lightcluster",
         label: "LightCluster (clustered cube maps, PCF/PCSS)",
         create: |gpu, layouts| Box::new(lightcluster::LightCluster::new(gpu, layouts)),
+    },
+    TechniqueEntry {
+        key: "insm",
+        label: "INSM (intermediate shadow maps)",
+        create: |gpu, layouts| Box::new(insm::Insm::new(gpu, layouts)),
     },
     TechniqueEntry {
         key: "raytraced",

@@ -13,12 +13,12 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::{
-    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, FrameContext, GrowableBuffer,
-    OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
+    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, CubeMapParams, FrameContext,
+    GrowableBuffer, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer};
+use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, CubeStats};
 use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
@@ -41,8 +41,10 @@ const _: () = assert!(std::mem::size_of::<ReferenceBatchUniform>() == 32);
 /// The reference's parameters: those of every cube-map technique.
 pub type ReferenceParams = super::CubeMapParams;
 
-pub struct Reference {
-    pub params: ReferenceParams,
+/// One cube shadow map per light, rendered batch by batch into a reused atlas, and the reference's hard-shadow
+/// shading. The reference draws the scene into the cube maps; INSM draws its reconstructed meshes with the same
+/// batches and the same shading, which is what makes the two comparable.
+pub struct PerLightShadows {
     cubes: CubeShadowRenderer,
     pipeline: wgpu::RenderPipeline,
     group_layout: wgpu::BindGroupLayout,
@@ -53,11 +55,11 @@ pub struct Reference {
     visible: Vec<usize>,
     gpu_lights: Vec<GpuLight>,
     batch_size: usize,
-    counts: TechniqueCounts,
 }
 
-impl Reference {
-    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Reference {
+impl PerLightShadows {
+    /// `cubes` draws the geometry `encode_batch` will be given (the scene's, or another vertex layout).
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts, cubes: CubeShadowRenderer) -> PerLightShadows {
         let device = &gpu.device;
         let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("reference shade"),
@@ -78,9 +80,8 @@ impl Reference {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
         let lights_buffer = GrowableBuffer::new(device, "reference lights", 64 * 32);
-        Reference {
-            params: ReferenceParams::default(),
-            cubes: CubeShadowRenderer::new(gpu),
+        PerLightShadows {
+            cubes,
             pipeline,
             group_layout,
             batch_uniform,
@@ -89,6 +90,96 @@ impl Reference {
             visible: Vec::new(),
             gpu_lights: Vec::new(),
             batch_size: 1,
+        }
+    }
+
+    /// Lights that passed the frustum culling of the last `prepare`.
+    pub fn visible_lights(&self) -> usize {
+        self.visible.len()
+    }
+
+    /// Steps 1-2: cull lights against the view frustum, split them into batches; returns the batch count.
+    pub fn prepare(&mut self, ctx: &FrameContext, params: &CubeMapParams) -> usize {
+        self.visible.clear();
+        self.visible.extend(
+            ctx.lights
+                .iter()
+                .enumerate()
+                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
+                .map(|(i, _)| i),
+        );
+        self.gpu_lights.clear();
+        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
+        if self.visible.is_empty() {
+            return 0;
+        }
+        let (res, budget) = params.resolution_and_budget(ctx.gpu);
+        self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step).max(1);
+        let batches = self.visible.len().div_ceil(self.batch_size);
+
+        let mut rebind = self.bind_group.is_none();
+        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
+        rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible.len()));
+        if rebind {
+            let atlas = self.cubes.atlas().expect("atlas was just ensured");
+            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("reference shade"),
+                layout: &self.group_layout,
+                entries: &[
+                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
+                ],
+            }));
+        }
+        batches
+    }
+
+    /// Step 3 for batch `batch`: its cube maps drawn from `geometry`, then its shading added to the HDR target.
+    pub fn encode_batch(
+        &mut self,
+        ctx: &FrameContext,
+        batch: usize,
+        encoder: &mut wgpu::CommandEncoder,
+        geometry: CubeGeometry<'_>,
+        params: &CubeMapParams,
+    ) -> CubeStats {
+        let first = batch * self.batch_size;
+        let last = (first + self.batch_size).min(self.visible.len());
+        let casters: Vec<CubeCaster> = self.gpu_lights[first..last]
+            .iter()
+            .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
+            .collect();
+        let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
+
+        let atlas = self.cubes.atlas().expect("prepare sized the atlas");
+        let uniform = ReferenceBatchUniform {
+            first_light: first as u32,
+            light_count: (last - first) as u32,
+            resolution: atlas.resolution as f32,
+            bias_world: params.bias_world,
+            normal_offset_texels: params.normal_offset_texels,
+            tiles_per_row: atlas.tiles_per_row,
+            _pad: [0.0; 2],
+        };
+        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = self.bind_group.as_ref().expect("prepare created the bind group");
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
+        stats
+    }
+}
+
+pub struct Reference {
+    pub params: ReferenceParams,
+    shadows: PerLightShadows,
+    counts: TechniqueCounts,
+}
+
+impl Reference {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Reference {
+        Reference {
+            params: ReferenceParams::default(),
+            shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::new(gpu)),
             counts: TechniqueCounts::default(),
         }
     }
@@ -121,49 +212,8 @@ impl Technique for Reference {
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
-        // Step 1: view-frustum culling of range spheres.
-        self.visible.clear();
-        self.visible.extend(
-            ctx.lights
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
-                .map(|(i, _)| i),
-        );
-        self.gpu_lights.clear();
-        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
-
-        // Step 2: batches sized to the atlas budget.
-        let (res, budget) = self.params.resolution_and_budget(ctx.gpu);
-        self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step);
-        let batches = self.visible.len().div_ceil(self.batch_size);
-        self.counts = TechniqueCounts {
-            lights_visible: self.visible.len(),
-            shadow_maps: 0,
-            batches,
-            shadow_triangles_submitted: 0,
-            shadow_triangles_culled: 0,
-            ..Default::default()
-        };
-        if self.visible.is_empty() {
-            return Ok(0);
-        }
-
-        let mut rebind = self.bind_group.is_none();
-        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
-        rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible.len()));
-        if rebind {
-            let atlas = self.cubes.atlas().expect("atlas was just ensured");
-            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("reference shade"),
-                layout: &self.group_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
-                ],
-            }));
-        }
+        let batches = self.shadows.prepare(ctx, &self.params);
+        self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), batches, ..Default::default() };
         Ok(batches)
     }
 
@@ -173,31 +223,10 @@ impl Technique for Reference {
         step: usize,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
-        // Step 3: shadow maps of this batch, then its shading.
-        let first = step * self.batch_size;
-        let last = (first + self.batch_size).min(self.visible.len());
-        let casters: Vec<CubeCaster> = self.gpu_lights[first..last]
-            .iter()
-            .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
-            .collect();
-        let stats = self.cubes.render(ctx.gpu, ctx.scene, ctx.timer, encoder, "shadow maps", &casters);
+        let stats = self.shadows.encode_batch(ctx, step, encoder, ctx.scene.cube_geometry(), &self.params);
         self.counts.shadow_maps += stats.cubes;
         self.counts.shadow_triangles_submitted += stats.triangles_submitted;
         self.counts.shadow_triangles_culled += stats.triangles_culled;
-
-        let atlas = self.cubes.atlas().expect("prepare sized the atlas");
-        let uniform = ReferenceBatchUniform {
-            first_light: first as u32,
-            light_count: (last - first) as u32,
-            resolution: atlas.resolution as f32,
-            bias_world: self.params.bias_world,
-            normal_offset_texels: self.params.normal_offset_texels,
-            tiles_per_row: atlas.tiles_per_row,
-            _pad: [0.0; 2],
-        };
-        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
-        let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
         Ok(())
     }
 

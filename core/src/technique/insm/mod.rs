@@ -1,0 +1,705 @@
+//! Intermediate shadow maps (INSM), after Wang, Zhang, Li, Zhang and Popescu 2016
+//! (`../shared/papers/intermediate-shadow-maps-wang-2016.md`), Algorithm 1:
+//!
+//! 1-2. Render `k` intermediate shadow maps `INSM_j` (depth images of `w x w`) from reference viewpoints `V_j`
+//!      ([`viewpoints`]: the paper's bounding-box placement, an inside placement, or the user's own).
+//! 3.   Reconstruct a triangle mesh `TM_j` from each `INSM_j` on the GPU (Algorithm 2,
+//!      `shaders/insm_triangulate.wgsl`): two triangles per 2x2 neighbourhood, an edge kept only when the
+//!      second-order depth differences on both its sides are below `epsilon`, background samples dropped.
+//! 4.   Render the scene without shadows: the renderer's G-buffer and ambient pass.
+//! 5-9. For each light `L_i`, render all `TM_j` into its cube shadow map `SM_i` and add its shadowed light, in
+//!      batches exactly as the reference does ([`PerLightShadows`]), so memory stays bounded for any number of
+//!      lights and the only difference to the reference is the geometry in the cube maps.
+//!
+//! Deviations, each for a reason:
+//! - The reconstructed triangles are written per tile of 16x16 neighbourhoods, compacted within the tile's
+//!   fixed slot, with the tile's bounds. The CPU reads the tile list back once per frame and culls tiles per
+//!   light and per cube face like the reference culls scene chunks: without it every light would draw every
+//!   reconstructed triangle six times, and the comparison with the (culled) reference would not be fair.
+//!   With culling the paper's bound `k*N + 2*n*k*w²` still holds; [`TechniqueCounts`] reports the real count.
+//! - `epsilon` is relative (see the shader): the paper's is in depth units and scene dependent.
+//!
+//! Frame steps: step 0 renders and triangulates the intermediate shadow maps; steps `1..` are light batches.
+
+pub mod triangulate;
+pub mod viewpoints;
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3, Vec4};
+use wgpu::util::DeviceExt;
+
+use super::reference::PerLightShadows;
+use super::{
+    check_param, CubeMapParams, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue,
+    Technique, TechniqueCounts,
+};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::cube_shadows::{CubeGeometry, CubeShadowRenderer};
+use crate::renderer::SharedLayouts;
+use crate::scene::chunks::Chunk;
+use crate::scene::{Aabb, PointLight};
+use crate::shaders;
+use crate::timing::PassTime;
+use triangulate::{GpuTile, SampledImage, MAX_TRIANGLES_PER_TILE};
+use viewpoints::{Placement, Viewpoint};
+
+/// Most intermediate shadow maps (the paper uses 6 to 14).
+pub const MAX_VIEWPOINTS: usize = 16;
+/// Largest intermediate shadow map side (the paper's Table 2 goes to 512).
+pub const MAX_INSM_RESOLUTION: u32 = 512;
+/// The reconstructed samples are read back for the overlays when they take at most this many bytes
+/// (10 maps of 256² are 10 MiB); beyond, the overlays show the viewpoints only.
+const OVERLAY_READBACK_LIMIT: u64 = 12 << 20;
+/// Caps of overlay primitives, so the overlay stays interactive.
+const MAX_WIREFRAME_TRIANGLES: usize = 40_000;
+const MAX_OVERLAY_POINTS: usize = 40_000;
+const MAX_DROPPED_EDGES: usize = 60_000;
+
+/// INSM's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InsmParams {
+    /// Number of intermediate shadow maps `k`.
+    pub viewpoints: u32,
+    /// Side `w` of each intermediate shadow map.
+    pub insm_resolution: u32,
+    /// Relative second-order difference above which an edge is a depth discontinuity.
+    pub epsilon: f32,
+    pub placement: Placement,
+    /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
+    pub cube: CubeMapParams,
+}
+
+impl Default for InsmParams {
+    fn default() -> Self {
+        InsmParams {
+            viewpoints: 10,
+            insm_resolution: 128,
+            epsilon: 0.05,
+            placement: Placement::Box,
+            cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
+        }
+    }
+}
+
+/// Mirrors `Params` in `insm_triangulate.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct TriangulateUniform {
+    resolution: u32,
+    tiles_per_side: u32,
+    epsilon: f32,
+    atlas_tiles_per_row: u32,
+}
+
+/// Mirrors `View` in `insm_triangulate.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuView {
+    world_from_clip: [[f32; 4]; 4],
+    near: f32,
+    far: f32,
+    _pad: [f32; 2],
+}
+const _: () = assert!(std::mem::size_of::<GpuView>() == 80);
+
+/// Vertex of a reconstructed mesh: world position and inverse depth (0 = background sample).
+const MESH_VERTEX_BYTES: u64 = 16;
+
+/// The reconstructed meshes of `k` maps of `resolution²`, and their readback buffers.
+struct MeshBuffers {
+    k: u32,
+    resolution: u32,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    tiles: wgpu::Buffer,
+    tiles_readback: wgpu::Buffer,
+    vertices_readback: Option<wgpu::Buffer>,
+    bind_group: wgpu::BindGroup,
+}
+
+/// What the overlays show of the last frame's meshes.
+#[derive(Default)]
+struct MeshSnapshot {
+    resolution: u32,
+    epsilon: f32,
+    /// `k * resolution²` samples, or empty when too large to read back.
+    samples: Arc<Vec<Vec4>>,
+}
+
+pub struct Insm {
+    pub params: InsmParams,
+    /// The viewpoints of `placement = custom` (edited in the app, saved in scene files).
+    pub custom_viewpoints: Vec<Viewpoint>,
+    images: CubeShadowRenderer,
+    shadows: PerLightShadows,
+    triangulate_pipeline: wgpu::ComputePipeline,
+    triangulate_layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
+    views_buffer: wgpu::Buffer,
+    mesh: Option<MeshBuffers>,
+    /// This frame's viewpoints and their clip-from-world matrices.
+    views: Vec<Viewpoint>,
+    view_matrices: Vec<Mat4>,
+    /// The scene's bounds in the last frame.
+    bounds: Aabb,
+    /// Non-empty tiles of the reconstructed meshes, read back after step 0.
+    tiles: Vec<Chunk>,
+    mesh_triangles: u64,
+    tiles_ready: bool,
+    snapshot: MeshSnapshot,
+    scene_triangles: u64,
+    counts: TechniqueCounts,
+    cpu_times: Vec<PassTime>,
+}
+
+impl Insm {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Insm {
+        let device = &gpu.device;
+        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let triangulate_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("insm triangulate"),
+            entries: &[
+                super::uniform_entry(0),
+                storage(1, true),
+                super::depth_texture_entry(2),
+                storage(3, false),
+                storage(4, false),
+                storage(5, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("insm triangulate"),
+            bind_group_layouts: &[Some(&triangulate_layout)],
+            immediate_size: 0,
+        });
+        let module = shaders::create_module(device, "insm_triangulate", shaders::INSM_TRIANGULATE);
+        let triangulate_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("insm triangulate"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("triangulate"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("insm triangulate params"),
+            contents: bytemuck::bytes_of(&TriangulateUniform {
+                resolution: 0,
+                tiles_per_side: 0,
+                epsilon: 0.0,
+                atlas_tiles_per_row: 1,
+            }),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let views_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("insm views"),
+            size: (MAX_VIEWPOINTS * std::mem::size_of::<GpuView>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Insm {
+            params: InsmParams::default(),
+            custom_viewpoints: Vec::new(),
+            images: CubeShadowRenderer::new(gpu),
+            shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_vertex_stride(gpu, MESH_VERTEX_BYTES)),
+            triangulate_pipeline,
+            triangulate_layout,
+            uniform,
+            views_buffer,
+            mesh: None,
+            views: Vec::new(),
+            view_matrices: Vec::new(),
+            bounds: Aabb::from_points(std::iter::empty()),
+            tiles: Vec::new(),
+            mesh_triangles: 0,
+            tiles_ready: false,
+            snapshot: MeshSnapshot::default(),
+            scene_triangles: 0,
+            counts: TechniqueCounts::default(),
+            cpu_times: Vec::new(),
+        }
+    }
+
+    /// The viewpoints used by the last frame.
+    pub fn viewpoints(&self) -> &[Viewpoint] {
+        &self.views
+    }
+
+    /// Triangles of the reconstructed meshes in the last frame.
+    pub fn mesh_triangles(&self) -> u64 {
+        self.mesh_triangles
+    }
+
+    /// The viewpoints `placement` gives for `bounds` (custom: the custom list), all of them, before `k` is applied.
+    pub fn candidate_viewpoints(&self, bounds: &Aabb) -> Vec<Viewpoint> {
+        viewpoints::select(self.params.placement, bounds, &self.custom_viewpoints, MAX_VIEWPOINTS)
+    }
+
+    /// Read back the samples and the triangles of each reconstructed mesh, as the GPU wrote them (for tests and
+    /// tools): `(samples, triangles as sample indices)`. Call after a frame.
+    pub fn read_meshes(&self, gpu: &GpuContext) -> Result<(Vec<Vec4>, Vec<[u32; 3]>), GpuError> {
+        let mesh = self.mesh.as_ref().ok_or_else(|| GpuError::Readback("INSM has not rendered a frame".into()))?;
+        let samples: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.vertices)?).to_vec();
+        let tiles: Vec<GpuTile> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.tiles)?).to_vec();
+        let indices: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.indices)?).to_vec();
+        let mut triangles = Vec::new();
+        for (t, tile) in tiles.iter().enumerate() {
+            let base = t * MAX_TRIANGLES_PER_TILE as usize * 3;
+            for i in 0..tile.count.min(MAX_TRIANGLES_PER_TILE) as usize {
+                let o = base + i * 3;
+                triangles.push([indices[o], indices[o + 1], indices[o + 2]]);
+            }
+        }
+        Ok((samples, triangles))
+    }
+
+    fn ensure_mesh(&mut self, gpu: &GpuContext, k: u32, resolution: u32) {
+        if self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == resolution) {
+            return;
+        }
+        let device = &gpu.device;
+        let samples = k as u64 * resolution as u64 * resolution as u64;
+        let tps = triangulate::tiles_per_side(resolution) as u64;
+        let tiles = k as u64 * tps * tps;
+        let vertex_bytes = samples * MESH_VERTEX_BYTES;
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let vertices = buffer(
+            "insm vertices",
+            vertex_bytes,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
+        );
+        let indices = buffer(
+            "insm indices",
+            tiles * MAX_TRIANGLES_PER_TILE as u64 * 12,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
+        );
+        let tile_bytes = tiles * std::mem::size_of::<GpuTile>() as u64;
+        let tiles_buffer = buffer("insm tiles", tile_bytes, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let readback = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
+        let tiles_readback = buffer("insm tiles readback", tile_bytes, readback);
+        let vertices_readback =
+            (vertex_bytes <= OVERLAY_READBACK_LIMIT).then(|| buffer("insm vertices readback", vertex_bytes, readback));
+        // A placeholder bind group; `prepare` rebuilds it with the atlas once it exists.
+        self.mesh = Some(MeshBuffers {
+            k,
+            resolution,
+            bind_group: self.bind_group_for(gpu, &vertices, &indices, &tiles_buffer),
+            vertices,
+            indices,
+            tiles: tiles_buffer,
+            tiles_readback,
+            vertices_readback,
+        });
+    }
+
+    fn bind_group_for(
+        &self,
+        gpu: &GpuContext,
+        vertices: &wgpu::Buffer,
+        indices: &wgpu::Buffer,
+        tiles: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let atlas = self.images.atlas().expect("the depth atlas is ensured before the mesh");
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("insm triangulate"),
+            layout: &self.triangulate_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.views_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
+                wgpu::BindGroupEntry { binding: 3, resource: vertices.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: indices.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: tiles.as_entire_binding() },
+            ],
+        })
+    }
+
+    /// Step 0: Algorithm 1 lines 1-3 for all `k` viewpoints.
+    fn encode_intermediate_maps(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+        let stats = self.images.render_views(
+            ctx.gpu,
+            ctx.scene.cube_geometry(),
+            ctx.timer,
+            encoder,
+            "intermediate shadow maps",
+            &self.view_matrices,
+        );
+        self.scene_triangles = stats.triangles_submitted;
+        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
+        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
+        let tps = triangulate::tiles_per_side(mesh.resolution);
+        let (pipeline, group, k) = (&self.triangulate_pipeline, &mesh.bind_group, self.views.len() as u32);
+        ctx.timer.compute_pass(encoder, "triangulation", |pass| {
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(tps, tps, k);
+        });
+        let tile_bytes = (k * tps * tps) as u64 * std::mem::size_of::<GpuTile>() as u64;
+        encoder.copy_buffer_to_buffer(&mesh.tiles, 0, &mesh.tiles_readback, 0, tile_bytes);
+        if let Some(rb) = &mesh.vertices_readback {
+            let bytes = k as u64 * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES;
+            encoder.copy_buffer_to_buffer(&mesh.vertices, 0, rb, 0, bytes);
+        }
+        self.tiles_ready = false;
+    }
+
+    /// Before the first light batch: read the tiles (and the samples for the overlays) back, and make the tile
+    /// list the lights cull against.
+    fn read_tiles(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
+        let start = std::time::Instant::now();
+        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
+        let k = self.views.len() as u64;
+        let tps = triangulate::tiles_per_side(mesh.resolution) as u64;
+        let tile_bytes = k * tps * tps * std::mem::size_of::<GpuTile>() as u64;
+        let tiles: Vec<GpuTile> = bytemuck::cast_slice(&map_read(gpu, &mesh.tiles_readback, tile_bytes)?).to_vec();
+        self.tiles.clear();
+        self.mesh_triangles = 0;
+        for (i, t) in tiles.iter().enumerate() {
+            let count = t.count.min(MAX_TRIANGLES_PER_TILE);
+            if count == 0 {
+                continue;
+            }
+            self.mesh_triangles += count as u64;
+            let min = Vec3::from_slice(&t.bounds_min[..3]);
+            let max = Vec3::from_slice(&t.bounds_max[..3]);
+            // Bounds that are not finite (never, unless the depth atlas holds garbage) make the tile always drawn.
+            let bounds = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+                Aabb { min, max }
+            } else {
+                Aabb { min: Vec3::splat(-f32::MAX), max: Vec3::splat(f32::MAX) }
+            };
+            self.tiles.push(Chunk {
+                first_index: i as u32 * MAX_TRIANGLES_PER_TILE * 3,
+                index_count: count * 3,
+                material: 0,
+                bounds,
+            });
+        }
+        self.snapshot =
+            MeshSnapshot { resolution: mesh.resolution, epsilon: self.params.epsilon, samples: Arc::default() };
+        if let Some(rb) = &mesh.vertices_readback {
+            let bytes = k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES;
+            let samples: Vec<Vec4> = bytemuck::cast_slice(&map_read(gpu, rb, bytes)?).to_vec();
+            self.snapshot.samples = Arc::new(samples);
+        }
+        self.tiles_ready = true;
+        self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
+        self.cpu_times.push(PassTime {
+            name: "mesh readback".into(),
+            ms: start.elapsed().as_secs_f64() * 1e3,
+            count: 1,
+        });
+        Ok(())
+    }
+}
+
+/// Map `bytes` of a MAP_READ buffer, copy them out, unmap.
+fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+    let slice = buffer.slice(..bytes.max(4));
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait_idle()?;
+    rx.recv()
+        .map_err(|_| GpuError::Readback("the map callback never ran".into()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+    buffer.unmap();
+    Ok(data)
+}
+
+/// Copy a whole COPY_SRC buffer back to the CPU.
+fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("insm readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    gpu.queue.submit([encoder.finish()]);
+    map_read(gpu, &staging, buffer.size())
+}
+
+/// The scene's bounds from its chunks.
+fn scene_bounds(chunks: &[Chunk]) -> Aabb {
+    let mut b = Aabb::from_points(std::iter::empty());
+    for c in chunks {
+        b = b.union(&c.bounds);
+    }
+    b
+}
+
+impl Technique for Insm {
+    fn key(&self) -> &'static str {
+        "insm"
+    }
+
+    fn label(&self) -> &'static str {
+        "INSM"
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let mut params = vec![
+            Param {
+                key: "k",
+                label: "Intermediate maps k",
+                help: "Number of intermediate shadow maps (reference viewpoints)",
+                kind: ParamKind::Int { min: 1, max: MAX_VIEWPOINTS as i64 },
+                value: ParamValue::Int(self.params.viewpoints as i64),
+            },
+            Param {
+                key: "insm_res",
+                label: "INSM resolution",
+                help: "Side of each intermediate shadow map in samples",
+                kind: ParamKind::Int { min: 8, max: MAX_INSM_RESOLUTION as i64 },
+                value: ParamValue::Int(self.params.insm_resolution as i64),
+            },
+            Param {
+                key: "epsilon",
+                label: "Discontinuity ε",
+                help: "Relative second-order depth difference above which an edge is not triangulated",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(self.params.epsilon),
+            },
+            Param {
+                key: "placement",
+                label: "Viewpoints",
+                help: "box: the paper's bounding-box placement; inside: a ring inside the scene (rooms); custom: \
+                       the viewpoints you placed",
+                kind: ParamKind::Choice(Placement::NAMES),
+                value: ParamValue::Choice(self.params.placement.name().to_string()),
+            },
+        ];
+        let mut cube = self.params.cube.params();
+        if let Some(p) = cube.iter_mut().find(|p| p.key == "shadow_res") {
+            p.label = "Per-light resolution";
+        }
+        params.extend(cube);
+        params
+    }
+
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        check_param(self.key(), &self.params(), key, value)?;
+        match (key, value) {
+            ("k", ParamValue::Int(v)) => self.params.viewpoints = *v as u32,
+            ("insm_res", ParamValue::Int(v)) => self.params.insm_resolution = *v as u32,
+            ("epsilon", ParamValue::Float(v)) => self.params.epsilon = *v,
+            ("placement", ParamValue::Choice(v)) => {
+                self.params.placement = Placement::from_name(v).expect("check_param checked the choice")
+            }
+            _ => {
+                let known = self.params.cube.set(key, value);
+                debug_assert!(known, "check_param accepted an unknown key");
+            }
+        }
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        self.cpu_times.clear();
+        self.tiles_ready = false;
+        let batches = self.shadows.prepare(ctx, &self.params.cube);
+        self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), ..Default::default() };
+        if batches == 0 {
+            return Ok(0);
+        }
+        let bounds = scene_bounds(&ctx.scene.chunks);
+        self.bounds = bounds;
+        self.views = viewpoints::select(
+            self.params.placement,
+            &bounds,
+            &self.custom_viewpoints,
+            self.params.viewpoints as usize,
+        );
+        if self.views.is_empty() {
+            return Err(GpuError::InvalidSettings(
+                "INSM has no viewpoint: place at least one (or choose the box or inside placement)".into(),
+            ));
+        }
+        self.view_matrices = self.views.iter().map(|v| v.clip_from_world(&bounds)).collect();
+        let gpu_views: Vec<GpuView> = self
+            .views
+            .iter()
+            .zip(&self.view_matrices)
+            .map(|(v, m)| {
+                let (near, far) = v.depth_range(&bounds);
+                GpuView { world_from_clip: m.inverse().to_cols_array_2d(), near, far, _pad: [0.0; 2] }
+            })
+            .collect();
+        ctx.gpu.queue.write_buffer(&self.views_buffer, 0, bytemuck::cast_slice(&gpu_views));
+
+        let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
+        let k = self.views.len() as u32;
+        let new_atlas = self.images.ensure_tiles(ctx.gpu, res, k as usize);
+        let atlas_tiles_per_row = self.images.atlas().expect("ensured").tiles_per_row;
+        let had_mesh = self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == res);
+        self.ensure_mesh(ctx.gpu, k, res);
+        if new_atlas && had_mesh {
+            let mesh = self.mesh.as_ref().expect("ensured");
+            let group = self.bind_group_for(ctx.gpu, &mesh.vertices, &mesh.indices, &mesh.tiles);
+            self.mesh.as_mut().expect("ensured").bind_group = group;
+        }
+        let uniform = TriangulateUniform {
+            resolution: res,
+            tiles_per_side: triangulate::tiles_per_side(res),
+            epsilon: self.params.epsilon,
+            atlas_tiles_per_row,
+        };
+        ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+
+        // The paper's bound on rendered triangles: k N + 2 n k w².
+        let n = self.shadows.visible_lights() as u64;
+        let budget = k as u64 * ctx.scene.triangle_count + 2 * n * k as u64 * (res as u64).pow(2);
+        self.counts.insm_triangle_budget = Some(budget);
+        self.counts.batches = batches + 1;
+        Ok(batches + 1)
+    }
+
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        if step == 0 {
+            self.encode_intermediate_maps(ctx, encoder);
+            return Ok(());
+        }
+        if !self.tiles_ready {
+            self.read_tiles(ctx.gpu)?;
+        }
+        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
+        let geometry = CubeGeometry {
+            vertex_buffer: &mesh.vertices,
+            index_buffer: &mesh.indices,
+            chunks: &self.tiles,
+            triangle_count: self.mesh_triangles,
+        };
+        let stats = self.shadows.encode_batch(ctx, step - 1, encoder, geometry, &self.params.cube);
+        self.counts.shadow_maps += stats.cubes;
+        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
+        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        Ok(())
+    }
+
+    fn step_label(&self) -> &'static str {
+        "intermediate maps / shadow maps + shading"
+    }
+
+    fn counts(&self) -> TechniqueCounts {
+        self.counts.clone()
+    }
+
+    fn cpu_times(&self) -> Vec<PassTime> {
+        self.cpu_times.clone()
+    }
+
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        let mut layers = super::light_overlays(lights);
+        let frustum_color = [1.0, 0.85, 0.2, 1.0];
+        layers.push(OverlayLayer {
+            name: "INSM viewpoints",
+            visible_by_default: true,
+            primitives: self
+                .views
+                .iter()
+                .enumerate()
+                .flat_map(|(i, v)| {
+                    let color = super::index_color(i);
+                    [
+                        Overlay::Point { position: v.position, color: frustum_color, radius_px: 5.0 },
+                        Overlay::Line { from: v.position, to: v.target, color: [color[0], color[1], color[2], 0.6] },
+                    ]
+                })
+                .chain(self.views.iter().enumerate().map(|(i, v)| {
+                    // Frusta drawn to an eighth of the scene's size: their far planes enclose the whole scene.
+                    let (near, _) = v.depth_range(&self.bounds);
+                    let depth = (self.bounds.size().length() * 0.125).max(near * 2.0);
+                    Overlay::Frustum {
+                        clip_from_world: v.clip_from_world_range(near, depth),
+                        color: super::index_color(i),
+                    }
+                }))
+                .collect(),
+        });
+        let snap = &self.snapshot;
+        if snap.samples.is_empty() || snap.resolution == 0 {
+            return layers;
+        }
+        let r = snap.resolution as usize;
+        let images: Vec<SampledImage> =
+            snap.samples.chunks(r * r).map(|s| SampledImage { resolution: snap.resolution, samples: s }).collect();
+
+        // Point cloud of the valid samples, every `stride`-th.
+        let valid: usize = images.iter().map(|i| i.valid_samples()).sum();
+        let stride = valid.div_ceil(MAX_OVERLAY_POINTS).max(1);
+        let points = snap
+            .samples
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.w > 0.0)
+            .step_by(stride)
+            .map(|(i, s)| Overlay::Point {
+                position: s.truncate(),
+                color: super::index_color(i / (r * r)),
+                radius_px: 1.5,
+            })
+            .collect();
+        layers.push(OverlayLayer { name: "INSM samples", visible_by_default: false, primitives: points });
+
+        // Wireframe of the reconstructed triangles: every `stride`-th neighbourhood row and column when large.
+        let mut wire = Vec::new();
+        let quad_stride =
+            ((2 * images.len() * r * r) as f64 / MAX_WIREFRAME_TRIANGLES as f64).sqrt().ceil().max(1.0) as u32;
+        for (j, img) in images.iter().enumerate() {
+            let [cr, cg, cb, _] = super::index_color(j);
+            let color = [cr, cg, cb, 0.8];
+            for v in (0..snap.resolution.saturating_sub(1)).step_by(quad_stride as usize) {
+                for u in (0..snap.resolution.saturating_sub(1)).step_by(quad_stride as usize) {
+                    for t in img.neighbourhood(u, v, snap.epsilon).into_iter().flatten() {
+                        let p = t.map(|i| img.samples[i as usize].truncate());
+                        wire.push(Overlay::Line { from: p[0], to: p[1], color });
+                        wire.push(Overlay::Line { from: p[1], to: p[2], color });
+                        wire.push(Overlay::Line { from: p[2], to: p[0], color });
+                    }
+                }
+            }
+        }
+        layers.push(OverlayLayer { name: "INSM mesh (wireframe)", visible_by_default: false, primitives: wire });
+
+        // Dropped edges: the depth discontinuities, in red.
+        let mut dropped: Vec<Overlay> = Vec::new();
+        for img in &images {
+            for e in img.dropped_edges(snap.epsilon) {
+                if dropped.len() >= MAX_DROPPED_EDGES {
+                    break;
+                }
+                dropped.push(Overlay::Line { from: e.from, to: e.to, color: [1.0, 0.1, 0.1, 1.0] });
+            }
+        }
+        layers.push(OverlayLayer { name: "INSM dropped edges", visible_by_default: false, primitives: dropped });
+        layers
+    }
+}

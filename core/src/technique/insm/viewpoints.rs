@@ -1,0 +1,296 @@
+//! Reference viewpoints `V_j` of the intermediate shadow maps (paper section 3.1, Fig. 2 and Fig. 6).
+//!
+//! - `box` (the paper's default, Fig. 2): the midpoints of the eight horizontal edges of the scene's bounding
+//!   box and the centres of its left and right faces, looking at the box centre. Good for scenes seen from
+//!   outside (a model on a ground plane).
+//! - `inside` (after the paper's 14 hand-placed Sponza cameras, Fig. 6): for scenes seen from inside (rooms,
+//!   atria), where cameras on the bounding box would only see the outside of the walls. Eight cameras at mid
+//!   height on a ring inside the box looking horizontally inwards, then cameras near the floor looking at the
+//!   centre. The paper does not give their coordinates; this ring is our placement of the same idea.
+//! - custom: a list the user edits (the app's gizmo) and saves in the scene file.
+//!
+//! Each list is ordered so that its first `k` entries spread around the scene for any `k`, which is how the
+//! `k` parameter picks viewpoints (the paper's Table 4 varies `k` from 6 to 12).
+
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::math::{look_to_rh, perspective_rh};
+use crate::scene::Aabb;
+
+/// Largest field of view of an automatically placed viewpoint. A camera on a box edge needs 180 degrees to see
+/// the whole box; beyond ~120 degrees a perspective image wastes most samples on its borders.
+pub const MAX_AUTO_FOV_DEG: f32 = 120.0;
+
+/// One reference viewpoint: where it is, where it looks, its (square) field of view.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Viewpoint {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub fov_y_deg: f32,
+}
+
+impl Viewpoint {
+    pub fn is_valid(&self) -> bool {
+        self.position.is_finite()
+            && self.target.is_finite()
+            && (self.target - self.position).length_squared() > 1e-12
+            && self.fov_y_deg.is_finite()
+            && self.fov_y_deg > 1.0
+            && self.fov_y_deg < 170.0
+    }
+
+    pub fn forward(&self) -> Vec3 {
+        (self.target - self.position).normalize_or(Vec3::NEG_Z)
+    }
+
+    fn up(&self) -> Vec3 {
+        let f = self.forward();
+        if f.cross(Vec3::Y).length_squared() < 1e-6 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        }
+    }
+
+    /// Near and far planes that hold the whole of `bounds` in front of this viewpoint.
+    pub fn depth_range(&self, bounds: &Aabb) -> (f32, f32) {
+        let far = corners(bounds).iter().map(|c| c.distance(self.position)).fold(0.0f32, f32::max).max(1e-3) * 1.01;
+        (far * 1e-3, far)
+    }
+
+    /// Clip-from-world of this viewpoint's square depth image, with the depth range of `bounds`.
+    pub fn clip_from_world(&self, bounds: &Aabb) -> Mat4 {
+        let (near, far) = self.depth_range(bounds);
+        self.clip_from_world_range(near, far)
+    }
+
+    /// Clip-from-world with an explicit depth range.
+    pub fn clip_from_world_range(&self, near: f32, far: f32) -> Mat4 {
+        perspective_rh(self.fov_y_deg.to_radians(), 1.0, near, far)
+            * look_to_rh(self.position, self.forward(), self.up())
+    }
+}
+
+/// The eight corners of a box.
+pub fn corners(b: &Aabb) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        )
+    })
+}
+
+/// The field of view (degrees) a camera at `position` looking at `target` needs to see all of `bounds`, clamped
+/// to 30..=[`MAX_AUTO_FOV_DEG`].
+fn fov_to_fit(position: Vec3, target: Vec3, bounds: &Aabb) -> f32 {
+    let f = (target - position).normalize_or(Vec3::NEG_Z);
+    let max_angle = corners(bounds)
+        .iter()
+        .map(|c| {
+            let d = *c - position;
+            if d.length_squared() < 1e-12 {
+                0.0
+            } else {
+                d.normalize().dot(f).clamp(-1.0, 1.0).acos()
+            }
+        })
+        .fold(0.0f32, f32::max);
+    (2.0 * max_angle.to_degrees() * 1.02).clamp(30.0, MAX_AUTO_FOV_DEG)
+}
+
+/// The box the `box` placement uses: the scene's bounds, raised to at least half their horizontal extent.
+/// Deviation: for a flat scene (a model on a wide ground plane) the paper's cameras would lie in the plane of
+/// the ground and see every flat occluder edge-on; raising the top lets the top cameras look down on them.
+pub fn placement_box(bounds: &Aabb) -> Aabb {
+    let size = bounds.size();
+    let min_height = 0.5 * size.x.max(size.z);
+    let mut b = *bounds;
+    b.max.y = b.max.y.max(b.min.y + min_height);
+    b
+}
+
+/// The paper's placement (Fig. 2) on [`placement_box`], ordered for any prefix: left and right face centres,
+/// then the eight horizontal edge midpoints alternating top and bottom, then front, back, top and bottom face
+/// centres (for `k` above 10). At most 14.
+pub fn box_viewpoints(scene_bounds: &Aabb) -> Vec<Viewpoint> {
+    let bounds = &placement_box(scene_bounds);
+    let c = bounds.center();
+    let (lo, hi) = (bounds.min, bounds.max);
+    let positions = [
+        Vec3::new(lo.x, c.y, c.z),
+        Vec3::new(hi.x, c.y, c.z),
+        Vec3::new(c.x, hi.y, hi.z),
+        Vec3::new(c.x, lo.y, lo.z),
+        Vec3::new(lo.x, hi.y, c.z),
+        Vec3::new(hi.x, lo.y, c.z),
+        Vec3::new(c.x, hi.y, lo.z),
+        Vec3::new(c.x, lo.y, hi.z),
+        Vec3::new(hi.x, hi.y, c.z),
+        Vec3::new(lo.x, lo.y, c.z),
+        Vec3::new(c.x, c.y, hi.z),
+        Vec3::new(c.x, c.y, lo.z),
+        Vec3::new(c.x, hi.y, c.z),
+        Vec3::new(c.x, lo.y, c.z),
+    ];
+    positions.iter().map(|&p| Viewpoint { position: p, target: c, fov_y_deg: fov_to_fit(p, c, scene_bounds) }).collect()
+}
+
+/// Cameras inside the box (after the paper's Sponza placement, Fig. 6): a ring of eight at mid height, 15 % in
+/// from the walls, looking horizontally at the vertical axis through the centre; then six at 10 % of the height
+/// on a smaller ring looking at the centre. Ordered for any prefix. At most 14.
+pub fn inside_viewpoints(bounds: &Aabb) -> Vec<Viewpoint> {
+    let c = bounds.center();
+    let half = bounds.size() * 0.5;
+    let mut out = Vec::with_capacity(14);
+    // Ring order alternating across the centre so prefixes spread: 0, 4, 2, 6, 1, 5, 3, 7 (eighths of a turn).
+    for i in [0u32, 4, 2, 6, 1, 5, 3, 7] {
+        let a = i as f32 * std::f32::consts::FRAC_PI_4;
+        let p = Vec3::new(c.x + a.cos() * half.x * 0.85, c.y, c.z + a.sin() * half.z * 0.85);
+        let target = Vec3::new(c.x, c.y, c.z);
+        out.push(Viewpoint { position: p, target, fov_y_deg: 100.0 });
+    }
+    let low_y = bounds.min.y + bounds.size().y * 0.1;
+    for i in [0u32, 3, 1, 4, 2, 5] {
+        let a = (i as f32 + 0.5) * std::f32::consts::TAU / 6.0;
+        let p = Vec3::new(c.x + a.cos() * half.x * 0.5, low_y, c.z + a.sin() * half.z * 0.5);
+        out.push(Viewpoint { position: p, target: c, fov_y_deg: 100.0 });
+    }
+    out
+}
+
+/// How viewpoints are placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Placement {
+    Box,
+    Inside,
+    Custom,
+}
+
+impl Placement {
+    pub const NAMES: &'static [&'static str] = &["box", "inside", "custom"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Placement::Box => "box",
+            Placement::Inside => "inside",
+            Placement::Custom => "custom",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Placement> {
+        match name {
+            "box" => Some(Placement::Box),
+            "inside" => Some(Placement::Inside),
+            "custom" => Some(Placement::Custom),
+            _ => None,
+        }
+    }
+}
+
+/// The first `k` viewpoints of `placement` for `bounds` (custom: the first `k` of `custom`), invalid ones dropped.
+pub fn select(placement: Placement, bounds: &Aabb, custom: &[Viewpoint], k: usize) -> Vec<Viewpoint> {
+    let all = match placement {
+        Placement::Box => box_viewpoints(bounds),
+        Placement::Inside => inside_viewpoints(bounds),
+        Placement::Custom => custom.to_vec(),
+    };
+    all.into_iter().filter(Viewpoint::is_valid).take(k).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Aabb {
+        Aabb { min: Vec3::new(-2.0, 0.0, -1.0), max: Vec3::new(2.0, 2.0, 1.0) }
+    }
+
+    #[test]
+    fn box_placement_is_the_papers_ten_then_four_more() {
+        let b = unit_box();
+        assert_eq!(placement_box(&b), b, "a box tall enough is used as it is");
+        let v = box_viewpoints(&b);
+        assert_eq!(v.len(), 14);
+        // The first ten: two face centres and eight edge midpoints, all on the box surface.
+        let on_surface = |p: Vec3| {
+            [p.x - b.min.x, b.max.x - p.x, p.y - b.min.y, b.max.y - p.y, p.z - b.min.z, b.max.z - p.z]
+                .iter()
+                .filter(|d| d.abs() < 1e-6)
+                .count()
+        };
+        assert_eq!(on_surface(v[0].position), 1);
+        assert_eq!(on_surface(v[1].position), 1);
+        assert_eq!(v[0].position.x, b.min.x);
+        assert_eq!(v[1].position.x, b.max.x);
+        for vp in &v[2..10] {
+            assert_eq!(on_surface(vp.position), 2, "{vp:?} is not an edge midpoint");
+            assert!(vp.position.y == b.min.y || vp.position.y == b.max.y, "edges are the horizontal ones");
+        }
+        // Distinct and all looking at the centre.
+        for (i, a) in v.iter().enumerate() {
+            assert!(a.is_valid());
+            assert!((a.forward() - (b.center() - a.position).normalize()).length() < 1e-5);
+            for bb in &v[i + 1..] {
+                assert!(a.position.distance(bb.position) > 1e-3);
+            }
+        }
+    }
+
+    #[test]
+    fn a_flat_scene_gets_a_taller_box() {
+        let flat = Aabb { min: Vec3::new(-10.0, 0.0, -10.0), max: Vec3::new(10.0, 1.0, 10.0) };
+        let b = placement_box(&flat);
+        assert_eq!(b.max.y, 10.0);
+        assert_eq!((b.min, b.max.x, b.max.z), (flat.min, 10.0, 10.0));
+        // The top cameras look down.
+        assert!(box_viewpoints(&flat)[2].forward().y < -0.4);
+    }
+
+    #[test]
+    fn fov_fits_the_box_up_to_the_cap() {
+        let b = unit_box();
+        for vp in box_viewpoints(&b) {
+            assert!((30.0..=MAX_AUTO_FOV_DEG).contains(&vp.fov_y_deg));
+        }
+        // From far away the box needs a small angle; the corners then project inside the image.
+        let far = Viewpoint { position: Vec3::new(0.0, 1.0, 20.0), target: b.center(), fov_y_deg: 0.0 };
+        let fov = fov_to_fit(far.position, far.target, &b);
+        assert!(fov < 40.0, "{fov}");
+        let vp = Viewpoint { fov_y_deg: fov, ..far };
+        let m = vp.clip_from_world(&b);
+        for c in corners(&b) {
+            let p = m.project_point3(c);
+            assert!(p.x.abs() <= 1.0 && p.y.abs() <= 1.0 && (0.0..=1.0).contains(&p.z), "{c} -> {p}");
+        }
+    }
+
+    #[test]
+    fn inside_placement_stays_inside_and_prefixes_spread() {
+        let b = unit_box();
+        let v = inside_viewpoints(&b);
+        assert_eq!(v.len(), 14);
+        for vp in &v {
+            assert!(vp.is_valid());
+            assert!(vp.position.cmpgt(b.min).all() && vp.position.cmplt(b.max).all(), "{vp:?}");
+        }
+        // The first two face each other across the centre.
+        assert!((v[0].position + v[1].position - 2.0 * Vec3::new(0.0, 1.0, 0.0)).length() < 1e-4);
+    }
+
+    #[test]
+    fn select_takes_k_and_drops_invalid_custom_viewpoints() {
+        let b = unit_box();
+        assert_eq!(select(Placement::Box, &b, &[], 6).len(), 6);
+        assert_eq!(select(Placement::Box, &b, &[], 100).len(), 14);
+        let good = Viewpoint { position: Vec3::ZERO, target: Vec3::X, fov_y_deg: 90.0 };
+        let nan = Viewpoint { position: Vec3::NAN, ..good };
+        let degenerate = Viewpoint { target: Vec3::ZERO, ..good };
+        let custom = [good, nan, degenerate, good];
+        assert_eq!(select(Placement::Custom, &b, &custom, 10), vec![good, good]);
+        assert_eq!(Placement::from_name("inside"), Some(Placement::Inside));
+        assert_eq!(Placement::from_name("nope"), None);
+    }
+}
