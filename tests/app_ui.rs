@@ -265,3 +265,80 @@ fn lightcluster_offers_a_per_pixel_cluster_id_map() {
     let distinct: std::collections::BTreeSet<u32> = ids.iter().copied().filter(|&i| i != u32::MAX).collect();
     assert!(distinct.len() > 1 && distinct.iter().all(|&i| (i as usize) < clusters), "{distinct:?} of {clusters}");
 }
+
+/// Drag the gizmo's X handle at `at` by 60 points, in small moves.
+fn drag_x_handle(h: &mut Harness<'static, ShadowLabApp>, at: glam::Vec3) {
+    let p = projection(h);
+    let center = p.to_screen(at).expect("the gizmo is on screen");
+    let grab = (0..360)
+        .step_by(5)
+        .flat_map(|a| [35.0, 45.0, 55.0].map(|r| center + egui::Vec2::angled((a as f32).to_radians()) * r))
+        .find(|&q| gizmo::hit_handle(&p, at, q) == Some(gizmo::Handle::Axis(0)))
+        .expect("the x handle is on screen");
+    move_to(h, grab);
+    press(h, grab, true, egui::Modifiers::NONE);
+    let dir_on_screen = (grab - center).normalized();
+    for i in 1..=6 {
+        move_to(h, grab + dir_on_screen * (10.0 * i as f32));
+    }
+    press(h, grab + dir_on_screen * 60.0, false, egui::Modifiers::NONE);
+}
+
+#[test]
+fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
+    use shadowlab_core::technique::ParamValue;
+    let dir = data_dir("insm");
+    let mut h = start("insm", "arcade");
+    h.state_mut().technique = "insm".into();
+    h.run_steps(4);
+    assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "INSM viewpoints" && *on));
+    assert!(h.state_mut().overlay_layers().iter().any(|(name, _)| name == "INSM dropped edges"));
+
+    // Start from the placed viewpoints: they become the custom list, and the placement switches to custom.
+    h.get_by_label("Edit the placed ones").click();
+    h.run_steps(3);
+    let cameras = |h: &Harness<'static, ShadowLabApp>| match h.state().params["insm"].get("viewpoints") {
+        Some(ParamValue::Cameras(c)) => c.clone(),
+        other => panic!("no custom viewpoints: {other:?}"),
+    };
+    assert_eq!(cameras(&h).len(), 10, "the paper's 10 viewpoints");
+    assert_eq!(h.state().params["insm"]["placement"], ParamValue::Choice("custom".into()));
+
+    // Select a viewpoint that is on screen by clicking it, then move it along x with the gizmo.
+    let p = projection(&h);
+    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
+    let (index, pos) = cameras(&h)
+        .iter()
+        .enumerate()
+        .find_map(|(i, c)| p.to_screen(c.position).filter(|s| rect.contains(*s)).map(|s| (i, s)))
+        .expect("a viewpoint is on screen");
+    move_to(&mut h, pos);
+    press(&mut h, pos, true, egui::Modifiers::NONE);
+    press(&mut h, pos, false, egui::Modifiers::NONE);
+    assert_eq!(h.state().selected_camera, Some(("viewpoints".to_string(), index)), "a click selects the viewpoint");
+    let before = cameras(&h)[index];
+    drag_x_handle(&mut h, before.position);
+    let after = cameras(&h)[index];
+    assert!((after.position.x - before.position.x).abs() > 0.01, "{before:?} -> {after:?}");
+    assert!((after.position.y - before.position.y).abs() < 1e-5, "only along x");
+    assert!(
+        ((after.target - after.position) - (before.target - before.position)).length() < 1e-4,
+        "same view direction"
+    );
+    h.run_steps(3);
+
+    // Remove the first one from the list.
+    h.get_all_by_label("Remove").next().expect("a remove button per viewpoint").click();
+    h.run_steps(2);
+    let edited = cameras(&h);
+    assert_eq!(edited.len(), 9);
+
+    // Saved and reloaded with the scene file.
+    let file = dir.join("insm.ron");
+    h.state_mut().save_scene_file(&file).unwrap();
+    let mut fresh =
+        harness(Startup { path: Some(file), data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
+    fresh.run_steps(2);
+    assert_eq!(fresh.state().technique, "insm");
+    assert_eq!(fresh.state().params["insm"]["viewpoints"], ParamValue::Cameras(edited));
+}

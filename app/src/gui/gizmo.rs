@@ -52,10 +52,19 @@ pub fn pick_light(
     pos: egui::Pos2,
     radius_points: f32,
 ) -> Option<usize> {
-    lights
-        .iter()
+    pick_point(projection, lights.iter().map(|l| l.position), pos, radius_points)
+}
+
+/// The point nearest to `pos` on screen within `radius_points`.
+pub fn pick_point(
+    projection: &Projection,
+    points: impl Iterator<Item = Vec3>,
+    pos: egui::Pos2,
+    radius_points: f32,
+) -> Option<usize> {
+    points
         .enumerate()
-        .filter_map(|(i, l)| projection.to_screen(l.position).map(|s| (i, s.distance(pos))))
+        .filter_map(|(i, p)| projection.to_screen(p).map(|s| (i, s.distance(pos))))
         .filter(|&(_, d)| d <= radius_points)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i)

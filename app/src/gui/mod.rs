@@ -19,7 +19,7 @@ use eframe::{egui, egui_wgpu};
 use glam::Vec3;
 use shadowlab_core::scene::layout::{self, LightLayout};
 use shadowlab_core::scene::{PointLight, Scene, SceneSource};
-use shadowlab_core::technique::{Overlay, ParamValue};
+use shadowlab_core::technique::{CameraPose, Overlay, ParamValue};
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::{GpuContext, RenderSettings, ToneMap};
 
@@ -129,11 +129,22 @@ pub struct Gpu {
 /// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
 pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
 
+/// What the gizmo moves.
+#[derive(Clone, Debug, PartialEq)]
+enum DragTarget {
+    Light(usize),
+    /// Camera `index` of the current technique's `ParamKind::Cameras` parameter `key` (INSM's viewpoints).
+    Camera {
+        key: String,
+        index: usize,
+    },
+}
+
 /// A drag of the gizmo in progress.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct GizmoDrag {
     handle: Handle,
-    light: usize,
+    target: DragTarget,
     /// Position at the start of the drag (the undo snapshot is taken then).
     start: Vec3,
     accumulated: egui::Vec2,
@@ -149,6 +160,8 @@ pub struct ShadowLabApp {
     pub view: ViewSettings,
     pub history: History,
     pub selected: Option<usize>,
+    /// A selected technique camera (parameter key, index), e.g. an INSM viewpoint; exclusive with `selected`.
+    pub selected_camera: Option<(String, usize)>,
     pub gpu: Option<Gpu>,
     pub animation: Animation,
     animation_time: f32,
@@ -204,6 +217,7 @@ impl ShadowLabApp {
             view: ViewSettings::default(),
             history: History::default(),
             selected: None,
+            selected_camera: None,
             gpu: None,
             animation: Animation::Off,
             animation_time: 0.0,
@@ -878,6 +892,56 @@ impl ShadowLabApp {
         input
     }
 
+    /// The current technique's first camera-list parameter as the user set it: (key, cameras).
+    fn technique_cameras(&self) -> Option<(String, Vec<CameraPose>)> {
+        self.params.get(&self.technique)?.iter().find_map(|(k, v)| match v {
+            ParamValue::Cameras(c) => Some((k.clone(), c.clone())),
+            _ => None,
+        })
+    }
+
+    /// What the gizmo is attached to: the selected light, else the selected technique camera.
+    fn gizmo_target(&self) -> Option<DragTarget> {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            return Some(DragTarget::Light(i));
+        }
+        let (key, index) = self.selected_camera.clone()?;
+        let (k, cameras) = self.technique_cameras()?;
+        (k == key && index < cameras.len()).then_some(DragTarget::Camera { key, index })
+    }
+
+    fn target_position(&self, target: &DragTarget) -> Option<Vec3> {
+        match target {
+            DragTarget::Light(i) => self.lights.get(*i).map(|l| l.position),
+            DragTarget::Camera { key, index } => match self.params.get(&self.technique)?.get(key)? {
+                ParamValue::Cameras(c) => c.get(*index).map(|c| c.position),
+                _ => None,
+            },
+        }
+    }
+
+    /// Move a light, or a technique camera (its target moves along, so it keeps looking the same way).
+    fn set_target_position(&mut self, target: &DragTarget, position: Vec3) {
+        match target {
+            DragTarget::Light(i) => {
+                if let Some(l) = self.lights.get_mut(*i) {
+                    l.position = position;
+                }
+            }
+            DragTarget::Camera { key, index } => {
+                let Some(ParamValue::Cameras(c)) = self.params.get_mut(&self.technique).and_then(|p| p.get_mut(key))
+                else {
+                    return;
+                };
+                if let Some(c) = c.get_mut(*index) {
+                    let offset = c.target - c.position;
+                    c.position = position;
+                    c.target = position + offset;
+                }
+            }
+        }
+    }
+
     /// The central 3D view: image(s), gizmo, picking, camera.
     fn viewport_ui(&mut self, ui: &mut egui::Ui) {
         let rect = ui.available_rect_before_wrap();
@@ -891,23 +955,27 @@ impl ShadowLabApp {
         let camera = self.camera.camera();
         let projection = Projection::new(&camera, projection_rect);
 
-        // Gizmo and picking.
+        // Gizmo and picking: a light, or a camera of the technique (INSM's viewpoints).
         let pointer = response.interact_pointer_pos().or(response.hover_pos());
-        let selected_pos = self.selected.and_then(|i| self.lights.get(i)).map(|l| l.position);
+        let selected_target = self.gizmo_target();
+        let selected_pos = selected_target.as_ref().and_then(|t| self.target_position(t));
         if response.drag_started_by(egui::PointerButton::Primary) {
-            if let (Some(pos), Some(at), Some(i)) = (pointer, selected_pos, self.selected) {
+            if let (Some(pos), Some(at), Some(target)) = (pointer, selected_pos, selected_target.clone()) {
                 if let Some(handle) = gizmo::hit_handle(&projection, at, pos) {
-                    self.begin_edit();
-                    self.drag = Some(GizmoDrag { handle, light: i, start: at, accumulated: egui::Vec2::ZERO });
+                    if matches!(target, DragTarget::Light(_)) {
+                        self.begin_edit();
+                    }
+                    self.drag = Some(GizmoDrag { handle, target, start: at, accumulated: egui::Vec2::ZERO });
                 }
             }
         }
-        if let Some(drag) = &mut self.drag {
+        if let Some(drag) = self.drag.clone() {
             if response.dragged_by(egui::PointerButton::Primary) {
-                drag.accumulated += response.drag_delta();
-                let delta = gizmo::drag_delta(&projection, drag.start, drag.handle, drag.accumulated);
-                if let Some(l) = self.lights.get_mut(drag.light) {
-                    l.position = drag.start + delta;
+                let accumulated = drag.accumulated + response.drag_delta();
+                let delta = gizmo::drag_delta(&projection, drag.start, drag.handle, accumulated);
+                self.set_target_position(&drag.target, drag.start + delta);
+                if let Some(d) = &mut self.drag {
+                    d.accumulated = accumulated;
                 }
                 self.last_interaction = Some(Instant::now());
             }
@@ -926,6 +994,13 @@ impl ShadowLabApp {
                     }
                 } else if selected_pos.and_then(|at| gizmo::hit_handle(&projection, at, pos)).is_none() {
                     self.selected = gizmo::pick_light(&projection, &self.animated_lights(), pos, 12.0);
+                    self.selected_camera = None;
+                    if self.selected.is_none() {
+                        self.selected_camera = self.technique_cameras().and_then(|(key, cameras)| {
+                            gizmo::pick_point(&projection, cameras.iter().map(|c| c.position), pos, 12.0)
+                                .map(|i| (key, i))
+                        });
+                    }
                 }
             }
         }
@@ -1049,9 +1124,9 @@ impl ShadowLabApp {
                 ui.ctx().request_repaint();
             }
         }
-        if let Some(at) = self.selected.and_then(|i| self.lights.get(i)).map(|l| l.position) {
+        if let Some(at) = self.gizmo_target().and_then(|t| self.target_position(&t)) {
             let hover = pointer.and_then(|p| gizmo::hit_handle(&projection, at, p));
-            gizmo::paint(&painter, &projection, at, self.drag.map(|d| d.handle).or(hover));
+            gizmo::paint(&painter, &projection, at, self.drag.as_ref().map(|d| d.handle).or(hover));
         }
         if interacting || self.animation != Animation::Off {
             ui.ctx().request_repaint();

@@ -4,7 +4,7 @@
 use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 use glam::Vec3;
-use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
+use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, REGISTRY};
 
 use super::camera::CameraMode;
 use super::document::ViewMode;
@@ -149,6 +149,62 @@ fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str
     out
 }
 
+/// The list of a [`ParamKind::Cameras`] parameter: select (the gizmo moves it), delete, add from the view camera,
+/// or start from the cameras the technique placed itself. Returns the new list when it changed.
+fn cameras_ui(
+    ui: &mut egui::Ui,
+    p: &shadowlab_core::technique::Param,
+    max: usize,
+    list: &[CameraPose],
+    in_use: &[CameraPose],
+    view_camera: &shadowlab_core::scene::Camera,
+    selected: &mut Option<(String, usize)>,
+) -> Option<Vec<CameraPose>> {
+    let mut out = None;
+    ui.label(format!("{}: {} of at most {max}", p.label, list.len())).on_hover_text(p.help);
+    let mut remove = None;
+    for (i, c) in list.iter().enumerate() {
+        ui.horizontal(|ui| {
+            let is_selected = selected.as_ref().is_some_and(|(k, j)| k == p.key && *j == i);
+            let text = format!("#{} at ({:.2}, {:.2}, {:.2})", i + 1, c.position.x, c.position.y, c.position.z);
+            if ui.selectable_label(is_selected, text).on_hover_text("Select to move it with the gizmo").clicked() {
+                *selected = Some((p.key.to_string(), i));
+            }
+            if ui.small_button("Remove").on_hover_text("Remove this camera").clicked() {
+                remove = Some(i);
+            }
+        });
+    }
+    if let Some(i) = remove {
+        let mut l = list.to_vec();
+        l.remove(i);
+        *selected = None;
+        out = Some(l);
+    }
+    ui.horizontal(|ui| {
+        let add = ui
+            .add_enabled(list.len() < max, egui::Button::new("Add from view"))
+            .on_hover_text("A new camera where the view camera is, looking where it looks");
+        if add.clicked() {
+            let mut l = list.to_vec();
+            l.push(CameraPose {
+                position: view_camera.position,
+                target: view_camera.position + view_camera.forward(),
+                fov_y_deg: view_camera.fov_y.to_degrees().clamp(10.0, 120.0),
+            });
+            *selected = Some((p.key.to_string(), l.len() - 1));
+            out = Some(l);
+        }
+        let copy = ui
+            .add_enabled(!in_use.is_empty() && in_use != list, egui::Button::new("Edit the placed ones"))
+            .on_hover_text("Start from the cameras the technique placed in the last frame");
+        if copy.clicked() {
+            out = Some(in_use.iter().take(max).copied().collect());
+        }
+    });
+    out
+}
+
 fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Shadows");
     egui::ComboBox::from_label("Technique").selected_text(app.technique.clone()).width(150.0).truncate().show_ui(
@@ -167,8 +223,25 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     for (k, v) in user.iter() {
         let _ = technique.set_param(k, v);
     }
+    let view_camera = app.camera.camera();
     for p in technique.params() {
-        if let Some(v) = param_ui(ui, &p.kind, &p.value, p.label, p.help) {
+        let changed = match (&p.kind, &p.value) {
+            (ParamKind::Cameras { max }, ParamValue::Cameras(list)) => {
+                let in_use = technique.cameras_in_use(p.key);
+                let edited = cameras_ui(ui, &p, *max, list, &in_use, &view_camera, &mut app.selected_camera);
+                if edited.is_some() {
+                    // Cameras the user places are used through `placement = custom` (see `ParamKind::Cameras`).
+                    let custom = ParamValue::Choice("custom".into());
+                    if technique.set_param("placement", &custom).is_ok() {
+                        user.insert("placement".into(), custom);
+                    }
+                    app.selected = None;
+                }
+                edited.map(ParamValue::Cameras)
+            }
+            _ => param_ui(ui, &p.kind, &p.value, p.label, p.help),
+        };
+        if let Some(v) = changed {
             if technique.set_param(p.key, &v).is_ok() {
                 user.insert(p.key.to_string(), v);
             }

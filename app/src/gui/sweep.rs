@@ -58,7 +58,7 @@ fn number(v: &ParamValue) -> f64 {
         ParamValue::Float(x) => *x as f64,
         ParamValue::Int(x) => *x as f64,
         ParamValue::Bool(b) => *b as i32 as f64,
-        ParamValue::Choice(_) => 0.0,
+        ParamValue::Choice(_) | ParamValue::Cameras(_) => 0.0,
     }
 }
 

@@ -71,6 +71,14 @@ pub struct TechniqueCounts {
     pub fell_back_to_reference: bool,
 }
 
+/// A camera a technique renders from (INSM's reference viewpoints): position, target, vertical field of view.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CameraPose {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub fov_y_deg: f32,
+}
+
 /// A parameter value.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum ParamValue {
@@ -78,6 +86,8 @@ pub enum ParamValue {
     Int(i64),
     Bool(bool),
     Choice(String),
+    /// A list of cameras the user places (the app's gizmo moves their positions).
+    Cameras(Vec<CameraPose>),
 }
 
 impl std::fmt::Display for ParamValue {
@@ -87,6 +97,16 @@ impl std::fmt::Display for ParamValue {
             ParamValue::Int(v) => write!(f, "{v}"),
             ParamValue::Bool(v) => write!(f, "{v}"),
             ParamValue::Choice(v) => write!(f, "{v}"),
+            ParamValue::Cameras(v) => {
+                let poses: Vec<String> = v
+                    .iter()
+                    .map(|c| {
+                        let (p, t) = (c.position, c.target);
+                        format!("{},{},{},{},{},{},{}", p.x, p.y, p.z, t.x, t.y, t.z, c.fov_y_deg)
+                    })
+                    .collect();
+                write!(f, "{}", poses.join(";"))
+            }
         }
     }
 }
@@ -94,10 +114,22 @@ impl std::fmt::Display for ParamValue {
 /// The kind and range of a parameter, enough for the UI to build a widget and for the CLI to parse text.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ParamKind {
-    Float { min: f32, max: f32 },
-    Int { min: i64, max: i64 },
+    Float {
+        min: f32,
+        max: f32,
+    },
+    Int {
+        min: i64,
+        max: i64,
+    },
     Bool,
     Choice(&'static [&'static str]),
+    /// Up to `max` cameras. On the command line: `px,py,pz,tx,ty,tz,fov` per camera, separated by `;`.
+    /// A technique with such a parameter and a `placement` choice offering `custom` uses the cameras when
+    /// `placement = custom`; the app switches to `custom` when the user adds or moves one.
+    Cameras {
+        max: usize,
+    },
 }
 
 /// A technique parameter with its current value.
@@ -143,6 +175,28 @@ impl ParamKind {
                 self.check(key, &v)?;
                 Ok(v)
             }
+            ParamKind::Cameras { .. } => {
+                let mut cameras = Vec::new();
+                for (i, item) in text.split(';').map(str::trim).filter(|s| !s.is_empty()).enumerate() {
+                    let numbers: Result<Vec<f32>, _> = item.split(',').map(|n| n.trim().parse::<f32>()).collect();
+                    match numbers.as_deref() {
+                        Ok([px, py, pz, tx, ty, tz, fov]) => cameras.push(CameraPose {
+                            position: Vec3::new(*px, *py, *pz),
+                            target: Vec3::new(*tx, *ty, *tz),
+                            fov_y_deg: *fov,
+                        }),
+                        _ => {
+                            return Err(invalid(format!(
+                                "camera {} '{item}' is not px,py,pz,tx,ty,tz,fov (7 numbers)",
+                                i + 1
+                            )))
+                        }
+                    }
+                }
+                let v = ParamValue::Cameras(cameras);
+                self.check(key, &v)?;
+                Ok(v)
+            }
         }
     }
 
@@ -161,6 +215,25 @@ impl ParamKind {
                 }
             }
             (ParamKind::Bool, ParamValue::Bool(_)) => {}
+            (ParamKind::Cameras { max }, ParamValue::Cameras(v)) => {
+                if v.len() > *max {
+                    return invalid(format!("{} cameras, at most {max}", v.len()));
+                }
+                for (i, c) in v.iter().enumerate() {
+                    let ok = c.position.is_finite()
+                        && c.target.is_finite()
+                        && c.position.distance_squared(c.target) > 1e-12
+                        && c.fov_y_deg.is_finite()
+                        && c.fov_y_deg > 1.0
+                        && c.fov_y_deg < 170.0;
+                    if !ok {
+                        return invalid(format!(
+                            "camera {}: position and target must be finite and distinct, fov in 1..170 degrees",
+                            i + 1
+                        ));
+                    }
+                }
+            }
             (ParamKind::Choice(options), ParamValue::Choice(v)) => {
                 if !options.contains(&v.as_str()) {
                     return invalid(format!("'{v}' is not one of {}", options.join(", ")));
@@ -261,6 +334,11 @@ pub trait Technique {
     /// the name of its overlay layer; None when the technique has none.
     fn pixel_ids(&self, _positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
         None
+    }
+    /// The cameras the last frame used for a [`ParamKind::Cameras`] parameter `key`, including automatically
+    /// placed ones (so the app can start editing from them).
+    fn cameras_in_use(&self, _key: &str) -> Vec<CameraPose> {
+        Vec::new()
     }
 }
 

@@ -491,6 +491,13 @@ impl Technique for Insm {
                 kind: ParamKind::Choice(Placement::NAMES),
                 value: ParamValue::Choice(self.params.placement.name().to_string()),
             },
+            Param {
+                key: "viewpoints",
+                label: "Custom viewpoints",
+                help: "The viewpoints of placement = custom: add them from the camera, move them with the gizmo",
+                kind: ParamKind::Cameras { max: MAX_VIEWPOINTS },
+                value: ParamValue::Cameras(self.custom_viewpoints.clone()),
+            },
         ];
         let mut cube = self.params.cube.params();
         if let Some(p) = cube.iter_mut().find(|p| p.key == "shadow_res") {
@@ -509,6 +516,7 @@ impl Technique for Insm {
             ("placement", ParamValue::Choice(v)) => {
                 self.params.placement = Placement::from_name(v).expect("check_param checked the choice")
             }
+            ("viewpoints", ParamValue::Cameras(v)) => self.custom_viewpoints = v.clone(),
             _ => {
                 let known = self.params.cube.set(key, value);
                 debug_assert!(known, "check_param accepted an unknown key");
@@ -614,6 +622,14 @@ impl Technique for Insm {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         self.cpu_times.clone()
+    }
+
+    fn cameras_in_use(&self, key: &str) -> Vec<super::CameraPose> {
+        if key == "viewpoints" {
+            self.views.clone()
+        } else {
+            Vec::new()
+        }
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

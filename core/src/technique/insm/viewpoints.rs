@@ -13,7 +13,6 @@
 //! `k` parameter picks viewpoints (the paper's Table 4 varies `k` from 6 to 12).
 
 use glam::{Mat4, Vec3};
-use serde::{Deserialize, Serialize};
 
 use crate::math::{look_to_rh, perspective_rh};
 use crate::scene::Aabb;
@@ -23,12 +22,7 @@ use crate::scene::Aabb;
 pub const MAX_AUTO_FOV_DEG: f32 = 120.0;
 
 /// One reference viewpoint: where it is, where it looks, its (square) field of view.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Viewpoint {
-    pub position: Vec3,
-    pub target: Vec3,
-    pub fov_y_deg: f32,
-}
+pub type Viewpoint = crate::technique::CameraPose;
 
 impl Viewpoint {
     pub fn is_valid(&self) -> bool {
@@ -292,5 +286,28 @@ mod tests {
         assert_eq!(select(Placement::Custom, &b, &custom, 10), vec![good, good]);
         assert_eq!(Placement::from_name("inside"), Some(Placement::Inside));
         assert_eq!(Placement::from_name("nope"), None);
+    }
+
+    #[test]
+    fn cameras_parse_from_the_command_line_and_reject_bad_input() {
+        use crate::technique::{ParamKind, ParamValue};
+        let kind = ParamKind::Cameras { max: 2 };
+        let v = kind.parse("viewpoints", "0,5,0, 0,0,0, 90; 1,2,3,4,5,6,45").unwrap();
+        let ParamValue::Cameras(c) = &v else { panic!("{v:?}") };
+        assert_eq!(c.len(), 2);
+        assert_eq!(c[1].target, Vec3::new(4.0, 5.0, 6.0));
+        // Display gives back text that parses to the same value.
+        assert_eq!(kind.parse("viewpoints", &v.to_string()).unwrap(), v);
+        assert_eq!(kind.parse("viewpoints", "").unwrap(), ParamValue::Cameras(vec![]));
+        for bad in [
+            "1,2,3",
+            "0,0,0,0,0,0,90",
+            "0,5,0,0,0,0,200",
+            "nan,5,0,0,0,0,90",
+            "0,1,0,0,0,0,90;0,2,0,0,0,0,90;0,3,0,0,0,0,90",
+        ] {
+            let e = kind.parse("viewpoints", bad);
+            assert!(e.is_err(), "{bad} was accepted");
+        }
     }
 }
