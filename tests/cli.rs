@@ -337,6 +337,64 @@ fn sweep_writes_one_row_per_setting() {
 }
 
 #[test]
+fn sweep_over_the_light_count_renders_insm_and_the_target_per_count() {
+    let dir = out_dir("sweep-lights");
+    let csv = dir.join("lights.csv");
+    let png = dir.join("lights.png");
+    let csv_arg = csv.to_str().unwrap();
+    let common = [
+        "sweep",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--lights",
+        "random:64:1.5:1",
+        "--technique",
+        "insm",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--shadow-res",
+        "32",
+        "--warmup",
+        "0",
+        "--no-flip",
+    ];
+    let mut args = common.to_vec();
+    args.extend(["--param", "lights=8,24", "--param", "insm_res=16,32", "--out", csv_arg, "--plot"]);
+    args.push(png.to_str().unwrap());
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 4, "{text}");
+    assert!(lines[0].starts_with("lights,insm_res,clusters,visible_lights,shadow_maps"), "{text}");
+    // Each row renders its own number of lights: one cube map per visible light.
+    let col = |l: &str, i: usize| l.split(',').nth(i).unwrap().parse::<usize>().unwrap();
+    assert_eq!((col(lines[1], 0), col(lines[1], 4)), (8, col(lines[1], 3)));
+    assert_eq!(col(lines[4], 0), 24);
+    assert!(col(lines[4], 4) > col(lines[1], 4), "{text}");
+    assert!(image::open(&png).is_ok());
+    // A light count needs a random layout; a bad count is refused before rendering.
+    let mut bad = common.to_vec();
+    bad[5] = "grid:4x4:1.5";
+    bad.extend(["--param", "lights=8", "--out", csv_arg]);
+    assert_fails_with(&bad, "random layout");
+    let mut bad = common.to_vec();
+    bad.extend(["--param", "lights=many", "--out", csv_arg]);
+    assert_fails_with(&bad, "not a light count");
+    // Custom INSM viewpoints from the command line; a malformed one is a one-line error.
+    let mut custom = common.to_vec();
+    custom.extend(["--param", "placement=custom", "--param", "viewpoints=0 1.5 0.9 0 0.5 0 80", "--out", csv_arg]);
+    let out = shadowlab(&custom);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let mut custom = common.to_vec();
+    custom.extend(["--param", "viewpoints=0 1 0", "--out", csv_arg]);
+    assert_fails_with(&custom, "7 numbers");
+}
+
+#[test]
 fn bench_runs_the_standard_suite_on_the_builtin_scenes() {
     let dir = out_dir("bench");
     let md = dir.join("bench.md");

@@ -204,6 +204,8 @@ pub struct SweepArgs {
     #[arg(long, default_value = "lightcluster")]
     pub technique: String,
     /// A swept parameter: `key=START:END:STEP`, `key=v1,v2,...` or `key=value`; repeatable (all combinations).
+    /// `lights=N1,N2,...` sweeps the number of lights of a `--lights random:...` layout (put it first to plot
+    /// time against the light count, the comparison target's time included).
     #[arg(long = "param", value_name = "KEY=VALUES")]
     pub params: Vec<String>,
     #[arg(long, default_value = "reference")]
@@ -661,6 +663,14 @@ fn compare(args: CompareArgs) -> Result<()> {
     Ok(())
 }
 
+/// The swept pseudo-parameter that changes the number of lights, not a technique parameter.
+const LIGHTS_KEY: &str = "lights";
+
+/// A sweep setting's technique parameters as `key=value` (without `lights`).
+fn technique_params(setting: &[(String, String)]) -> Vec<String> {
+    setting.iter().filter(|(k, _)| k != LIGHTS_KEY).map(|(k, v)| format!("{k}={v}")).collect()
+}
+
 fn sweep(args: SweepArgs) -> Result<()> {
     check_output_path(&args.out, "csv")?;
     if let Some(m) = &args.markdown {
@@ -682,22 +692,47 @@ fn sweep(args: SweepArgs) -> Result<()> {
     {
         let mut probe = renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique"))?;
         for setting in &settings {
-            let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
-            apply_params(probe.as_mut(), f.shadow_res, &strings)?;
+            apply_params(probe.as_mut(), f.shadow_res, &technique_params(setting))?;
         }
     }
-    let target = crate::measure::render_technique(
-        &mut renderer,
-        &args.against,
-        f.shadow_res,
-        &args.against_params,
-        &camera,
-        &lights,
-        f.warmup,
-        f.repeat,
-        no_progress,
-    )?;
-    let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
+    // `--param lights=N1,N2,...` sweeps the light count of a `random:` layout: the comparison target is rendered
+    // again for each count.
+    let layout: LightLayout = layout::parse(&args.scene.lights)?;
+    let lights_for = |setting: &[(String, String)]| -> Result<Option<Vec<PointLight>>> {
+        let Some((_, n)) = setting.iter().find(|(k, _)| k == LIGHTS_KEY) else { return Ok(None) };
+        let count: usize = n.parse().map_err(|_| anyhow!("--param lights: '{n}' is not a light count"))?;
+        match layout {
+            LightLayout::Random { range, seed, .. } => {
+                Ok(Some(layout::generate(&LightLayout::Random { count, range, seed }, &scene)?))
+            }
+            _ => bail!("--param lights needs a random layout (--lights random:COUNT:L_ATT:SEED)"),
+        }
+    };
+    for setting in &settings {
+        lights_for(setting)?;
+    }
+    let render_target = |renderer: &mut Renderer, lights: &[PointLight]| -> Result<_> {
+        let target = crate::measure::render_technique(
+            renderer,
+            &args.against,
+            f.shadow_res,
+            &args.against_params,
+            &camera,
+            lights,
+            f.warmup,
+            f.repeat,
+            &mut |_: &str| {},
+        )?;
+        let inputs = crate::measure::compare_inputs(renderer, &camera, lights)?;
+        Ok((target, inputs))
+    };
+    let mut lights = lights;
+    let mut light_count = None;
+    if let Some(l) = settings.first().map(|s| lights_for(s)).transpose()?.flatten() {
+        light_count = Some(l.len());
+        lights = l;
+    }
+    let (mut target, mut inputs) = render_target(&mut renderer, &lights)?;
     let keys: Vec<&str> = swept.iter().map(|(k, _)| k.as_str()).collect();
     let mut header: Vec<String> = keys.iter().map(|k| k.to_string()).collect();
     header.extend(
@@ -728,8 +763,26 @@ fn sweep(args: SweepArgs) -> Result<()> {
     let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
     let mut progress = Progress::new(&format!("sweep {}", args.technique), quiet).with_unit("setting");
     progress.update(0, settings.len());
+    let mut plotted_counts: Vec<usize> = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
-        let strings: Vec<String> = setting.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        if let Some(l) = lights_for(setting)? {
+            if light_count != Some(l.len()) {
+                light_count = Some(l.len());
+                lights = l;
+                (target, inputs) = render_target(&mut renderer, &lights)?;
+            }
+            // The comparison target's time is a curve of its own when the light count is the x axis.
+            if setting[0].0 == LIGHTS_KEY && !plotted_counts.contains(&lights.len()) {
+                plotted_counts.push(lights.len());
+                plot_rows.push(crate::plot::PlotRow {
+                    x: lights.len() as f64,
+                    series: format!("{} (against)", args.against),
+                    ms: target.timing.median_ms,
+                    rmse: 0.0,
+                });
+            }
+        }
+        let strings = technique_params(setting);
         let r = crate::measure::render_technique(
             &mut renderer,
             &args.technique,

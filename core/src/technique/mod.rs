@@ -124,7 +124,8 @@ pub enum ParamKind {
     },
     Bool,
     Choice(&'static [&'static str]),
-    /// Up to `max` cameras. On the command line: `px,py,pz,tx,ty,tz,fov` per camera, separated by `;`.
+    /// Up to `max` cameras. On the command line: `px,py,pz,tx,ty,tz,fov` per camera, separated by `;` (numbers may
+    /// also be separated by spaces, which `sweep` needs: there commas separate swept values).
     /// A technique with such a parameter and a `placement` choice offering `custom` uses the cameras when
     /// `placement = custom`; the app switches to `custom` when the user adds or moves one.
     Cameras {
@@ -178,7 +179,11 @@ impl ParamKind {
             ParamKind::Cameras { .. } => {
                 let mut cameras = Vec::new();
                 for (i, item) in text.split(';').map(str::trim).filter(|s| !s.is_empty()).enumerate() {
-                    let numbers: Result<Vec<f32>, _> = item.split(',').map(|n| n.trim().parse::<f32>()).collect();
+                    let numbers: Result<Vec<f32>, _> = item
+                        .split(|c: char| c == ',' || c.is_whitespace())
+                        .filter(|n| !n.is_empty())
+                        .map(|n| n.parse::<f32>())
+                        .collect();
                     match numbers.as_deref() {
                         Ok([px, py, pz, tx, ty, tz, fov]) => cameras.push(CameraPose {
                             position: Vec3::new(*px, *py, *pz),

@@ -76,7 +76,7 @@ impl Default for InsmParams {
         InsmParams {
             viewpoints: 10,
             insm_resolution: 128,
-            epsilon: 0.05,
+            epsilon: 0.01,
             placement: Placement::Box,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
