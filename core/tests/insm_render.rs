@@ -203,3 +203,26 @@ fn many_lights_run_in_bounded_batches_and_bad_settings_are_errors() {
     assert!(report.counts.technique.insm_mesh_triangles.unwrap() > 0);
     assert_eq!(insm.viewpoints().len(), 1);
 }
+
+#[test]
+fn culling_changes_the_triangles_drawn_but_not_the_image() {
+    // `cull = off` is the conventional shadow mapping the paper compares with: every triangle into every face.
+    let scene = plane_and_occluder();
+    let lights = lights_above();
+    let mut r = renderer(&scene);
+    for key in ["reference", "insm"] {
+        let mut t = r.create_technique(key).unwrap();
+        t.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
+        let (culled, a) = render(&mut r, t.as_mut(), &scene, &lights);
+        t.set_param("cull", &ParamValue::Bool(false)).unwrap();
+        let (all, b) = render(&mut r, t.as_mut(), &scene, &lights);
+        let (a, b) = (&a.counts.technique, &b.counts.technique);
+        assert!(b.shadow_triangles_submitted > a.shadow_triangles_submitted, "{key}: {a:?} vs {b:?}");
+        // Only INSM's intermediate maps still cull (against their view frusta).
+        assert!(b.shadow_triangles_culled < a.shadow_triangles_culled, "{key}: {a:?} vs {b:?}");
+        if key == "reference" {
+            assert_eq!(b.shadow_triangles_culled, 0);
+        }
+        assert_eq!(share_over(&culled, &all, 1e-4), 0.0, "{key}: culling changed the image");
+    }
+}

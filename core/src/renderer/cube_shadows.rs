@@ -268,7 +268,7 @@ impl CubeShadowRenderer {
     }
 
     /// Render `geometry` for `casters` into tiles `6*i .. 6*i+6` of the atlas (which `ensure_atlas` must have
-    /// sized), in one render pass named `label`.
+    /// sized), in one render pass named `label`; chunks culled per caster and face when `cull`.
     pub fn render(
         &mut self,
         gpu: &GpuContext,
@@ -277,6 +277,7 @@ impl CubeShadowRenderer {
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         casters: &[CubeCaster],
+        cull: bool,
     ) -> CubeStats {
         let atlas = self.atlas.as_ref().expect("ensure_atlas before render");
         assert!(casters.len() <= atlas.capacity && casters.len() <= MAX_CUBES_PER_BATCH);
@@ -298,7 +299,7 @@ impl CubeShadowRenderer {
                     .chunks
                     .iter()
                     .enumerate()
-                    .filter(|(_, c)| c.bounds.intersects_sphere(caster.position, caster.far))
+                    .filter(|(_, c)| !cull || c.bounds.intersects_sphere(caster.position, caster.far))
                     .map(|(i, _)| i as u32),
             );
             for (fi, face) in CUBE_FACES.iter().enumerate() {
@@ -306,7 +307,7 @@ impl CubeShadowRenderer {
                 let mut tris = 0u64;
                 for &id in &self.visible {
                     let c = &scene.chunks[id as usize];
-                    if face.intersects_aabb(caster.position, &c.bounds) {
+                    if !cull || face.intersects_aabb(caster.position, &c.bounds) {
                         self.face_visible.push(id);
                         tris += c.triangle_count() as u64;
                     }

@@ -470,6 +470,9 @@ pub struct CubeMapParams {
     pub normal_offset_texels: f32,
     /// Memory for one batch's atlas, in MiB.
     pub atlas_budget_mib: u32,
+    /// Cull chunks per light and per cube face. Off draws every chunk into every face, which is the
+    /// conventional shadow mapping the INSM paper compares with (`n N` triangles).
+    pub cull: bool,
 }
 
 impl Default for CubeMapParams {
@@ -479,6 +482,7 @@ impl Default for CubeMapParams {
             bias_world: 0.01,
             normal_offset_texels: 1.5,
             atlas_budget_mib: (crate::renderer::cube_shadows::DEFAULT_ATLAS_BUDGET_BYTES >> 20) as u32,
+            cull: true,
         }
     }
 }
@@ -514,6 +518,14 @@ impl CubeMapParams {
                 kind: ParamKind::Int { min: 1, max: 4096 },
                 value: ParamValue::Int(self.atlas_budget_mib as i64),
             },
+            Param {
+                key: "cull",
+                label: "Cull per light and face",
+                help: "Draw only the chunks within a light's range and a face's pyramid (off: every chunk into every \
+                       face, conventional shadow mapping)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(self.cull),
+            },
         ]
     }
 
@@ -524,6 +536,7 @@ impl CubeMapParams {
             ("bias", ParamValue::Float(v)) => self.bias_world = *v,
             ("normal_offset", ParamValue::Float(v)) => self.normal_offset_texels = *v,
             ("atlas_mib", ParamValue::Int(v)) => self.atlas_budget_mib = *v as u32,
+            ("cull", ParamValue::Bool(v)) => self.cull = *v,
             _ => return false,
         }
         true

@@ -349,7 +349,15 @@ impl Technique for LightCluster {
             .iter()
             .map(|c| CubeCaster { position: Vec3::from_array(c.position), near: c.shadow_near, far: c.c_att })
             .collect();
-        let stats = self.cubes.render(ctx.gpu, ctx.scene.cube_geometry(), ctx.timer, encoder, "shadow maps", &casters);
+        let stats = self.cubes.render(
+            ctx.gpu,
+            ctx.scene.cube_geometry(),
+            ctx.timer,
+            encoder,
+            "shadow maps",
+            &casters,
+            self.params.cube.cull,
+        );
         self.counts.shadow_maps += stats.cubes;
         self.counts.shadow_triangles_submitted += stats.triangles_submitted;
         self.counts.shadow_triangles_culled += stats.triangles_culled;
