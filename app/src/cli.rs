@@ -40,7 +40,7 @@ pub struct Cli {
     /// App: quit after this many seconds (smoke tests, README pictures).
     #[arg(long, hide = true)]
     pub quit_after: Option<f32>,
-    /// App: window size in points, `WIDTHxHEIGHT` (default 1400x860).
+    /// App: window size in points, `WIDTHxHEIGHT` (default 1400x860; 1024x640 on a software rasterizer).
     #[arg(long = "window-size", value_name = "WxH")]
     pub window_size: Option<String>,
     /// App: orbit the camera continuously (UI frame-rate measurement).

@@ -61,6 +61,14 @@ impl GpuContext {
         Ok(GpuContext::from_device(device, queue, adapter.get_info()))
     }
 
+    /// Whether the adapter a window would get (the environment's choice, else the default) is a software
+    /// rasterizer such as lavapipe; `None` without any adapter. Creates no device (a few milliseconds).
+    pub fn default_adapter_is_software() -> Option<bool> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, None)).ok()?;
+        Some(adapter.get_info().device_type == wgpu::DeviceType::Cpu)
+    }
+
     /// Use a device created elsewhere (the app passes eframe's).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> GpuContext {
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
