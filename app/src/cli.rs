@@ -778,7 +778,7 @@ fn sweep(args: SweepArgs) -> Result<()> {
                     x: lights.len() as f64,
                     series: format!("{} (against)", args.against),
                     ms: target.timing.median_ms,
-                    rmse: 0.0,
+                    rmse: None,
                 });
             }
         }
@@ -807,7 +807,7 @@ fn sweep(args: SweepArgs) -> Result<()> {
             x: setting[0].1.parse().unwrap_or(0.0),
             series: setting[1..].iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" "),
             ms: r.timing.median_ms,
-            rmse: m.rmse,
+            rmse: Some(m.rmse),
         });
         let c = &r.report.counts.technique;
         let pass = |name: &str| r.timing.passes_median_ms.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>();
@@ -862,8 +862,14 @@ fn sweep(args: SweepArgs) -> Result<()> {
     if let Some(path) = &args.plot {
         // Drawn to a temporary file, then renamed, like every output.
         let tmp = path.with_extension("png.tmp.png");
-        let title = format!("{} on {} ({} lights, {}x{})", args.technique, scene.name, lights.len(), f.width, f.height);
-        crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, target.timing.median_ms)?;
+        let lights_swept = swept[0].0 == LIGHTS_KEY;
+        let title = if lights_swept {
+            format!("{} and {} on {} ({}x{})", args.technique, args.against, scene.name, f.width, f.height)
+        } else {
+            format!("{} on {} ({} lights, {}x{})", args.technique, scene.name, lights.len(), f.width, f.height)
+        };
+        let reference_ms = (!lights_swept).then_some(target.timing.median_ms);
+        crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, &args.against, reference_ms)?;
         std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
         if !quiet {
             eprintln!("wrote {}", path.display());

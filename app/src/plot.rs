@@ -1,6 +1,6 @@
 //! The sweep's PNG plot: time and error against the first swept parameter, one line per combination of the
-//! other parameters, the reference's time as a dashed line. Drawn with plotters on a bitmap, text with the
-//! font egui ships (no system fonts needed).
+//! other parameters, the comparison target's time as a dashed line (a line of its own when the light count is
+//! swept). Drawn with plotters on a bitmap, text with the font egui ships (no system fonts needed).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -14,7 +14,8 @@ pub struct PlotRow {
     /// The other swept parameters, e.g. "filter=pcss"; rows with the same series form one line.
     pub series: String,
     pub ms: f64,
-    pub rmse: f64,
+    /// None for a time-only row (the comparison target's own time when the light count is swept).
+    pub rmse: Option<f64>,
 }
 
 fn register_font() {
@@ -24,8 +25,16 @@ fn register_font() {
     });
 }
 
-/// Write a two-panel PNG (time, RMSE) of `rows` against `x_label`.
-pub fn sweep_plot(path: &Path, title: &str, x_label: &str, rows: &[PlotRow], reference_ms: f64) -> Result<()> {
+/// Write a two-panel PNG (time, RMSE) of `rows` against `x_label`, with the comparison target's time as a dashed
+/// line when it is one number (`reference_ms`; None when it varies along x and comes as rows of its own).
+pub fn sweep_plot(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    rows: &[PlotRow],
+    against: &str,
+    reference_ms: Option<f64>,
+) -> Result<()> {
     if rows.is_empty() {
         return Err(anyhow!("nothing to plot"));
     }
@@ -36,8 +45,8 @@ pub fn sweep_plot(path: &Path, title: &str, x_label: &str, rows: &[PlotRow], ref
     }
     let (x0, x1) = rows.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| (a.min(r.x), b.max(r.x)));
     let (x0, x1) = if x1 > x0 { (x0, x1) } else { (x0 - 0.5, x0 + 0.5) };
-    let max_ms = rows.iter().map(|r| r.ms).fold(reference_ms, f64::max) * 1.1;
-    let max_rmse = rows.iter().map(|r| r.rmse).fold(0.0, f64::max).max(1e-6) * 1.1;
+    let max_ms = rows.iter().map(|r| r.ms).fold(reference_ms.unwrap_or(0.0), f64::max) * 1.1;
+    let max_rmse = rows.iter().filter_map(|r| r.rmse).fold(0.0, f64::max).max(1e-6) * 1.1;
     let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw the plot: {e}");
 
     const SIZE: (u32, u32) = (1200, 480);
@@ -57,18 +66,20 @@ pub fn sweep_plot(path: &Path, title: &str, x_label: &str, rows: &[PlotRow], ref
             .build_cartesian_2d(x0..x1, 0.0..max_ms)
             .map_err(|e| err(&e))?;
         time.configure_mesh().x_desc(x_label).y_desc("ms").draw().map_err(|e| err(&e))?;
-        time.draw_series(DashedLineSeries::new(
-            vec![(x0, reference_ms), (x1, reference_ms)],
-            8,
-            5,
-            BLACK.stroke_width(2),
-        ))
-        .map_err(|e| err(&e))?
-        .label("reference")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        if let Some(reference_ms) = reference_ms {
+            time.draw_series(DashedLineSeries::new(
+                vec![(x0, reference_ms), (x1, reference_ms)],
+                8,
+                5,
+                BLACK.stroke_width(2),
+            ))
+            .map_err(|e| err(&e))?
+            .label(against)
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        }
         let mut error = ChartBuilder::on(&right)
             .margin(12)
-            .caption("RMSE against the reference", ("sans-serif", 18))
+            .caption(format!("RMSE against {against}"), ("sans-serif", 18))
             .x_label_area_size(40)
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, 0.0..max_rmse)
@@ -84,7 +95,10 @@ pub fn sweep_plot(path: &Path, title: &str, x_label: &str, rows: &[PlotRow], ref
                 .label(label.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
             time.draw_series(t.into_iter().map(|p| Circle::new(p, 3, color.filled()))).map_err(|e| err(&e))?;
-            let e: Vec<(f64, f64)> = points.iter().map(|r| (r.x, r.rmse)).collect();
+            let e: Vec<(f64, f64)> = points.iter().filter_map(|r| r.rmse.map(|v| (r.x, v))).collect();
+            if e.is_empty() {
+                continue;
+            }
             error
                 .draw_series(LineSeries::new(e.clone(), color.stroke_width(2)))
                 .map_err(|e| err(&e))?
