@@ -45,6 +45,8 @@ pub struct CubeGeometry<'a> {
     pub chunks: &'a [Chunk],
     /// Triangles of all chunks, for the culled count.
     pub triangle_count: u64,
+    /// Cull chunks per caster (range sphere) and per face (pyramid); false draws every chunk into every face.
+    pub cull: bool,
 }
 
 impl GpuScene {
@@ -55,6 +57,7 @@ impl GpuScene {
             index_buffer: &self.index_buffer,
             chunks: &self.chunks,
             triangle_count: self.triangle_count,
+            cull: true,
         }
     }
 }
@@ -268,7 +271,7 @@ impl CubeShadowRenderer {
     }
 
     /// Render `geometry` for `casters` into tiles `6*i .. 6*i+6` of the atlas (which `ensure_atlas` must have
-    /// sized), in one render pass named `label`; chunks culled per caster and face when `cull`.
+    /// sized), in one render pass named `label`; chunks culled per caster and face when `geometry.cull`.
     pub fn render(
         &mut self,
         gpu: &GpuContext,
@@ -277,8 +280,8 @@ impl CubeShadowRenderer {
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         casters: &[CubeCaster],
-        cull: bool,
     ) -> CubeStats {
+        let cull = scene.cull;
         let atlas = self.atlas.as_ref().expect("ensure_atlas before render");
         assert!(casters.len() <= atlas.capacity && casters.len() <= MAX_CUBES_PER_BATCH);
         let matrices: Vec<MatrixUniform> = casters

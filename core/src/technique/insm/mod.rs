@@ -604,6 +604,7 @@ impl Technique for Insm {
             index_buffer: &mesh.indices,
             chunks: &self.tiles,
             triangle_count: self.mesh_triangles,
+            cull: true,
         };
         let stats = self.shadows.encode_batch(ctx, step - 1, encoder, geometry, &self.params.cube);
         self.counts.shadow_maps += stats.cubes;

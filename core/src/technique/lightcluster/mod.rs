@@ -29,7 +29,7 @@ use super::{
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeCaster, CubeShadowRenderer};
+use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
@@ -349,15 +349,8 @@ impl Technique for LightCluster {
             .iter()
             .map(|c| CubeCaster { position: Vec3::from_array(c.position), near: c.shadow_near, far: c.c_att })
             .collect();
-        let stats = self.cubes.render(
-            ctx.gpu,
-            ctx.scene.cube_geometry(),
-            ctx.timer,
-            encoder,
-            "shadow maps",
-            &casters,
-            self.params.cube.cull,
-        );
+        let geometry = CubeGeometry { cull: self.params.cube.cull, ..ctx.scene.cube_geometry() };
+        let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
         self.counts.shadow_maps += stats.cubes;
         self.counts.shadow_triangles_submitted += stats.triangles_submitted;
         self.counts.shadow_triangles_culled += stats.triangles_culled;

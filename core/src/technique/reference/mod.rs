@@ -150,7 +150,8 @@ impl PerLightShadows {
             .iter()
             .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
             .collect();
-        let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters, params.cull);
+        let geometry = CubeGeometry { cull: params.cull, ..geometry };
+        let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
 
         let atlas = self.cubes.atlas().expect("prepare sized the atlas");
         let uniform = ReferenceBatchUniform {
