@@ -126,6 +126,8 @@ struct MeshSnapshot {
     epsilon: f32,
     /// `k * resolution²` samples, or empty when too large to read back.
     samples: Arc<Vec<Vec4>>,
+    /// The mesh overlay layers, built on first use (the app asks for overlays every UI frame).
+    layers: std::sync::OnceLock<Vec<OverlayLayer>>,
 }
 
 pub struct Insm {
@@ -297,7 +299,7 @@ impl Insm {
         let tiles_readback = buffer("insm tiles readback", tile_bytes, readback);
         let vertices_readback =
             (vertex_bytes <= OVERLAY_READBACK_LIMIT).then(|| buffer("insm vertices readback", vertex_bytes, readback));
-        // A placeholder bind group; `prepare` rebuilds it with the atlas once it exists.
+        // `prepare` ensured the depth atlas first, and rebuilds this bind group when the atlas changes.
         self.mesh = Some(MeshBuffers {
             k,
             resolution,
@@ -394,8 +396,12 @@ impl Insm {
                 bounds,
             });
         }
-        self.snapshot =
-            MeshSnapshot { resolution: mesh.resolution, epsilon: self.params.epsilon, samples: Arc::default() };
+        self.snapshot = MeshSnapshot {
+            resolution: mesh.resolution,
+            epsilon: self.params.epsilon,
+            samples: Arc::default(),
+            layers: Default::default(),
+        };
         if let Some(rb) = &mesh.vertices_readback {
             let bytes = k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES;
             let samples: Vec<Vec4> = bytemuck::cast_slice(&map_read(gpu, rb, bytes)?).to_vec();
@@ -560,6 +566,21 @@ impl Technique for Insm {
 
         let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let k = self.views.len() as u32;
+        // The largest buffer is the tiles' index slots; refuse settings the device cannot hold, instead of
+        // letting wgpu fail on creation.
+        let limits = ctx.gpu.device.limits();
+        let tps = triangulate::tiles_per_side(res) as u64;
+        let largest = (k as u64 * tps * tps * MAX_TRIANGLES_PER_TILE as u64 * 12)
+            .max(k as u64 * (res as u64).pow(2) * MESH_VERTEX_BYTES);
+        let allowed = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+        if largest > allowed {
+            return Err(GpuError::InvalidSettings(format!(
+                "INSM with k = {k} maps of {res}x{res} needs a {} MiB buffer; this device allows {} MiB: lower k or \
+                 insm_res",
+                largest >> 20,
+                allowed >> 20
+            )));
+        }
         let new_atlas = self.images.ensure_tiles(ctx.gpu, res, k as usize);
         let atlas_tiles_per_row = self.images.atlas().expect("ensured").tiles_per_row;
         let had_mesh = self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == res);
@@ -661,7 +682,16 @@ impl Technique for Insm {
                 }))
                 .collect(),
         });
-        let snap = &self.snapshot;
+        layers.extend(self.snapshot.layers.get_or_init(|| self.snapshot.build_layers()).iter().cloned());
+        layers
+    }
+}
+
+impl MeshSnapshot {
+    /// Overlay layers of the reconstructed meshes: samples, wireframe and dropped edges, each capped.
+    fn build_layers(&self) -> Vec<OverlayLayer> {
+        let snap = self;
+        let mut layers = Vec::new();
         if snap.samples.is_empty() || snap.resolution == 0 {
             return layers;
         }
