@@ -572,7 +572,7 @@ impl Technique for Insm {
         let tps = triangulate::tiles_per_side(res) as u64;
         let largest = (k as u64 * tps * tps * MAX_TRIANGLES_PER_TILE as u64 * 12)
             .max(k as u64 * (res as u64).pow(2) * MESH_VERTEX_BYTES);
-        let allowed = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+        let allowed = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         if largest > allowed {
             return Err(GpuError::InvalidSettings(format!(
                 "INSM with k = {k} maps of {res}x{res} needs a {} MiB buffer; this device allows {} MiB: lower k or \
