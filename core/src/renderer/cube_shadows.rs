@@ -220,9 +220,7 @@ impl CubeShadowRenderer {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
@@ -275,13 +273,13 @@ impl CubeShadowRenderer {
     pub fn render(
         &mut self,
         gpu: &GpuContext,
-        scene: CubeGeometry<'_>,
+        geometry: CubeGeometry<'_>,
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         casters: &[CubeCaster],
     ) -> CubeStats {
-        let cull = scene.cull;
+        let cull = geometry.cull;
         let atlas = self.atlas.as_ref().expect("ensure_atlas before render");
         assert!(casters.len() <= atlas.capacity && casters.len() <= MAX_CUBES_PER_BATCH);
         let matrices: Vec<MatrixUniform> = casters
@@ -291,14 +289,14 @@ impl CubeShadowRenderer {
         gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
 
         // Culling on the CPU, draw lists per face.
-        let total_triangles = scene.triangle_count;
+        let total_triangles = geometry.triangle_count;
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
         let mut draws: Vec<(u32, usize, usize)> = Vec::new(); // (tile, first range, range count)
         let mut all_ranges: Vec<(u32, u32)> = Vec::new();
         for (ci, caster) in casters.iter().enumerate() {
             self.visible.clear();
             self.visible.extend(
-                scene
+                geometry
                     .chunks
                     .iter()
                     .enumerate()
@@ -309,7 +307,7 @@ impl CubeShadowRenderer {
                 self.face_visible.clear();
                 let mut tris = 0u64;
                 for &id in &self.visible {
-                    let c = &scene.chunks[id as usize];
+                    let c = &geometry.chunks[id as usize];
                     if !cull || face.intersects_aabb(caster.position, &c.bounds) {
                         self.face_visible.push(id);
                         tris += c.triangle_count() as u64;
@@ -317,13 +315,13 @@ impl CubeShadowRenderer {
                 }
                 stats.triangles_submitted += tris;
                 stats.triangles_culled += total_triangles - tris;
-                merge_draw_ranges(scene.chunks, self.face_visible.iter().copied(), &mut self.ranges);
+                merge_draw_ranges(geometry.chunks, self.face_visible.iter().copied(), &mut self.ranges);
                 draws.push(((ci * 6 + fi) as u32, all_ranges.len(), self.ranges.len()));
                 all_ranges.extend_from_slice(&self.ranges);
             }
         }
 
-        self.record(scene, timer, encoder, label, &draws, &all_ranges);
+        self.record(geometry, timer, encoder, label, &draws, &all_ranges);
         stats
     }
 
