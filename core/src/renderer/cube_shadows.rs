@@ -229,9 +229,11 @@ impl CubeShadowRenderer {
         true
     }
 
-    /// Render `geometry` seen through each of `views` (clip-from-world matrices of square images) into atlas tile
-    /// `i`, chunks culled against each view's frustum, in one render pass named `label`. `ensure_tiles` must have
-    /// sized the atlas.
+    /// Render `geometry` seen through each of `views` (clip-from-world matrices of square images) into atlas tiles
+    /// `first_tile + i`, chunks culled against each view's frustum, in one render pass named `label`. With `clear`
+    /// the whole atlas is cleared first; without, the other tiles keep what earlier passes drew (so views can be
+    /// rendered one step at a time). `ensure_tiles` must have sized the atlas.
+    #[allow(clippy::too_many_arguments)]
     pub fn render_views(
         &mut self,
         gpu: &GpuContext,
@@ -240,11 +242,14 @@ impl CubeShadowRenderer {
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         views: &[glam::Mat4],
+        first_tile: usize,
+        clear: bool,
     ) -> CubeStats {
         let atlas = self.atlas.as_ref().expect("ensure_tiles before render_views");
-        assert!(views.len() <= atlas.tiles && views.len() <= MAX_CUBES_PER_BATCH * 6);
+        assert!(first_tile + views.len() <= atlas.tiles && first_tile + views.len() <= MAX_CUBES_PER_BATCH * 6);
         let matrices: Vec<MatrixUniform> = views.iter().map(|m| MatrixUniform::new(*m)).collect();
-        gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
+        let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
+        gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&matrices));
         let mut stats = CubeStats::default();
         let mut draws: Vec<(u32, usize, usize)> = Vec::new();
         let mut all_ranges: Vec<(u32, u32)> = Vec::new();
@@ -261,10 +266,10 @@ impl CubeShadowRenderer {
             stats.triangles_submitted += tris;
             stats.triangles_culled += geometry.triangle_count - tris;
             merge_draw_ranges(geometry.chunks, self.visible.iter().copied(), &mut self.ranges);
-            draws.push((vi as u32, all_ranges.len(), self.ranges.len()));
+            draws.push(((first_tile + vi) as u32, all_ranges.len(), self.ranges.len()));
             all_ranges.extend_from_slice(&self.ranges);
         }
-        self.record(geometry, timer, encoder, label, &draws, &all_ranges);
+        self.record(geometry, timer, encoder, label, &draws, &all_ranges, clear);
         stats
     }
 
@@ -321,12 +326,13 @@ impl CubeShadowRenderer {
             }
         }
 
-        self.record(geometry, timer, encoder, label, &draws, &all_ranges);
+        self.record(geometry, timer, encoder, label, &draws, &all_ranges, true);
         stats
     }
 
-    /// One depth pass over the atlas: for each `(tile, first range, range count)` of `draws`, the ranges
-    /// `all_ranges[first..first + count]` drawn with tile `tile`'s matrix and viewport.
+    /// One depth pass over the atlas (cleared first when `clear`): for each `(tile, first range, range count)` of
+    /// `draws`, the ranges `all_ranges[first..first + count]` drawn with tile `tile`'s matrix and viewport.
+    #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
         geometry: CubeGeometry<'_>,
@@ -335,6 +341,7 @@ impl CubeShadowRenderer {
         label: &str,
         draws: &[(u32, usize, usize)],
         all_ranges: &[(u32, u32)],
+        clear: bool,
     ) {
         let atlas = self.atlas.as_ref().expect("the atlas exists when recording");
         let res = atlas.resolution;
@@ -349,7 +356,10 @@ impl CubeShadowRenderer {
                 color_attachments: &[],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &atlas.view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: if clear { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load },
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: None,

@@ -12,14 +12,15 @@
 //!      lights and the only difference to the reference is the geometry in the cube maps.
 //!
 //! Deviations, each for a reason:
-//! - The reconstructed triangles are written per tile of 16x16 neighbourhoods, compacted within the tile's
+//! - The reconstructed triangles are written per tile of 8x8 neighbourhoods, compacted within the tile's
 //!   fixed slot, with the tile's bounds. The CPU reads the tile list back once per frame and culls tiles per
 //!   light and per cube face like the reference culls scene chunks: without it every light would draw every
 //!   reconstructed triangle six times, and the comparison with the (culled) reference would not be fair.
 //!   With culling the paper's bound `k*N + 2*n*k*w²` still holds; [`TechniqueCounts`] reports the real count.
 //! - `epsilon` is relative (see the shader): the paper's is in depth units and scene dependent.
 //!
-//! Frame steps: step 0 renders and triangulates the intermediate shadow maps; steps `1..` are light batches.
+//! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
+//! `k+1..` are the light batches (the first reads the tile list back).
 
 pub mod triangulate;
 pub mod viewpoints;
@@ -146,7 +147,7 @@ pub struct Insm {
     view_matrices: Vec<Mat4>,
     /// The scene's bounds in the last frame.
     bounds: Aabb,
-    /// Non-empty tiles of the reconstructed meshes, read back after step 0.
+    /// Non-empty tiles of the reconstructed meshes, read back before the first light batch.
     tiles: Vec<Chunk>,
     mesh_triangles: u64,
     tiles_ready: bool,
@@ -334,19 +335,29 @@ impl Insm {
         })
     }
 
-    /// Step 0: Algorithm 1 lines 1-3 for all `k` viewpoints.
-    fn encode_intermediate_maps(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+    /// Steps `0..k`: Algorithm 1 line 2 for viewpoint `j`, one map per step so that a slow scene never holds the
+    /// app for all `k` at once. The first step clears the atlas, the others draw into their own tile.
+    fn encode_intermediate_map(&mut self, ctx: &FrameContext, j: usize, encoder: &mut wgpu::CommandEncoder) {
         let stats = self.images.render_views(
             ctx.gpu,
             ctx.scene.cube_geometry(),
             ctx.timer,
             encoder,
             "intermediate shadow maps",
-            &self.view_matrices,
+            &self.view_matrices[j..j + 1],
+            j,
+            j == 0,
         );
-        self.scene_triangles = stats.triangles_submitted;
+        if j == 0 {
+            self.scene_triangles = 0;
+        }
+        self.scene_triangles += stats.triangles_submitted;
         self.counts.shadow_triangles_submitted += stats.triangles_submitted;
         self.counts.shadow_triangles_culled += stats.triangles_culled;
+    }
+
+    /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
+    fn encode_triangulation(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
         let tps = triangulate::tiles_per_side(mesh.resolution);
         let (pipeline, group, k) = (&self.triangulate_pipeline, &mesh.bind_group, self.views.len() as u32);
@@ -602,8 +613,9 @@ impl Technique for Insm {
         let n = self.shadows.visible_lights() as u64;
         let budget = k as u64 * ctx.scene.triangle_count + 2 * n * k as u64 * (res as u64).pow(2);
         self.counts.insm_triangle_budget = Some(budget);
-        self.counts.batches = batches + 1;
-        Ok(batches + 1)
+        // Steps: one per intermediate map, the triangulation, then the light batches.
+        self.counts.batches = k as usize + 1 + batches;
+        Ok(self.counts.batches)
     }
 
     fn encode_step(
@@ -612,8 +624,13 @@ impl Technique for Insm {
         step: usize,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
-        if step == 0 {
-            self.encode_intermediate_maps(ctx, encoder);
+        let k = self.views.len();
+        if step < k {
+            self.encode_intermediate_map(ctx, step, encoder);
+            return Ok(());
+        }
+        if step == k {
+            self.encode_triangulation(ctx, encoder);
             return Ok(());
         }
         if !self.tiles_ready {
@@ -627,7 +644,7 @@ impl Technique for Insm {
             triangle_count: self.mesh_triangles,
             cull: true,
         };
-        let stats = self.shadows.encode_batch(ctx, step - 1, encoder, geometry, &self.params.cube);
+        let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.params.cube);
         self.counts.shadow_maps += stats.cubes;
         self.counts.shadow_triangles_submitted += stats.triangles_submitted;
         self.counts.shadow_triangles_culled += stats.triangles_culled;
