@@ -52,6 +52,13 @@ const MAX_TRIS: u32 = 128u; // 2 * TILE * TILE
 @group(0) @binding(4) var<storage, read_write> indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> tiles: array<Tile>;
 
+// The tile's samples with a halo (one before, two after: the second differences of the last neighbourhood's
+// edges reach two samples past it), loaded once into workgroup memory: inverse depth and world position.
+const HALO: u32 = 11u; // TILE + 3
+var<workgroup> halo_z: array<f32, 121>; // HALO * HALO
+var<workgroup> halo_p: array<vec3<f32>, 121>;
+var<private> tile_origin: vec2<i32>;
+
 var<workgroup> tri_count: atomic<u32>;
 var<workgroup> lo: array<atomic<u32>, 3>;
 var<workgroup> hi: array<atomic<u32>, 3>;
@@ -83,6 +90,17 @@ fn world_position(p: vec2<i32>, image: u32) -> vec3<f32> {
     return w.xyz / w.w;
 }
 
+// Inverse depth of sample p from the tile's halo (p within one before and two after the tile).
+fn z_at(p: vec2<i32>) -> f32 {
+    let l = vec2<u32>(p - tile_origin + vec2<i32>(1));
+    return halo_z[l.y * HALO + l.x];
+}
+
+fn p_at(p: vec2<i32>) -> vec3<f32> {
+    let l = vec2<u32>(p - tile_origin + vec2<i32>(1));
+    return halo_p[l.y * HALO + l.x];
+}
+
 fn second_difference_ok(prev: f32, mid: f32, next: f32) -> bool {
     if prev < 0.0 || next < 0.0 {
         return true;
@@ -90,14 +108,15 @@ fn second_difference_ok(prev: f32, mid: f32, next: f32) -> bool {
     return abs(prev + next - 2.0 * mid) < params.epsilon * mid;
 }
 
-fn edge_connected(a: vec2<i32>, b: vec2<i32>, image: u32) -> bool {
-    let za = inv_depth(a, image);
-    let zb = inv_depth(b, image);
+// Edges go right, down or down-right, so a - d and b + d stay within the halo.
+fn edge_connected(a: vec2<i32>, b: vec2<i32>) -> bool {
+    let za = z_at(a);
+    let zb = z_at(b);
     if za <= 0.0 || zb <= 0.0 {
         return false;
     }
     let d = b - a;
-    return second_difference_ok(inv_depth(a - d, image), za, zb) && second_difference_ok(za, zb, inv_depth(b + d, image));
+    return second_difference_ok(z_at(a - d), za, zb) && second_difference_ok(za, zb, z_at(b + d));
 }
 
 // Float to an unsigned integer with the same order, for atomic min/max.
@@ -126,6 +145,13 @@ fn triangulate(
     @builtin(local_invocation_index) li: u32,
 ) {
     let image = wg.z;
+    tile_origin = vec2<i32>(wg.xy * TILE);
+    for (var i = li; i < HALO * HALO; i += TILE * TILE) {
+        let p = tile_origin + vec2<i32>(i32(i % HALO), i32(i / HALO)) - vec2<i32>(1);
+        let z = inv_depth(p, image);
+        halo_z[i] = z;
+        halo_p[i] = select(vec3<f32>(0.0), world_position(p, image), z > 0.0);
+    }
     if li == 0u {
         atomicStore(&tri_count, 0u);
         for (var i = 0u; i < 3u; i++) {
@@ -143,12 +169,8 @@ fn triangulate(
 
     // The vertex of sample (u, v): every sample belongs to exactly one invocation.
     if uv.x < r && uv.y < r {
-        let z = inv_depth(p00, image);
-        var out = vec4<f32>(0.0);
-        if z > 0.0 {
-            out = vec4<f32>(world_position(p00, image), z);
-        }
-        vertices[base + uv.y * r + uv.x] = out;
+        let z = z_at(p00);
+        vertices[base + uv.y * r + uv.x] = select(vec4<f32>(0.0), vec4<f32>(p_at(p00), z), z > 0.0);
     }
 
     // The two triangles of the neighbourhood (Algorithm 2, lines 2-5).
@@ -156,9 +178,9 @@ fn triangulate(
         let p01 = p00 + vec2<i32>(0, 1);
         let p11 = p00 + vec2<i32>(1, 1);
         let p10 = p00 + vec2<i32>(1, 0);
-        let diagonal = edge_connected(p00, p11, image);
-        let t1 = diagonal && edge_connected(p00, p01, image) && edge_connected(p01, p11, image);
-        let t2 = diagonal && edge_connected(p11, p10, image) && edge_connected(p10, p00, image);
+        let diagonal = edge_connected(p00, p11);
+        let t1 = diagonal && edge_connected(p00, p01) && edge_connected(p01, p11);
+        let t2 = diagonal && edge_connected(p10, p11) && edge_connected(p00, p10);
         let n = u32(t1) + u32(t2);
         if n > 0u {
             let slot = atomicAdd(&tri_count, n);
@@ -167,20 +189,20 @@ fn triangulate(
             let i01 = i00 + r;
             let i11 = i00 + r + 1u;
             let i10 = i00 + 1u;
-            grow_bounds(world_position(p00, image));
-            grow_bounds(world_position(p11, image));
+            grow_bounds(p_at(p00));
+            grow_bounds(p_at(p11));
             if t1 {
                 indices[o] = i00;
                 indices[o + 1u] = i01;
                 indices[o + 2u] = i11;
                 o += 3u;
-                grow_bounds(world_position(p01, image));
+                grow_bounds(p_at(p01));
             }
             if t2 {
                 indices[o] = i11;
                 indices[o + 1u] = i10;
                 indices[o + 2u] = i00;
-                grow_bounds(world_position(p10, image));
+                grow_bounds(p_at(p10));
             }
         }
     }
