@@ -1,7 +1,8 @@
 // INSM step 3 (Wang et al. 2016, Algorithm 2): triangulate the intermediate shadow maps on the GPU.
 //
 // One workgroup per tile of TILE x TILE neighbourhoods of one image, one invocation per 2x2 neighbourhood whose
-// top-left sample is (u, v) (u = x, v = y). The neighbourhood gives the triangles
+// top-left sample is (u, v) (u = x, v = y). The tile's samples and a halo are read from the depth atlas once into
+// workgroup memory; the connectivity tests read them from there. The neighbourhood gives the triangles
 //   [(u, v), (u, v+1), (u+1, v+1)] and [(u+1, v+1), (u+1, v), (u, v)],
 // each kept when IsConnected holds for its three edges. Edge (a, b) with step d = b - a is connected when both
 // samples are valid (not background) and the second-order differences at a and at b are below epsilon:
