@@ -336,9 +336,23 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     // Saved and reloaded with the scene file.
     let file = dir.join("insm.ron");
     h.state_mut().save_scene_file(&file).unwrap();
-    let mut fresh =
-        harness(Startup { path: Some(file), data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
+    let mut fresh = harness(Startup {
+        path: Some(file.clone()),
+        data_dir: Some(dir.clone()),
+        synchronous: true,
+        ..Default::default()
+    });
     fresh.run_steps(2);
     assert_eq!(fresh.state().technique, "insm");
+    assert_eq!(fresh.state().params["insm"]["viewpoints"], ParamValue::Cameras(edited.clone()));
+
+    // A file whose viewpoint is out of range is refused with the parameter named; the loaded state stays.
+    let text = std::fs::read_to_string(&file).unwrap();
+    let fov = format!("fov_y_deg: {:?}", edited[0].fov_y_deg);
+    assert!(text.contains(&fov), "{fov} not in the saved file");
+    let bad = dir.join("insm-bad.ron");
+    std::fs::write(&bad, text.replacen(&fov, "fov_y_deg: 500.0", 1)).unwrap();
+    let err = fresh.state_mut().load_scene_file(&bad).unwrap_err();
+    assert!(format!("{err:#}").contains("viewpoints"), "{err:#}");
     assert_eq!(fresh.state().params["insm"]["viewpoints"], ParamValue::Cameras(edited));
 }

@@ -408,6 +408,18 @@ impl ShadowLabApp {
         if shadowlab_core::technique::REGISTRY.iter().all(|e| e.key != file.technique) {
             return Err(anyhow!("unknown technique '{}'", file.technique));
         }
+        // Every saved parameter is checked against its technique's ranges before anything changes, so a bad
+        // value (an edited file, a viewpoint at NaN) is an error here and the current state stays.
+        if let Some(gpu) = &mut self.gpu {
+            for (key, values) in &file.params {
+                let technique = gpu.main.technique(key).with_context(|| "the scene file's parameters".to_string())?;
+                let params = technique.params();
+                for (name, value) in values {
+                    shadowlab_core::technique::check_param(key, &params, name, value)
+                        .map_err(|e| anyhow!("technique '{key}': {e}"))?;
+                }
+            }
+        }
         self.set_scene(scene);
         self.lights = file.lights;
         self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);

@@ -226,14 +226,16 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     let view_camera = app.camera.camera();
     for p in technique.params() {
         let changed = match (&p.kind, &p.value) {
-            (ParamKind::Cameras { max }, ParamValue::Cameras(list)) => {
+            (ParamKind::Cameras { max, selected_by }, ParamValue::Cameras(list)) => {
                 let in_use = technique.cameras_in_use(p.key);
                 let edited = cameras_ui(ui, &p, *max, list, &in_use, &view_camera, &mut app.selected_camera);
                 if edited.is_some() {
-                    // Cameras the user places are used through `placement = custom` (see `ParamKind::Cameras`).
-                    let custom = ParamValue::Choice("custom".into());
-                    if technique.set_param("placement", &custom).is_ok() {
-                        user.insert("placement".into(), custom);
+                    // Edited cameras are the ones the technique should use: select them.
+                    if let Some((key, value)) = selected_by {
+                        let value = ParamValue::Choice(value.to_string());
+                        if technique.set_param(key, &value).is_ok() {
+                            user.insert(key.to_string(), value);
+                        }
                     }
                     app.selected = None;
                 }

@@ -1,4 +1,4 @@
-//! Copying a texture back to the CPU (rows padded to 256 bytes, as wgpu requires).
+//! Copying textures and buffers back to the CPU (texture rows padded to 256 bytes, as wgpu requires).
 
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
@@ -38,7 +38,18 @@ pub fn read_texture(
         wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
     );
     gpu.queue.submit([encoder.finish()]);
-    let slice = buffer.slice(..);
+    let data = map_read(gpu, &buffer, (padded * height) as u64)?;
+    let mut out = Vec::with_capacity((row * height) as usize);
+    for y in 0..height as usize {
+        let start = y * padded as usize;
+        out.extend_from_slice(&data[start..start + row as usize]);
+    }
+    Ok(out)
+}
+
+/// Map the first `bytes` of a `MAP_READ` buffer (after the submitted work that fills it), copy them out, unmap.
+pub fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+    let slice = buffer.slice(..bytes.max(4));
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
@@ -47,15 +58,23 @@ pub fn read_texture(
     rx.recv()
         .map_err(|_| GpuError::Readback("the map callback never ran".into()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((row * height) as usize);
-    for y in 0..height as usize {
-        let start = y * padded as usize;
-        out.extend_from_slice(&data[start..start + row as usize]);
-    }
-    drop(data);
+    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
     buffer.unmap();
-    Ok(out)
+    Ok(data)
+}
+
+/// Copy a whole `COPY_SRC` buffer back to the CPU.
+pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("buffer readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    gpu.queue.submit([encoder.finish()]);
+    map_read(gpu, &staging, buffer.size())
 }
 
 /// IEEE half to single precision.

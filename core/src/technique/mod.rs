@@ -71,6 +71,15 @@ pub struct TechniqueCounts {
     pub fell_back_to_reference: bool,
 }
 
+impl TechniqueCounts {
+    /// Add what one cube-map (or intermediate-map) render pass drew and culled.
+    pub fn add_cube_stats(&mut self, stats: &crate::renderer::cube_shadows::CubeStats) {
+        self.shadow_maps += stats.cubes;
+        self.shadow_triangles_submitted += stats.triangles_submitted;
+        self.shadow_triangles_culled += stats.triangles_culled;
+    }
+}
+
 /// A camera a technique renders from (INSM's reference viewpoints): position, target, vertical field of view.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CameraPose {
@@ -126,10 +135,11 @@ pub enum ParamKind {
     Choice(&'static [&'static str]),
     /// Up to `max` cameras. On the command line: `px,py,pz,tx,ty,tz,fov` per camera, separated by `;` (numbers may
     /// also be separated by spaces, which `sweep` needs: there commas separate swept values).
-    /// A technique with such a parameter and a `placement` choice offering `custom` uses the cameras when
-    /// `placement = custom`; the app switches to `custom` when the user adds or moves one.
     Cameras {
         max: usize,
+        /// A choice parameter and the value that makes the technique use these cameras (INSM: `placement` =
+        /// `custom`); the app sets it when the user edits the list.
+        selected_by: Option<(&'static str, &'static str)>,
     },
 }
 
@@ -220,7 +230,7 @@ impl ParamKind {
                 }
             }
             (ParamKind::Bool, ParamValue::Bool(_)) => {}
-            (ParamKind::Cameras { max }, ParamValue::Cameras(v)) => {
+            (ParamKind::Cameras { max, .. }, ParamValue::Cameras(v)) => {
                 if v.len() > *max {
                     return invalid(format!("{} cameras, at most {max}", v.len()));
                 }

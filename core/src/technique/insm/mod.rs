@@ -38,6 +38,7 @@ use super::{
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeGeometry, CubeShadowRenderer};
+use crate::renderer::readback::{map_read, read_buffer};
 use crate::renderer::SharedLayouts;
 use crate::scene::chunks::Chunk;
 use crate::scene::{Aabb, PointLight};
@@ -152,7 +153,6 @@ pub struct Insm {
     mesh_triangles: u64,
     tiles_ready: bool,
     snapshot: MeshSnapshot,
-    scene_triangles: u64,
     counts: TechniqueCounts,
     cpu_times: Vec<PassTime>,
 }
@@ -228,7 +228,6 @@ impl Insm {
             mesh_triangles: 0,
             tiles_ready: false,
             snapshot: MeshSnapshot::default(),
-            scene_triangles: 0,
             counts: TechniqueCounts::default(),
             cpu_times: Vec::new(),
         }
@@ -237,16 +236,6 @@ impl Insm {
     /// The viewpoints used by the last frame.
     pub fn viewpoints(&self) -> &[Viewpoint] {
         &self.views
-    }
-
-    /// Triangles of the reconstructed meshes in the last frame.
-    pub fn mesh_triangles(&self) -> u64 {
-        self.mesh_triangles
-    }
-
-    /// The viewpoints `placement` gives for `bounds` (custom: the custom list), all of them, before `k` is applied.
-    pub fn candidate_viewpoints(&self, bounds: &Aabb) -> Vec<Viewpoint> {
-        viewpoints::select(self.params.placement, bounds, &self.custom_viewpoints, MAX_VIEWPOINTS)
     }
 
     /// Read back the samples and the triangles of each reconstructed mesh, as the GPU wrote them (for tests and
@@ -348,12 +337,7 @@ impl Insm {
             j,
             j == 0,
         );
-        if j == 0 {
-            self.scene_triangles = 0;
-        }
-        self.scene_triangles += stats.triangles_submitted;
-        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
-        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        self.counts.add_cube_stats(&stats);
     }
 
     /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
@@ -429,36 +413,6 @@ impl Insm {
     }
 }
 
-/// Map `bytes` of a MAP_READ buffer, copy them out, unmap.
-fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
-    let slice = buffer.slice(..bytes.max(4));
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait_idle()?;
-    rx.recv()
-        .map_err(|_| GpuError::Readback("the map callback never ran".into()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
-    buffer.unmap();
-    Ok(data)
-}
-
-/// Copy a whole COPY_SRC buffer back to the CPU.
-fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("insm readback"),
-        size: buffer.size(),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
-    gpu.queue.submit([encoder.finish()]);
-    map_read(gpu, &staging, buffer.size())
-}
-
 /// The scene's bounds from its chunks.
 fn scene_bounds(chunks: &[Chunk]) -> Aabb {
     let mut b = Aabb::from_points(std::iter::empty());
@@ -512,7 +466,7 @@ impl Technique for Insm {
                 key: "viewpoints",
                 label: "Custom viewpoints",
                 help: "The viewpoints of placement = custom: add them from the camera, move them with the gizmo",
-                kind: ParamKind::Cameras { max: MAX_VIEWPOINTS },
+                kind: ParamKind::Cameras { max: MAX_VIEWPOINTS, selected_by: Some(("placement", "custom")) },
                 value: ParamValue::Cameras(self.custom_viewpoints.clone()),
             },
         ];
@@ -645,9 +599,7 @@ impl Technique for Insm {
             cull: true,
         };
         let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.params.cube);
-        self.counts.shadow_maps += stats.cubes;
-        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
-        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        self.counts.add_cube_stats(&stats);
         Ok(())
     }
 

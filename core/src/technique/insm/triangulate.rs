@@ -27,15 +27,6 @@ pub fn tiles_per_side(resolution: u32) -> u32 {
     resolution.div_ceil(TILE)
 }
 
-/// Inverse view depth from a `0..1` perspective depth-buffer value; 0 for the background (`depth >= 1`).
-pub fn inverse_depth(depth: f32, near: f32, far: f32) -> f32 {
-    if depth >= 1.0 {
-        0.0
-    } else {
-        (far - depth * (far - near)) / (near * far)
-    }
-}
-
 /// One intermediate shadow map as the GPU reconstructed it: `resolution²` samples of (world xyz, inverse depth).
 pub struct SampledImage<'a> {
     pub resolution: u32,
@@ -183,13 +174,7 @@ mod tests {
     }
 
     #[test]
-    fn inverse_depth_round_trips_the_depth_buffer() {
-        let (near, far) = (0.1f32, 50.0f32);
-        for z in [0.2f32, 1.0, 7.5, 49.0] {
-            let depth = far / (far - near) * (1.0 - near / z);
-            assert!((inverse_depth(depth, near, far) * z - 1.0).abs() < 1e-4, "{z}");
-        }
-        assert_eq!(inverse_depth(1.0, near, far), 0.0);
+    fn every_sample_belongs_to_one_tile() {
         assert_eq!(tiles_per_side(16 * TILE), 16);
         assert_eq!(tiles_per_side(16 * TILE + 1), 17);
     }

@@ -291,7 +291,7 @@ mod tests {
     #[test]
     fn cameras_parse_from_the_command_line_and_reject_bad_input() {
         use crate::technique::{ParamKind, ParamValue};
-        let kind = ParamKind::Cameras { max: 2 };
+        let kind = ParamKind::Cameras { max: 2, selected_by: None };
         let v = kind.parse("viewpoints", "0,5,0, 0,0,0, 90; 1,2,3,4,5,6,45").unwrap();
         let ParamValue::Cameras(c) = &v else { panic!("{v:?}") };
         assert_eq!(c.len(), 2);

@@ -351,9 +351,7 @@ impl Technique for LightCluster {
             .collect();
         let geometry = CubeGeometry { cull: self.params.cube.cull, ..ctx.scene.cube_geometry() };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
-        self.counts.shadow_maps += stats.cubes;
-        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
-        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        self.counts.add_cube_stats(&stats);
 
         let atlas = self.cubes.atlas().expect("prepare sized the atlas");
         let uniform = ClusterBatchUniform {

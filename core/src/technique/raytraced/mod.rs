@@ -443,18 +443,7 @@ pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<boo
     }
     encoder.copy_buffer_to_buffer(&hits, 0, &readback, 0, hits_size);
     gpu.queue.submit([encoder.finish()]);
-    let slice = readback.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait_idle()?;
-    rx.recv()
-        .map_err(|_| GpuError::Readback("the map callback never ran".into()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let data = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+    let data = crate::renderer::readback::map_read(gpu, &readback, hits_size)?;
     let flags: Vec<bool> = bytemuck::cast_slice::<u8, u32>(&data).iter().map(|&h| h != 0).collect();
-    drop(data);
-    readback.unmap();
     Ok(flags)
 }

@@ -225,9 +225,7 @@ impl Technique for Reference {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let stats = self.shadows.encode_batch(ctx, step, encoder, ctx.scene.cube_geometry(), &self.params);
-        self.counts.shadow_maps += stats.cubes;
-        self.counts.shadow_triangles_submitted += stats.triangles_submitted;
-        self.counts.shadow_triangles_culled += stats.triangles_culled;
+        self.counts.add_cube_stats(&stats);
         Ok(())
     }
 
