@@ -14,6 +14,9 @@ struct Frame {
     background: vec4<f32>,
     // x: exposure, y: tone-map operator (0 ACES, 1 Reinhard, 2 linear)
     tonemap: vec4<f32>,
+    // x: component shown (0 total, 1 direct, 2 indirect), y: indirect display gain, z: 1 when an indirect
+    // technique runs (the indirect buffer is real)
+    indirect: vec4<f32>,
 }
 
 // A point light as the shaders see it. Keep in sync with `GpuLight` in core/src/renderer/gpu_data.rs.

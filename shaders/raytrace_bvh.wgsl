@@ -120,3 +120,112 @@ fn bvh_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
     }
     return false;
 }
+
+// Nearest hit of a ray; t = BVH_MISS when there is none. Mirrors `Hit` in bvh.rs.
+struct BvhHit {
+    t: f32,
+    // index into bvh_triangles
+    triangle: u32,
+    // barycentrics of v1 and v2
+    u: f32,
+    v: f32,
+}
+
+// Möller–Trumbore with distance and barycentrics: (t, u, v), t = BVH_MISS unless 0 < t < t_max.
+fn bvh_ray_triangle_hit(origin: vec3<f32>, dir: vec3<f32>, tri: BvhTriangle, t_max: f32) -> vec3<f32> {
+    let miss = vec3<f32>(BVH_MISS, 0.0, 0.0);
+    let e1 = tri.e1.xyz;
+    let e2 = tri.e2.xyz;
+    let p = cross(dir, e2);
+    let det = bvh_dot(e1, p);
+    if det == 0.0 {
+        return miss;
+    }
+    let inv_det = 1.0 / det;
+    let s = origin - tri.v0.xyz;
+    let u = bvh_dot(s, p) * inv_det;
+    if u < 0.0 || u > 1.0 {
+        return miss;
+    }
+    let q = cross(s, e1);
+    let v = bvh_dot(dir, q) * inv_det;
+    if v < 0.0 || u + v > 1.0 {
+        return miss;
+    }
+    let t = bvh_dot(e2, q) * inv_det;
+    if t > 0.0 && t < t_max {
+        return vec3<f32>(t, u, v);
+    }
+    return miss;
+}
+
+// Closest hit, the twin of `closest_hit_cpu` in bvh.rs: near child first, subtrees whose box starts beyond the
+// nearest hit so far are skipped when popped.
+fn bvh_closest_hit(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> BvhHit {
+    var best: BvhHit;
+    best.t = BVH_MISS;
+    best.triangle = 0u;
+    best.u = 0.0;
+    best.v = 0.0;
+    var t_best = t_max;
+    let inv = bvh_safe_inverse(dir);
+    let root = bvh_nodes[0];
+    if bvh_ray_box(origin, inv, root.min, root.max, t_max) >= BVH_MISS {
+        return best;
+    }
+    var stack: array<u32, BVH_STACK_SIZE>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = bvh_nodes[node];
+        var descend = false;
+        if n.count > 0u {
+            for (var i = n.first; i < n.first + n.count; i++) {
+                let h = bvh_ray_triangle_hit(origin, dir, bvh_triangles[i], t_best);
+                if h.x < BVH_MISS {
+                    t_best = h.x;
+                    best.t = h.x;
+                    best.triangle = i;
+                    best.u = h.y;
+                    best.v = h.z;
+                }
+            }
+        } else {
+            let a = n.first;
+            let na = bvh_nodes[a];
+            let nb = bvh_nodes[a + 1u];
+            let ta = bvh_ray_box(origin, inv, na.min, na.max, t_best);
+            let tb = bvh_ray_box(origin, inv, nb.min, nb.max, t_best);
+            let a_first = ta <= tb;
+            let t_near = select(tb, ta, a_first);
+            let t_far = select(ta, tb, a_first);
+            if t_near < BVH_MISS {
+                node = select(a + 1u, a, a_first);
+                if t_far < BVH_MISS && sp < BVH_STACK_SIZE {
+                    stack[sp] = select(a, a + 1u, a_first);
+                    sp += 1u;
+                }
+                descend = true;
+            }
+        }
+        if !descend {
+            var found = false;
+            loop {
+                if sp == 0u {
+                    break;
+                }
+                sp -= 1u;
+                let c = bvh_nodes[stack[sp]];
+                if bvh_ray_box(origin, inv, c.min, c.max, t_best) < BVH_MISS {
+                    node = stack[sp];
+                    found = true;
+                    break;
+                }
+            }
+            if !found {
+                return best;
+            }
+        }
+    }
+    return best;
+}

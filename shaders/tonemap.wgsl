@@ -2,6 +2,9 @@
 // Composed after common.wgsl (for `frame` and the full-screen triangle).
 
 @group(1) @binding(0) var hdr: texture_2d<f32>;
+// Indirect radiance per pixel (f32 RGBA, row-major), written by the indirect technique; a placeholder when
+// frame.indirect.z is 0.
+@group(1) @binding(1) var<storage, read> indirect_radiance: array<vec4<f32>>;
 
 // Narkowicz's fit of the ACES filmic curve.
 fn aces(x: vec3<f32>) -> vec3<f32> {
@@ -15,7 +18,19 @@ fn aces(x: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let radiance = textureLoad(hdr, vec2<i32>(in.position.xy), 0).rgb * frame.tonemap.x;
+    let pixel = vec2<i32>(in.position.xy);
+    var radiance = textureLoad(hdr, pixel, 0).rgb;
+    if frame.indirect.z > 0.5 {
+        let indirect = indirect_radiance[u32(pixel.y) * u32(frame.viewport.x) + u32(pixel.x)].rgb;
+        switch u32(frame.indirect.x) {
+            case 0u: { radiance += indirect; }
+            case 1u: { }
+            default: { radiance = indirect * frame.indirect.y; }
+        }
+    } else if u32(frame.indirect.x) == 2u {
+        radiance = vec3<f32>(0.0);
+    }
+    radiance *= frame.tonemap.x;
     var mapped: vec3<f32>;
     switch u32(frame.tonemap.y) {
         case 0u: { mapped = aces(radiance); }

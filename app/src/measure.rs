@@ -270,6 +270,7 @@ mod tests {
             cpu_stages: vec![],
             wall_ms: ms,
             counts: Default::default(),
+            indirect: None,
         };
         let s = summarize(&[r(5.0), r(1.0), r(3.0), r(9.0), r(2.0)]);
         assert_eq!(s.median_ms, 3.0);

@@ -12,6 +12,7 @@ pub mod renderer;
 pub mod shaders;
 pub mod technique;
 pub mod timing;
+pub mod vpl;
 
 pub use gpu::GpuContext;
 pub use renderer::{FrameReport, RenderSettings, Renderer, ToneMap};

@@ -29,6 +29,33 @@ pub const RAYTRACE_TEST: &str =
     concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/raytrace_test.wgsl"));
 pub const INSM_TRIANGULATE: &str = include_str!("../../shaders/insm_triangulate.wgsl");
 pub const OVERLAY: &str = include_str!("../../shaders/overlay.wgsl");
+pub const PARABOLOID_DEPTH: &str =
+    concat!(include_str!("../../shaders/vpl_basis.wgsl"), include_str!("../../shaders/paraboloid_depth.wgsl"));
+pub const VPL_GATHER_UNSHADOWED: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/vpl_common.wgsl"),
+    include_str!("../../shaders/vpl_vis_none.wgsl"),
+    include_str!("../../shaders/vpl_gather.wgsl")
+);
+pub const VPL_GATHER_RAYTRACED: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/raytrace_bvh.wgsl"),
+    include_str!("../../shaders/vpl_common.wgsl"),
+    include_str!("../../shaders/vpl_vis_raytraced.wgsl"),
+    include_str!("../../shaders/vpl_gather.wgsl")
+);
+pub const VPL_GATHER_PARABOLOID: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/vpl_common.wgsl"),
+    include_str!("../../shaders/vpl_basis.wgsl"),
+    include_str!("../../shaders/vpl_vis_paraboloid.wgsl"),
+    include_str!("../../shaders/vpl_gather.wgsl")
+);
+pub const PATHTRACE: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/raytrace_bvh.wgsl"),
+    include_str!("../../shaders/pathtrace.wgsl")
+);
 
 /// Every composed shader module: (name, the files it is made of, source).
 pub const MODULES: &[(&str, &[&str], &str)] = &[
@@ -43,6 +70,23 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("raytrace_shadow", &["common.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"], RAYTRACE_SHADOW),
     ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
     ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
+    ("paraboloid_depth", &["vpl_basis.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),
+    (
+        "vpl_gather_unshadowed",
+        &["common.wgsl", "vpl_common.wgsl", "vpl_vis_none.wgsl", "vpl_gather.wgsl"],
+        VPL_GATHER_UNSHADOWED,
+    ),
+    (
+        "vpl_gather_raytraced",
+        &["common.wgsl", "raytrace_bvh.wgsl", "vpl_common.wgsl", "vpl_vis_raytraced.wgsl", "vpl_gather.wgsl"],
+        VPL_GATHER_RAYTRACED,
+    ),
+    (
+        "vpl_gather_paraboloid",
+        &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "vpl_vis_paraboloid.wgsl", "vpl_gather.wgsl"],
+        VPL_GATHER_PARABOLOID,
+    ),
+    ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "pathtrace.wgsl"], PATHTRACE),
 ];
 
 /// Create a shader module from one of the sources above.

@@ -82,8 +82,32 @@ pub struct CubeStats {
     pub triangles_culled: u64,
 }
 
+/// One paraboloid shadow map to render (a VPL's hemisphere): its centre, the direction it faces and its depth
+/// range.
+#[derive(Clone, Copy, Debug)]
+pub struct ParaboloidCaster {
+    pub centre: Vec3,
+    pub normal: Vec3,
+    pub near: f32,
+    pub far: f32,
+}
+
+/// Mirrors `ParaboloidView` in `paraboloid_depth.wgsl`, padded to a 256-byte slot like [`MatrixUniform`].
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ParaboloidView {
+    centre: [f32; 4],
+    normal: [f32; 4],
+    _pad: [[f32; 4]; 14],
+}
+const _: () = assert!(std::mem::size_of::<ParaboloidView>() == std::mem::size_of::<MatrixUniform>());
+
 pub struct CubeShadowRenderer {
     pipeline: wgpu::RenderPipeline,
+    /// Paraboloid depth pipeline, created on first use.
+    paraboloid_pipeline: Option<wgpu::RenderPipeline>,
+    faces_layout: wgpu::BindGroupLayout,
+    vertex_stride: u64,
     faces: wgpu::Buffer,
     faces_bind_group: wgpu::BindGroup,
     atlas: Option<CubeAtlas>,
@@ -133,16 +157,38 @@ impl CubeShadowRenderer {
             }],
         });
         let module = shaders::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH);
+        let pipeline = Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth");
+        CubeShadowRenderer {
+            pipeline,
+            paraboloid_pipeline: None,
+            faces_layout: layout,
+            vertex_stride,
+            faces,
+            faces_bind_group,
+            atlas: None,
+            ranges: Vec::new(),
+            visible: Vec::new(),
+            face_visible: Vec::new(),
+        }
+    }
+
+    fn depth_pipeline(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        module: &wgpu::ShaderModule,
+        vertex_stride: u64,
+        label: &str,
+    ) -> wgpu::RenderPipeline {
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shadow depth"),
-            bind_group_layouts: &[Some(&layout)],
+            label: Some(label),
+            bind_group_layouts: &[Some(layout)],
             immediate_size: 0,
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow depth"),
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
-                module: &module,
+                module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
@@ -164,16 +210,69 @@ impl CubeShadowRenderer {
             fragment: None,
             multiview_mask: None,
             cache: None,
-        });
-        CubeShadowRenderer {
-            pipeline,
-            faces,
-            faces_bind_group,
-            atlas: None,
-            ranges: Vec::new(),
-            visible: Vec::new(),
-            face_visible: Vec::new(),
+        })
+    }
+
+    /// Render `geometry` into one paraboloid map per caster, tiles `first_tile + i` of the atlas (sized by
+    /// `ensure_tiles`), in one render pass named `label` that clears the atlas first. With `geometry.cull` a chunk
+    /// is drawn for a caster only if its bounds reach into the caster's front half-space within `far`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_paraboloids(
+        &mut self,
+        gpu: &GpuContext,
+        geometry: CubeGeometry<'_>,
+        timer: &PassTimer,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        casters: &[ParaboloidCaster],
+        first_tile: usize,
+    ) -> CubeStats {
+        let atlas = self.atlas.as_ref().expect("ensure_tiles before render_paraboloids");
+        assert!(first_tile + casters.len() <= atlas.tiles && first_tile + casters.len() <= MAX_CUBES_PER_BATCH * 6);
+        if self.paraboloid_pipeline.is_none() {
+            let module = shaders::create_module(&gpu.device, "paraboloid_depth", shaders::PARABOLOID_DEPTH);
+            self.paraboloid_pipeline = Some(Self::depth_pipeline(
+                &gpu.device,
+                &self.faces_layout,
+                &module,
+                self.vertex_stride,
+                "paraboloid depth",
+            ));
         }
+        let views: Vec<ParaboloidView> = casters
+            .iter()
+            .map(|c| ParaboloidView {
+                centre: c.centre.extend(c.near).to_array(),
+                normal: c.normal.extend(c.far).to_array(),
+                _pad: [[0.0; 4]; 14],
+            })
+            .collect();
+        let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
+        gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&views));
+        let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
+        let mut draws: Vec<(u32, usize, usize)> = Vec::new();
+        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        for (i, c) in casters.iter().enumerate() {
+            self.visible.clear();
+            let mut tris = 0u64;
+            for (ci, chunk) in geometry.chunks.iter().enumerate() {
+                if !geometry.cull
+                    || (in_front_of(&chunk.bounds, c.centre, c.normal)
+                        && chunk.bounds.intersects_sphere(c.centre, c.far))
+                {
+                    self.visible.push(ci as u32);
+                    tris += chunk.triangle_count() as u64;
+                }
+            }
+            stats.triangles_submitted += tris;
+            stats.triangles_culled += geometry.triangle_count - tris;
+            merge_draw_ranges(geometry.chunks, self.visible.iter().copied(), &mut self.ranges);
+            draws.push(((first_tile + i) as u32, all_ranges.len(), self.ranges.len()));
+            all_ranges.extend_from_slice(&self.ranges);
+        }
+        let pipeline = self.paraboloid_pipeline.as_ref().expect("created above");
+        self.record(pipeline, geometry, timer, encoder, label, &draws, &all_ranges, true);
+        stats
     }
 
     /// How many cube maps of `resolution` texels per face one batch holds within `budget_bytes`.
@@ -269,7 +368,7 @@ impl CubeShadowRenderer {
             draws.push(((first_tile + vi) as u32, all_ranges.len(), self.ranges.len()));
             all_ranges.extend_from_slice(&self.ranges);
         }
-        self.record(geometry, timer, encoder, label, &draws, &all_ranges, clear);
+        self.record(&self.pipeline, geometry, timer, encoder, label, &draws, &all_ranges, clear);
         stats
     }
 
@@ -326,7 +425,7 @@ impl CubeShadowRenderer {
             }
         }
 
-        self.record(geometry, timer, encoder, label, &draws, &all_ranges, true);
+        self.record(&self.pipeline, geometry, timer, encoder, label, &draws, &all_ranges, true);
         stats
     }
 
@@ -335,6 +434,7 @@ impl CubeShadowRenderer {
     #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
+        pipeline: &wgpu::RenderPipeline,
         geometry: CubeGeometry<'_>,
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
@@ -346,7 +446,6 @@ impl CubeShadowRenderer {
         let atlas = self.atlas.as_ref().expect("the atlas exists when recording");
         let res = atlas.resolution;
         let tiles_per_row = atlas.tiles_per_row;
-        let pipeline = &self.pipeline;
         let bind_group = &self.faces_bind_group;
         timer.render_pass(
             encoder,
@@ -387,4 +486,11 @@ impl CubeShadowRenderer {
             },
         );
     }
+}
+
+/// True when some corner of `b` lies in front of the plane through `p` with normal `n`.
+fn in_front_of(b: &crate::scene::Aabb, p: Vec3, n: Vec3) -> bool {
+    // The corner furthest along n.
+    let corner = Vec3::select(n.cmpge(Vec3::ZERO), b.max, b.min);
+    (corner - p).dot(n) > 0.0
 }

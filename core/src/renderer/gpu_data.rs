@@ -16,8 +16,11 @@ pub struct FrameUniform {
     pub ambient: [f32; 4],
     pub background: [f32; 4],
     pub tonemap: [f32; 4],
+    /// x: component shown (0 total, 1 direct, 2 indirect), y: indirect display gain, z: 1 when an indirect
+    /// technique runs.
+    pub indirect: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 208);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);
 
 /// Mirrors `Camera` in `gbuffer.wgsl` and `Face` in `shadow_depth.wgsl`: one matrix, padded to the 256-byte
 /// dynamic-offset alignment so an array of them can be indexed per draw.

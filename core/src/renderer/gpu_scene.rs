@@ -18,6 +18,10 @@ pub struct GpuScene {
     pub geometry: std::sync::Arc<ChunkedGeometry>,
     pub triangle_count: u64,
     pub material_bind_groups: Vec<wgpu::BindGroup>,
+    /// Per material, the mean linear albedo (factor times the texture's mean): what a ray hit reflects.
+    pub material_albedo: Vec<glam::Vec3>,
+    /// The BVH, built on first use ([`GpuScene::bvh`]).
+    pub(crate) bvh_cell: std::sync::OnceLock<std::sync::Arc<super::scene_bvh::SceneBvh>>,
 }
 
 impl GpuScene {
@@ -110,7 +114,10 @@ impl GpuScene {
                 })
             })
             .collect();
+        let material_albedo = scene.materials.iter().map(|m| mean_albedo(scene, m)).collect();
         GpuScene {
+            material_albedo,
+            bvh_cell: std::sync::OnceLock::new(),
             vertex_buffer,
             index_buffer,
             triangle_count: geometry.triangle_count() as u64,
@@ -119,6 +126,38 @@ impl GpuScene {
             material_bind_groups,
         }
     }
+}
+
+/// A material's mean linear albedo: its base-colour factor times the mean of its texture (decoded from sRGB),
+/// clamped to [0, 1].
+pub fn mean_albedo(scene: &Scene, m: &crate::scene::Material) -> glam::Vec3 {
+    let factor = m.base_color.truncate();
+    let texture_mean = m
+        .base_color_texture
+        .and_then(|i| scene.textures.get(i))
+        .filter(|t| !t.rgba8.is_empty())
+        .map(|t| {
+            let to_linear = |c: u8| {
+                let c = c as f32 / 255.0;
+                if c <= 0.04045 {
+                    c / 12.92
+                } else {
+                    ((c + 0.055) / 1.055).powf(2.4)
+                }
+            };
+            // At most ~64k texels are averaged: a mean does not need every texel of a 4k texture.
+            let texels = t.rgba8.len() / 4;
+            let stride = (texels / 65_536).max(1);
+            let mut sum = glam::Vec3::ZERO;
+            let mut n = 0u32;
+            for px in t.rgba8.chunks_exact(4).step_by(stride) {
+                sum += glam::Vec3::new(to_linear(px[0]), to_linear(px[1]), to_linear(px[2]));
+                n += 1;
+            }
+            sum / n.max(1) as f32
+        })
+        .unwrap_or(glam::Vec3::ONE);
+    (factor * texture_mean).clamp(glam::Vec3::ZERO, glam::Vec3::ONE)
 }
 
 /// Upload an sRGB texture with a full mip chain (box-filtered on the CPU).

@@ -12,7 +12,9 @@ pub mod gpu_data;
 pub mod gpu_scene;
 pub mod overlay;
 pub mod readback;
+pub mod scene_bvh;
 pub mod targets;
+pub mod vpl_gather;
 
 use std::time::Instant;
 
@@ -27,6 +29,7 @@ use crate::scene::{Camera, PointLight, Scene};
 use crate::shaders;
 use crate::technique::{FrameContext, Technique, TechniqueCounts};
 use crate::timing::{PassTime, PassTimer, TimingSource};
+use crate::vpl::{GpuVpl, VplSet, VplSettings};
 use gpu_data::{FrameUniform, MatrixUniform};
 use gpu_scene::GpuScene;
 use targets::FrameTargets;
@@ -59,6 +62,40 @@ pub struct RenderSettings {
     /// At most this many lights (cube maps) per step; 0 = as many as the technique's memory budget allows.
     /// The app lowers it on slow adapters so each UI frame does a bounded amount of work.
     pub max_lights_per_step: usize,
+    /// The VPLs every indirect technique of a frame shares.
+    pub vpl: VplSettings,
+    /// Which part of the light the output, `read_hdr` and so every comparison show.
+    pub component: Component,
+    /// Display gain of the indirect part when [`Component::Indirect`] is shown (not applied to `read_hdr`).
+    pub indirect_gain: f32,
+}
+
+/// A part of the image: everything, the ambient + direct part, or the indirect part alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Component {
+    /// Ambient + emission + direct + indirect.
+    #[default]
+    Total,
+    /// Ambient + emission + direct (the whole image without an indirect technique).
+    Direct,
+    /// Indirect light only (zero without an indirect technique).
+    Indirect,
+}
+
+impl Component {
+    pub const NAMES: &'static [&'static str] = &["total", "direct", "indirect"];
+    pub fn parse(text: &str) -> Option<Component> {
+        match text.trim() {
+            "total" => Some(Component::Total),
+            "direct" => Some(Component::Direct),
+            "indirect" => Some(Component::Indirect),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        Component::NAMES[self as usize]
+    }
 }
 
 impl Default for RenderSettings {
@@ -72,6 +109,9 @@ impl Default for RenderSettings {
             background: Vec3::new(0.05, 0.06, 0.08),
             specular: false,
             max_lights_per_step: 0,
+            vpl: VplSettings::default(),
+            component: Component::Total,
+            indirect_gain: 1.0,
         }
     }
 }
@@ -90,6 +130,10 @@ impl RenderSettings {
         if !(self.ambient.is_finite() && self.background.is_finite()) {
             return Err(GpuError::InvalidSettings("ambient and background must be finite".into()));
         }
+        if !(self.indirect_gain.is_finite() && self.indirect_gain > 0.0 && self.indirect_gain <= 1e6) {
+            return Err(GpuError::InvalidSettings(format!("indirect gain {} must be in (0, 1e6]", self.indirect_gain)));
+        }
+        self.vpl.validate().map_err(GpuError::InvalidSettings)?;
         Ok(())
     }
 }
@@ -227,6 +271,23 @@ pub struct FrameReport {
     /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
     pub wall_ms: f64,
     pub counts: FrameCounts,
+    /// The indirect technique of the frame, when there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<IndirectReport>,
+}
+
+/// What the indirect technique of a frame did.
+#[derive(Clone, Debug, Serialize)]
+pub struct IndirectReport {
+    pub technique: String,
+    /// VPLs used (0 for techniques that use none, e.g. the path tracer).
+    pub vpls: usize,
+    pub vpl_source: crate::vpl::VplSource,
+    /// VPL samples (texels or particles) that hit nothing.
+    pub vpl_misses: u32,
+    pub counts: TechniqueCounts,
+    /// CPU stages (VPL generation, the technique's own), milliseconds.
+    pub cpu_stages: Vec<PassTime>,
 }
 
 /// A frame in progress.
@@ -237,6 +298,9 @@ pub struct FrameJob {
     camera: Camera,
     lights: Vec<PointLight>,
     gbuffer_triangles: u64,
+    /// Steps of the direct technique; the indirect technique's follow.
+    direct_steps: usize,
+    vpl_ms: f64,
 }
 
 impl FrameJob {
@@ -271,6 +335,45 @@ pub struct Renderer {
     timer: PassTimer,
     draw_ranges: Vec<(u32, u32)>,
     overlay: Option<overlay::OverlayRenderer>,
+    /// The indirect technique, when one is chosen; its steps run after the direct technique's.
+    indirect: Option<Box<dyn Technique>>,
+    /// Indirect radiance per pixel, linear RGBA f32 (a tiny placeholder without an indirect technique).
+    indirect_buffer: wgpu::Buffer,
+    vpls: VplFrame,
+    /// True when [`Renderer::set_fixed_vpls`] gave the VPLs.
+    fixed_vpls: bool,
+}
+
+/// The VPLs of the current frame, on the CPU and the GPU (`array<Vpl>`, `vpl_common.wgsl`).
+pub struct VplFrame {
+    pub set: std::sync::Arc<VplSet>,
+    pub buffer: crate::technique::GrowableBuffer,
+    /// What the set was generated from (lights, settings, scene geometry), so an unchanged frame reuses it.
+    key: Option<(Vec<PointLight>, VplSettings, usize)>,
+}
+
+/// Bytes of the indirect buffer for a `width x height` image.
+fn indirect_bytes(width: u32, height: u32) -> u64 {
+    width as u64 * height as u64 * 16
+}
+
+fn create_indirect_buffer(gpu: &GpuContext, width: u32, height: u32, enabled: bool) -> Result<wgpu::Buffer, GpuError> {
+    let size = if enabled { indirect_bytes(width, height) } else { 16 };
+    let limits = gpu.device.limits();
+    let max = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+    if size > max {
+        return Err(GpuError::InvalidSettings(format!(
+            "indirect light at {width}x{height} needs a {} MiB buffer; this GPU allows {} MiB (lower the image size)",
+            size >> 20,
+            max >> 20
+        )));
+    }
+    Ok(gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("indirect radiance"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    }))
 }
 
 impl Renderer {
@@ -344,16 +447,19 @@ impl Renderer {
             layouts.fullscreen_pipeline(device, "ambient", &ambient_module, &[], SharedLayouts::HDR_FORMAT, false);
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
                 },
-                count: None,
-            }],
+                crate::technique::storage_entry(1),
+            ],
         });
         let tonemap_module = shaders::create_module(device, "tonemap", shaders::TONEMAP);
         let tonemap_pipeline = layouts.fullscreen_pipeline(
@@ -365,7 +471,8 @@ impl Renderer {
             false,
         );
         let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets);
-        let tonemap_bind_group = Self::tonemap_bind_group(device, &tonemap_layout, &targets);
+        let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
+        let tonemap_bind_group = Self::tonemap_bind_group(device, &tonemap_layout, &targets, &indirect_buffer);
         let timer = PassTimer::new(gpu)?;
         Ok(Renderer {
             gpu: gpu.clone(),
@@ -385,6 +492,14 @@ impl Renderer {
             timer,
             draw_ranges: Vec::new(),
             overlay: None,
+            indirect: None,
+            indirect_buffer,
+            vpls: VplFrame {
+                set: Default::default(),
+                buffer: crate::technique::GrowableBuffer::new(device, "vpls", 48 * 64),
+                key: None,
+            },
+            fixed_vpls: false,
         })
     }
 
@@ -407,11 +522,19 @@ impl Renderer {
         })
     }
 
-    fn tonemap_bind_group(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, t: &FrameTargets) -> wgpu::BindGroup {
+    fn tonemap_bind_group(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        t: &FrameTargets,
+        indirect: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tonemap"),
             layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&t.hdr) }],
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&t.hdr) },
+                wgpu::BindGroupEntry { binding: 1, resource: indirect.as_entire_binding() },
+            ],
         })
     }
 
@@ -432,13 +555,83 @@ impl Renderer {
     pub fn set_settings(&mut self, settings: RenderSettings) -> Result<(), GpuError> {
         settings.validate()?;
         if settings.width != self.settings.width || settings.height != self.settings.height {
+            // Checked first, so a refused size leaves the renderer as it was.
+            let indirect = create_indirect_buffer(&self.gpu, settings.width, settings.height, self.indirect.is_some())?;
+            self.indirect_buffer = indirect;
             self.targets = FrameTargets::new(&self.gpu, settings.width, settings.height);
             self.screen_bind_group =
                 Self::screen_bind_group(&self.gpu.device, &self.layouts, &self.frame_uniform, &self.targets);
-            self.tonemap_bind_group = Self::tonemap_bind_group(&self.gpu.device, &self.tonemap_layout, &self.targets);
+            self.rebind_tonemap();
         }
         self.settings = settings;
         Ok(())
+    }
+
+    fn rebind_tonemap(&mut self) {
+        self.tonemap_bind_group =
+            Self::tonemap_bind_group(&self.gpu.device, &self.tonemap_layout, &self.targets, &self.indirect_buffer);
+    }
+
+    /// Choose the indirect technique (None: direct light only, the default). Its steps run after the direct
+    /// technique's in every frame.
+    pub fn set_indirect(&mut self, technique: Option<Box<dyn Technique>>) -> Result<(), GpuError> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        self.indirect_buffer = create_indirect_buffer(&self.gpu, w, h, technique.is_some())?;
+        self.indirect = technique;
+        self.rebind_tonemap();
+        Ok(())
+    }
+
+    /// The indirect technique, to read or change its parameters.
+    pub fn indirect(&self) -> Option<&dyn Technique> {
+        self.indirect.as_deref()
+    }
+    pub fn indirect_mut(&mut self) -> Option<&mut (dyn Technique + 'static)> {
+        self.indirect.as_deref_mut()
+    }
+
+    /// Create an indirect technique by key on this renderer's device.
+    pub fn create_indirect_technique(&self, key: &str) -> Option<Box<dyn Technique>> {
+        crate::technique::create_indirect(key, &self.gpu, &self.layouts)
+    }
+
+    /// Use these VPLs instead of generating them from the lights (None: generate again). For tests with
+    /// hand-placed VPLs, and for VPL sets made elsewhere.
+    pub fn set_fixed_vpls(&mut self, set: Option<VplSet>) {
+        self.fixed_vpls = set.is_some();
+        if let Some(set) = set {
+            let gpu: Vec<GpuVpl> = set.vpls.iter().map(GpuVpl::new).collect();
+            self.vpls.buffer.write(&self.gpu, &gpu);
+            self.vpls.set = std::sync::Arc::new(set);
+        }
+        self.vpls.key = None;
+    }
+
+    /// Regenerate the frame's VPLs when the lights, the VPL settings or the scene changed.
+    fn update_vpls(&mut self, technique: &dyn Technique, lights: &[PointLight]) {
+        if self.fixed_vpls {
+            return;
+        }
+        if !technique.uses_vpls() {
+            self.vpls.set = Default::default();
+            self.vpls.key = None;
+            return;
+        }
+        let key = (lights.to_vec(), self.settings.vpl, std::sync::Arc::as_ptr(&self.scene.geometry) as usize);
+        if self.vpls.key.as_ref() == Some(&key) {
+            return;
+        }
+        let (bvh, _) = self.scene.bvh(&self.gpu);
+        let set = crate::vpl::generate(&bvh, lights, &self.settings.vpl);
+        let gpu: Vec<GpuVpl> = set.vpls.iter().map(GpuVpl::new).collect();
+        self.vpls.buffer.write(&self.gpu, &gpu);
+        self.vpls.set = std::sync::Arc::new(set);
+        self.vpls.key = Some(key);
+    }
+
+    /// The VPLs of the last frame (empty without an indirect technique).
+    pub fn vpls(&self) -> &VplSet {
+        &self.vpls.set
     }
 
     /// Replace the scene's geometry and materials.
@@ -473,6 +666,10 @@ impl Renderer {
             frustum: Frustum::from_clip_from_world(&camera.clip_from_world(aspect)),
             lights,
             timer: &self.timer,
+            size: (self.settings.width, self.settings.height),
+            indirect_buffer: &self.indirect_buffer,
+            vpls: &self.vpls,
+            vpl_settings: &self.settings.vpl,
             max_lights_per_step: match self.settings.max_lights_per_step {
                 0 => usize::MAX,
                 n => n,
@@ -509,6 +706,12 @@ impl Renderer {
                     ToneMap::Linear => 2.0,
                 },
                 0.0,
+                0.0,
+            ],
+            indirect: [
+                s.component as u32 as f32,
+                s.indirect_gain,
+                if self.indirect.is_some() { 1.0 } else { 0.0 },
                 0.0,
             ],
         };
@@ -607,19 +810,35 @@ impl Renderer {
                 },
             );
         }
+        let mut vpl_ms = 0.0;
+        if self.indirect.is_some() {
+            encoder.clear_buffer(&self.indirect_buffer, 0, None);
+        }
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
 
-        let steps_total = {
+        let direct_steps = {
             let ctx = self.context(camera, lights);
             technique.prepare(&ctx)?
         };
+        let mut indirect_steps = 0;
+        if let Some(mut indirect) = self.indirect.take() {
+            let t0 = Instant::now();
+            self.update_vpls(indirect.as_ref(), lights);
+            vpl_ms = t0.elapsed().as_secs_f64() * 1000.0;
+            let ctx = self.context(camera, lights);
+            let prepared = indirect.prepare(&ctx);
+            self.indirect = Some(indirect);
+            indirect_steps = prepared?;
+        }
         Ok(FrameJob {
-            steps_total,
+            steps_total: direct_steps + indirect_steps,
             steps_done: 0,
             started,
             camera: *camera,
             lights: lights.to_vec(),
             gbuffer_triangles,
+            direct_steps,
+            vpl_ms,
         })
     }
 
@@ -633,11 +852,24 @@ impl Renderer {
         let mut n = 0;
         while !job.is_done() && n < max_steps {
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            {
+            let label = if job.steps_done < job.direct_steps {
                 let ctx = self.context(&job.camera, &job.lights);
                 technique.encode_step(&ctx, job.steps_done, &mut encoder)?;
-            }
-            self.timer.submit(&self.gpu, encoder, technique.step_label())?;
+                technique.step_label()
+            } else {
+                let mut indirect = self.indirect.take().ok_or_else(|| {
+                    GpuError::InvalidSettings("the indirect technique was removed during a frame".into())
+                })?;
+                let result = {
+                    let ctx = self.context(&job.camera, &job.lights);
+                    indirect.encode_step(&ctx, job.steps_done - job.direct_steps, &mut encoder)
+                };
+                let label = indirect.step_label();
+                self.indirect = Some(indirect);
+                result?;
+                label
+            };
+            self.timer.submit(&self.gpu, encoder, label)?;
             job.steps_done += 1;
             n += 1;
         }
@@ -665,6 +897,18 @@ impl Renderer {
                 gbuffer_triangles: job.gbuffer_triangles,
                 technique: technique.counts(),
             },
+            indirect: self.indirect.as_ref().map(|t| {
+                let mut cpu_stages = vec![PassTime { name: "vpl generation".into(), ms: job.vpl_ms, count: 1 }];
+                cpu_stages.extend(t.cpu_times());
+                IndirectReport {
+                    technique: t.key().to_string(),
+                    vpls: if t.uses_vpls() { self.vpls.set.vpls.len() } else { 0 },
+                    vpl_source: self.settings.vpl.source,
+                    vpl_misses: self.vpls.set.misses,
+                    counts: t.counts(),
+                    cpu_stages,
+                }
+            }),
         })
     }
 
@@ -798,16 +1042,43 @@ impl Renderer {
             .collect())
     }
 
-    /// The HDR radiance, linear RGBA, row-major.
+    /// The HDR radiance of the chosen [`RenderSettings::component`], linear RGBA, row-major (no gain).
     pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, GpuError> {
+        self.read_component(self.settings.component)
+    }
+
+    /// The HDR radiance of one component, linear RGBA, row-major (no gain).
+    pub fn read_component(&self, component: Component) -> Result<Vec<[f32; 4]>, GpuError> {
         let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 8)?;
-        Ok(bytes
-            .chunks_exact(8)
-            .map(|p| {
-                let h = |i: usize| readback::f16_to_f32(u16::from_le_bytes([p[i], p[i + 1]]));
-                [h(0), h(2), h(4), h(6)]
-            })
-            .collect())
+        let direct = || -> Result<Vec<[f32; 4]>, GpuError> {
+            let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 8)?;
+            Ok(bytes
+                .chunks_exact(8)
+                .map(|p| {
+                    let h = |i: usize| readback::f16_to_f32(u16::from_le_bytes([p[i], p[i + 1]]));
+                    [h(0), h(2), h(4), h(6)]
+                })
+                .collect())
+        };
+        let indirect = || -> Result<Vec<[f32; 4]>, GpuError> {
+            let bytes = readback::read_buffer(&self.gpu, &self.indirect_buffer)?;
+            let values: &[f32] = bytemuck::cast_slice(&bytes);
+            Ok(values.chunks_exact(4).map(|v| [v[0], v[1], v[2], 1.0]).collect())
+        };
+        let pixels = (t.width * t.height) as usize;
+        match (component, self.indirect.is_some()) {
+            (Component::Direct, _) | (Component::Total, false) => direct(),
+            (Component::Indirect, false) => Ok(vec![[0.0, 0.0, 0.0, 1.0]; pixels]),
+            (Component::Indirect, true) => indirect(),
+            (Component::Total, true) => {
+                let mut d = direct()?;
+                for (p, i) in d.iter_mut().zip(indirect()?) {
+                    for c in 0..3 {
+                        p[c] += i[c];
+                    }
+                }
+                Ok(d)
+            }
+        }
     }
 }

@@ -12,9 +12,11 @@
 
 pub mod insm;
 pub mod lightcluster;
+pub mod pathtraced;
 pub mod raytraced;
 pub mod reference;
 pub mod unshadowed;
+pub mod vpl_gather;
 
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -44,6 +46,14 @@ pub struct FrameContext<'a> {
     /// Upper bound on the lights (or clusters, cube maps) one step may handle, so an interactive caller can keep
     /// each step short; `usize::MAX` when unlimited. Never changes the image, only how the work is split.
     pub max_lights_per_step: usize,
+    /// Render target size in pixels.
+    pub size: (u32, u32),
+    /// Indirect radiance per pixel (`array<vec4<f32>>`, row-major), cleared at the start of every frame;
+    /// indirect techniques add into it. A placeholder without an indirect technique.
+    pub indirect_buffer: &'a wgpu::Buffer,
+    /// The frame's VPLs (empty unless the indirect technique [`Technique::uses_vpls`]).
+    pub vpls: &'a crate::renderer::VplFrame,
+    pub vpl_settings: &'a crate::vpl::VplSettings,
 }
 
 /// What a technique did in a frame, for the frame report.
@@ -69,6 +79,10 @@ pub struct TechniqueCounts {
     /// True when the technique handed the frame to the reference path (LightCluster's worst case).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub fell_back_to_reference: bool,
+    /// Further named figures a technique reports (`vpls`, `samples`, ...): reports, CSV columns and panels list
+    /// them without knowing the technique.
+    #[serde(flatten)]
+    pub figures: std::collections::BTreeMap<String, f64>,
 }
 
 impl TechniqueCounts {
@@ -354,6 +368,10 @@ pub trait Technique {
     /// placed ones (so the app can start editing from them).
     fn cameras_in_use(&self, _key: &str) -> Vec<CameraPose> {
         Vec::new()
+    }
+    /// True for indirect techniques that gather the frame's VPLs (the renderer generates them only then).
+    fn uses_vpls(&self) -> bool {
+        false
     }
 }
 
@@ -642,6 +660,41 @@ pub const REGISTRY: &[TechniqueEntry] = &[
         create: |gpu, layouts| Box::new(raytraced::Raytraced::new(gpu, layouts)),
     },
 ];
+
+/// Every indirect technique: each adds the frame's indirect light into [`FrameContext::indirect_buffer`].
+/// The app's second selector and the CLI's `--indirect` read this list.
+pub const INDIRECT_REGISTRY: &[TechniqueEntry] = &[
+    TechniqueEntry {
+        key: "vpl-shadowmaps",
+        label: "VPLs, a shadow map each (instant radiosity)",
+        create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::ShadowMaps)),
+    },
+    TechniqueEntry {
+        key: "vpl-raytraced",
+        label: "VPLs, ray-traced visibility (ground truth)",
+        create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::RayTraced)),
+    },
+    TechniqueEntry {
+        key: "vpl-unshadowed",
+        label: "VPLs, no visibility",
+        create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::None)),
+    },
+    TechniqueEntry {
+        key: "pathtraced",
+        label: "Path traced one bounce (truth)",
+        create: |gpu, layouts| Box::new(pathtraced::PathTraced::new(gpu, layouts)),
+    },
+];
+
+/// Create an indirect technique by key.
+pub fn create_indirect(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {
+    INDIRECT_REGISTRY.iter().find(|e| e.key == key).map(|e| (e.create)(gpu, layouts))
+}
+
+/// The keys of all indirect techniques, for error messages.
+pub fn indirect_keys() -> String {
+    INDIRECT_REGISTRY.iter().map(|e| e.key).collect::<Vec<_>>().join(", ")
+}
 
 /// Create a technique by key.
 pub fn create(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {

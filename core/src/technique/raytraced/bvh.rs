@@ -459,6 +459,107 @@ pub fn occluded_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
     }
 }
 
+/// The nearest hit of a ray: distance, triangle (index into [`Bvh::triangles`]) and barycentrics of `v1`, `v2`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub triangle: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Möller–Trumbore with the hit's distance and barycentrics (`bvh_ray_triangle_hit`): `Some((t, u, v))` when
+/// the ray hits at `0 < t < t_max`.
+pub fn ray_triangle_hit(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) -> Option<(f32, f32, f32)> {
+    let (o, d) = (origin.to_array(), dir.to_array());
+    let e1 = v3(&tri.e1);
+    let e2 = v3(&tri.e2);
+    let p = cross(d, e2);
+    let det = dot(e1, p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let s = sub(o, v3(&tri.v0));
+    let u = dot(s, p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = cross(s, e1);
+    let v = dot(d, q) * inv_det;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = dot(e2, q) * inv_det;
+    (t > 0.0 && t < t_max).then_some((t, u, v))
+}
+
+/// Closest-hit traversal, the CPU twin of `bvh_closest_hit` in `raytrace_bvh.wgsl`: the nearest triangle on
+/// `origin + t * dir` for `0 < t < t_max`. Children are visited near first and a subtree is skipped when its
+/// box starts beyond the nearest hit so far.
+pub fn closest_hit_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+    let inv = safe_inverse(dir);
+    let nodes = &bvh.nodes;
+    if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
+        return None;
+    }
+    let mut best: Option<Hit> = None;
+    let mut t_best = t_max;
+    let mut stack = [0u32; MAX_DEPTH];
+    let mut sp = 0usize;
+    let mut node = 0usize;
+    loop {
+        let n = &nodes[node];
+        if n.count > 0 {
+            let first = n.first as usize;
+            for (k, tri) in bvh.triangles[first..first + n.count as usize].iter().enumerate() {
+                if let Some((t, u, v)) = ray_triangle_hit(origin, dir, tri, t_best) {
+                    t_best = t;
+                    best = Some(Hit { t, triangle: (first + k) as u32, u, v });
+                }
+            }
+        } else {
+            let a = n.first as usize;
+            let ta = ray_box(origin, inv, nodes[a].min, nodes[a].max, t_best);
+            let tb = ray_box(origin, inv, nodes[a + 1].min, nodes[a + 1].max, t_best);
+            let (near, far, t_near, t_far) = if ta <= tb { (a, a + 1, ta, tb) } else { (a + 1, a, tb, ta) };
+            if t_near != f32::INFINITY {
+                node = near;
+                if t_far != f32::INFINITY && sp < MAX_DEPTH {
+                    stack[sp] = far as u32;
+                    sp += 1;
+                }
+                continue;
+            }
+        }
+        // Pop the next subtree that can still hold a nearer hit.
+        loop {
+            if sp == 0 {
+                return best;
+            }
+            sp -= 1;
+            let candidate = stack[sp] as usize;
+            if ray_box(origin, inv, nodes[candidate].min, nodes[candidate].max, t_best) != f32::INFINITY {
+                node = candidate;
+                break;
+            }
+        }
+    }
+}
+
+/// Every triangle tested: the oracle of [`closest_hit_cpu`].
+pub fn closest_hit_brute_force(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    let mut t_best = t_max;
+    for (i, tri) in bvh.triangles.iter().enumerate() {
+        if let Some((t, u, v)) = ray_triangle_hit(origin, dir, tri, t_best) {
+            t_best = t;
+            best = Some(Hit { t, triangle: i as u32, u, v });
+        }
+    }
+    best
+}
+
 /// Every triangle tested: the oracle of [`occluded_cpu`].
 pub fn occluded_brute_force(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
     bvh.triangles.iter().any(|t| ray_triangle(origin, dir, t, t_max))
@@ -478,6 +579,26 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn closest_hit_equals_brute_force() {
+        let mut tris = grid(6);
+        // A second, raised layer so rays meet several triangles.
+        let raised: Vec<[Vec3; 3]> = tris.iter().map(|t| t.map(|p| p + Vec3::new(0.1, 0.5, 0.0))).collect();
+        tris.extend(raised);
+        let bvh = Bvh::build(&tris);
+        let mut hits = 0;
+        for i in 0..400u32 {
+            let f = |k: u32| ((i.wrapping_mul(2654435761).wrapping_add(k * 40503)) % 1000) as f32 / 1000.0;
+            let origin = Vec3::new(f(1) * 6.0, 3.0, f(2) * 6.0 - 0.5);
+            let dir = Vec3::new(f(3) - 0.5, -1.0, f(4) - 0.5).normalize();
+            let a = closest_hit_cpu(&bvh, origin, dir, 100.0);
+            let b = closest_hit_brute_force(&bvh, origin, dir, 100.0);
+            assert_eq!(a.map(|h| h.t), b.map(|h| h.t), "ray {i}");
+            hits += a.is_some() as u32;
+        }
+        assert!(hits > 100, "only {hits} rays hit: the test does not test");
     }
 
     #[test]

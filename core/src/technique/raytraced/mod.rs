@@ -4,8 +4,8 @@
 //! at the light and facing the receiver (what PCSS approximates), visibility being the unoccluded fraction.
 //!
 //! Per frame:
-//! 1. Build the BVH on the CPU the first time a scene is seen ([`bvh::Bvh::from_geometry`], binned SAH), upload
-//!    it; it is cached by the scene's geometry (`GpuScene::geometry`, compared by pointer).
+//! 1. The scene's BVH from the renderer's service ([`GpuScene::bvh`](crate::renderer::gpu_scene::GpuScene::bvh)),
+//!    built on the CPU (binned SAH) and uploaded the first time any tracer asks for it.
 //! 2. Cull each light's range sphere against the view frustum, as the reference does.
 //! 3. Per batch of `lights_per_step` lights (one step): a full-screen pass traces every pixel's shadow rays in
 //!    the fragment shader (`raytrace_shadow.wgsl`, stack-based any-hit traversal) and adds the lights' shading
@@ -19,11 +19,14 @@
 
 pub mod bvh;
 
-use std::sync::{Arc, Weak};
+use std::sync::Arc;
 
 use wgpu::util::DeviceExt;
 
-pub use bvh::{occluded_brute_force, occluded_cpu, Bvh, BvhNode, BvhStats, BvhTriangle, Ray};
+pub use bvh::{
+    closest_hit_brute_force, closest_hit_cpu, occluded_brute_force, occluded_cpu, Bvh, BvhNode, BvhStats, BvhTriangle,
+    Hit, Ray,
+};
 
 use super::{
     accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, Overlay, OverlayLayer,
@@ -32,8 +35,8 @@ use super::{
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::gpu_data::GpuLight;
+use crate::renderer::scene_bvh::SceneBvh;
 use crate::renderer::SharedLayouts;
-use crate::scene::chunks::ChunkedGeometry;
 use crate::scene::PointLight;
 use crate::shaders;
 use crate::timing::PassTime;
@@ -76,7 +79,7 @@ impl Default for RaytracedParams {
     }
 }
 
-/// A BVH on the GPU.
+/// A BVH on the GPU (for [`gpu_occluded`], which traces a BVH it is given rather than a scene's).
 struct GpuBvh {
     nodes: wgpu::Buffer,
     triangles: wgpu::Buffer,
@@ -99,13 +102,6 @@ impl GpuBvh {
     }
 }
 
-/// The BVH of the scene last seen, keyed by its geometry.
-struct CachedBvh {
-    geometry: Weak<ChunkedGeometry>,
-    gpu: GpuBvh,
-    stats: BvhStats,
-}
-
 pub struct Raytraced {
     pub params: RaytracedParams,
     pipeline: wgpu::RenderPipeline,
@@ -113,7 +109,8 @@ pub struct Raytraced {
     batch_uniform: wgpu::Buffer,
     lights_buffer: GrowableBuffer,
     bind_group: Option<wgpu::BindGroup>,
-    bvh: Option<CachedBvh>,
+    /// The scene BVH this frame's bind group uses (the renderer's service, shared with other tracers).
+    bvh: Option<Arc<SceneBvh>>,
     /// Indices of the visible lights of this frame, in batch order.
     visible: Vec<usize>,
     gpu_lights: Vec<GpuLight>,
@@ -167,28 +164,7 @@ impl Raytraced {
 
     /// Facts about the BVH in use (None before the first frame).
     pub fn bvh_stats(&self) -> Option<&BvhStats> {
-        self.bvh.as_ref().map(|b| &b.stats)
-    }
-
-    /// Build (or reuse) the BVH of `geometry`; returns true when it changed.
-    fn ensure_bvh(&mut self, gpu: &GpuContext, geometry: &Arc<ChunkedGeometry>) -> bool {
-        if let Some(cached) = &self.bvh {
-            if std::ptr::eq(cached.geometry.as_ptr(), Arc::as_ptr(geometry)) {
-                return false;
-            }
-        }
-        let bvh = Bvh::from_geometry(geometry);
-        self.build_ms = Some(bvh.stats.build_ms);
-        log::info!(
-            "ray tracer: BVH of {} triangles, {} nodes, depth {}, built in {:.1} ms",
-            bvh.stats.triangles,
-            bvh.stats.nodes,
-            bvh.stats.max_depth,
-            bvh.stats.build_ms
-        );
-        self.bvh =
-            Some(CachedBvh { geometry: Arc::downgrade(geometry), gpu: GpuBvh::upload(gpu, &bvh), stats: bvh.stats });
-        true
+        self.bvh.as_ref().map(|b| &b.cpu.stats)
     }
 }
 
@@ -287,10 +263,13 @@ impl Technique for Raytraced {
 
         // The BVH, built the first time this geometry is seen.
         let mut rebind = self.bind_group.is_none();
-        rebind |= self.ensure_bvh(ctx.gpu, &ctx.scene.geometry);
+        let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
+        self.build_ms = build_ms;
+        rebind |= self.bvh.as_ref().is_none_or(|b| !Arc::ptr_eq(b, &bvh));
+        self.bvh = Some(bvh);
         rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
         if rebind {
-            let bvh = &self.bvh.as_ref().expect("ensure_bvh built it").gpu;
+            let bvh = self.bvh.as_ref().expect("set above");
             self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("raytraced shade"),
                 layout: &self.group_layout,

@@ -1,0 +1,210 @@
+//! The VPL gather, a renderer service for every VPL technique: a compute pass in which every pixel sums the
+//! radiance of a batch of the frame's VPLs times their visibility and adds it into the indirect buffer
+//! (`vpl_gather.wgsl`). A technique brings its visibility as WGSL (`fn vpl_visibility(s, v, k) -> f32`,
+//! composed before `vpl_gather.wgsl`) and its bind group 1 (what the visibility reads: the BVH, a shadow-map
+//! atlas, nothing); group 0 is the screen group, group 2 the gather's own (VPLs, batch, output).
+//!
+//! Precision: each pixel's batch sum is an f32 register sum, added once per batch into an f32 buffer written by
+//! that pixel's invocation only, so no atomics are needed and batching changes nothing beyond f32 rounding
+//! (the HDR target's f16 blending would lose thousands of tiny terms).
+//!
+//! Also here: the VPL overlays every VPL technique shows ([`vpl_overlays`]).
+
+use glam::Vec3;
+
+use crate::gpu::GpuContext;
+use crate::renderer::SharedLayouts;
+use crate::technique::{FrameContext, Overlay, OverlayLayer};
+use crate::vpl::VplSet;
+
+/// Mirrors `GatherBatch` in `vpl_common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GatherBatchUniform {
+    pub first_vpl: u32,
+    pub vpl_count: u32,
+    pub clamp_sq: f32,
+    pub bias: f32,
+    pub first_tile: u32,
+    pub tiles_per_row: u32,
+    pub resolution: u32,
+    pub normal_offset: f32,
+    pub depth_near: f32,
+    pub depth_far: f32,
+    pub origin_offset: f32,
+    pub _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<GatherBatchUniform>() == 48);
+
+/// A compute pipeline gathering VPLs with one visibility function.
+pub struct VplGatherPass {
+    pipeline: wgpu::ComputePipeline,
+    gather_layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
+}
+
+/// A storage-buffer layout entry for compute shaders, read-write.
+pub fn storage_rw_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: false },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A compute pipeline over `[screen, extra...]` groups with entry point `entry`.
+pub fn compute_pipeline(
+    gpu: &GpuContext,
+    layouts: &SharedLayouts,
+    label: &str,
+    source: &str,
+    entry: &str,
+    extra_groups: &[&wgpu::BindGroupLayout],
+) -> wgpu::ComputePipeline {
+    let device = &gpu.device;
+    let module = crate::shaders::create_module(device, label, source);
+    let mut groups: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&layouts.screen)];
+    groups.extend(extra_groups.iter().map(|g| Some(*g)));
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// Workgroups of 8x8 covering the image.
+pub fn pixel_workgroups(size: (u32, u32)) -> (u32, u32) {
+    (size.0.div_ceil(8), size.1.div_ceil(8))
+}
+
+impl VplGatherPass {
+    /// `source`: common.wgsl, the visibility's files, vpl_common.wgsl, vpl_gather.wgsl (see `shaders.rs`).
+    pub fn new(
+        gpu: &GpuContext,
+        layouts: &SharedLayouts,
+        label: &str,
+        source: &str,
+        visibility_layout: &wgpu::BindGroupLayout,
+    ) -> VplGatherPass {
+        let device = &gpu.device;
+        let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl gather"),
+            entries: &[crate::technique::storage_entry(0), crate::technique::uniform_entry(1), storage_rw_entry(2)],
+        });
+        let pipeline =
+            compute_pipeline(gpu, layouts, label, source, "gather_main", &[visibility_layout, &gather_layout]);
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl gather batch"),
+            size: std::mem::size_of::<GatherBatchUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        VplGatherPass { pipeline, gather_layout, uniform }
+    }
+
+    /// Gather VPLs `batch.first_vpl .. + batch.vpl_count` of the frame into the indirect buffer, in a compute
+    /// pass named `label`. One call per step: the batch uniform is written with `queue.write_buffer`.
+    pub fn encode(
+        &self,
+        ctx: &FrameContext,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        visibility_group: &wgpu::BindGroup,
+        mut batch: GatherBatchUniform,
+    ) {
+        batch.clamp_sq = ctx.vpl_settings.clamp_world * ctx.vpl_settings.clamp_world;
+        ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&batch));
+        let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl gather"),
+            layout: &self.gather_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: ctx.vpls.buffer.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: ctx.indirect_buffer.as_entire_binding() },
+            ],
+        });
+        let (x, y) = pixel_workgroups(ctx.size);
+        ctx.timer.compute_pass(encoder, label, |pass| {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+            pass.set_bind_group(1, visibility_group, &[]);
+            pass.set_bind_group(2, &group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        });
+    }
+}
+
+/// Above this many VPLs the disc and normal layers draw every n-th VPL only (and say so in their names).
+const OVERLAY_MAX_VPLS: usize = 4096;
+
+/// The overlays of a VPL set: oriented discs (squares in the VPL's tangent plane) coloured by flux or by light,
+/// their normals, and the particle paths of the first VPLs. `scene_size` scales the glyphs.
+pub fn vpl_overlays(set: &VplSet, scene_size: f32) -> Vec<OverlayLayer> {
+    let vpls = &set.vpls;
+    let stride = vpls.len().div_ceil(OVERLAY_MAX_VPLS).max(1);
+    let max_flux = vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max).max(1e-20);
+    let half = scene_size * 0.004;
+    let disc = |v: &crate::vpl::Vpl, color: [f32; 4]| {
+        let (t, b) = v.normal.any_orthonormal_pair();
+        Overlay::Rect { center: v.position, half_u: t * half, half_v: b * half, color }
+    };
+    let flux_color = |f: Vec3| {
+        // Hue from the flux's colour, brightness from its magnitude (square root, so dim VPLs stay visible).
+        let c = f / f.max_element().max(1e-20);
+        let k = 0.35 + 0.65 * (f.max_element() / max_flux).sqrt();
+        [c.x * k, c.y * k, c.z * k, 1.0]
+    };
+    let thin = if stride > 1 { " (every n-th)" } else { "" };
+    let name = |base: &'static str, thinned: &'static str| if thin.is_empty() { base } else { thinned };
+    vec![
+        OverlayLayer {
+            name: name("vpls (flux)", "vpls (flux, every n-th)"),
+            visible_by_default: true,
+            primitives: vpls.iter().step_by(stride).map(|v| disc(v, flux_color(v.flux))).collect(),
+        },
+        OverlayLayer {
+            name: name("vpls (by light)", "vpls (by light, every n-th)"),
+            visible_by_default: false,
+            primitives: vpls
+                .iter()
+                .step_by(stride)
+                .map(|v| disc(v, crate::technique::index_color(v.light as usize)))
+                .collect(),
+        },
+        OverlayLayer {
+            name: name("vpl normals", "vpl normals (every n-th)"),
+            visible_by_default: false,
+            primitives: vpls
+                .iter()
+                .step_by(stride)
+                .map(|v| Overlay::Line {
+                    from: v.position,
+                    to: v.position + v.normal * (half * 6.0),
+                    color: [0.4, 0.9, 1.0, 1.0],
+                })
+                .collect(),
+        },
+        OverlayLayer {
+            name: "vpl paths (first 48)",
+            visible_by_default: false,
+            primitives: vpls
+                .iter()
+                .take(48)
+                .map(|v| Overlay::Line { from: v.from, to: v.position, color: [1.0, 0.85, 0.3, 0.8] })
+                .collect(),
+        },
+    ]
+}

@@ -1,0 +1,279 @@
+//! One-bounce path tracing: the truth for one-bounce indirect light itself, so a user sees the VPLs'
+//! discretisation and clamping error apart from their visibility error. Needs no VPLs.
+//!
+//! Per pixel and sample (`pathtrace.wgsl`):
+//! 1. a cosine-distributed direction around the receiver's normal (pdf `cos/pi`),
+//! 2. the closest hit `y` through the scene BVH (the renderer's service),
+//! 3. direct light at `y` from one light picked in proportion to its power, with a shadow ray:
+//!    `L(y -> x) = rho(y)/pi * I * attenuation(d) * cos(theta_y) / p_light`,
+//! 4. the estimate `rho(x) * L(y -> x)`, averaged over `samples`.
+//!
+//! Progressive: each step adds `samples_per_step` samples (weighted by `1/samples`), so the app shows the
+//! image converging; seeded (a PCG hash of pixel, sample and `seed`), so a frame is reproducible.
+//! Unlike the VPL gathers there is no `d_clamp`: the difference to `vpl-raytraced` is the VPLs' discretisation
+//! and clamping bias. Emissive surfaces do not light others here (nor in the VPL sources).
+
+use std::sync::Arc;
+
+use wgpu::util::DeviceExt;
+
+use super::{
+    check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, OverlayLayer, Param, ParamError,
+    ParamKind, ParamValue, Technique, TechniqueCounts,
+};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::gpu_data::GpuLight;
+use crate::renderer::scene_bvh::SceneBvh;
+use crate::renderer::vpl_gather::{compute_pipeline, pixel_workgroups, storage_rw_entry};
+use crate::renderer::SharedLayouts;
+use crate::scene::PointLight;
+use crate::shaders;
+use crate::timing::PassTime;
+
+/// Mirrors `PtStep` in `pathtrace.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct PtStepUniform {
+    first_sample: u32,
+    sample_count: u32,
+    total_samples: u32,
+    light_count: u32,
+    bias: f32,
+    seed: u32,
+    _pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<PtStepUniform>() == 32);
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathTracedParams {
+    /// Samples per pixel.
+    pub samples: u32,
+    pub samples_per_step: u32,
+    /// Ray origin offset along the normal, world units per metre of camera distance.
+    pub bias: f32,
+    pub seed: u32,
+}
+
+impl Default for PathTracedParams {
+    fn default() -> Self {
+        PathTracedParams { samples: 64, samples_per_step: 8, bias: 0.001, seed: 0 }
+    }
+}
+
+pub struct PathTraced {
+    pub params: PathTracedParams,
+    pipeline: wgpu::ComputePipeline,
+    group_layout: wgpu::BindGroupLayout,
+    output_layout: wgpu::BindGroupLayout,
+    step_uniform: wgpu::Buffer,
+    lights: GrowableBuffer,
+    cdf: GrowableBuffer,
+    bvh: Option<Arc<SceneBvh>>,
+    light_count: u32,
+    steps: usize,
+    counts: TechniqueCounts,
+    build_ms: Option<f64>,
+}
+
+impl PathTraced {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> PathTraced {
+        let device = &gpu.device;
+        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("pathtrace"),
+            entries: &[
+                storage_entry(0),
+                storage_entry(1),
+                storage_entry(2),
+                storage_entry(3),
+                storage_entry(4),
+                uniform_entry(5),
+            ],
+        });
+        let output_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("pathtrace output"),
+            entries: &[storage_rw_entry(0)],
+        });
+        let pipeline = compute_pipeline(
+            gpu,
+            layouts,
+            "pathtrace",
+            shaders::PATHTRACE,
+            "pathtrace_main",
+            &[&group_layout, &output_layout],
+        );
+        let step_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("pathtrace step"),
+            contents: bytemuck::bytes_of(&<PtStepUniform as bytemuck::Zeroable>::zeroed()),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        PathTraced {
+            params: PathTracedParams::default(),
+            pipeline,
+            group_layout,
+            output_layout,
+            step_uniform,
+            lights: GrowableBuffer::new(device, "pathtrace lights", 32 * 16),
+            cdf: GrowableBuffer::new(device, "pathtrace light cdf", 4 * 16),
+            bvh: None,
+            light_count: 0,
+            steps: 0,
+            counts: TechniqueCounts::default(),
+            build_ms: None,
+        }
+    }
+}
+
+impl Technique for PathTraced {
+    fn key(&self) -> &'static str {
+        "pathtraced"
+    }
+
+    fn label(&self) -> &'static str {
+        "Path traced (one bounce)"
+    }
+
+    fn params(&self) -> Vec<Param> {
+        let p = &self.params;
+        vec![
+            Param {
+                key: "samples",
+                label: "Samples",
+                help: "Bounce paths per pixel",
+                kind: ParamKind::Int { min: 1, max: 65_536 },
+                value: ParamValue::Int(p.samples as i64),
+            },
+            Param {
+                key: "samples_per_step",
+                label: "Samples per step",
+                help: "Paths per pixel in one pass; fewer means shorter steps (the image does not change)",
+                kind: ParamKind::Int { min: 1, max: 1024 },
+                value: ParamValue::Int(p.samples_per_step as i64),
+            },
+            Param {
+                key: "bias",
+                label: "Ray offset",
+                help: "Ray origin offset along the normal, world units per metre of camera distance",
+                kind: ParamKind::Float { min: 0.0, max: 0.1 },
+                value: ParamValue::Float(p.bias),
+            },
+            Param {
+                key: "seed",
+                label: "Seed",
+                help: "Seed of the random paths",
+                kind: ParamKind::Int { min: 0, max: u32::MAX as i64 },
+                value: ParamValue::Int(p.seed as i64),
+            },
+        ]
+    }
+
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        check_param(self.key(), &self.params(), key, value)?;
+        let p = &mut self.params;
+        match (key, value) {
+            ("samples", ParamValue::Int(v)) => p.samples = *v as u32,
+            ("samples_per_step", ParamValue::Int(v)) => p.samples_per_step = *v as u32,
+            ("bias", ParamValue::Float(v)) => p.bias = *v,
+            ("seed", ParamValue::Int(v)) => p.seed = *v as u32,
+            _ => unreachable!("check_param accepted an unknown key"),
+        }
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
+        self.build_ms = build_ms;
+        self.bvh = Some(bvh);
+        // Every light may light a bounce point, visible or not; pick them by power.
+        let lights: Vec<&PointLight> = ctx.lights.iter().filter(|l| l.is_valid()).collect();
+        let powers: Vec<f64> =
+            lights.iter().map(|l| (l.intensity * (l.color.x + l.color.y + l.color.z)) as f64).collect();
+        let total: f64 = powers.iter().sum();
+        let mut gpu_lights: Vec<GpuLight> = Vec::new();
+        let mut cdf: Vec<f32> = Vec::new();
+        if total > 0.0 && total.is_finite() {
+            let mut acc = 0.0f64;
+            for (l, p) in lights.iter().zip(&powers) {
+                acc += p / total;
+                gpu_lights.push(GpuLight::new(l));
+                cdf.push(acc as f32);
+            }
+            if let Some(last) = cdf.last_mut() {
+                *last = 1.0;
+            }
+        }
+        self.light_count = gpu_lights.len() as u32;
+        self.lights.write(ctx.gpu, &gpu_lights);
+        self.cdf.write(ctx.gpu, &cdf);
+        let p = &self.params;
+        self.steps = if self.light_count == 0 { 0 } else { p.samples.div_ceil(p.samples_per_step.max(1)) as usize };
+        self.counts = TechniqueCounts { lights_visible: gpu_lights.len(), batches: self.steps, ..Default::default() };
+        self.counts.figures.insert("samples".into(), p.samples as f64);
+        Ok(self.steps)
+    }
+
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        let p = &self.params;
+        let per_step = p.samples_per_step.max(1);
+        let first = step as u32 * per_step;
+        let uniform = PtStepUniform {
+            first_sample: first,
+            sample_count: per_step.min(p.samples - first),
+            total_samples: p.samples,
+            light_count: self.light_count,
+            bias: p.bias,
+            seed: p.seed,
+            _pad: [0; 2],
+        };
+        ctx.gpu.queue.write_buffer(&self.step_uniform, 0, bytemuck::bytes_of(&uniform));
+        let bvh = self.bvh.as_ref().expect("prepare set the BVH");
+        let device = &ctx.gpu.device;
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("pathtrace"),
+            layout: &self.group_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: bvh.surface_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: self.lights.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: self.cdf.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: self.step_uniform.as_entire_binding() },
+            ],
+        });
+        let output = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("pathtrace output"),
+            layout: &self.output_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: ctx.indirect_buffer.as_entire_binding() }],
+        });
+        let (x, y) = pixel_workgroups(ctx.size);
+        ctx.timer.compute_pass(encoder, "path tracing", |pass| {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+            pass.set_bind_group(1, &group, &[]);
+            pass.set_bind_group(2, &output, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        });
+        Ok(())
+    }
+
+    fn step_label(&self) -> &'static str {
+        "path tracing"
+    }
+
+    fn counts(&self) -> TechniqueCounts {
+        self.counts.clone()
+    }
+
+    fn cpu_times(&self) -> Vec<PassTime> {
+        self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 }).into_iter().collect()
+    }
+
+    fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
+        Vec::new()
+    }
+}

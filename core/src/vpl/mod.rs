@@ -1,0 +1,294 @@
+//! Virtual point lights (VPLs): the light the scene's lights reflect once (or `bounces` times), as a set of
+//! points that every indirect technique of a frame shares (instant radiosity, Keller 1997). A VPL has a
+//! position, a normal and the flux it reflects (RGB); the set is a pure function of the scene's BVH, the lights
+//! and [`VplSettings`], so two indirect techniques of one frame see the same VPLs and difference images show
+//! visibility error only.
+//!
+//! Two sources (`vpl_source`):
+//! 1. `rsm` (Dachsbacher & Stamminger 2005, Dong et al. 2009 section 6): a reflective shadow map per light, a
+//!    cube of `6 R^2` texels (`R` = [`RSM_RESOLUTION`]) holding the position, normal and reflected flux of the
+//!    surface each texel sees. `N` texels are drawn by a Halton sequence; a texel's flux is what the light sends
+//!    through its solid angle `Omega_texel = (2/R)^2 / (1 + s^2 + t^2)^(3/2)` times the albedo, divided by the
+//!    probability of drawing it. Deviation: only the drawn texels are computed, by casting each texel's central
+//!    ray through the scene BVH, instead of rasterising all `6 R^2` texels and reading back `N` of them. The
+//!    texel's content is the same (the first surface along its centre ray); nothing else of the map is ever read.
+//! 2. `traced` (Keller 1997, Colom et al. 2022 section 3.1): particles shot from the lights in Halton
+//!    directions (uniform on the sphere), a VPL at each closest hit carrying the particle's flux times the
+//!    surface's albedo; with `bounces > 1` the particle continues in a cosine-distributed direction with Russian
+//!    roulette (survival probability = mean albedo, so the flux stays unbiased).
+//!
+//! Both share the `N` samples among the lights in proportion to their power (the first Halton dimension picks
+//! a light through the cumulative power table), and both are quasi-random: a small move of a light moves its
+//! VPLs a little (Dong section 5.2 relies on it for temporal coherence).
+//!
+//! The flux a light sends through a solid angle `dw` towards a surface at distance `d` is
+//! `I * attenuation(d) * d^2 * dw` (the renderer's falloff `attenuation` replaces `1/d^2`, so direct and
+//! indirect light stay consistent). The indirect radiance VPL `i` sends to a receiver `x` (every gather uses
+//! it, `vpl_common.wgsl`): `rho(x)/pi * Phi_i/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2)`.
+
+pub mod halton;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::renderer::scene_bvh::SceneBvh;
+use crate::scene::{attenuation, PointLight};
+
+/// The side of each face of a light's reflective shadow map.
+pub const RSM_RESOLUTION: u32 = 256;
+/// Largest `--vpls` accepted: the gathers are O(pixels x VPLs), and a frame of more than this on a software
+/// rasterizer takes minutes.
+pub const MAX_VPLS: u32 = 65_536;
+/// Largest `--bounces`.
+pub const MAX_BOUNCES: u32 = 8;
+
+/// Where VPLs come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum VplSource {
+    /// Reflective shadow maps (one bounce).
+    #[default]
+    Rsm,
+    /// Particles traced from the lights through the BVH.
+    Traced,
+}
+
+impl VplSource {
+    pub const NAMES: &'static [&'static str] = &["rsm", "traced"];
+    pub fn parse(text: &str) -> Option<VplSource> {
+        match text.trim() {
+            "rsm" => Some(VplSource::Rsm),
+            "traced" => Some(VplSource::Traced),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            VplSource::Rsm => "rsm",
+            VplSource::Traced => "traced",
+        }
+    }
+}
+
+/// The VPL settings every indirect technique of a frame shares (render settings, not technique parameters).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VplSettings {
+    /// `N`: samples drawn (RSM texels or particles). 0 = no indirect light.
+    pub count: u32,
+    pub source: VplSource,
+    /// Bounces of a traced particle (the RSM source is always one bounce).
+    pub bounces: u32,
+    /// `d_clamp` in world units: `1/d^2` is clamped to `1/d_clamp^2`. Removes the singularity near a VPL
+    /// (bright splotches) at the price of bias: light between surfaces closer than `d_clamp` (corners, contact)
+    /// is underestimated.
+    pub clamp_world: f32,
+    /// Offset of the quasi-random sequence: another seed gives another, equally good, VPL set.
+    pub seed: u32,
+}
+
+impl Default for VplSettings {
+    fn default() -> Self {
+        VplSettings { count: 1024, source: VplSource::Rsm, bounces: 1, clamp_world: 0.1, seed: 0 }
+    }
+}
+
+impl VplSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.count > MAX_VPLS {
+            return Err(format!("{} VPLs requested; the limit is {MAX_VPLS}", self.count));
+        }
+        if self.bounces == 0 || self.bounces > MAX_BOUNCES {
+            return Err(format!("bounces {} must be between 1 and {MAX_BOUNCES}", self.bounces));
+        }
+        if !(self.clamp_world.is_finite() && self.clamp_world >= 0.0) {
+            return Err(format!("VPL clamp distance {} must be finite and >= 0", self.clamp_world));
+        }
+        Ok(())
+    }
+}
+
+/// One virtual point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vpl {
+    pub position: Vec3,
+    /// Unit normal of the surface it sits on, facing where the light came from.
+    pub normal: Vec3,
+    /// Reflected flux, linear RGB (already times the surface's albedo).
+    pub flux: Vec3,
+    /// The light it came from.
+    pub light: u32,
+    /// Where the light reaching it left from (the light, or the previous bounce): for the overlays.
+    pub from: Vec3,
+}
+
+/// Mirrors `Vpl` in `vpl_common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVpl {
+    pub position: [f32; 4],
+    pub normal: [f32; 4],
+    pub flux: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuVpl>() == 48);
+
+impl GpuVpl {
+    pub fn new(v: &Vpl) -> GpuVpl {
+        GpuVpl {
+            position: v.position.extend(1.0).to_array(),
+            normal: v.normal.extend(0.0).to_array(),
+            flux: v.flux.extend(0.0).to_array(),
+        }
+    }
+}
+
+/// The VPLs of a frame and what made them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct VplSet {
+    pub settings: Option<VplSettings>,
+    pub vpls: Vec<Vpl>,
+    /// Samples drawn (texels or particles); misses make no VPL.
+    pub samples: u32,
+    /// Samples that hit nothing (open scenes).
+    pub misses: u32,
+}
+
+impl VplSet {
+    pub fn total_flux(&self) -> Vec3 {
+        self.vpls.iter().map(|v| v.flux).sum()
+    }
+}
+
+/// A light's power as used to share samples: `4 pi I` times its mean colour.
+fn light_power(l: &PointLight) -> f32 {
+    if !l.is_valid() {
+        return 0.0;
+    }
+    4.0 * std::f32::consts::PI * l.intensity * (l.color.x + l.color.y + l.color.z) / 3.0
+}
+
+/// A unit direction uniform on the sphere from two numbers in [0, 1).
+fn sphere_direction(u: f32, v: f32) -> Vec3 {
+    let z = 1.0 - 2.0 * u;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * v;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// A cosine-distributed direction around `n`.
+fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
+    let r = u.sqrt();
+    let phi = 2.0 * std::f32::consts::PI * v;
+    let (t, b) = n.any_orthonormal_pair();
+    (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u).max(0.0).sqrt()).normalize_or(n)
+}
+
+/// The direction through the centre of RSM texel `(x, y)` of cube face `face` (the renderer's face order is
+/// irrelevant here: all six faces are drawn uniformly), and the texel's solid angle.
+fn rsm_texel(face: u32, x: u32, y: u32) -> (Vec3, f32) {
+    let r = RSM_RESOLUTION as f32;
+    let s = (x as f32 + 0.5) / r * 2.0 - 1.0;
+    let t = (y as f32 + 0.5) / r * 2.0 - 1.0;
+    let dir = match face {
+        0 => Vec3::new(1.0, -t, -s),
+        1 => Vec3::new(-1.0, -t, s),
+        2 => Vec3::new(s, 1.0, t),
+        3 => Vec3::new(s, -1.0, -t),
+        4 => Vec3::new(s, -t, 1.0),
+        _ => Vec3::new(-s, -t, -1.0),
+    };
+    let texel_area = (2.0 / r) * (2.0 / r);
+    let omega = texel_area / (1.0 + s * s + t * t).powf(1.5);
+    (dir.normalize(), omega)
+}
+
+/// Offset of a ray origin from a surface, relative to the scene's size.
+fn ray_epsilon(bvh: &SceneBvh) -> f32 {
+    let b = bvh.cpu.nodes.first().map(|n| Vec3::from_array(n.max) - Vec3::from_array(n.min)).unwrap_or(Vec3::ONE);
+    (b.length() * 1e-5).max(1e-6)
+}
+
+/// Generate the VPLs of `lights` in the scene of `bvh`. Deterministic: the same inputs give the same set.
+pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -> VplSet {
+    let mut set = VplSet { settings: Some(*settings), ..Default::default() };
+    let powers: Vec<f32> = lights.iter().map(light_power).collect();
+    let total: f32 = powers.iter().sum();
+    if settings.count == 0 || !(total > 0.0 && total.is_finite()) || bvh.cpu.triangles.is_empty() {
+        return set;
+    }
+    let mut cdf = Vec::with_capacity(powers.len());
+    let mut acc = 0.0f32;
+    for p in &powers {
+        acc += p / total;
+        cdf.push(acc);
+    }
+    let eps = ray_epsilon(bvh);
+    let n = settings.count;
+    let base = settings.seed as u64 * n as u64;
+    for i in 0..n {
+        let index = base + i as u64 + 1;
+        let u = [
+            halton::radical_inverse(0, index),
+            halton::radical_inverse(1, index),
+            halton::radical_inverse(2, index),
+            halton::radical_inverse(3, index),
+        ];
+        // Dimension 0 picks a light by power; its rank within the light's share spreads the light's own samples
+        // (rescaled to [0, 1)) so they stay stratified.
+        let li = cdf.partition_point(|&c| c <= u[0]).min(lights.len() - 1);
+        let light = &lights[li];
+        let p_light = powers[li] / total;
+        if p_light <= 0.0 {
+            continue;
+        }
+        let intensity = light.color * light.intensity;
+        // dir, and the radiant intensity divided by the pdf of picking that direction (per steradian).
+        let (dir, weight) = match settings.source {
+            VplSource::Traced => (sphere_direction(u[1], u[2]), 4.0 * std::f32::consts::PI),
+            VplSource::Rsm => {
+                let r = RSM_RESOLUTION;
+                let face = ((u[1] * 6.0) as u32).min(5);
+                let x = ((u[2] * r as f32) as u32).min(r - 1);
+                let y = ((u[3] * r as f32) as u32).min(r - 1);
+                let (dir, omega) = rsm_texel(face, x, y);
+                (dir, omega * (6 * r * r) as f32)
+            }
+        };
+        set.samples += 1;
+        let Some(hit) = bvh.closest_hit(light.position, dir, light.range) else {
+            set.misses += 1;
+            continue;
+        };
+        let d = hit.t;
+        // Flux reaching the surface through this sample's share of the sphere.
+        let mut flux = intensity * (weight * attenuation(d, light.range) * d * d / (n as f32 * p_light));
+        let mut from = light.position;
+        let mut hit = hit;
+        for bounce in 0..settings.bounces {
+            let reflected = flux * hit.albedo;
+            if reflected.max_element() <= 0.0 || !reflected.is_finite() {
+                break;
+            }
+            set.vpls.push(Vpl { position: hit.position, normal: hit.normal, flux: reflected, light: li as u32, from });
+            if bounce + 1 == settings.bounces {
+                break;
+            }
+            // Russian roulette on the mean albedo, then a cosine-distributed bounce (throughput = albedo / q).
+            let q = ((hit.albedo.x + hit.albedo.y + hit.albedo.z) / 3.0).clamp(0.0, 1.0);
+            let dim = 4 + 3 * bounce;
+            if q <= 0.0 || halton::radical_inverse(dim, index) >= q {
+                break;
+            }
+            let next = cosine_direction(
+                hit.normal,
+                halton::radical_inverse(dim + 1, index),
+                halton::radical_inverse(dim + 2, index),
+            );
+            let origin = hit.position + hit.normal * eps;
+            let Some(h) = bvh.closest_hit(origin, next, f32::INFINITY) else { break };
+            flux = reflected / q;
+            from = hit.position;
+            hit = h;
+        }
+    }
+    set
+}

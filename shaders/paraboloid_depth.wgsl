@@ -1,0 +1,25 @@
+// Depth-only rendering of one paraboloid shadow map (a VPL's hemisphere, Brabec et al. 2002). The view comes
+// per tile through a dynamic offset; composed after vpl_basis.wgsl (the lookup uses the same basis). Clip space is
+// (dir.x, dir.y, depth * w, w) with w = 1 + dir.z, so x/w, y/w = dir.xy / (1 + dir.z) and clipping against
+// |x|, |y| <= w cuts the back hemisphere. Keep `ParaboloidView` in sync with core/src/renderer/cube_shadows.rs.
+
+struct ParaboloidView {
+    // xyz: centre, w: near
+    centre: vec4<f32>,
+    // xyz: unit normal, w: far
+    normal: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> view: ParaboloidView;
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
+    let basis = vpl_basis(view.normal.xyz);
+    let rel = position - view.centre.xyz;
+    let local = vec3<f32>(dot(rel, basis[0]), dot(rel, basis[1]), dot(rel, basis[2]));
+    let d = max(length(local), 1e-20);
+    let dir = local / d;
+    let depth = (d - view.centre.w) / (view.normal.w - view.centre.w);
+    let w = 1.0 + dir.z;
+    return vec4<f32>(dir.x, dir.y, depth * w, w);
+}

@@ -1,0 +1,56 @@
+// What every VPL gather shares: the VPL layout, the batch uniform, the indirect output and the radiance one VPL
+// sends to a receiver. Composed after common.wgsl (and the visibility's own files), before vpl_gather.wgsl.
+// `Vpl` mirrors `GpuVpl` in core/src/vpl/mod.rs; `GatherBatch` mirrors `GatherBatchUniform` in
+// core/src/renderer/vpl_gather.rs.
+
+struct Vpl {
+    // xyz: position
+    position: vec4<f32>,
+    // xyz: unit normal
+    normal: vec4<f32>,
+    // rgb: reflected flux
+    flux: vec4<f32>,
+}
+
+struct GatherBatch {
+    first_vpl: u32,
+    vpl_count: u32,
+    // d_clamp^2: 1/d^2 is clamped to 1/d_clamp^2
+    clamp_sq: f32,
+    // ray or shadow-map bias, world units (per metre of camera distance for rays)
+    bias: f32,
+    // atlas tile of the batch's first VPL (shadow maps)
+    first_tile: u32,
+    tiles_per_row: u32,
+    resolution: u32,
+    // normal offset of the receiver, world units (shadow maps)
+    normal_offset: f32,
+    // shadow-map depth range: near, far (world units)
+    depth_near: f32,
+    depth_far: f32,
+    // offset of the map's centre from the VPL along its normal, world units
+    origin_offset: f32,
+    _pad: u32,
+}
+
+@group(2) @binding(0) var<storage, read> vpls: array<Vpl>;
+@group(2) @binding(1) var<uniform> gather: GatherBatch;
+@group(2) @binding(2) var<storage, read_write> indirect_out: array<vec4<f32>>;
+
+// Irradiance-like term of one VPL at a receiver, before visibility and the receiver's rho/pi:
+// Phi/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2). Zero (never NaN) when the receiver lies on the VPL,
+// behind it, or faces away.
+fn vpl_term(s: Surface, v: Vpl) -> vec3<f32> {
+    let to_x = s.position - v.position.xyz;
+    let d2 = dot(to_x, to_x);
+    if !(d2 > 1e-12) {
+        return vec3<f32>(0.0);
+    }
+    let w = to_x * inverseSqrt(d2);
+    let cos_i = dot(v.normal.xyz, w);
+    let cos_x = -dot(s.normal, w);
+    if cos_i <= 0.0 || cos_x <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return v.flux.rgb * (cos_i * cos_x / (PI * max(d2, gather.clamp_sq)));
+}
