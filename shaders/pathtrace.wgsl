@@ -3,14 +3,9 @@
 // the direct light at y from one light picked in proportion to its power, with a shadow ray. With the cosine
 // pdf cos/pi the estimate of the reflected radiance is rho(x) * L(y -> x), and
 // L(y -> x) = rho(y)/pi * I * attenuation(d) * cos(theta_y) * V / p_light. Hits reflect their material's mean
-// albedo (BvhSurface, see core/src/renderer/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
+// albedo, carried in the triangle's w components (see core/src/renderer/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
 // index and the seed, so a frame is reproducible. Composed after common.wgsl and raytrace_bvh.wgsl.
 // `PtStep` mirrors `PtStepUniform` in core/src/technique/pathtraced/mod.rs.
-
-struct BvhSurface {
-    normal: vec4<f32>,
-    albedo: vec4<f32>,
-}
 
 struct PtStep {
     first_sample: u32,
@@ -23,11 +18,9 @@ struct PtStep {
     _pad1: u32,
 }
 
-@group(1) @binding(2) var<storage, read> bvh_surfaces: array<BvhSurface>;
-@group(1) @binding(3) var<storage, read> lights: array<Light>;
-// Cumulative light-selection probabilities (last = 1).
-@group(1) @binding(4) var<storage, read> light_cdf: array<f32>;
-@group(1) @binding(5) var<uniform> step: PtStep;
+// `shadow_near` holds the cumulative light-selection probability (the last light's is 1).
+@group(1) @binding(2) var<storage, read> lights: array<Light>;
+@group(1) @binding(3) var<uniform> step: PtStep;
 @group(2) @binding(0) var<storage, read_write> indirect_out: array<vec4<f32>>;
 
 fn pt_hash(x: u32) -> u32 {
@@ -57,7 +50,7 @@ fn pt_pick_light(u: f32) -> u32 {
             break;
         }
         let mid = (lo + hi) / 2u;
-        if light_cdf[mid] <= u {
+        if lights[mid].shadow_near <= u {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -97,13 +90,14 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let y = origin + dir * hit.t;
-        let surface = bvh_surfaces[hit.triangle];
-        var n_y = surface.normal.xyz;
+        let tri = bvh_triangles[hit.triangle];
+        let albedo_y = vec3<f32>(tri.v0.w, tri.e1.w, tri.e2.w);
+        var n_y = normalize(cross(tri.e1.xyz, tri.e2.xyz));
         if dot(n_y, dir) > 0.0 {
             n_y = -n_y;
         }
         let li = pt_pick_light(pt_unit(h2));
-        let p_light = light_cdf[li] - select(0.0, light_cdf[li - 1u], li > 0u);
+        let p_light = lights[li].shadow_near - select(0.0, lights[max(li, 1u) - 1u].shadow_near, li > 0u);
         if p_light <= 0.0 {
             continue;
         }
@@ -125,7 +119,7 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
             continue;
         }
         let irradiance = light.radiance * (attenuation(d, light.range) * cos_y / p_light);
-        sum += surface.albedo.rgb / PI * irradiance;
+        sum += albedo_y / PI * irradiance;
     }
     let index = id.y * width + id.x;
     indirect_out[index] += vec4<f32>(s.albedo * sum / f32(step.total_samples), 0.0);

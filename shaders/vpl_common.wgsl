@@ -23,7 +23,7 @@ struct GatherBatch {
     first_tile: u32,
     tiles_per_row: u32,
     resolution: u32,
-    // normal offset of the receiver, world units (shadow maps)
+    // normal offset of the receiver, in texels of the map at the receiver (shadow maps)
     normal_offset: f32,
     // shadow-map depth range: near, far (world units)
     depth_near: f32,

@@ -9,7 +9,12 @@
 fn vpl_visibility(s: Surface, v: Vpl, k: u32) -> f32 {
     let basis = vpl_basis(v.normal.xyz);
     let centre = v.position.xyz + v.normal.xyz * gather.origin_offset;
-    let p = s.position + s.normal * gather.normal_offset;
+    // Normal offset in texels of the map at the receiver: a texel spans about (2 / res)(1 + cos) radians.
+    let rel0 = s.position - centre;
+    let d0 = length(rel0);
+    let cos0 = dot(rel0, v.normal.xyz) / max(d0, 1e-20);
+    let footprint = d0 * 2.0 / f32(gather.resolution) * (1.0 + max(cos0, 0.0));
+    let p = s.position + s.normal * (gather.normal_offset * footprint);
     let rel = p - centre;
     let local = vec3<f32>(dot(rel, basis[0]), dot(rel, basis[1]), dot(rel, basis[2]));
     let d = length(local);

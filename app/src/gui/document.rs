@@ -7,11 +7,64 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use shadowlab_core::renderer::Component;
 use shadowlab_core::scene::{Camera, PointLight, SceneSource};
 use shadowlab_core::technique::ParamValue;
+use shadowlab_core::vpl::VplSettings;
 
-/// Version written into scene files.
-pub const FILE_VERSION: u32 = 1;
+/// Version written into scene files (2: indirect light; files of version 1 load as "no indirect").
+pub const FILE_VERSION: u32 = 2;
+
+/// The indirect light of a document: the indirect technique (from `INDIRECT_REGISTRY`), its parameters, the
+/// VPL settings every indirect technique shares, and which component of the light the views show.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct IndirectSettings {
+    /// Key of the indirect technique; None = direct light only.
+    pub technique: Option<String>,
+    /// Parameters per indirect technique key, as set by the user.
+    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
+    pub vpl: VplSettings,
+    pub component: Component,
+    /// Display gain of the indirect component, 1..1000.
+    pub gain: f32,
+}
+
+impl Default for IndirectSettings {
+    fn default() -> Self {
+        IndirectSettings {
+            technique: None,
+            params: BTreeMap::new(),
+            vpl: VplSettings::default(),
+            component: Component::Total,
+            gain: 1.0,
+        }
+    }
+}
+
+impl IndirectSettings {
+    /// The smallest and largest display gain the app offers.
+    pub const GAIN_RANGE: std::ops::RangeInclusive<f32> = 1.0..=1000.0;
+
+    /// Check what does not need a device: the technique key is registered, the VPL settings and the gain are in
+    /// range. (Parameters are checked against the technique's own ranges by the app, which creates it.)
+    pub fn validate(&self) -> Result<()> {
+        let registry = shadowlab_core::technique::INDIRECT_REGISTRY;
+        for key in self.technique.iter().chain(self.params.keys()) {
+            if registry.iter().all(|e| e.key != key.as_str()) {
+                bail!(
+                    "unknown indirect technique '{key}' (choose one of: {})",
+                    shadowlab_core::technique::indirect_keys()
+                );
+            }
+        }
+        self.vpl.validate().map_err(|e| anyhow::anyhow!("indirect light: {e}"))?;
+        if !(self.gain.is_finite() && Self::GAIN_RANGE.contains(&self.gain)) {
+            bail!("indirect gain {} must be between 1 and 1000", self.gain);
+        }
+        Ok(())
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum ViewMode {
@@ -79,9 +132,12 @@ pub struct SceneFile {
     pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
     #[serde(default)]
     pub view: ViewSettings,
+    /// Indirect light; absent in files of version 1 (= none).
+    #[serde(default)]
+    pub indirect: IndirectSettings,
 }
 
-const KNOWN_FIELDS: &[&str] = &["version", "scene", "lights", "camera", "technique", "params", "view"];
+const KNOWN_FIELDS: &[&str] = &["version", "scene", "lights", "camera", "technique", "params", "view", "indirect"];
 
 impl SceneFile {
     pub fn to_ron(&self) -> Result<String> {
@@ -111,6 +167,7 @@ impl SceneFile {
         if !file.camera.is_valid() {
             bail!("the camera has non-finite or degenerate values");
         }
+        file.indirect.validate()?;
         Ok((file, warnings))
     }
 
@@ -192,6 +249,7 @@ mod tests {
                 BTreeMap::from([("shadow_res".to_string(), ParamValue::Int(256))]),
             )]),
             view: ViewSettings::default(),
+            indirect: IndirectSettings::default(),
         }
     }
 
@@ -225,6 +283,53 @@ mod tests {
         f.lights[0].range = f32::NAN;
         let text = f.to_ron().unwrap();
         assert!(SceneFile::from_ron(&text).is_err(), "NaN light must be rejected");
+    }
+
+    #[test]
+    fn indirect_settings_round_trip_and_old_files_load_without_them() {
+        let key = shadowlab_core::technique::INDIRECT_REGISTRY[0].key.to_string();
+        let mut f = file();
+        f.indirect.technique = Some(key.clone());
+        f.indirect.params.insert(key.clone(), BTreeMap::from([("vpls_per_step".to_string(), ParamValue::Int(64))]));
+        f.indirect.vpl.count = 77;
+        f.indirect.vpl.source = shadowlab_core::vpl::VplSource::Traced;
+        f.indirect.vpl.bounces = 3;
+        f.indirect.component = Component::Indirect;
+        f.indirect.gain = 20.0;
+        let (back, warnings) = SceneFile::from_ron(&f.to_ron().unwrap()).unwrap();
+        assert_eq!(back, f);
+        assert!(warnings.is_empty(), "{warnings:?}");
+
+        // A version-1 file has no `indirect`: it loads as "no indirect light".
+        let mut old = file();
+        old.version = 1;
+        let text = old.to_ron().unwrap();
+        let i = text.find("    indirect:").expect("the field is written");
+        let j = i + text[i..].find("\n    ),\n").expect("the field ends") + "\n    ),\n".len();
+        let text = format!("{}{}", &text[..i], &text[j..]);
+        assert!(!text.contains("indirect"), "{text}");
+        let (back, warnings) = SceneFile::from_ron(&text).unwrap();
+        assert_eq!(back.indirect, IndirectSettings::default());
+        assert!(warnings.is_empty(), "{warnings:?}");
+    }
+
+    #[test]
+    fn bad_indirect_settings_are_refused_with_a_message() {
+        let mut f = file();
+        f.indirect.technique = Some("no-such-technique".into());
+        let err = SceneFile::from_ron(&f.to_ron().unwrap()).unwrap_err();
+        assert!(format!("{err:#}").contains("unknown indirect technique 'no-such-technique'"), "{err:#}");
+        let mut f = file();
+        f.indirect.vpl.bounces = 0;
+        let err = SceneFile::from_ron(&f.to_ron().unwrap()).unwrap_err();
+        assert!(format!("{err:#}").contains("bounces"), "{err:#}");
+        let mut f = file();
+        f.indirect.vpl.count = shadowlab_core::vpl::MAX_VPLS + 1;
+        assert!(SceneFile::from_ron(&f.to_ron().unwrap()).is_err());
+        let mut f = file();
+        f.indirect.gain = 0.0;
+        let err = SceneFile::from_ron(&f.to_ron().unwrap()).unwrap_err();
+        assert!(format!("{err:#}").contains("gain"), "{err:#}");
     }
 
     #[test]

@@ -17,6 +17,7 @@ use std::time::Instant;
 use anyhow::{anyhow, Context, Result};
 use eframe::{egui, egui_wgpu};
 use glam::Vec3;
+use shadowlab_core::renderer::Component;
 use shadowlab_core::scene::layout::{self, LightLayout};
 use shadowlab_core::scene::{PointLight, Scene, SceneSource};
 use shadowlab_core::technique::{CameraPose, Overlay, ParamValue};
@@ -24,7 +25,7 @@ use shadowlab_core::timing::PassTime;
 use shadowlab_core::{GpuContext, RenderSettings, ToneMap};
 
 use camera::{CameraController, CameraInput, CameraMode};
-use document::{History, SceneFile, ViewMode, ViewSettings, FILE_VERSION};
+use document::{History, IndirectSettings, SceneFile, ViewMode, ViewSettings, FILE_VERSION};
 use gizmo::{Handle, Projection};
 use viewport::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
 
@@ -169,6 +170,8 @@ pub struct ShadowLabApp {
     pub technique: String,
     /// Parameters the user set, per technique.
     pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
+    /// The indirect technique, its parameters, the VPL settings and the component shown.
+    pub indirect: IndirectSettings,
     pub view: ViewSettings,
     pub history: History,
     pub selected: Option<usize>,
@@ -226,6 +229,7 @@ impl ShadowLabApp {
             scene,
             technique: "reference".into(),
             params: BTreeMap::new(),
+            indirect: IndirectSettings::default(),
             view: ViewSettings::default(),
             history: History::default(),
             selected: None,
@@ -380,6 +384,7 @@ impl ShadowLabApp {
             technique: self.technique.clone(),
             params: self.params.clone(),
             view: self.view.clone(),
+            indirect: self.indirect.clone(),
         }
     }
 
@@ -419,12 +424,22 @@ impl ShadowLabApp {
                         .map_err(|e| anyhow!("technique '{key}': {e}"))?;
                 }
             }
+            // The indirect technique's too (its key and the VPL settings were checked when the file was read).
+            for (key, values) in &file.indirect.params {
+                let technique = gpu.main.indirect_technique(key).context("the scene file's indirect parameters")?;
+                let params = technique.borrow().params();
+                for (name, value) in values {
+                    shadowlab_core::technique::check_param(key, &params, name, value)
+                        .map_err(|e| anyhow!("indirect technique '{key}': {e}"))?;
+                }
+            }
         }
         self.set_scene(scene);
         self.lights = file.lights;
         self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
         self.technique = file.technique;
         self.params = file.params;
+        self.indirect = file.indirect;
         self.view = file.view;
         self.scene_file = Some(path.to_path_buf());
         for w in warnings {
@@ -545,7 +560,34 @@ impl ShadowLabApp {
             exposure: self.view.exposure,
             tonemap: ToneMap::Aces,
             specular: self.view.specular,
+            vpl: self.indirect.vpl,
+            // The preview has no indirect light: show all of what it has.
+            component: if preview { Component::Total } else { self.indirect.component },
+            indirect_gain: self
+                .indirect
+                .gain
+                .clamp(*IndirectSettings::GAIN_RANGE.start(), *IndirectSettings::GAIN_RANGE.end()),
             ..Default::default()
+        }
+    }
+
+    /// The indirect technique of the views (None while the preview renders) and the parameters the user set.
+    fn indirect_inputs(&self, preview: bool) -> (Option<String>, BTreeMap<String, ParamValue>) {
+        match self.indirect.technique.clone().filter(|_| !preview) {
+            Some(key) => {
+                let params = self.indirect.params.get(&key).cloned().unwrap_or_default();
+                (Some(key), params)
+            }
+            None => (None, BTreeMap::new()),
+        }
+    }
+
+    /// The overlay layers of the indirect technique, from the instance the main view renders with.
+    fn indirect_overlay_layers(&mut self, lights: &[PointLight]) -> Vec<shadowlab_core::technique::OverlayLayer> {
+        let (Some(key), Some(gpu)) = (self.indirect.technique.clone(), &mut self.gpu) else { return Vec::new() };
+        match gpu.main.indirect_technique(&key) {
+            Ok(t) => t.borrow().overlays(lights),
+            Err(_) => Vec::new(),
         }
     }
 
@@ -560,6 +602,7 @@ impl ShadowLabApp {
                 layers.extend(reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges"));
             }
         }
+        layers.extend(self.indirect_overlay_layers(lights));
         for layer in layers {
             let on = *self.view.overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
             if on {
@@ -589,6 +632,7 @@ impl ShadowLabApp {
                 names.push((name.to_string(), false));
             }
         }
+        names.extend(self.indirect_overlay_layers(&[]).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         names.into_iter().map(|(n, d)| (n.clone(), *self.view.overlays.get(&n).unwrap_or(&d))).collect()
     }
 
@@ -608,9 +652,19 @@ impl ShadowLabApp {
             }
         }
         let params = self.params.get(&technique).cloned().unwrap_or_default();
+        // Both views get the same indirect technique and parameters, so a comparison compares the same light.
+        let (indirect, indirect_params) = self.indirect_inputs(interacting);
         let x_ray = self.view.x_ray;
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
-        let main_inputs = FrameInputs { camera, lights: lights.clone(), technique, params, settings: settings.clone() };
+        let main_inputs = FrameInputs {
+            camera,
+            lights: lights.clone(),
+            technique,
+            params,
+            indirect: indirect.clone(),
+            indirect_params: indirect_params.clone(),
+            settings: settings.clone(),
+        };
         // While the user drags, keep the UI fluid: the preview gets a third of the budget.
         let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
         let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
@@ -646,6 +700,8 @@ impl ShadowLabApp {
                 lights,
                 technique: reference_technique.into(),
                 params: self.params.get(reference_technique).cloned().unwrap_or_default(),
+                indirect,
+                indirect_params,
                 settings,
             };
             // The reference gets what is left of the budget once the technique's image is complete.
@@ -664,16 +720,24 @@ impl ShadowLabApp {
         let describe = |params: &BTreeMap<String, ParamValue>| {
             params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
         };
+        let indirect_params = &main_inputs.indirect_params;
+        let describe_report = |r: &shadowlab_core::FrameReport, params: &BTreeMap<String, ParamValue>| {
+            let mut p = describe(params);
+            if r.indirect.is_some() && !indirect_params.is_empty() {
+                p = format!("{p} | {}", describe(indirect_params)).trim().to_string();
+            }
+            p
+        };
         if std::mem::take(&mut gpu.reference.new_report) {
             if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
-                let p = describe(&self.params.get(&r.technique).cloned().unwrap_or_default());
-                self.session_times.insert(r.technique.clone(), (r.gpu_total_ms, p));
+                let p = describe_report(r, &self.params.get(&r.technique).cloned().unwrap_or_default());
+                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
             }
         }
         if std::mem::take(&mut gpu.main.new_report) {
             if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
-                let p = describe(&main_inputs.params);
-                self.session_times.insert(r.technique.clone(), (r.gpu_total_ms, p));
+                let p = describe_report(r, &main_inputs.params);
+                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
             }
             if let Some(r) = &gpu.main.last_report {
                 let t = self.started.elapsed().as_secs_f64();
@@ -757,6 +821,10 @@ impl ShadowLabApp {
             settings,
             technique: self.technique.clone(),
             fixed,
+            indirect: self.indirect.technique.clone().map(|k| {
+                let params = self.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
+                (k, params)
+            }),
             key: key.to_string(),
             values,
         }));
@@ -772,8 +840,10 @@ impl ShadowLabApp {
             .map(|p| p.iter().map(|(k, v)| format!("-{k}{v}")).collect())
             .unwrap_or_default();
         let stamp = chrono_like_stamp();
-        let name = format!("shadowlab-{}-{}{}-{}-{}.png", self.scene.name, self.technique, params, what, stamp)
-            .replace(['/', '\\', ' ', ':'], "_");
+        let indirect = self.indirect.technique.as_ref().map(|k| format!("+{k}")).unwrap_or_default();
+        let name =
+            format!("shadowlab-{}-{}{}{}-{}-{}.png", self.scene.name, self.technique, params, indirect, what, stamp)
+                .replace(['/', '\\', ' ', ':'], "_");
         self.data_dir.join("screenshots").join(name)
     }
 
@@ -1065,6 +1135,7 @@ impl ShadowLabApp {
 
         // Show the images.
         let painter = ui.painter_at(rect);
+        let indirect = self.indirect.technique.as_deref();
         let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
         if let Some(gpu) = &self.gpu {
             match self.view.mode {
@@ -1076,8 +1147,8 @@ impl ShadowLabApp {
                     painter.image(gpu.main.texture_id, l, uv, egui::Color32::WHITE);
                     painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
                     painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
-                    label(&painter, l.left_top(), &self.technique);
-                    label(&painter, r.left_top(), &self.view.compare_against);
+                    label(&painter, l.left_top(), &technique_pair(&self.technique, indirect));
+                    label(&painter, r.left_top(), &technique_pair(&self.view.compare_against, indirect));
                 }
                 ViewMode::Difference => match &self.difference {
                     Some(d) => {
@@ -1087,8 +1158,9 @@ impl ShadowLabApp {
                             &painter,
                             rect.left_top(),
                             &format!(
-                                "{} vs reference: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
-                                self.technique,
+                                "{} vs {}: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
+                                technique_pair(&self.technique, indirect),
+                                technique_pair(&self.view.compare_against, indirect),
                                 m.rmse,
                                 m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
                                 m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
@@ -1125,8 +1197,8 @@ impl ShadowLabApp {
                         [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
                         egui::Stroke::new(2.0, egui::Color32::WHITE),
                     );
-                    label(&painter, rect.left_top(), &self.technique);
-                    label(&painter, egui::pos2(x, rect.top()), &self.view.compare_against);
+                    label(&painter, rect.left_top(), &technique_pair(&self.technique, indirect));
+                    label(&painter, egui::pos2(x, rect.top()), &technique_pair(&self.view.compare_against, indirect));
                     // The split line is draggable from a handle at its middle.
                     let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
                     let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());
@@ -1176,6 +1248,19 @@ impl ShadowLabApp {
             },
         );
         ctx.request_repaint_after(std::time::Duration::from_millis(500));
+    }
+}
+
+/// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
+pub fn session_name(report: &shadowlab_core::FrameReport) -> String {
+    technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
+}
+
+/// `direct`, or `direct + indirect`.
+pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
+    match indirect {
+        Some(i) => format!("{direct} + {i}"),
+        None => direct.to_string(),
     }
 }
 

@@ -4,10 +4,14 @@
 use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 use glam::Vec3;
-use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, REGISTRY};
+use std::collections::BTreeMap;
+
+use shadowlab_core::renderer::Component;
+use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, Technique, INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::vpl::{VplSource, MAX_BOUNCES, MAX_VPLS};
 
 use super::camera::CameraMode;
-use super::document::ViewMode;
+use super::document::{IndirectSettings, ViewMode};
 use super::{Animation, ShadowLabApp};
 
 pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
@@ -205,30 +209,25 @@ fn cameras_ui(
     out
 }
 
-fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    ui.heading("Shadows");
-    egui::ComboBox::from_label("Technique").selected_text(app.technique.clone()).width(150.0).truncate().show_ui(
-        ui,
-        |ui| {
-            for e in REGISTRY {
-                ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
-            }
-        },
-    );
-    let key = app.technique.clone();
-    let Some(gpu) = &mut app.gpu else { return };
-    let Ok(technique) = gpu.main.technique(&key) else { return };
+/// The generated parameter panel of a technique, direct or indirect: a widget per parameter of `params()`; a
+/// change goes through `set_param` and is remembered in `user` (the values the views render with).
+fn params_panel(
+    ui: &mut egui::Ui,
+    technique: &mut dyn Technique,
+    user: &mut BTreeMap<String, ParamValue>,
+    view_camera: &shadowlab_core::scene::Camera,
+    selected_camera: &mut Option<(String, usize)>,
+    selected_light: &mut Option<usize>,
+) {
     // Apply the user's values first, so the widgets show them.
-    let user = app.params.entry(key.clone()).or_default();
     for (k, v) in user.iter() {
         let _ = technique.set_param(k, v);
     }
-    let view_camera = app.camera.camera();
     for p in technique.params() {
         let changed = match (&p.kind, &p.value) {
             (ParamKind::Cameras { max, selected_by }, ParamValue::Cameras(list)) => {
                 let in_use = technique.cameras_in_use(p.key);
-                let edited = cameras_ui(ui, &p, *max, list, &in_use, &view_camera, &mut app.selected_camera);
+                let edited = cameras_ui(ui, &p, *max, list, &in_use, view_camera, selected_camera);
                 if edited.is_some() {
                     // Edited cameras are the ones the technique should use: select them.
                     if let Some((key, value)) = selected_by {
@@ -237,7 +236,7 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                             user.insert(key.to_string(), value);
                         }
                     }
-                    app.selected = None;
+                    *selected_light = None;
                 }
                 edited.map(ParamValue::Cameras)
             }
@@ -249,10 +248,129 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
     }
+}
+
+fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Shadows");
+    egui::ComboBox::from_label("Technique").selected_text(app.technique.clone()).width(150.0).truncate().show_ui(
+        ui,
+        |ui| {
+            for e in REGISTRY {
+                ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
+            }
+        },
+    );
+    let key = app.technique.clone();
+    let view_camera = app.camera.camera();
+    let Some(gpu) = &mut app.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&key) else { return };
+    let user = app.params.entry(key.clone()).or_default();
+    params_panel(ui, technique.as_mut(), user, &view_camera, &mut app.selected_camera, &mut app.selected);
     if ui.button("Reset parameters").clicked() {
         app.params.remove(&key);
         gpu.main.reset_technique(&key);
     }
+}
+
+/// The indirect technique selector with its generated parameter panel, the VPL settings, and the component
+/// the views show.
+fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Indirect light");
+    let mut choice = app.indirect.technique.clone();
+    egui::ComboBox::from_label("Indirect")
+        .selected_text(choice.clone().unwrap_or_else(|| "none".into()))
+        .width(150.0)
+        .truncate()
+        .show_ui(ui, |ui| {
+            ui.selectable_value(&mut choice, None, "None (direct light only)");
+            for e in INDIRECT_REGISTRY {
+                ui.selectable_value(&mut choice, Some(e.key.to_string()), e.label);
+            }
+        });
+    // A change restarts the views' frames: the indirect key is part of what a frame depends on.
+    app.indirect.technique = choice;
+    let mut uses_vpls = false;
+    if let (Some(key), Some(gpu)) = (app.indirect.technique.clone(), &mut app.gpu) {
+        match gpu.main.indirect_technique(&key) {
+            Ok(shared) => {
+                let mut technique = shared.borrow_mut();
+                uses_vpls = technique.uses_vpls();
+                let user = app.indirect.params.entry(key.clone()).or_default();
+                let view_camera = app.camera.camera();
+                ui.push_id("indirect parameters", |ui| {
+                    params_panel(
+                        ui,
+                        technique.as_mut(),
+                        user,
+                        &view_camera,
+                        &mut app.selected_camera,
+                        &mut app.selected,
+                    );
+                });
+                drop(technique);
+                if ui.button("Reset indirect parameters").clicked() {
+                    app.indirect.params.remove(&key);
+                    // Both views, so a comparison keeps comparing the same indirect light.
+                    for view in [&mut gpu.main, &mut gpu.reference] {
+                        if let Err(e) = view.reset_indirect(&key) {
+                            app.status = format!("indirect: {e:#}");
+                        }
+                    }
+                }
+            }
+            Err(e) => {
+                ui.colored_label(egui::Color32::LIGHT_RED, format!("{e:#}"));
+            }
+        }
+    }
+    ui.add_enabled_ui(uses_vpls, |ui| vpl_ui(&mut app.indirect, ui));
+    ui.horizontal(|ui| {
+        ui.label("show");
+        for c in [Component::Total, Component::Direct, Component::Indirect] {
+            ui.selectable_value(&mut app.indirect.component, c, c.name());
+        }
+    })
+    .response
+    .on_hover_text("The part of the light the views, the difference and the screenshots show");
+    ui.add_enabled_ui(app.indirect.component == Component::Indirect, |ui| {
+        ui.add(
+            egui::Slider::new(&mut app.indirect.gain, IndirectSettings::GAIN_RANGE)
+                .logarithmic(true)
+                .text("indirect gain"),
+        )
+        .on_hover_text("Display gain of the indirect component (not applied to measurements)");
+    });
+}
+
+/// The VPL settings every indirect technique of a frame shares.
+fn vpl_ui(indirect: &mut IndirectSettings, ui: &mut egui::Ui) {
+    let v = &mut indirect.vpl;
+    ui.add(egui::Slider::new(&mut v.count, 0..=MAX_VPLS).logarithmic(true).text("VPLs"))
+        .on_hover_text("VPL samples drawn (RSM texels or particles); 0 = no indirect light");
+    ui.horizontal(|ui| {
+        ui.label("VPL source");
+        for source in [VplSource::Rsm, VplSource::Traced] {
+            ui.selectable_value(&mut v.source, source, source.name());
+        }
+    })
+    .response
+    .on_hover_text("rsm: reflective shadow maps (one bounce); traced: particles traced from the lights");
+    ui.add_enabled_ui(v.source == VplSource::Traced, |ui| {
+        ui.add(egui::Slider::new(&mut v.bounces, 1..=MAX_BOUNCES).text("bounces"))
+            .on_hover_text("Bounces of a traced particle (the RSM source is always one bounce)");
+    });
+    ui.horizontal(|ui| {
+        ui.add(
+            egui::DragValue::new(&mut v.clamp_world)
+                .range(0.0..=1000.0)
+                .speed(0.002)
+                .max_decimals(3)
+                .prefix("clamp distance "),
+        )
+        .on_hover_text("1/d² is clamped to 1/d_clamp² (world units): fewer splotches, darker corners");
+        ui.add(egui::DragValue::new(&mut v.seed).speed(1.0).prefix("seed "))
+            .on_hover_text("Offset of the VPLs' quasi-random sequence: another, equally good, VPL set");
+    });
 }
 
 fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
@@ -454,8 +572,11 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                         ui.label(format!("{}", p.count));
                         ui.end_row();
                     }
-                    for p in &r.cpu_stages {
-                        ui.label(format!("{} (CPU)", p.name));
+                    let indirect_stages = r.indirect.iter().flat_map(|i| &i.cpu_stages);
+                    for (p, indirect) in
+                        r.cpu_stages.iter().map(|p| (p, false)).chain(indirect_stages.map(|p| (p, true)))
+                    {
+                        ui.label(format!("{} (CPU{})", p.name, if indirect { ", indirect" } else { "" }));
                         ui.label(format!("{:.3}", p.ms));
                         ui.label("1");
                         ui.end_row();
@@ -476,8 +597,29 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     c.technique.shadow_triangles_submitted,
                     c.technique.shadow_triangles_culled,
                 ));
+                if !c.technique.figures.is_empty() {
+                    ui.label(figures_text(&c.technique.figures));
+                }
+                if let Some(i) = &r.indirect {
+                    let mut parts = vec![format!("indirect {}", i.technique)];
+                    if !i.counts.figures.is_empty() {
+                        parts.push(figures_text(&i.counts.figures));
+                    }
+                    parts.push(format!("{} steps", i.counts.batches));
+                    if i.vpls > 0 {
+                        parts.push(format!("VPLs from {}, {} samples missed", i.vpl_source.name(), i.vpl_misses));
+                    }
+                    if i.counts.shadow_maps > 0 {
+                        parts.push(format!(
+                            "{} shadow maps, {} triangles drawn",
+                            i.counts.shadow_maps, i.counts.shadow_triangles_submitted
+                        ));
+                    }
+                    ui.label(parts.join(" · "));
+                }
                 // Every technique seen this session against the reference, same session and adapter.
-                if let Some((reference_ms, _)) = app.session_times.get("reference") {
+                let reference = super::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
+                if let Some((reference_ms, _)) = app.session_times.get(&reference) {
                     egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
                         ui.strong("technique (this session)");
                         ui.strong("GPU ms");
@@ -519,6 +661,15 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         });
     });
+}
+
+/// A technique's named figures (`vpls 1024 · samples 16`), in key order, whatever the technique.
+pub fn figures_text(figures: &BTreeMap<String, f64>) -> String {
+    figures
+        .iter()
+        .map(|(k, v)| if v.fract() == 0.0 && v.abs() < 1e15 { format!("{k} {v:.0}") } else { format!("{k} {v:.3}") })
+        .collect::<Vec<_>>()
+        .join(" · ")
 }
 
 /// Sweep one numeric parameter of the current technique against the reference, plotted live.
@@ -616,6 +767,8 @@ pub fn side_panels(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     egui::Panel::left("controls").resizable(true).default_size(300.0).show(ui, |ui| {
         egui::ScrollArea::vertical().show(ui, |ui| {
             technique_ui(app, ui);
+            ui.separator();
+            indirect_ui(app, ui);
             ui.separator();
             render_ui(app, ui);
         });

@@ -49,6 +49,8 @@ pub struct SweepJob {
     pub settings: RenderSettings,
     pub technique: String,
     pub fixed: Vec<(String, ParamValue)>,
+    /// The indirect technique both the technique's and the reference's frames add (key, parameters).
+    pub indirect: Option<(String, Vec<(String, ParamValue)>)>,
     pub key: String,
     pub values: Vec<ParamValue>,
 }
@@ -66,6 +68,14 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
     let mut renderer = Renderer::new(&job.gpu, &job.scene, settings)?;
+    if let Some((key, params)) = &job.indirect {
+        let mut indirect =
+            renderer.create_indirect_technique(key).ok_or_else(|| anyhow!("unknown indirect technique '{key}'"))?;
+        for (k, v) in params {
+            indirect.set_param(k, v)?;
+        }
+        renderer.set_indirect(Some(indirect))?;
+    }
     let (w, h) = (renderer.settings().width, renderer.settings().height);
     let mut reference = renderer.create_technique("reference").ok_or_else(|| anyhow!("no reference"))?;
     let mut technique = renderer.create_technique(&job.technique).ok_or_else(|| anyhow!("unknown technique"))?;

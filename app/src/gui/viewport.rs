@@ -3,17 +3,28 @@
 //! and the work per step adapts to the adapter's speed, so the UI stays responsive on a software GPU and a real
 //! GPU still finishes in one UI frame. While the user drags, a cheap preview (unshadowed, lower resolution)
 //! is shown instead, and the full technique restarts when the input settles.
+//!
+//! A view may also have an indirect technique (`INDIRECT_REGISTRY`), which its renderer runs after the direct
+//! one. The view keeps one instance per indirect key and lends the renderer a [`SharedTechnique`] handle to it,
+//! so the preview can switch indirect light off (and back on) without recreating its pipelines, and the panels
+//! read the instance the renderer used (parameters, overlays) whether or not it is installed right now.
 
+use std::cell::RefCell;
 use std::collections::hash_map::DefaultHasher;
 use std::collections::BTreeMap;
 use std::hash::{Hash, Hasher};
+use std::rc::Rc;
 use std::time::Instant;
 
 use anyhow::{anyhow, Result};
 use eframe::{egui, egui_wgpu};
 use shadowlab_core::renderer::FrameJob;
 use shadowlab_core::scene::{Camera, PointLight, Scene};
-use shadowlab_core::technique::{Overlay, ParamValue, Technique};
+use shadowlab_core::technique::{
+    CameraPose, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
+};
+use shadowlab_core::timing::PassTime;
+use shadowlab_core::GpuError;
 use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer};
 
 /// Milliseconds of GPU work one UI frame may wait for.
@@ -28,6 +39,9 @@ pub struct FrameInputs {
     pub lights: Vec<PointLight>,
     pub technique: String,
     pub params: BTreeMap<String, ParamValue>,
+    /// The indirect technique's key (None: direct light only) and the parameters the user set for it.
+    pub indirect: Option<String>,
+    pub indirect_params: BTreeMap<String, ParamValue>,
     pub settings: RenderSettings,
 }
 
@@ -46,9 +60,64 @@ impl FrameInputs {
             floats(&[l.intensity, l.range]);
         }
         self.technique.hash(&mut h);
+        self.indirect.hash(&mut h);
         // Parameters and settings are a handful of values.
-        format!("{:?}{:?}", self.params, self.settings).hash(&mut h);
+        format!("{:?}{:?}{:?}", self.params, self.indirect_params, self.settings).hash(&mut h);
         h.finish()
+    }
+}
+
+/// An indirect technique instance shared by a view and its renderer (see the module documentation).
+pub type SharedIndirect = Rc<RefCell<Box<dyn Technique>>>;
+
+/// The handle a renderer holds to a view's indirect technique: every call goes to the shared instance.
+/// (Every method of [`Technique`] is forwarded, the provided ones too, so none falls back to its default.)
+pub struct SharedTechnique(pub SharedIndirect);
+
+impl Technique for SharedTechnique {
+    fn key(&self) -> &'static str {
+        self.0.borrow().key()
+    }
+    fn label(&self) -> &'static str {
+        self.0.borrow().label()
+    }
+    fn params(&self) -> Vec<Param> {
+        self.0.borrow().params()
+    }
+    fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
+        self.0.borrow_mut().set_param(key, value)
+    }
+    fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        self.0.borrow_mut().prepare(ctx)
+    }
+    fn encode_step(
+        &mut self,
+        ctx: &FrameContext,
+        step: usize,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), GpuError> {
+        self.0.borrow_mut().encode_step(ctx, step, encoder)
+    }
+    fn step_label(&self) -> &'static str {
+        self.0.borrow().step_label()
+    }
+    fn counts(&self) -> TechniqueCounts {
+        self.0.borrow().counts()
+    }
+    fn cpu_times(&self) -> Vec<PassTime> {
+        self.0.borrow().cpu_times()
+    }
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        self.0.borrow().overlays(lights)
+    }
+    fn pixel_ids(&self, positions: &[Option<glam::Vec3>]) -> Option<(&'static str, Vec<u32>)> {
+        self.0.borrow().pixel_ids(positions)
+    }
+    fn cameras_in_use(&self, key: &str) -> Vec<CameraPose> {
+        self.0.borrow().cameras_in_use(key)
+    }
+    fn uses_vpls(&self) -> bool {
+        self.0.borrow().uses_vpls()
     }
 }
 
@@ -56,6 +125,10 @@ impl FrameInputs {
 pub struct View {
     pub renderer: Renderer,
     techniques: BTreeMap<&'static str, Box<dyn Technique>>,
+    /// Indirect technique instances by key, created on first use.
+    indirect: BTreeMap<&'static str, SharedIndirect>,
+    /// The key of the indirect technique installed in the renderer.
+    installed_indirect: Option<&'static str>,
     pub texture_id: egui::TextureId,
     job: Option<(FrameJob, String)>,
     key: u64,
@@ -79,6 +152,8 @@ impl View {
         Ok(View {
             renderer,
             techniques: BTreeMap::new(),
+            indirect: BTreeMap::new(),
+            installed_indirect: None,
             texture_id,
             job: None,
             key: 0,
@@ -100,6 +175,55 @@ impl View {
             self.techniques.insert(entry.key, t);
         }
         Ok(self.techniques.get_mut(entry.key).expect("inserted above"))
+    }
+
+    /// The indirect technique instance for `key` (an `INDIRECT_REGISTRY` key), created on first use. Its
+    /// parameters are the ones the renderer uses when it is installed.
+    pub fn indirect_technique(&mut self, key: &str) -> Result<SharedIndirect> {
+        let entry = shadowlab_core::technique::INDIRECT_REGISTRY.iter().find(|e| e.key == key).ok_or_else(|| {
+            anyhow!(
+                "unknown indirect technique '{key}' (choose one of: {})",
+                shadowlab_core::technique::indirect_keys()
+            )
+        })?;
+        if !self.indirect.contains_key(entry.key) {
+            let t = self
+                .renderer
+                .create_indirect_technique(entry.key)
+                .ok_or_else(|| anyhow!("cannot create the indirect technique '{key}'"))?;
+            self.indirect.insert(entry.key, Rc::new(RefCell::new(t)));
+        }
+        Ok(self.indirect[entry.key].clone())
+    }
+
+    /// Install `key`'s instance in the renderer (None: none). Cancels a frame in progress, since its steps were
+    /// counted with the previous indirect technique.
+    fn install_indirect(&mut self, key: Option<&str>) -> Result<()> {
+        let wanted = match key {
+            Some(k) => Some(self.indirect_technique(k)?),
+            None => None,
+        };
+        let wanted_key = wanted.as_ref().map(|t| t.borrow().key());
+        if wanted_key == self.installed_indirect {
+            return Ok(());
+        }
+        if let Some((job, _)) = self.job.take() {
+            self.renderer.cancel_frame(job)?;
+        }
+        self.renderer.set_indirect(wanted.map(|t| Box::new(SharedTechnique(t)) as Box<dyn Technique>))?;
+        self.installed_indirect = wanted_key;
+        self.key = 0;
+        Ok(())
+    }
+
+    /// Forget the instance of indirect technique `key`, so the next use creates it with default parameters.
+    pub fn reset_indirect(&mut self, key: &str) -> Result<()> {
+        if self.installed_indirect.is_some_and(|k| k == key) {
+            self.install_indirect(None)?;
+        }
+        self.indirect.retain(|k, _| *k != key);
+        self.key = 0;
+        Ok(())
     }
 
     pub fn set_scene(&mut self, scene: &Scene) {
@@ -147,6 +271,15 @@ impl View {
             let mut settings = self.renderer.settings().clone();
             settings.max_lights_per_step = max_lights_per_step;
             self.renderer.set_settings(settings)?;
+            self.install_indirect(inputs.indirect.as_deref())?;
+            if let Some(indirect) = self.renderer.indirect_mut() {
+                for (k, v) in &inputs.indirect_params {
+                    // Validated when set in the UI or loaded, like the direct technique's.
+                    if let Err(e) = indirect.set_param(k, v) {
+                        log::warn!("{e}");
+                    }
+                }
+            }
             let technique = self.technique(&inputs.technique)?;
             for (k, v) in &inputs.params {
                 // Parameters were validated when set in the UI or loaded; a stale one is skipped.

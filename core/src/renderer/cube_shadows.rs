@@ -157,7 +157,7 @@ impl CubeShadowRenderer {
             }],
         });
         let module = shaders::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH);
-        let pipeline = Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth");
+        let pipeline = Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth", false);
         CubeShadowRenderer {
             pipeline,
             paraboloid_pipeline: None,
@@ -178,6 +178,7 @@ impl CubeShadowRenderer {
         module: &wgpu::ShaderModule,
         vertex_stride: u64,
         label: &str,
+        with_fragment: bool,
     ) -> wgpu::RenderPipeline {
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
@@ -207,7 +208,13 @@ impl CubeShadowRenderer {
                 bias: Default::default(),
             }),
             multisample: Default::default(),
-            fragment: None,
+            // Depth-only; a fragment stage only where it must discard (paraboloids), as it costs early depth tests.
+            fragment: with_fragment.then_some(wgpu::FragmentState {
+                module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
             multiview_mask: None,
             cache: None,
         })
@@ -237,6 +244,7 @@ impl CubeShadowRenderer {
                 &module,
                 self.vertex_stride,
                 "paraboloid depth",
+                true,
             ));
         }
         let views: Vec<ParaboloidView> = casters

@@ -5,7 +5,8 @@
 //! traces a ray never pays for it.
 //!
 //! Besides the traversal layout (`raytrace_bvh.wgsl`) it keeps, per BVH triangle, what a hit needs to shade:
-//! the geometric normal and the material's mean albedo (`BvhSurface`, mirrored in `vpl_common.wgsl`). Hits use
+//! the geometric normal and the material's mean albedo ([`BvhSurface`] on the CPU; on the GPU the albedo rides
+//! in the unused `w` components of the triangle and the normal is `cross(e1, e2)`). Hits use
 //! the material's *mean* albedo (its factor times the mean of its texture) rather than the texel under the hit:
 //! a GPU hit shader cannot sample an arbitrary material's texture without bindless textures, and the CPU VPL
 //! generator and the path tracer must agree. Receivers (the G-buffer) keep their textured albedo.
@@ -20,8 +21,7 @@ use crate::gpu::GpuContext;
 use crate::scene::chunks::ChunkedGeometry;
 use crate::technique::raytraced::bvh::{self, Bvh, Hit};
 
-/// Per BVH triangle: geometric normal (xyz) and the material's mean albedo (rgb). Mirrors `BvhSurface` in
-/// `vpl_common.wgsl`.
+/// Per BVH triangle: geometric normal (xyz) and the material's mean albedo (rgb).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct BvhSurface {
@@ -36,8 +36,8 @@ pub struct SceneBvh {
     /// Per entry of `cpu.triangles`.
     pub surfaces: Vec<BvhSurface>,
     pub nodes: wgpu::Buffer,
+    /// `BvhTriangle`s with the albedo in the `w` of `v0`, `e1`, `e2` (r, g, b).
     pub triangles: wgpu::Buffer,
-    pub surface_buffer: wgpu::Buffer,
 }
 
 /// What a closest hit found, in world space.
@@ -88,11 +88,17 @@ impl SceneBvh {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        let (nodes, triangles) = cpu.gpu_buffers();
+        let (nodes, mut triangles) = cpu.gpu_buffers();
+        // The unused w of v0, e1, e2 carry the albedo, so a hit shader reads it without another storage buffer
+        // (downlevel devices allow four per stage).
+        for (t, s) in triangles.iter_mut().zip(&surfaces) {
+            t.v0[3] = s.albedo[0];
+            t.e1[3] = s.albedo[1];
+            t.e2[3] = s.albedo[2];
+        }
         SceneBvh {
             nodes: storage("bvh nodes", bytemuck::cast_slice(&nodes)),
             triangles: storage("bvh triangles", bytemuck::cast_slice(&triangles)),
-            surface_buffer: storage("bvh surfaces", bytemuck::cast_slice(&surfaces)),
             surfaces,
             cpu,
         }

@@ -68,7 +68,6 @@ pub struct PathTraced {
     output_layout: wgpu::BindGroupLayout,
     step_uniform: wgpu::Buffer,
     lights: GrowableBuffer,
-    cdf: GrowableBuffer,
     bvh: Option<Arc<SceneBvh>>,
     light_count: u32,
     steps: usize,
@@ -81,14 +80,7 @@ impl PathTraced {
         let device = &gpu.device;
         let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("pathtrace"),
-            entries: &[
-                storage_entry(0),
-                storage_entry(1),
-                storage_entry(2),
-                storage_entry(3),
-                storage_entry(4),
-                uniform_entry(5),
-            ],
+            entries: &[storage_entry(0), storage_entry(1), storage_entry(2), uniform_entry(3)],
         });
         let output_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("pathtrace output"),
@@ -114,7 +106,6 @@ impl PathTraced {
             output_layout,
             step_uniform,
             lights: GrowableBuffer::new(device, "pathtrace lights", 32 * 16),
-            cdf: GrowableBuffer::new(device, "pathtrace light cdf", 4 * 16),
             bvh: None,
             light_count: 0,
             steps: 0,
@@ -189,22 +180,20 @@ impl Technique for PathTraced {
         let powers: Vec<f64> =
             lights.iter().map(|l| (l.intensity * (l.color.x + l.color.y + l.color.z)) as f64).collect();
         let total: f64 = powers.iter().sum();
+        // The cumulative selection probability rides in `shadow_near`, which no shadow map needs here.
         let mut gpu_lights: Vec<GpuLight> = Vec::new();
-        let mut cdf: Vec<f32> = Vec::new();
         if total > 0.0 && total.is_finite() {
             let mut acc = 0.0f64;
             for (l, p) in lights.iter().zip(&powers) {
                 acc += p / total;
-                gpu_lights.push(GpuLight::new(l));
-                cdf.push(acc as f32);
+                gpu_lights.push(GpuLight { shadow_near: acc as f32, ..GpuLight::new(l) });
             }
-            if let Some(last) = cdf.last_mut() {
-                *last = 1.0;
+            if let Some(last) = gpu_lights.last_mut() {
+                last.shadow_near = 1.0;
             }
         }
         self.light_count = gpu_lights.len() as u32;
         self.lights.write(ctx.gpu, &gpu_lights);
-        self.cdf.write(ctx.gpu, &cdf);
         let p = &self.params;
         self.steps = if self.light_count == 0 { 0 } else { p.samples.div_ceil(p.samples_per_step.max(1)) as usize };
         self.counts = TechniqueCounts { lights_visible: gpu_lights.len(), batches: self.steps, ..Default::default() };
@@ -239,10 +228,8 @@ impl Technique for PathTraced {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: bvh.surface_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: self.lights.buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: self.cdf.buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 5, resource: self.step_uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: self.lights.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: self.step_uniform.as_entire_binding() },
             ],
         });
         let output = device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -54,8 +54,8 @@ pub struct GatherParams {
     pub shadow_resolution: u32,
     /// Shadow maps: constant depth bias, world units.
     pub depth_bias_world: f32,
-    /// Shadow maps: receiver offset along its normal, world units.
-    pub normal_offset_world: f32,
+    /// Shadow maps: receiver offset along its normal, in texels of the map at the receiver.
+    pub normal_offset_texels: f32,
     /// Shadow maps: memory of one batch's atlas, MiB.
     pub atlas_budget_mib: u32,
     /// Shadow maps: draw only the chunks in a VPL's front half-space.
@@ -68,8 +68,8 @@ impl Default for GatherParams {
             vpls_per_step: 256,
             ray_bias: 0.001,
             shadow_resolution: 128,
-            depth_bias_world: 0.02,
-            normal_offset_world: 0.01,
+            depth_bias_world: 0.01,
+            normal_offset_texels: 1.5,
             atlas_budget_mib: 64,
             cull: true,
         }
@@ -135,10 +135,14 @@ impl VplGather {
         (res, by_budget.min(per_row * per_row).clamp(1, MAX_CUBES_PER_BATCH * 6))
     }
 
-    /// Where paraboloid maps are centred and their depth range: a VPL sits on a surface, so the map's centre is
-    /// pushed off it along the normal; the far plane is the scene's diagonal (VPLs have no range).
+    /// Where paraboloid maps are centred and their depth range. A VPL sits on a surface, so the map's centre is
+    /// pushed off it along the normal by 0.2 % of the scene's diagonal: the triangles right around the VPL then
+    /// lie behind the map's plane (and are discarded) instead of rising in front of it at grazing angles, where
+    /// the paraboloid projection stretches a small triangle across the whole map (measured on the closed-sphere
+    /// test: 0.07 % offset darkened the image by 16 %, 0.2 % matches the ray tracer within 3 %). The far plane is
+    /// the scene's diagonal (VPLs have no range).
     fn depth_range(&self) -> (f32, f32, f32) {
-        let offset = self.scene_size * 1e-4;
+        let offset = self.scene_size * 2e-3;
         (offset, self.scene_size * 1e-5, self.scene_size * 1.01)
     }
 }
@@ -195,9 +199,9 @@ impl Technique for VplGather {
                 Param {
                     key: "normal_offset",
                     label: "Normal offset",
-                    help: "Receiver offset along its normal, world units",
-                    kind: ParamKind::Float { min: 0.0, max: 10.0 },
-                    value: ParamValue::Float(p.normal_offset_world),
+                    help: "Receiver offset along its normal, in shadow-map texels at the receiver",
+                    kind: ParamKind::Float { min: 0.0, max: 16.0 },
+                    value: ParamValue::Float(p.normal_offset_texels),
                 },
                 Param {
                     key: "atlas_mib",
@@ -227,7 +231,7 @@ impl Technique for VplGather {
             ("bias", ParamValue::Float(v)) if self.visibility == Visibility::RayTraced => p.ray_bias = *v,
             ("bias", ParamValue::Float(v)) => p.depth_bias_world = *v,
             ("shadow_res", ParamValue::Int(v)) => p.shadow_resolution = *v as u32,
-            ("normal_offset", ParamValue::Float(v)) => p.normal_offset_world = *v,
+            ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
             _ => unreachable!("check_param accepted an unknown key"),
@@ -329,7 +333,7 @@ impl Technique for VplGather {
                 batch.tiles_per_row = atlas.tiles_per_row;
                 batch.resolution = atlas.resolution;
                 batch.bias = self.params.depth_bias_world;
-                batch.normal_offset = self.params.normal_offset_world;
+                batch.normal_offset = self.params.normal_offset_texels;
                 batch.depth_near = near;
                 batch.depth_far = far;
                 batch.origin_offset = origin_offset;

@@ -1,0 +1,411 @@
+//! Indirect light: VPL generation (energy, determinism, sources), the gathers against analytic answers and a CPU
+//! gather, batching, the component switch, and bad input. On the software adapter.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3, Vec4};
+use shadowlab_core::renderer::Component;
+use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::vpl::{self, Vpl, VplSet, VplSettings, VplSource};
+use shadowlab_core::{RenderSettings, Renderer, ToneMap};
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+fn settings(component: Component, vpl: VplSettings) -> RenderSettings {
+    RenderSettings {
+        width: W,
+        height: H,
+        tonemap: ToneMap::Linear,
+        ambient: Vec3::ZERO,
+        component,
+        vpl,
+        ..Default::default()
+    }
+}
+
+fn scene_of(name: &str, meshes: Vec<Mesh>, albedo: f32, camera: Camera) -> Scene {
+    let m = Material { name: "m".into(), base_color: Vec4::new(albedo, albedo, albedo, 1.0), ..Default::default() };
+    let mut scene = Scene {
+        name: name.into(),
+        source: SceneSource::Builtin("test".into()),
+        meshes,
+        materials: vec![m],
+        textures: vec![],
+        lights: vec![],
+        camera,
+        bounds: Aabb::EMPTY,
+        warnings: vec![],
+    };
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    scene
+}
+
+/// A UV sphere of radius `r` around the origin with inward normals.
+fn inward_sphere(r: f32, stacks: u32, slices: u32) -> Mesh {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..=stacks {
+        let theta = std::f32::consts::PI * i as f32 / stacks as f32;
+        for j in 0..=slices {
+            let phi = 2.0 * std::f32::consts::PI * j as f32 / slices as f32;
+            let d = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            positions.push(d * r);
+            normals.push(-d);
+        }
+    }
+    let mut indices = Vec::new();
+    let row = slices + 1;
+    for i in 0..stacks {
+        for j in 0..slices {
+            let a = i * row + j;
+            let b = a + row;
+            // Counter-clockwise seen from inside (the G-buffer turns normals towards the viewer by winding).
+            indices.extend_from_slice(&[a, b, a + 1, a + 1, b, b + 1]);
+        }
+    }
+    let uvs = vec![Vec2::ZERO; positions.len()];
+    Mesh { name: "sphere".into(), positions, normals, uvs, indices, material: 0 }
+}
+
+/// Render `direct` + `indirect` with the given settings; returns the chosen component's HDR image.
+fn render(
+    scene: &Scene,
+    lights: &[PointLight],
+    s: RenderSettings,
+    indirect: Option<&str>,
+    params: &[(&str, ParamValue)],
+    fixed: Option<VplSet>,
+) -> (Renderer, Vec<[f32; 4]>, shadowlab_core::FrameReport) {
+    let gpu = gpu();
+    let mut renderer = Renderer::new(&gpu, scene, s).unwrap();
+    let mut direct = renderer.create_technique("unshadowed").unwrap();
+    if let Some(key) = indirect {
+        let mut t = renderer.create_indirect_technique(key).unwrap();
+        for (k, v) in params {
+            t.set_param(k, v).unwrap();
+        }
+        renderer.set_indirect(Some(t)).unwrap();
+    }
+    if fixed.is_some() {
+        renderer.set_fixed_vpls(fixed);
+    }
+    let report = renderer.render_frame(direct.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
+    let hdr = renderer.read_hdr().unwrap();
+    (renderer, hdr, report)
+}
+
+// --- VPL generation -------------------------------------------------------------------------------------------
+
+/// Flux a point light at height `h` above the centre of a square of side `side` sends onto it, by midpoint
+/// quadrature of `I * attenuation(d) * cos` (the renderer's falloff) over the square.
+fn intercepted_flux(intensity: f32, range: f32, h: f32, side: f32) -> f64 {
+    let n = 1000;
+    let cell = side as f64 / n as f64;
+    let mut sum = 0.0f64;
+    for i in 0..n {
+        for j in 0..n {
+            let x = (i as f64 + 0.5) * cell - side as f64 / 2.0;
+            let z = (j as f64 + 0.5) * cell - side as f64 / 2.0;
+            let d = (x * x + z * z + (h * h) as f64).sqrt();
+            let cos = h as f64 / d;
+            sum += intensity as f64 * attenuation(d as f32, range) as f64 * cos * cell * cell;
+        }
+    }
+    sum
+}
+
+fn plane_scene(side: f32, albedo: f32) -> Scene {
+    let camera = Camera::look_at(Vec3::new(0.0, 6.0, 5.0), Vec3::ZERO, 60f32.to_radians(), 0.1, 50.0);
+    scene_of("plane", vec![quad("ground", Vec3::ZERO, side, 0)], albedo, camera)
+}
+
+#[test]
+fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
+    let (side, h, albedo) = (8.0, 2.0, 0.6);
+    let scene = plane_scene(side, albedo);
+    let gpu = gpu();
+    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+        &gpu,
+        &scene,
+        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+    );
+    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let light = PointLight::new(Vec3::new(0.0, h, 0.0), Vec3::new(1.0, 0.5, 0.25), 10.0, 50.0);
+    let expected = albedo as f64 * intercepted_flux(10.0, 50.0, h, side);
+    let mut totals = Vec::new();
+    for source in [VplSource::Rsm, VplSource::Traced] {
+        let s = VplSettings { count: 1024, source, ..Default::default() };
+        let set = vpl::generate(&bvh, &[light], &s);
+        assert!(!set.vpls.is_empty());
+        let flux = set.total_flux();
+        // Colour carried: red = 1, green = 0.5, blue = 0.25 of the light.
+        let red = flux.x as f64;
+        let err = (red - expected).abs() / expected;
+        assert!(err < 0.02, "{source:?}: VPL flux {red:.4} vs reflected {expected:.4} ({:.2} %)", err * 100.0);
+        assert!((flux.y / flux.x - 0.5).abs() < 1e-4 && (flux.z / flux.x - 0.25).abs() < 1e-4);
+        // Every VPL lies on the plane, facing the light.
+        assert!(set.vpls.iter().all(|v| v.position.y.abs() < 1e-4 && v.normal.y > 0.99));
+        totals.push(red);
+    }
+    let agree = (totals[0] - totals[1]).abs() / totals[0];
+    assert!(agree < 0.02, "rsm and traced disagree on total flux by {:.2} %", agree * 100.0);
+}
+
+#[test]
+fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little() {
+    let scene = plane_scene(8.0, 0.5);
+    let gpu = gpu();
+    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+        &gpu,
+        &scene,
+        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+    );
+    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let light = PointLight::new(Vec3::new(0.3, 2.0, -0.2), Vec3::ONE, 5.0, 50.0);
+    for source in [VplSource::Rsm, VplSource::Traced] {
+        let s = VplSettings { count: 256, source, bounces: 3, ..Default::default() };
+        let a = vpl::generate(&bvh, &[light], &s);
+        let b = vpl::generate(&bvh, &[light], &s);
+        assert_eq!(a, b, "{source:?}: not deterministic");
+        let c = vpl::generate(&bvh, &[light], &VplSettings { seed: 7, ..s });
+        assert_ne!(a.vpls, c.vpls, "{source:?}: the seed changes nothing");
+        // Quasi-random coherence: moving the light 1 cm moves the first-bounce VPLs by centimetres, not metres.
+        let mut moved = light;
+        moved.position.x += 0.01;
+        let m = vpl::generate(&bvh, &[moved], &VplSettings { bounces: 1, ..s });
+        let a1 = vpl::generate(&bvh, &[light], &VplSettings { bounces: 1, ..s });
+        assert_eq!(m.vpls.len(), a1.vpls.len());
+        let worst = a1.vpls.iter().zip(&m.vpls).map(|(p, q)| p.position.distance(q.position)).fold(0.0, f32::max);
+        assert!(worst < 0.05, "{source:?}: a VPL jumped {worst} m");
+    }
+}
+
+#[test]
+fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error() {
+    let gpu = gpu();
+    let layout = shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device);
+    let scene = plane_scene(8.0, 0.5);
+    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
+    let (bvh, _) = gpu_scene.bvh(&gpu);
+    // Below the plane and facing nowhere it is single-sided? No: planes are hit from both sides; a light far
+    // outside the scene with a short range reaches nothing.
+    let away = PointLight::new(Vec3::new(0.0, 100.0, 0.0), Vec3::ONE, 5.0, 1.0);
+    let set = vpl::generate(&bvh, &[away], &VplSettings::default());
+    assert!(set.vpls.is_empty() && set.misses == set.samples && set.samples > 0);
+    let none = vpl::generate(&bvh, &[], &VplSettings::default());
+    assert!(none.vpls.is_empty());
+    let zero = vpl::generate(&bvh, &[away], &VplSettings { count: 0, ..Default::default() });
+    assert!(zero.vpls.is_empty() && zero.samples == 0);
+    let black = plane_scene(8.0, 0.0);
+    let black_gpu = shadowlab_core::renderer::gpu_scene::GpuScene::new(&gpu, &black, &layout);
+    let (black_bvh, _) = black_gpu.bvh(&gpu);
+    let light = PointLight::new(Vec3::new(0.0, 2.0, 0.0), Vec3::ONE, 5.0, 50.0);
+    assert!(vpl::generate(&black_bvh, &[light], &VplSettings::default()).vpls.is_empty());
+    // A million VPLs is refused with a message naming the limit.
+    let err = VplSettings { count: 1_000_000, ..Default::default() }.validate().unwrap_err();
+    assert!(err.contains("65536"), "{err}");
+    assert!(RenderSettings { vpl: VplSettings { count: 1_000_000, ..Default::default() }, ..Default::default() }
+        .validate()
+        .is_err());
+}
+
+/// The ground and occluder of `plane_and_occluder` with a back wall (z = -3, facing +z) that the ground's
+/// VPLs light, seen by the default camera.
+fn room() -> Scene {
+    let mut scene = plane_and_occluder();
+    let h = 4.0;
+    let wall = Mesh {
+        name: "wall".into(),
+        positions: vec![
+            Vec3::new(-h, 0.0, -3.0),
+            Vec3::new(h, 0.0, -3.0),
+            Vec3::new(h, 2.0 * h, -3.0),
+            Vec3::new(-h, 2.0 * h, -3.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+    };
+    scene.meshes.push(wall);
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    scene
+}
+
+// --- Gathers --------------------------------------------------------------------------------------------------
+
+#[test]
+fn closed_sphere_gives_rho_squared_e0_over_pi_everywhere() {
+    // A point light at the centre of a closed sphere of albedo rho: the one-bounce radiance is rho^2 E0 / pi at
+    // every point (cos cos / d^2 = 1 / (4 R^2) between any two points of a sphere).
+    let (r, rho, intensity, range) = (2.0f32, 0.5f32, 4.0f32, 1000.0f32);
+    let camera = Camera::look_at(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, -0.2, -1.0), 70f32.to_radians(), 0.05, 10.0);
+    let scene = scene_of("sphere", vec![inward_sphere(r, 48, 96)], rho, camera);
+    let lights = [PointLight::new(Vec3::new(0.0, 0.0, 0.0), Vec3::ONE, intensity, range)];
+    let e0 = intensity * attenuation(r, range);
+    let expected = rho * rho * e0 / std::f32::consts::PI;
+    let vpl = VplSettings { count: 1024, clamp_world: 0.05, ..Default::default() };
+    let cases: [(&str, Vec<(&str, ParamValue)>); 3] = [
+        ("vpl-raytraced", vec![]),
+        ("vpl-shadowmaps", vec![("shadow_res", ParamValue::Int(256))]),
+        ("pathtraced", vec![("samples", ParamValue::Int(256)), ("samples_per_step", ParamValue::Int(64))]),
+    ];
+    for (key, params) in cases {
+        let (_, hdr, report) = render(&scene, &lights, settings(Component::Indirect, vpl), Some(key), &params, None);
+        let indirect = report.indirect.as_ref().expect("the report has the indirect technique");
+        assert_eq!(indirect.technique, key);
+        let mean: f32 = hdr.iter().map(|p| p[0]).sum::<f32>() / hdr.len() as f32;
+        let worst = hdr.iter().map(|p| (p[0] - expected).abs() / expected).fold(0.0, f32::max);
+        let err = (mean - expected).abs() / expected;
+        if err >= 0.03 || (key != "pathtraced" && worst >= 0.05) {
+            save_hdr(&format!("sphere-{key}-actual.png"), W, H, &hdr, 0.5 / expected);
+        }
+        assert!(err < 0.03, "{key}: mean indirect {mean:.5} vs rho^2 E0/pi = {expected:.5} ({:.2} %)", err * 100.0);
+        // The VPL gathers are the same everywhere (no noise); the path tracer's pixels are noisy.
+        if key != "pathtraced" {
+            assert!(worst < 0.05, "{key}: worst pixel off by {:.2} %", worst * 100.0);
+        }
+        assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key}: non-finite pixel");
+    }
+}
+
+/// One VPL above the ground facing down, the square plate between them: the plate's shadow on the ground.
+fn one_vpl() -> (Scene, VplSet, Vpl) {
+    let scene = plane_and_occluder();
+    let v = Vpl {
+        position: Vec3::new(0.2, 2.0, 0.1),
+        normal: Vec3::NEG_Y,
+        flux: Vec3::splat(20.0),
+        light: 0,
+        from: Vec3::new(0.2, 3.0, 0.1),
+    };
+    let set = VplSet { settings: None, vpls: vec![v], samples: 1, misses: 0 };
+    (scene, set, v)
+}
+
+#[test]
+fn one_vpl_over_an_occluder_matches_a_cpu_gather() {
+    let (scene, set, v) = one_vpl();
+    let clamp = 0.1f32;
+    let vs = VplSettings { clamp_world: clamp, ..Default::default() };
+    for (key, tolerance, bad_share) in [("vpl-raytraced", 0.01, 0.005), ("vpl-shadowmaps", 0.02, 0.03)] {
+        let params = if key == "vpl-shadowmaps" { vec![("shadow_res", ParamValue::Int(512))] } else { vec![] };
+        let (renderer, hdr, _) =
+            render(&scene, &[], settings(Component::Indirect, vs), Some(key), &params, Some(set.clone()));
+        let positions = renderer.read_world_positions(&scene.camera).unwrap();
+        let (mut checked, mut bad, mut shadowed) = (0, 0, 0);
+        let mut expected_img = vec![None; hdr.len()];
+        let mut bad_img = vec![false; hdr.len()];
+        for (i, p) in positions.iter().enumerate() {
+            let Some(p) = p else { continue };
+            if p.y.abs() > 1e-3 {
+                continue; // the plate itself
+            }
+            // CPU gather: rho/pi * Phi/pi * cos_i cos_x / max(d^2, c^2) * V, V by the plate's square.
+            let to_x = *p - v.position;
+            let d2 = to_x.length_squared();
+            let w = to_x / d2.sqrt();
+            let (cos_i, cos_x) = (v.normal.dot(w), w.dot(Vec3::NEG_Y));
+            let t = (PLATE_CENTER.y - v.position.y) / w.y;
+            let hit = v.position + w * t;
+            let half = PLATE_SIZE * 0.5;
+            let dx = (hit.x - PLATE_CENTER.x).abs().max((hit.z - PLATE_CENTER.z).abs()) - half;
+            if dx.abs() < 0.03 {
+                continue; // within 3 cm of the shadow's edge (on the plate's plane)
+            }
+            let visible = dx > 0.0;
+            shadowed += !visible as u32;
+            let e = ALBEDO / std::f32::consts::PI * 20.0 / std::f32::consts::PI * cos_i.max(0.0) * cos_x.max(0.0)
+                / d2.max(clamp * clamp)
+                * visible as u32 as f32;
+            checked += 1;
+            expected_img[i] = Some([e, e, e, 1.0]);
+            if (hdr[i][0] - e).abs() > tolerance * e.max(1e-3) + 1e-5 {
+                bad += 1;
+                bad_img[i] = true;
+            }
+        }
+        assert!(checked > 1000 && shadowed > 50, "{key}: the test checks {checked} pixels, {shadowed} shadowed");
+        let share = bad as f32 / checked as f32;
+        if share > bad_share {
+            let dir = write_failure_images(&format!("one-vpl-{key}"), W, H, &hdr, &expected_img, &bad_img);
+            panic!("{key}: {bad} of {checked} ground pixels differ from the CPU gather (see {})", dir.display());
+        }
+    }
+}
+
+#[test]
+fn batched_gathers_equal_one_batch() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let vs = VplSettings { count: 1024, ..Default::default() };
+    let one = [("vpls_per_step", ParamValue::Int(1024))];
+    let many = [("vpls_per_step", ParamValue::Int(37))];
+    for key in ["vpl-raytraced", "vpl-unshadowed"] {
+        let (_, a, ra) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &one, None);
+        let (_, b, rb) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &many, None);
+        assert_eq!(ra.indirect.as_ref().unwrap().counts.batches, 1);
+        let n = ra.indirect.as_ref().unwrap().vpls;
+        assert!(n > 500, "{n} VPLs");
+        assert_eq!(rb.indirect.as_ref().unwrap().counts.batches, n.div_ceil(37));
+        assert_eq!(n, rb.indirect.as_ref().unwrap().vpls);
+        let max = a.iter().map(|p| p[0]).fold(0.0, f32::max);
+        assert!(max > 0.0, "{key}: no indirect light at all");
+        for (p, q) in a.iter().zip(&b) {
+            for c in 0..3 {
+                assert!((p[c] - q[c]).abs() <= 1e-3 * p[c].abs().max(1e-3 * max), "{key}: {p:?} vs {q:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn direct_light_is_bit_identical_with_or_without_an_indirect_technique() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let gpu = gpu();
+    let s = settings(Component::Total, VplSettings { count: 64, ..Default::default() });
+    let mut renderer = Renderer::new(&gpu, &scene, s.clone()).unwrap();
+    let mut reference = renderer.create_technique("reference").unwrap();
+    renderer.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    let alone = renderer.read_hdr().unwrap();
+    let output_alone = renderer.read_output().unwrap();
+    let t = renderer.create_indirect_technique("vpl-unshadowed").unwrap();
+    renderer.set_indirect(Some(t)).unwrap();
+    let report = renderer.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    assert!(report.indirect.as_ref().unwrap().vpls > 0);
+    let direct = renderer.read_component(Component::Direct).unwrap();
+    assert!(alone == direct, "the direct part changed when an indirect technique joined");
+    let total = renderer.read_component(Component::Total).unwrap();
+    let indirect = renderer.read_component(Component::Indirect).unwrap();
+    assert!(indirect.iter().any(|p| p[0] > 0.0));
+    for ((t, d), i) in total.iter().zip(&direct).zip(&indirect) {
+        assert!((t[0] - d[0] - i[0]).abs() < 1e-6);
+    }
+    // Back to no indirect technique: the output is what it was.
+    renderer.set_indirect(None).unwrap();
+    renderer.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    assert!(renderer.read_output().unwrap() == output_alone);
+    assert!(renderer.read_component(Component::Indirect).unwrap().iter().all(|p| p[0] == 0.0));
+}
+
+#[test]
+fn zero_vpls_and_a_light_on_a_surface_give_a_defined_image() {
+    let scene = room();
+    // A light exactly on the ground: VPLs at distance ~0 from it, receivers at d = 0 from VPLs.
+    let lights = [white_light(Vec3::new(0.0, 0.0, 2.0), 8.0, 30.0), white_light(Vec3::new(0.0, 1.0, 0.0), 4.0, 30.0)];
+    for key in ["vpl-raytraced", "vpl-shadowmaps", "vpl-unshadowed", "pathtraced"] {
+        for count in [0, 64] {
+            let vs = VplSettings { count, clamp_world: 0.0, ..Default::default() };
+            let params = if key == "pathtraced" { vec![("samples", ParamValue::Int(4))] } else { vec![] };
+            let (_, hdr, report) = render(&scene, &lights, settings(Component::Total, vs), Some(key), &params, None);
+            assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key} with {count} VPLs: NaN pixel");
+            if count == 0 && key != "pathtraced" {
+                assert_eq!(report.indirect.unwrap().vpls, 0);
+            }
+        }
+    }
+}
