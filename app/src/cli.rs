@@ -8,9 +8,11 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
 use serde::Serialize;
+use shadowlab_core::renderer::Component;
 use shadowlab_core::scene::layout::{self, LightLayout};
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::{self, Technique};
+use shadowlab_core::vpl::{VplSettings, VplSource};
 use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer, ToneMap};
 
 #[derive(Parser, Debug)]
@@ -136,6 +138,41 @@ pub struct FrameArgs {
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
+    /// Indirect technique added to the direct one: none, vpl-shadowmaps, vpl-raytraced, vpl-unshadowed,
+    /// pathtraced.
+    #[arg(long, default_value = "none")]
+    pub indirect: String,
+    /// A parameter of the indirect technique, `key=value` (in `sweep`: `key=VALUES` like `--param`); repeatable.
+    #[arg(long = "indirect-param", value_name = "KEY=VALUE")]
+    pub indirect_params: Vec<String>,
+    /// VPLs (RSM texels or traced particles) shared by every VPL technique; 0 = no indirect light.
+    #[arg(long, default_value_t = 1024)]
+    pub vpls: u32,
+    /// Where VPLs come from: rsm (reflective shadow maps) or traced (particles through the BVH).
+    #[arg(long, default_value = "rsm")]
+    pub vpl_source: String,
+    /// Bounces of traced particles (the rsm source is one bounce).
+    #[arg(long, default_value_t = 1)]
+    pub bounces: u32,
+    /// d_clamp of the VPL gathers in world units: 1/d^2 is clamped to 1/d_clamp^2.
+    #[arg(long, default_value_t = 0.1)]
+    pub vpl_clamp: f32,
+    /// Seed of the VPLs' quasi-random sequence.
+    #[arg(long, default_value_t = 0)]
+    pub vpl_seed: u32,
+    /// What images, metrics and difference images show: total, direct or indirect.
+    #[arg(long, default_value = "total")]
+    pub component: String,
+    /// Display gain of the indirect component in saved images (metrics never use it).
+    #[arg(long, default_value_t = 1.0)]
+    pub indirect_gain: f32,
+}
+
+impl FrameArgs {
+    /// The indirect technique of the technique side.
+    pub fn indirect_choice(&self) -> crate::measure::IndirectChoice {
+        crate::measure::IndirectChoice { key: self.indirect.clone(), params: self.indirect_params.clone() }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -175,6 +212,12 @@ pub struct CompareArgs {
     /// A parameter of the comparison target, `key=value`; repeatable.
     #[arg(long = "against-param", value_name = "KEY=VALUE")]
     pub against_params: Vec<String>,
+    /// The comparison target's indirect technique (default: the same as `--indirect`).
+    #[arg(long = "against-indirect", value_name = "KEY")]
+    pub against_indirect: Option<String>,
+    /// A parameter of the target's indirect technique, `key=value`; repeatable.
+    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
+    pub against_indirect_params: Vec<String>,
     /// Difference image mode.
     #[arg(long, value_enum, default_value = "absolute")]
     pub mode: crate::measure::DiffKind,
@@ -212,6 +255,12 @@ pub struct SweepArgs {
     pub against: String,
     #[arg(long = "against-param", value_name = "KEY=VALUE")]
     pub against_params: Vec<String>,
+    /// The comparison target's indirect technique (default: the same as `--indirect`).
+    #[arg(long = "against-indirect", value_name = "KEY")]
+    pub against_indirect: Option<String>,
+    /// A parameter of the target's indirect technique, `key=value`; repeatable.
+    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
+    pub against_indirect_params: Vec<String>,
     /// Skip the FLIP metric.
     #[arg(long)]
     pub no_flip: bool,
@@ -410,15 +459,32 @@ fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Rende
         "linear" => ToneMap::Linear,
         other => bail!("--tonemap '{other}': choose aces, reinhard or linear"),
     };
+    let source = VplSource::parse(&frame.vpl_source)
+        .ok_or_else(|| anyhow!("--vpl-source '{}': choose {}", frame.vpl_source, VplSource::NAMES.join(" or ")))?;
+    let component = Component::parse(&frame.component)
+        .ok_or_else(|| anyhow!("--component '{}': choose {}", frame.component, Component::NAMES.join(", ")))?;
+    check_indirect(&frame.indirect)?;
     let settings = RenderSettings {
         width: frame.width,
         height: frame.height,
         exposure: frame.exposure,
         tonemap,
         specular: frame.specular,
+        vpl: VplSettings {
+            count: frame.vpls,
+            source,
+            bounces: frame.bounces,
+            clamp_world: frame.vpl_clamp,
+            seed: frame.vpl_seed,
+        },
+        component,
+        indirect_gain: frame.indirect_gain,
         ..Default::default()
     };
     settings.validate()?;
+    if frame.vpls == 0 && frame.indirect != "none" && !frame.quiet {
+        eprintln!("note: --vpls 0: the VPL techniques add no indirect light");
+    }
     if frame.warmup > 20 || frame.repeat > 1000 {
         bail!("--warmup {} / --repeat {}: at most 20 warm-up and 1000 measured frames", frame.warmup, frame.repeat);
     }
@@ -437,6 +503,14 @@ fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Rende
     let gpu = GpuContext::headless()?;
     let renderer = Renderer::new(&gpu, &scene, settings)?;
     Ok((gpu, renderer, scene, lights, camera))
+}
+
+/// `none` or a key of the indirect registry.
+pub fn check_indirect(key: &str) -> Result<()> {
+    if key != "none" && technique::INDIRECT_REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown indirect technique '{key}' (choose none or one of: {})", technique::indirect_keys());
+    }
+    Ok(())
 }
 
 fn check_technique(key: &str) -> Result<()> {
@@ -463,6 +537,7 @@ fn render(args: RenderArgs) -> Result<()> {
     let mut technique =
         renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
     apply_params(technique.as_mut(), frame.shadow_res, &args.params)?;
+    crate::measure::apply_indirect(&mut renderer, &frame.indirect_choice())?;
 
     let mut reports = Vec::new();
     let total = frame.warmup + frame.repeat.max(1);
@@ -560,6 +635,30 @@ struct CompareReport<'a> {
     /// Same-run speedup of the technique over the comparison target (median frame times).
     speedup: f64,
     technique_counts: &'a shadowlab_core::renderer::FrameCounts,
+    /// The component the metrics were computed on.
+    component: &'a str,
+    indirect: &'a crate::measure::IndirectChoice,
+    against_indirect: &'a crate::measure::IndirectChoice,
+    /// VPLs the technique side used (absent without an indirect technique).
+    vpls: Option<usize>,
+    technique_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
+    against_report_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
+}
+
+/// The target's indirect technique: `--against-indirect` (with its parameters) or the technique side's.
+fn against_indirect(
+    key: &Option<String>,
+    params: &[String],
+    same: &crate::measure::IndirectChoice,
+) -> Result<crate::measure::IndirectChoice> {
+    match key {
+        Some(k) => {
+            check_indirect(k)?;
+            Ok(crate::measure::IndirectChoice { key: k.clone(), params: params.to_vec() })
+        }
+        None if params.is_empty() => Ok(same.clone()),
+        None => bail!("--against-indirect-param needs --against-indirect"),
+    }
 }
 
 fn compare(args: CompareArgs) -> Result<()> {
@@ -583,6 +682,8 @@ fn compare(args: CompareArgs) -> Result<()> {
             eprintln!("{m}");
         }
     };
+    let indirect = f.indirect_choice();
+    let against_indirect = against_indirect(&args.against_indirect, &args.against_indirect_params, &indirect)?;
     let target = crate::measure::render_technique(
         &mut renderer,
         &args.against,
@@ -590,6 +691,7 @@ fn compare(args: CompareArgs) -> Result<()> {
         &args.against_params,
         &camera,
         &lights,
+        &against_indirect,
         f.warmup,
         f.repeat,
         &mut say,
@@ -601,6 +703,7 @@ fn compare(args: CompareArgs) -> Result<()> {
         &args.params,
         &camera,
         &lights,
+        &indirect,
         f.warmup,
         f.repeat,
         &mut say,
@@ -657,6 +760,12 @@ fn compare(args: CompareArgs) -> Result<()> {
             against_timing: &target.timing,
             speedup,
             technique_counts: &tech.report.counts,
+            component: &f.component,
+            indirect: &indirect,
+            against_indirect: &against_indirect,
+            vpls: tech.report.indirect.as_ref().map(|i| i.vpls),
+            technique_indirect: tech.report.indirect.as_ref(),
+            against_report_indirect: target.report.indirect.as_ref(),
         };
         write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
     }
@@ -666,9 +775,27 @@ fn compare(args: CompareArgs) -> Result<()> {
 /// The swept pseudo-parameter that changes the number of lights, not a technique parameter.
 const LIGHTS_KEY: &str = "lights";
 
-/// A sweep setting's technique parameters as `key=value` (without `lights`).
+/// Prefix of swept indirect-technique parameters in a sweep setting (`--indirect-param key=VALUES`).
+const INDIRECT_PREFIX: &str = "indirect.";
+
+/// A sweep setting's technique parameters as `key=value` (without `lights` and the indirect ones).
 fn technique_params(setting: &[(String, String)]) -> Vec<String> {
-    setting.iter().filter(|(k, _)| k != LIGHTS_KEY).map(|(k, v)| format!("{k}={v}")).collect()
+    setting
+        .iter()
+        .filter(|(k, _)| k != LIGHTS_KEY && !k.starts_with(INDIRECT_PREFIX))
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect()
+}
+
+/// A sweep setting's indirect technique, its swept parameters included.
+fn indirect_for(setting: &[(String, String)], key: &str) -> crate::measure::IndirectChoice {
+    crate::measure::IndirectChoice {
+        key: key.to_string(),
+        params: setting
+            .iter()
+            .filter_map(|(k, v)| k.strip_prefix(INDIRECT_PREFIX).map(|k| format!("{k}={v}")))
+            .collect(),
+    }
 }
 
 fn sweep(args: SweepArgs) -> Result<()> {
@@ -681,8 +808,15 @@ fn sweep(args: SweepArgs) -> Result<()> {
     if let Some(p) = &args.plot {
         check_output_path(p, "png")?;
     }
-    let swept: Vec<(String, Vec<String>)> =
+    let mut swept: Vec<(String, Vec<String>)> =
         args.params.iter().map(|p| crate::measure::sweep_values(p)).collect::<Result<_>>()?;
+    for p in &args.frame.indirect_params {
+        let (k, v) = crate::measure::sweep_values(p)?;
+        swept.push((format!("{INDIRECT_PREFIX}{k}"), v));
+    }
+    if args.frame.indirect == "none" && !args.frame.indirect_params.is_empty() {
+        bail!("--indirect-param given without an --indirect technique");
+    }
     let settings = crate::measure::combinations(&swept);
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
@@ -693,8 +827,11 @@ fn sweep(args: SweepArgs) -> Result<()> {
         let mut probe = renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique"))?;
         for setting in &settings {
             apply_params(probe.as_mut(), f.shadow_res, &technique_params(setting))?;
+            crate::measure::apply_indirect(&mut renderer, &indirect_for(setting, &f.indirect))?;
         }
     }
+    let same_indirect = f.indirect_choice();
+    let target_indirect = against_indirect(&args.against_indirect, &args.against_indirect_params, &same_indirect)?;
     // `--param lights=N1,N2,...` sweeps the light count of a `random:` layout: the comparison target is rendered
     // again for each count.
     let layout: LightLayout = layout::parse(&args.scene.lights)?;
@@ -719,6 +856,7 @@ fn sweep(args: SweepArgs) -> Result<()> {
             &args.against_params,
             &camera,
             lights,
+            &target_indirect,
             f.warmup,
             f.repeat,
             &mut |_: &str| {},
@@ -753,6 +891,8 @@ fn sweep(args: SweepArgs) -> Result<()> {
             "shadow_error",
             "share_over_5pct",
             "fallback",
+            "vpls",
+            "indirect_ms",
         ]
         .map(String::from),
     );
@@ -790,6 +930,7 @@ fn sweep(args: SweepArgs) -> Result<()> {
             &strings,
             &camera,
             &lights,
+            &indirect_for(setting, &f.indirect),
             f.warmup,
             f.repeat,
             no_progress,
@@ -829,6 +970,8 @@ fn sweep(args: SweepArgs) -> Result<()> {
             m.shadow_intensity_error.map(|v| format!("{:.4}", v)).unwrap_or_default(),
             format!("{:.4}", m.share_over_threshold),
             c.fell_back_to_reference.to_string(),
+            r.report.indirect.as_ref().map(|i| i.vpls.to_string()).unwrap_or_default(),
+            format!("{:.2}", ["vpl shadow maps", "vpl gather", "path tracing"].iter().map(|n| pass(n)).sum::<f64>()),
         ]);
         rows.push(row);
         progress.update(i + 1, settings.len());
@@ -948,6 +1091,15 @@ fn bench(args: BenchArgs) -> Result<()> {
             warmup: args.warmup,
             repeat: args.repeat,
             quiet: true,
+            indirect: "none".into(),
+            indirect_params: Vec::new(),
+            vpls: VplSettings::default().count,
+            vpl_source: "rsm".into(),
+            bounces: 1,
+            vpl_clamp: VplSettings::default().clamp_world,
+            vpl_seed: 0,
+            component: "total".into(),
+            indirect_gain: 1.0,
         };
         eprintln!("{}: loading", s.name);
         let (gpu, mut renderer, _scene, lights, camera) = setup(&s.scene, &frame)?;
@@ -964,6 +1116,7 @@ fn bench(args: BenchArgs) -> Result<()> {
                 &params,
                 &camera,
                 &lights,
+                &crate::measure::IndirectChoice::none(),
                 frame.warmup,
                 frame.repeat,
                 &mut |_| {},

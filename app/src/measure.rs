@@ -77,6 +77,40 @@ pub struct Rendered {
     pub parameters: BTreeMap<String, String>,
 }
 
+/// The indirect technique of one side of a comparison: `none` or a key, and its `key=value` parameters.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct IndirectChoice {
+    pub key: String,
+    pub params: Vec<String>,
+}
+
+impl IndirectChoice {
+    pub fn none() -> IndirectChoice {
+        IndirectChoice { key: "none".into(), params: Vec::new() }
+    }
+}
+
+/// Give `renderer` the indirect technique of `choice` (or none).
+pub fn apply_indirect(renderer: &mut Renderer, choice: &IndirectChoice) -> Result<()> {
+    if choice.key == "none" {
+        if !choice.params.is_empty() {
+            return Err(anyhow!("--indirect-param given without an --indirect technique"));
+        }
+        renderer.set_indirect(None)?;
+        return Ok(());
+    }
+    let mut t = renderer.create_indirect_technique(&choice.key).ok_or_else(|| {
+        anyhow!(
+            "unknown indirect technique '{}' (choose none or one of: {})",
+            choice.key,
+            shadowlab_core::technique::indirect_keys()
+        )
+    })?;
+    apply_params(t.as_mut(), None, &choice.params)?;
+    renderer.set_indirect(Some(t))?;
+    Ok(())
+}
+
 /// Render `technique` with `params` (`key=value`) `warmup` + `repeat` times.
 #[allow(clippy::too_many_arguments)]
 pub fn render_technique(
@@ -86,10 +120,12 @@ pub fn render_technique(
     params: &[String],
     camera: &Camera,
     lights: &[PointLight],
+    indirect: &IndirectChoice,
     warmup: u32,
     repeat: u32,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
+    apply_indirect(renderer, indirect)?;
     let mut t = renderer.create_technique(technique).ok_or_else(|| {
         anyhow!("unknown technique '{technique}' (choose one of: {})", shadowlab_core::technique::keys())
     })?;
@@ -104,7 +140,12 @@ pub fn render_technique(
     }
     let (w, h) = (renderer.settings().width, renderer.settings().height);
     let image = Image::new(w, h, renderer.read_hdr()?)?;
-    let parameters = t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
+    let mut parameters: BTreeMap<String, String> =
+        t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
+    if let Some(i) = renderer.indirect() {
+        parameters.insert("indirect".into(), i.key().to_string());
+        parameters.extend(i.params().into_iter().map(|p| (format!("indirect.{}", p.key), p.value.to_string())));
+    }
     Ok(Rendered { image, timing: summarize(&reports), report: reports.pop().expect("at least one frame"), parameters })
 }
 
@@ -130,8 +171,10 @@ pub struct CompareInputs {
 
 pub fn compare_inputs(renderer: &mut Renderer, camera: &Camera, lights: &[PointLight]) -> Result<CompareInputs> {
     let no_progress = &mut |_: &str| {};
-    let unshadowed = render_technique(renderer, "unshadowed", None, &[], camera, lights, 0, 1, no_progress)?.image;
-    let ambient = render_technique(renderer, "unshadowed", None, &[], camera, &[], 0, 1, no_progress)?.image;
+    let none = IndirectChoice::none();
+    let unshadowed =
+        render_technique(renderer, "unshadowed", None, &[], camera, lights, &none, 0, 1, no_progress)?.image;
+    let ambient = render_technique(renderer, "unshadowed", None, &[], camera, &[], &none, 0, 1, no_progress)?.image;
     Ok(CompareInputs { mask: renderer.read_geometry_mask()?, unshadowed, ambient })
 }
 
