@@ -420,3 +420,74 @@ fn bench_runs_the_standard_suite_on_the_builtin_scenes() {
         assert!(text.contains(needle), "{needle} missing in\n{text}");
     }
 }
+
+#[test]
+fn indirect_light_renders_compares_and_sweeps_by_component() {
+    let small = ["--scene", "cornell", "--width", "64", "--height", "48", "--vpls", "128"];
+    // Total vs direct: the indirect part brightens the image; the report gives the VPL count.
+    let mut args: Vec<&str> = small.to_vec();
+    args.extend(["--indirect", "vpl-unshadowed"]);
+    let (total, report) = render_ok("indirect-total", &args);
+    let vpls = report["frame"]["indirect"]["vpls"].as_u64().expect("the report gives vpls");
+    assert!(vpls > 0 && vpls <= 128, "{vpls} VPLs");
+    let (direct, _) = render_ok("indirect-direct", &small);
+    assert!(image_stats(&total).1 > image_stats(&direct).1, "indirect light adds nothing");
+    // --vpls 0: no indirect light, said so, and the image equals the direct one.
+    let dir = out_dir("indirect-zero");
+    let png = dir.join("out.png");
+    let mut args: Vec<&str> = vec!["render", "--warmup", "0", "--out", png.to_str().unwrap()];
+    args.extend(&small[..6]);
+    args.extend(["--indirect", "vpl-raytraced", "--vpls", "0"]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no indirect light"));
+    assert!(image::open(&png).unwrap().to_rgba8() == direct, "--vpls 0 changed the image");
+
+    // Comparing two indirect techniques over the same direct light on the indirect component.
+    let dir = out_dir("indirect-compare");
+    let (diff, json) = (dir.join("diff.png"), dir.join("report.json"));
+    let mut args: Vec<&str> =
+        vec!["compare", "--quiet", "--warmup", "0", "--out", diff.to_str().unwrap(), "--report", json.to_str().unwrap()];
+    args.extend(small);
+    args.extend(["--technique", "reference", "--against", "reference", "--indirect", "vpl-unshadowed"]);
+    args.extend(["--against-indirect", "vpl-raytraced", "--component", "indirect"]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(r["component"], "indirect");
+    assert_eq!(r["against_indirect"]["key"], "vpl-raytraced");
+    // Unshadowed VPLs are brighter than visible ones: the indirect component differs.
+    assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0);
+
+    // A sweep over an indirect parameter: one row per value, with the vpls column.
+    let csv = dir.join("sweep.csv");
+    let mut args: Vec<&str> = vec!["sweep", "--quiet", "--warmup", "0", "--no-flip", "--out", csv.to_str().unwrap()];
+    args.extend(small);
+    args.extend(["--technique", "unshadowed", "--against", "unshadowed", "--indirect", "vpl-shadowmaps"]);
+    args.extend(["--indirect-param", "shadow_res=16,32", "--against-indirect", "vpl-raytraced"]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(lines[0].starts_with("indirect.shadow_res,") && lines[0].contains(",vpls,"), "{}", lines[0]);
+}
+
+#[test]
+fn bad_indirect_input_gives_a_one_line_error() {
+    let small = ["render", "--scene", "cornell", "--width", "32", "--height", "24", "--out", "/tmp/shadowlab-x.png"];
+    let with = |extra: &[&'static str]| -> Vec<&'static str> {
+        let mut v = small.to_vec();
+        v.extend_from_slice(extra);
+        v
+    };
+    assert_fails_with(&with(&["--indirect", "nope"]), "unknown indirect technique 'nope'");
+    assert_fails_with(&with(&["--indirect", "vpl-raytraced", "--vpls", "1000000"]), "limit is 65536");
+    assert_fails_with(&with(&["--vpl-source", "photons"]), "--vpl-source 'photons'");
+    assert_fails_with(&with(&["--bounces", "0"]), "bounces 0");
+    assert_fails_with(&with(&["--vpl-clamp", "NaN"]), "clamp");
+    assert_fails_with(&with(&["--component", "both"]), "--component 'both'");
+    assert_fails_with(&with(&["--indirect-gain", "0"]), "indirect gain");
+    assert_fails_with(&with(&["--indirect", "pathtraced", "--indirect-param", "samples=0"]), "samples");
+    assert_fails_with(&with(&["--indirect-param", "samples=4"]), "without an --indirect");
+}
