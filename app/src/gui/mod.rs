@@ -772,14 +772,23 @@ impl ShadowLabApp {
         }
         use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Visibility};
         let (w, h) = gpu.main.size;
-        let technique = Image::new(w, h, gpu.main.renderer.read_hdr()?)?;
-        let reference = Image::new(w, h, gpu.reference.renderer.read_hdr()?)?;
+        // Shadow factors are those of the direct light, whatever component the views show; otherwise the
+        // component shown is compared.
+        let read = |renderer: &shadowlab_core::Renderer| {
+            if self.view.diff_visibility {
+                renderer.read_component(Component::Direct)
+            } else {
+                renderer.read_hdr()
+            }
+        };
+        let technique = Image::new(w, h, read(&gpu.main.renderer)?)?;
+        let reference = Image::new(w, h, read(&gpu.reference.renderer)?)?;
         let mask = gpu.main.renderer.read_geometry_mask()?;
         let mode = if self.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
         let gain = self.view.diff_gain;
         let (metrics, image) = if self.view.diff_visibility {
             // Shadow factors need the unshadowed and ambient-only images of the same view.
-            let settings = gpu.main.renderer.settings().clone();
+            let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
             let mut aux = shadowlab_core::Renderer::new(&gpu.ctx, &self.scene, settings)?;
             let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
             aux.render_frame(unshadowed.as_mut(), &camera, &lights, &mut |_, _| {})?;
