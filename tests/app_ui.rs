@@ -400,6 +400,32 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     let hdr = gpu.main.renderer.read_component(Component::Indirect).unwrap();
     assert!(hdr.iter().any(|p| p[0] + p[1] + p[2] > 0.0), "some indirect light");
 
+    // While the camera moves the preview has no indirect light; once it settles the same instance is back.
+    let centre = h.state().last_viewport_rect.unwrap().center();
+    move_to(&mut h, centre);
+    h.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: egui::vec2(0.0, 40.0),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Wheel,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.step();
+    h.step();
+    let preview = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+    assert!(preview.technique == "unshadowed" && preview.indirect.is_none(), "{}", preview.technique);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    let settled = loop {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+        let r = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+        if r.technique != "unshadowed" || std::time::Instant::now() > deadline {
+            break r;
+        }
+    };
+    assert_eq!(settled.technique, "reference");
+    assert_eq!(settled.indirect.expect("indirect light again").counts.batches, main.counts.batches);
+
     // Saved and loaded in a fresh app; a file naming an unknown indirect technique is refused, state kept.
     let file = dir.join("indirect.ron");
     h.state_mut().save_scene_file(&file).unwrap();
