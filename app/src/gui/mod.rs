@@ -1,6 +1,8 @@
 //! The interactive app: a 3D view of the scene rendered by the core (progressively, on eframe's device),
 //! light editing with picking, a move gizmo and undo/redo, technique selection with generated parameter panels,
 //! overlays, side-by-side and split comparison with the reference, live timings, screenshots and scene files.
+//! An indirect technique (`INDIRECT_REGISTRY`, none by default) can be added to every view, with its own
+//! generated panel, the shared VPL settings and the component (total, direct, indirect) the views show.
 
 pub mod camera;
 pub mod document;

@@ -1,5 +1,6 @@
 //! The panels around the 3D view: menu bar, technique and parameters (generated from the technique's parameter
-//! list), render and camera settings, overlays, the light list and inspector, scene statistics, timings.
+//! list), the indirect technique with its parameters (the same generated panel), VPL settings and component,
+//! render and camera settings, overlays, the light list and inspector, scene statistics, timings.
 
 use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
