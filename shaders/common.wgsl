@@ -28,6 +28,18 @@ struct Light {
     radiance: vec3<f32>,
     // near plane of the light's cube shadow map
     shadow_near: f32,
+    // spot lights: the cone's direction (zero for omnidirectional lights)
+    spot_direction: vec3<f32>,
+    // cone factor = saturate(cos * spot_scale + spot_offset)^2; 0 and 1 for omnidirectional lights
+    spot_scale: f32,
+    spot_offset: f32,
+}
+
+// The spot cone's factor towards the unit direction `dir` from the light (1 for omnidirectional lights).
+// Keep in sync with `Spot::factor` in core/src/scene/mod.rs.
+fn spot_factor(light: Light, dir: vec3<f32>) -> f32 {
+    let t = clamp(dot(dir, light.spot_direction) * light.spot_scale + light.spot_offset, 0.0, 1.0);
+    return t * t;
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -109,5 +121,5 @@ fn shade_light(s: Surface, light: Light) -> vec3<f32> {
         let h = normalize(l + v);
         brdf += vec3<f32>(s.specular * (s.shininess + 8.0) / (8.0 * PI) * pow(max(dot(s.normal, h), 0.0), s.shininess));
     }
-    return brdf * light.radiance * attenuation(distance, light.range) * n_dot_l;
+    return brdf * light.radiance * (attenuation(distance, light.range) * n_dot_l * spot_factor(light, -l));
 }

@@ -118,7 +118,7 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
         if bvh_occluded(shadow_origin, (light.position - shadow_origin) / shadow_distance, shadow_distance - y_eps) {
             continue;
         }
-        let irradiance = light.radiance * (attenuation(d, light.range) * cos_y / p_light);
+        let irradiance = light.radiance * (attenuation(d, light.range) * cos_y * spot_factor(light, -l) / p_light);
         sum += albedo_y / PI * irradiance;
     }
     let index = id.y * width + id.x;

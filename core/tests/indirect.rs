@@ -20,6 +20,7 @@ fn settings(component: Component, vpl: VplSettings) -> RenderSettings {
         height: H,
         tonemap: ToneMap::Linear,
         ambient: Vec3::ZERO,
+        background: Vec3::ZERO,
         component,
         vpl,
         ..Default::default()
@@ -408,4 +409,98 @@ fn zero_vpls_and_a_light_on_a_surface_give_a_defined_image() {
             }
         }
     }
+}
+
+// --- Spot lights ----------------------------------------------------------------------------------------------
+
+fn spot_over_plane(cone_deg: f32) -> PointLight {
+    let layout = shadowlab_core::scene::layout::parse(&format!("spot:0.5,3,0.2:0.5,0,0.2:{cone_deg}:20")).unwrap();
+    // The canonical spec reads back to the same layout.
+    assert_eq!(shadowlab_core::scene::layout::parse(&layout.to_string()).unwrap(), layout);
+    let lights = shadowlab_core::scene::layout::generate(&layout, &plane_scene(8.0, 0.5)).unwrap();
+    assert_eq!(lights.len(), 1);
+    lights[0]
+}
+
+#[test]
+fn spot_lights_light_their_cone_only_in_every_direct_technique() {
+    let scene = plane_scene(8.0, 0.5);
+    let spot = spot_over_plane(30.0);
+    let cone = spot.spot.unwrap();
+    assert!((cone.outer_angle - 30f32.to_radians()).abs() < 1e-6 && cone.inner_angle < cone.outer_angle);
+    let gpu = gpu();
+    for key in ["reference", "unshadowed", "raytraced", "lightcluster", "insm"] {
+        let mut renderer = Renderer::new(&gpu, &scene, settings(Component::Total, VplSettings::default())).unwrap();
+        let mut t = renderer.create_technique(key).unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &[spot], &mut |_, _| {}).unwrap();
+        let hdr = renderer.read_hdr().unwrap();
+        let positions = renderer.read_world_positions(&scene.camera).unwrap();
+        let (mut inside, mut outside) = (0, 0);
+        for (p, px) in positions.iter().zip(&hdr) {
+            let Some(p) = p else { continue };
+            let dir = (*p - spot.position).normalize();
+            let angle = dir.dot(cone.direction).clamp(-1.0, 1.0).acos();
+            let d = p.distance(spot.position);
+            let expected = 0.5 / std::f32::consts::PI
+                * spot.intensity
+                * attenuation(d, spot.range)
+                * (-dir.y)
+                * spot.cone_factor(dir);
+            if angle > cone.outer_angle * 1.02 {
+                outside += 1;
+                assert!(px[0].abs() < 1e-4, "{key}: lit outside the cone ({} at {angle} rad)", px[0]);
+            } else if angle < cone.inner_angle * 0.98 {
+                inside += 1;
+                assert!((px[0] - expected).abs() < 0.01 * expected + 1e-4, "{key}: {} vs {expected} inside", px[0]);
+            }
+        }
+        assert!(inside > 50 && outside > 500, "{key}: {inside} pixels inside, {outside} outside the cone");
+    }
+}
+
+#[test]
+fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
+    let scene = plane_scene(8.0, 0.5);
+    let gpu = gpu();
+    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+        &gpu,
+        &scene,
+        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+    );
+    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let spot = spot_over_plane(25.0);
+    let cone = spot.spot.unwrap();
+    // The flux the plane reflects, by quadrature over the plane, the cone's falloff included.
+    let n = 800;
+    let (side, mut expected) = (8.0f64, 0.0f64);
+    let cell = side / n as f64;
+    for i in 0..n {
+        for j in 0..n {
+            let p = Vec3::new(((i as f64 + 0.5) * cell - 4.0) as f32, 0.0, ((j as f64 + 0.5) * cell - 4.0) as f32);
+            let to = p - spot.position;
+            let d = to.length();
+            let dir = to / d;
+            let e = spot.intensity * attenuation(d, spot.range) * (-dir.y) * spot.cone_factor(dir);
+            expected += e as f64 * cell * cell;
+        }
+    }
+    expected *= 0.5 * 0.9; // albedo, and the red of warm white (1, 0.9, 0.75) is 1: use green
+    for source in [VplSource::Rsm, VplSource::Traced] {
+        let set = vpl::generate(&bvh, &[spot], &VplSettings { count: 2048, source, ..Default::default() });
+        assert!(!set.vpls.is_empty());
+        for v in &set.vpls {
+            let angle = (v.position - spot.position).normalize().dot(cone.direction).acos();
+            assert!(angle <= cone.outer_angle + 1e-3, "{source:?}: a VPL outside the cone ({angle} rad)");
+        }
+        let green = set.total_flux().y as f64;
+        let err = (green - expected).abs() / expected;
+        assert!(err < 0.02, "{source:?}: spot VPL flux {green:.4} vs {expected:.4} ({:.2} %)", err * 100.0);
+    }
+    // A zero cone lights nothing and makes no VPL: a defined, dark image.
+    let zero = spot_over_plane(0.0);
+    let set = vpl::generate(&bvh, &[zero], &VplSettings::default());
+    assert!(set.vpls.iter().all(|v| v.flux.max_element() < 1e-6 * spot.intensity));
+    let (_, hdr, _) =
+        render(&scene, &[zero], settings(Component::Total, VplSettings::default()), Some("vpl-raytraced"), &[], None);
+    assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite()) && p[0] < 1e-4), "a zero cone lit something");
 }

@@ -271,8 +271,7 @@ fn check_lit_quad(scene: &Scene, unit_scale: f32) {
     // Two instances of a 2-triangle quad; the LINES primitive is skipped.
     assert_eq!(scene.triangle_count(), 4);
     assert!(has_warning(scene, "only TRIANGLES"), "{:?}", scene.warnings);
-    assert!(has_warning(scene, "spot light"), "{:?}", scene.warnings);
-    assert_eq!(scene.warnings.len(), 2, "the instanced mesh warns once: {:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 1, "the instanced mesh warns once: {:?}", scene.warnings);
 
     assert_eq!(scene.materials.len(), 1);
     let m = &scene.materials[0];
@@ -305,13 +304,19 @@ fn check_lit_quad(scene: &Scene, unit_scale: f32) {
     }
 
     // Point light 0 at local (0,1,0) under root: (1,2,3) + 2 * (0,1,0) = (1,4,3). Light 2 has no range.
-    assert_eq!(scene.lights.len(), 2, "{:?}", scene.lights);
-    let key = scene.lights[0];
+    assert_eq!(scene.lights.len(), 3, "{:?}", scene.lights);
+    // The spot light loads as a spot: its cone as the file gives it, shining down its node's -Z.
+    let spots: Vec<_> = scene.lights.iter().filter_map(|l| l.spot).collect();
+    assert_eq!(spots.len(), 1, "{:?}", scene.lights);
+    assert!((spots[0].inner_angle - 0.2).abs() < 1e-6 && (spots[0].outer_angle - 0.5).abs() < 1e-6);
+    assert_close(spots[0].direction, Vec3::NEG_Z, 1e-5);
+    let points: Vec<_> = scene.lights.iter().filter(|l| l.spot.is_none()).copied().collect();
+    let key = points[0];
     assert_close(key.position, Vec3::new(1.0, 4.0, 3.0) * s, 1e-5);
     assert_eq!(key.color, Vec3::new(1.0, 0.5, 0.25));
     assert_eq!(key.intensity, 20.0);
     assert!((key.range - 12.0 * s).abs() < 1e-5);
-    let lamp = scene.lights[1];
+    let lamp = points[1];
     assert_close(lamp.position, Vec3::new(0.0, 5.0, 0.0) * s, 1e-5);
     assert_eq!(lamp.color, Vec3::ONE);
     assert!((lamp.range - scene.bounds.size().length()).abs() < 1e-4, "default range = bounds diagonal");

@@ -46,16 +46,30 @@ pub struct GpuLight {
     pub range: f32,
     pub radiance: [f32; 3],
     pub shadow_near: f32,
+    /// Spot direction (zero for omnidirectional lights).
+    pub spot_direction: [f32; 3],
+    /// Cone falloff: factor = saturate(cos * scale + offset)^2; 0 and 1 for omnidirectional lights.
+    pub spot_scale: f32,
+    pub spot_offset: f32,
+    pub _pad: [f32; 3],
 }
-const _: () = assert!(std::mem::size_of::<GpuLight>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuLight>() == 64);
 
 impl GpuLight {
     pub fn new(light: &PointLight) -> Self {
+        let (direction, (scale, offset)) = match light.spot {
+            Some(s) => (s.direction, s.scale_offset()),
+            None => (Vec3::ZERO, (0.0, 1.0)),
+        };
         GpuLight {
             position: light.position.to_array(),
             range: light.range,
             radiance: (light.color * light.intensity).to_array(),
             shadow_near: shadow_near(light.range),
+            spot_direction: direction.to_array(),
+            spot_scale: scale,
+            spot_offset: offset,
+            _pad: [0.0; 3],
         }
     }
 }

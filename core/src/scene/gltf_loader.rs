@@ -12,7 +12,7 @@
 //! - `unit_scale` multiplies world positions, light positions and ranges, and the camera's clip planes.
 //! - Base colour factor and emissive are linear; the base colour texture is sRGB. Materials are Lambertian
 //!   (metallic/roughness are ignored).
-//! - `KHR_lights_punctual` point lights keep their colour and intensity (candela) as given; a light without a
+//! - `KHR_lights_punctual` point and spot lights (cone angles as given, direction down the node's -Z) keep their colour and intensity (candela) as given; a light without a
 //!   `range` gets the diagonal of the scene bounds as its range, so it reaches the whole scene while the
 //!   renderer's windowed falloff still ends at a finite distance. Spot and directional lights are skipped
 //!   with a warning.
@@ -313,8 +313,30 @@ impl Loader<'_> {
                     PointLight::new(position, Vec3::from(light.color()), light.intensity(), range.unwrap_or(0.0));
                 self.scene.lights.push(light);
             }
-            gltf::khr_lights_punctual::Kind::Spot { .. } => {
-                self.warn(format!("spot light '{name}' skipped (only point lights are supported)"));
+            gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                let position = world.transform_point3(Vec3::ZERO) * self.unit_scale;
+                // A glTF light shines down its node's -Z axis.
+                let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z);
+                let half_pi = std::f32::consts::FRAC_PI_2;
+                let (inner, outer) = (inner_cone_angle, outer_cone_angle);
+                let valid =
+                    inner.is_finite() && outer.is_finite() && 0.0 <= inner && inner <= outer && outer <= half_pi;
+                if !valid {
+                    self.warn(format!(
+                        "spot light '{name}': cone angles {inner}..{outer} are outside 0 <= inner <= outer <= pi/2; clamped"
+                    ));
+                }
+                let outer = if outer.is_finite() { outer.clamp(0.0, half_pi) } else { std::f32::consts::FRAC_PI_4 };
+                let inner = if inner.is_finite() { inner.clamp(0.0, outer) } else { 0.0 };
+                let range = light.range().map(|r| r * self.unit_scale);
+                if range.is_none() {
+                    self.lights_without_range.push(self.scene.lights.len());
+                }
+                let spot = crate::scene::Spot { direction, inner_angle: inner, outer_angle: outer };
+                let light =
+                    PointLight::new(position, Vec3::from(light.color()), light.intensity(), range.unwrap_or(0.0))
+                        .with_spot(spot);
+                self.scene.lights.push(light);
             }
             gltf::khr_lights_punctual::Kind::Directional => {
                 self.warn(format!("directional light '{name}' skipped (only point lights are supported)"));

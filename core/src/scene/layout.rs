@@ -54,6 +54,9 @@ pub enum LightLayout {
     Paper,
     /// The lights that came with the scene.
     Scene,
+    /// One spot light at `position` aimed at `target`, cone half-angle `cone_deg` degrees (the outer 20 % of it
+    /// soft), range `range`.
+    Spot { position: Vec3, target: Vec3, cone_deg: f32, range: f32 },
 }
 
 impl LightLayout {
@@ -64,6 +67,7 @@ impl LightLayout {
             LightLayout::Random { count, .. } => Some(count),
             LightLayout::Circles { circles, per_circle, .. } => circles.checked_mul(per_circle),
             LightLayout::Grid { nx, ny, .. } => nx.checked_mul(ny),
+            LightLayout::Spot { .. } => Some(1),
             LightLayout::Paper | LightLayout::Scene => None,
         }
     }
@@ -73,7 +77,8 @@ impl LightLayout {
         match *self {
             LightLayout::Random { range, .. }
             | LightLayout::Circles { range, .. }
-            | LightLayout::Grid { range, .. } => Some(range),
+            | LightLayout::Grid { range, .. }
+            | LightLayout::Spot { range, .. } => Some(range),
             LightLayout::Paper | LightLayout::Scene => None,
         }
     }
@@ -86,6 +91,20 @@ impl LightLayout {
         }
         let count = match self {
             LightLayout::Paper | LightLayout::Scene => return Ok(()),
+            LightLayout::Spot { position, target, cone_deg, .. } => {
+                let ok = position.is_finite()
+                    && target.is_finite()
+                    && position.distance(*target) > 1e-6
+                    && cone_deg.is_finite()
+                    && (0.0..=90.0).contains(cone_deg);
+                if !ok {
+                    return Err(LayoutError::Invalid {
+                        spec,
+                        reason: "a spot needs finite, distinct position and target and a cone of 0..=90 degrees".into(),
+                    });
+                }
+                1
+            }
             // An overflowing product is certainly too many.
             _ => self.light_count().unwrap_or(usize::MAX),
         };
@@ -105,6 +124,9 @@ impl fmt::Display for LightLayout {
             LightLayout::Grid { nx, ny, range } => write!(f, "grid:{nx}x{ny}:{range}"),
             LightLayout::Paper => f.write_str("paper"),
             LightLayout::Scene => f.write_str("scene"),
+            LightLayout::Spot { position: p, target: t, cone_deg, range } => {
+                write!(f, "spot:{},{},{}:{},{},{}:{cone_deg}:{range}", p.x, p.y, p.z, t.x, t.y, t.z)
+            }
         }
     }
 }
@@ -116,7 +138,8 @@ impl FromStr for LightLayout {
     }
 }
 
-const USAGE: &str = "expected random:COUNT:L_ATT[:SEED], circles:N:PER_CIRCLE:L_ATT, grid:NXxNY:L_ATT, paper or scene";
+const USAGE: &str = "expected random:COUNT:L_ATT[:SEED], circles:N:PER_CIRCLE:L_ATT, grid:NXxNY:L_ATT, \
+                     spot:PX,PY,PZ:TX,TY,TZ:CONE_DEG:L_ATT, paper or scene";
 
 /// Parse a layout spec such as `random:1024:1.5`, `random:1024:1.5:7`, `circles:10:8:7`, `grid:8x8:2`, `paper`
 /// or `scene`. The kind is case-insensitive; surrounding whitespace is ignored.
@@ -155,6 +178,27 @@ pub fn parse(spec: &str) -> Result<LightLayout, LayoutError> {
             let ny = parse_count(ny, "NY").map_err(invalid)?;
             let range = parse_range(args[1]).map_err(invalid)?;
             LightLayout::Grid { nx, ny, range }
+        }
+        "spot" => {
+            expect_fields(&args, 4, 4, "spot:PX,PY,PZ:TX,TY,TZ:CONE_DEG:L_ATT").map_err(invalid)?;
+            let vec3 = |text: &str, what: &str| -> Result<Vec3, String> {
+                let v: Vec<f32> = text
+                    .split(',')
+                    .map(|x| x.trim().parse::<f32>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| format!("{what} must be three numbers x,y,z, got '{text}'"))?;
+                match v.as_slice() {
+                    [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
+                    _ => Err(format!("{what} must be three numbers x,y,z, got '{text}'")),
+                }
+            };
+            let position = vec3(args[0], "the position").map_err(invalid)?;
+            let target = vec3(args[1], "the target").map_err(invalid)?;
+            let cone_deg = args[2]
+                .parse::<f32>()
+                .map_err(|_| invalid(format!("CONE_DEG must be a number of degrees, got '{}'", args[2])))?;
+            let range = parse_range(args[3]).map_err(invalid)?;
+            LightLayout::Spot { position, target, cone_deg, range }
         }
         "paper" | "scene" => {
             expect_fields(&args, 0, 0, &kind).map_err(invalid)?;
@@ -220,6 +264,11 @@ pub fn generate(layout: &LightLayout, scene: &Scene) -> Result<Vec<PointLight>, 
         LightLayout::Grid { nx, ny, range } => grid_lights(&bounds, nx, ny, range),
         LightLayout::Paper => paper_lights(scene)?,
         LightLayout::Scene => scene.lights.clone(),
+        LightLayout::Spot { position, target, cone_deg, range } => {
+            let intensity = layout_intensity(range, 1, 1.0 / light_volume(bounds.size()));
+            let spot = crate::scene::Spot::aimed(position, target, cone_deg.to_radians(), 0.2);
+            vec![PointLight::new(position, warm_white(), intensity, range).with_spot(spot)]
+        }
     };
     Ok(lights)
 }

@@ -134,7 +134,57 @@ pub struct TextureImage {
     pub rgba8: Vec<u8>,
 }
 
-/// An omnidirectional point light. Radiance falls off smoothly to zero at `range` (the papers' `L_att`).
+/// The cone of a spot light (glTF `KHR_lights_punctual` semantics): full intensity within `inner_angle` of
+/// `direction`, nothing beyond `outer_angle`, a smooth falloff between (the cone's softness).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Spot {
+    /// Unit direction the spot points to.
+    pub direction: Vec3,
+    /// Half-angle of full intensity, radians, `0 <= inner <= outer`.
+    pub inner_angle: f32,
+    /// Half-angle of the cone, radians, at most pi/2.
+    pub outer_angle: f32,
+}
+
+impl Spot {
+    /// A spot aimed from `position` at `target` with the cone's half-angle and its soft fraction (0: hard edge).
+    pub fn aimed(position: Vec3, target: Vec3, outer_angle: f32, softness: f32) -> Spot {
+        let outer = outer_angle.clamp(0.0, std::f32::consts::FRAC_PI_2);
+        Spot {
+            direction: (target - position).normalize_or(Vec3::NEG_Y),
+            inner_angle: outer * (1.0 - softness.clamp(0.0, 1.0)),
+            outer_angle: outer,
+        }
+    }
+
+    pub fn is_valid(&self) -> bool {
+        self.direction.is_finite()
+            && (self.direction.length() - 1.0).abs() < 1e-3
+            && self.inner_angle.is_finite()
+            && self.outer_angle.is_finite()
+            && 0.0 <= self.inner_angle
+            && self.inner_angle <= self.outer_angle
+            && self.outer_angle <= std::f32::consts::FRAC_PI_2 + 1e-6
+    }
+
+    /// `(scale, offset)` of the cone's falloff: factor = saturate(cos(angle) * scale + offset)^2 (glTF's
+    /// reference form; a zero-width falloff is a hard edge).
+    pub fn scale_offset(&self) -> (f32, f32) {
+        let cos_outer = self.outer_angle.cos();
+        let cos_inner = self.inner_angle.cos();
+        let scale = 1.0 / (cos_inner - cos_outer).max(1e-4);
+        (scale, -cos_outer * scale)
+    }
+
+    /// The cone's factor towards the unit direction `dir` (from the light).
+    pub fn factor(&self, dir: Vec3) -> f32 {
+        let (scale, offset) = self.scale_offset();
+        let t = (dir.dot(self.direction) * scale + offset).clamp(0.0, 1.0);
+        t * t
+    }
+}
+
+/// A point light, omnidirectional or a spot. Radiance falls off smoothly to zero at `range` (the papers' `L_att`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointLight {
     pub position: Vec3,
@@ -143,13 +193,20 @@ pub struct PointLight {
     pub intensity: f32,
     /// Attenuation range `L_att` in world units: the light contributes nothing beyond it.
     pub range: f32,
+    /// The cone when the light is a spot light.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spot: Option<Spot>,
 }
 
 impl PointLight {
     pub fn new(position: Vec3, color: Vec3, intensity: f32, range: f32) -> Self {
-        PointLight { position, color, intensity, range }
+        PointLight { position, color, intensity, range, spot: None }
     }
-    /// True when every field is finite and range/intensity are usable.
+    /// The same light as a spot with this cone.
+    pub fn with_spot(self, spot: Spot) -> Self {
+        PointLight { spot: Some(spot), ..self }
+    }
+    /// True when every field is finite and range/intensity (and the cone) are usable.
     pub fn is_valid(&self) -> bool {
         self.position.is_finite()
             && self.color.is_finite()
@@ -158,6 +215,11 @@ impl PointLight {
             && self.range > 0.0
             && self.intensity >= 0.0
             && self.color.min_element() >= 0.0
+            && self.spot.is_none_or(|s| s.is_valid())
+    }
+    /// The spot cone's factor towards the unit direction `dir` from the light (1 for omnidirectional lights).
+    pub fn cone_factor(&self, dir: Vec3) -> f32 {
+        self.spot.map_or(1.0, |s| s.factor(dir))
     }
 }
 

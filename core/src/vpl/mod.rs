@@ -17,6 +17,9 @@
 //!    surface's albedo; with `bounces > 1` the particle continues in a cosine-distributed direction with Russian
 //!    roulette (survival probability = mean albedo, so the flux stays unbiased).
 //!
+//! Spot lights: `rsm` draws texels of one face covering the cone (a cube beyond 80 degrees), `traced` draws
+//! directions uniformly within the cone; both weight by the cone's falloff.
+//!
 //! Both share the `N` samples among the lights in proportion to their power (the first Halton dimension picks
 //! a light through the cumulative power table), and both are quasi-random: a small move of a light moves its
 //! VPLs a little (Dong section 5.2 relies on it for temporal coherence).
@@ -158,12 +161,43 @@ impl VplSet {
     }
 }
 
-/// A light's power as used to share samples: `4 pi I` times its mean colour.
+/// The solid angle a light emits into: the sphere, or a spot's cone.
+fn emission_solid_angle(l: &PointLight) -> f32 {
+    match l.spot {
+        Some(s) => 2.0 * std::f32::consts::PI * (1.0 - s.outer_angle.cos()),
+        None => 4.0 * std::f32::consts::PI,
+    }
+}
+
+/// A light's power as used to share samples: its intensity over its solid angle, times its mean colour.
 fn light_power(l: &PointLight) -> f32 {
     if !l.is_valid() {
         return 0.0;
     }
-    4.0 * std::f32::consts::PI * l.intensity * (l.color.x + l.color.y + l.color.z) / 3.0
+    emission_solid_angle(l) * l.intensity * (l.color.x + l.color.y + l.color.z) / 3.0
+}
+
+/// Spots narrower than this get a single-face RSM (Dachsbacher's spot-light RSM); wider ones the cube.
+const SPOT_RSM_MAX_ANGLE: f32 = 80.0 * std::f32::consts::PI / 180.0;
+
+/// The direction through the centre of texel `(x, y)` of a single RSM face looking along `axis` with a
+/// half-angle whose tangent is `tan_half`, and the texel's solid angle.
+fn rsm_spot_texel(axis: Vec3, tan_half: f32, x: u32, y: u32) -> (Vec3, f32) {
+    let r = RSM_RESOLUTION as f32;
+    let s = ((x as f32 + 0.5) / r * 2.0 - 1.0) * tan_half;
+    let t = ((y as f32 + 0.5) / r * 2.0 - 1.0) * tan_half;
+    let (u, v) = axis.any_orthonormal_pair();
+    let texel_area = (2.0 * tan_half / r) * (2.0 * tan_half / r);
+    ((axis + u * s + v * t).normalize(), texel_area / (1.0 + s * s + t * t).powf(1.5))
+}
+
+/// A unit direction uniform in the cone of half-angle `angle` around `axis`.
+fn cone_direction(axis: Vec3, angle: f32, u: f32, v: f32) -> Vec3 {
+    let cos = 1.0 - u * (1.0 - angle.cos());
+    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * v;
+    let (t, b) = axis.any_orthonormal_pair();
+    (axis * cos + t * (sin * phi.cos()) + b * (sin * phi.sin())).normalize_or(axis)
 }
 
 /// A unit direction uniform on the sphere from two numbers in [0, 1).
@@ -242,9 +276,19 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -
         }
         let intensity = light.color * light.intensity;
         // dir, and the radiant intensity divided by the pdf of picking that direction (per steradian).
-        let (dir, weight) = match settings.source {
-            VplSource::Traced => (sphere_direction(u[1], u[2]), 4.0 * std::f32::consts::PI),
-            VplSource::Rsm => {
+        let (dir, weight) = match (settings.source, light.spot) {
+            (VplSource::Traced, None) => (sphere_direction(u[1], u[2]), 4.0 * std::f32::consts::PI),
+            (VplSource::Traced, Some(spot)) => {
+                (cone_direction(spot.direction, spot.outer_angle, u[1], u[2]), emission_solid_angle(light))
+            }
+            (VplSource::Rsm, Some(spot)) if spot.outer_angle <= SPOT_RSM_MAX_ANGLE => {
+                let r = RSM_RESOLUTION;
+                let x = ((u[2] * r as f32) as u32).min(r - 1);
+                let y = ((u[3] * r as f32) as u32).min(r - 1);
+                let (dir, omega) = rsm_spot_texel(spot.direction, spot.outer_angle.tan(), x, y);
+                (dir, omega * (r * r) as f32)
+            }
+            (VplSource::Rsm, _) => {
                 let r = RSM_RESOLUTION;
                 let face = ((u[1] * 6.0) as u32).min(5);
                 let x = ((u[2] * r as f32) as u32).min(r - 1);
@@ -260,7 +304,11 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -
         };
         let d = hit.t;
         // Flux reaching the surface through this sample's share of the sphere.
-        let mut flux = intensity * (weight * attenuation(d, light.range) * d * d / (n as f32 * p_light));
+        let cone = light.cone_factor(dir);
+        if cone <= 0.0 {
+            continue;
+        }
+        let mut flux = intensity * (weight * cone * attenuation(d, light.range) * d * d / (n as f32 * p_light));
         let mut from = light.position;
         let mut hit = hit;
         for bounce in 0..settings.bounces {
