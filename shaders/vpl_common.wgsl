@@ -30,7 +30,8 @@ struct GatherBatch {
     depth_far: f32,
     // offset of the map's centre from the VPL along its normal, world units
     origin_offset: f32,
-    _pad: u32,
+    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64)
+    interleave: u32,
 }
 
 @group(2) @binding(0) var<storage, read> vpls: array<Vpl>;

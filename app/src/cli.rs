@@ -193,6 +193,12 @@ pub struct RenderArgs {
     /// Frame report as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Draw the overlay layers the techniques show by default (lights, clusters, VPLs, ...) over the image;
+    /// `--overlay-layer NAME` picks layers by name instead (repeatable).
+    #[arg(long)]
+    pub overlays: bool,
+    #[arg(long = "overlay-layer", value_name = "NAME")]
+    pub overlay_layers: Vec<String>,
 }
 
 #[derive(Args, Debug)]
@@ -555,6 +561,32 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let timing = crate::measure::summarize(&reports);
     let report = reports.pop().expect("at least one measured frame");
+    if args.overlays || !args.overlay_layers.is_empty() {
+        let mut layers = technique.overlays(&lights);
+        if let Some(i) = renderer.indirect() {
+            layers.extend(i.overlays(&lights));
+        }
+        for name in &args.overlay_layers {
+            if !layers.iter().any(|l| l.name == name) {
+                bail!(
+                    "--overlay-layer '{name}': the techniques have the layers {}",
+                    layers.iter().map(|l| format!("'{}'", l.name)).collect::<Vec<_>>().join(", ")
+                );
+            }
+        }
+        let primitives: Vec<technique::Overlay> = layers
+            .into_iter()
+            .filter(|l| {
+                if args.overlay_layers.is_empty() {
+                    l.visible_by_default
+                } else {
+                    args.overlay_layers.iter().any(|n| n == l.name)
+                }
+            })
+            .flat_map(|l| l.primitives)
+            .collect();
+        renderer.draw_overlays(&camera, &primitives, false)?;
+    }
     write_atomic(&args.out, &encode_png(&renderer.read_output()?)?)?;
 
     if !frame.quiet {

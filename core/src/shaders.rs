@@ -51,6 +51,8 @@ pub const VPL_GATHER_PARABOLOID: &str = concat!(
     include_str!("../../shaders/vpl_vis_paraboloid.wgsl"),
     include_str!("../../shaders/vpl_gather.wgsl")
 );
+pub const VPL_BLUR: &str =
+    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/vpl_blur.wgsl"));
 pub const PATHTRACE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/raytrace_bvh.wgsl"),
@@ -87,6 +89,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
         VPL_GATHER_PARABOLOID,
     ),
     ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "pathtrace.wgsl"], PATHTRACE),
+    ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
 ];
 
 /// Create a shader module from one of the sources above.

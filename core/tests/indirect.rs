@@ -504,3 +504,27 @@ fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
         render(&scene, &[zero], settings(Component::Total, VplSettings::default()), Some("vpl-raytraced"), &[], None);
     assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite()) && p[0] < 1e-4), "a zero cone lit something");
 }
+
+#[test]
+fn interleaved_sampling_with_the_blur_stays_close_to_the_full_gather() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let vs = VplSettings { count: 1024, ..Default::default() };
+    let s = RenderSettings { width: 128, height: 96, ..settings(Component::Indirect, vs) };
+    let (_, full, _) = render(&scene, &lights, s.clone(), Some("vpl-raytraced"), &[], None);
+    let on = [("interleave", ParamValue::Bool(true)), ("vpls_per_step", ParamValue::Int(100))];
+    let (_, inter, report) = render(&scene, &lights, s, Some("vpl-raytraced"), &on, None);
+    let c = &report.indirect.as_ref().unwrap().counts;
+    let n = report.indirect.as_ref().unwrap().vpls;
+    assert_eq!(c.batches, n.div_ceil(100), "the blur is a step of its own, not a batch");
+    let mean = |img: &[[f32; 4]]| img.iter().map(|p| p[1] as f64).sum::<f64>() / img.len() as f64;
+    let (a, b) = (mean(&full), mean(&inter));
+    assert!(a > 0.0 && ((a - b) / a).abs() < 0.03, "mean indirect {b} vs {a} without interleaving");
+    // Per pixel: most within 15 % of the full gather (edges of the blur's window differ more).
+    let lit: Vec<(f32, f32)> =
+        full.iter().zip(&inter).filter(|(p, _)| p[1] > 1e-3).map(|(p, q)| (p[1], q[1])).collect();
+    let close = lit.iter().filter(|(p, q)| (p - q).abs() < 0.15 * p).count();
+    assert!(close as f32 > 0.8 * lit.len() as f32, "{close} of {} pixels within 15 %", lit.len());
+    // Without the blur the pixels of a block would differ wildly; the blur makes neighbours agree.
+    assert!(inter.iter().all(|p| p.iter().all(|c| c.is_finite())));
+}

@@ -32,7 +32,8 @@ pub struct GatherBatchUniform {
     pub depth_near: f32,
     pub depth_far: f32,
     pub origin_offset: f32,
-    pub _pad: u32,
+    /// 1: interleaved sampling (every 64th VPL per pixel of an 8x8 block, times 64).
+    pub interleave: u32,
 }
 const _: () = assert!(std::mem::size_of::<GatherBatchUniform>() == 48);
 
@@ -144,6 +145,54 @@ impl VplGatherPass {
             pass.set_bind_group(2, &group, &[]);
             pass.dispatch_workgroups(x, y, 1);
         });
+    }
+}
+
+/// The geometry-aware 8x8 blur that completes interleaved sampling (`vpl_blur.wgsl`): blurs the indirect
+/// buffer into a scratch buffer and copies it back. Run once per frame, after the last gather.
+pub struct InterleaveBlur {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    scratch: Option<wgpu::Buffer>,
+}
+
+impl InterleaveBlur {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> InterleaveBlur {
+        let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("vpl blur"),
+            entries: &[crate::technique::storage_entry(0), storage_rw_entry(1)],
+        });
+        let pipeline = compute_pipeline(gpu, layouts, "vpl_blur", crate::shaders::VPL_BLUR, "blur_main", &[&layout]);
+        InterleaveBlur { pipeline, layout, scratch: None }
+    }
+
+    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+        let size = ctx.indirect_buffer.size();
+        if self.scratch.as_ref().is_none_or(|b| b.size() != size) {
+            self.scratch = Some(ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("vpl blur scratch"),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }));
+        }
+        let scratch = self.scratch.as_ref().expect("made above");
+        let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("vpl blur"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: ctx.indirect_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: scratch.as_entire_binding() },
+            ],
+        });
+        let (x, y) = pixel_workgroups(ctx.size);
+        ctx.timer.compute_pass(encoder, "vpl blur", |pass| {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+            pass.set_bind_group(1, &group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        });
+        encoder.copy_buffer_to_buffer(scratch, 0, ctx.indirect_buffer, 0, size);
     }
 }
 

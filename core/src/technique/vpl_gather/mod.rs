@@ -12,6 +12,10 @@
 //!   exact, the ground truth of VPL visibility (Colom et al. 2022's reference image). Per step: gather a batch.
 //! - `vpl-unshadowed`: no visibility (`vpl_vis_none.wgsl`), the denominator of indirect shadow factors.
 //!
+//! `interleave` (all three, off by default and for the references): Dong et al. section 6's interleaved
+//! sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64), and a last step blurs the indirect
+//! buffer over 8x8 windows on the same surface ([`InterleaveBlur`], `vpl_blur.wgsl`).
+//!
 //! The radiance of VPL `i` at `x` is `rho(x)/pi * Phi_i/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2)`
 //! (`vpl_common.wgsl`); `d_clamp` is the render setting `vpl.clamp_world`.
 
@@ -25,7 +29,7 @@ use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster, MAX_CUBES_PER_BATCH};
 use crate::renderer::scene_bvh::SceneBvh;
-use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, VplGatherPass};
+use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
@@ -60,6 +64,9 @@ pub struct GatherParams {
     pub atlas_budget_mib: u32,
     /// Shadow maps: draw only the chunks in a VPL's front half-space.
     pub cull: bool,
+    /// Interleaved sampling (Dong section 6): each pixel of an 8x8 block gathers every 64th VPL, then a
+    /// geometry-aware blur spreads them over the block. Off for the references.
+    pub interleave: bool,
 }
 
 impl Default for GatherParams {
@@ -72,6 +79,7 @@ impl Default for GatherParams {
             normal_offset_texels: 1.5,
             atlas_budget_mib: 64,
             cull: true,
+            interleave: false,
         }
     }
 }
@@ -80,6 +88,7 @@ pub struct VplGather {
     visibility: Visibility,
     pub params: GatherParams,
     pass: VplGatherPass,
+    blur: InterleaveBlur,
     visibility_layout: wgpu::BindGroupLayout,
     visibility_group: Option<wgpu::BindGroup>,
     shadows: Option<CubeShadowRenderer>,
@@ -87,6 +96,8 @@ pub struct VplGather {
     bvh: Option<Arc<SceneBvh>>,
     vpls: Arc<VplSet>,
     batch_size: usize,
+    /// Gather steps of this frame (the blur, when interleaving, is one more).
+    batches: usize,
     scene_size: f32,
     counts: TechniqueCounts,
     build_ms: Option<f64>,
@@ -111,6 +122,7 @@ impl VplGather {
         };
         let pass = VplGatherPass::new(gpu, layouts, label, source, &visibility_layout);
         VplGather {
+            blur: InterleaveBlur::new(gpu, layouts),
             visibility,
             params: GatherParams::default(),
             pass,
@@ -120,6 +132,7 @@ impl VplGather {
             bvh: None,
             vpls: Arc::default(),
             batch_size: 1,
+            batches: 0,
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             build_ms: None,
@@ -173,6 +186,14 @@ impl Technique for VplGather {
             kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
             value: ParamValue::Int(p.vpls_per_step as i64),
         }];
+        list.push(Param {
+            key: "interleave",
+            label: "Interleaved sampling",
+            help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (Dong section 6); \
+                   64x fewer visibility tests in the gather",
+            kind: ParamKind::Bool,
+            value: ParamValue::Bool(p.interleave),
+        });
         match self.visibility {
             Visibility::RayTraced => list.push(Param {
                 key: "bias",
@@ -234,6 +255,7 @@ impl Technique for VplGather {
             ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
+            ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())
@@ -296,7 +318,9 @@ impl Technique for VplGather {
         let batches = n.div_ceil(self.batch_size);
         self.counts = TechniqueCounts { lights_visible: ctx.lights.len(), batches, ..Default::default() };
         self.counts.figures.insert("vpls".into(), n as f64);
-        Ok(batches)
+        self.batches = batches;
+        // With interleaving, one more step: the blur.
+        Ok(if self.params.interleave && batches > 0 { batches + 1 } else { batches })
     }
 
     fn encode_step(
@@ -305,10 +329,18 @@ impl Technique for VplGather {
         step: usize,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
+        if step == self.batches {
+            self.blur.encode(ctx, encoder);
+            return Ok(());
+        }
         let first = step * self.batch_size;
         let last = (first + self.batch_size).min(self.vpls.vpls.len());
-        let mut batch =
-            GatherBatchUniform { first_vpl: first as u32, vpl_count: (last - first) as u32, ..Default::default() };
+        let mut batch = GatherBatchUniform {
+            first_vpl: first as u32,
+            vpl_count: (last - first) as u32,
+            interleave: self.params.interleave as u32,
+            ..Default::default()
+        };
         match self.visibility {
             Visibility::ShadowMaps => {
                 // Step 1: this batch's paraboloid maps.
