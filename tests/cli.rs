@@ -446,8 +446,16 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     // Comparing two indirect techniques over the same direct light on the indirect component.
     let dir = out_dir("indirect-compare");
     let (diff, json) = (dir.join("diff.png"), dir.join("report.json"));
-    let mut args: Vec<&str> =
-        vec!["compare", "--quiet", "--warmup", "0", "--out", diff.to_str().unwrap(), "--report", json.to_str().unwrap()];
+    let mut args: Vec<&str> = vec![
+        "compare",
+        "--quiet",
+        "--warmup",
+        "0",
+        "--out",
+        diff.to_str().unwrap(),
+        "--report",
+        json.to_str().unwrap(),
+    ];
     args.extend(small);
     args.extend(["--technique", "reference", "--against", "reference", "--indirect", "vpl-unshadowed"]);
     args.extend(["--against-indirect", "vpl-raytraced", "--component", "indirect"]);

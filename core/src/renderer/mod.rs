@@ -360,7 +360,7 @@ fn indirect_bytes(width: u32, height: u32) -> u64 {
 fn create_indirect_buffer(gpu: &GpuContext, width: u32, height: u32, enabled: bool) -> Result<wgpu::Buffer, GpuError> {
     let size = if enabled { indirect_bytes(width, height) } else { 16 };
     let limits = gpu.device.limits();
-    let max = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+    let max = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
     if size > max {
         return Err(GpuError::InvalidSettings(format!(
             "indirect light at {width}x{height} needs a {} MiB buffer; this GPU allows {} MiB (lower the image size)",
