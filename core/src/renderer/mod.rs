@@ -10,6 +10,7 @@
 pub mod cube_shadows;
 pub mod gpu_data;
 pub mod gpu_scene;
+pub mod lights;
 pub mod overlay;
 pub mod readback;
 pub mod scene_bvh;
@@ -340,6 +341,7 @@ pub struct Renderer {
     /// Indirect radiance per pixel, linear RGBA f32 (a tiny placeholder without an indirect technique).
     indirect_buffer: wgpu::Buffer,
     vpls: VplFrame,
+    visible_lights: lights::VisibleLights,
     /// True when [`Renderer::set_fixed_vpls`] gave the VPLs.
     fixed_vpls: bool,
 }
@@ -500,6 +502,7 @@ impl Renderer {
                 key: None,
             },
             fixed_vpls: false,
+            visible_lights: lights::VisibleLights::new(gpu),
         })
     }
 
@@ -670,6 +673,7 @@ impl Renderer {
             indirect_buffer: &self.indirect_buffer,
             vpls: &self.vpls,
             vpl_settings: &self.settings.vpl,
+            visible_lights: &self.visible_lights,
             max_lights_per_step: match self.settings.max_lights_per_step {
                 0 => usize::MAX,
                 n => n,
@@ -816,6 +820,7 @@ impl Renderer {
         }
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
 
+        self.visible_lights.update(&self.gpu, lights, &frustum);
         let direct_steps = {
             let ctx = self.context(camera, lights);
             technique.prepare(&ctx)?

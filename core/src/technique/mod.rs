@@ -54,6 +54,8 @@ pub struct FrameContext<'a> {
     /// The frame's VPLs (empty unless the indirect technique [`Technique::uses_vpls`]).
     pub vpls: &'a crate::renderer::VplFrame,
     pub vpl_settings: &'a crate::vpl::VplSettings,
+    /// The lights whose range touches the view frustum, uploaded once for every technique.
+    pub visible_lights: &'a crate::renderer::lights::VisibleLights,
 }
 
 /// What a technique did in a frame, for the frame report.

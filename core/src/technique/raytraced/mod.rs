@@ -6,7 +6,7 @@
 //! Per frame:
 //! 1. The scene's BVH from the renderer's service ([`GpuScene::bvh`](crate::renderer::gpu_scene::GpuScene::bvh)),
 //!    built on the CPU (binned SAH) and uploaded the first time any tracer asks for it.
-//! 2. Cull each light's range sphere against the view frustum, as the reference does.
+//! 2. The lights whose range sphere touches the view frustum: the renderer's culling, shared with the reference.
 //! 3. Per batch of `lights_per_step` lights (one step): a full-screen pass traces every pixel's shadow rays in
 //!    the fragment shader (`raytrace_shadow.wgsl`, stack-based any-hit traversal) and adds the lights' shading
 //!    (the reference's `shade_light`) times visibility into the HDR target.
@@ -29,12 +29,11 @@ pub use bvh::{
 };
 
 use super::{
-    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, Overlay, OverlayLayer,
-    Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, Overlay, OverlayLayer, Param, ParamError,
+    ParamKind, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::scene_bvh::SceneBvh;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
@@ -107,13 +106,13 @@ pub struct Raytraced {
     pipeline: wgpu::RenderPipeline,
     group_layout: wgpu::BindGroupLayout,
     batch_uniform: wgpu::Buffer,
-    lights_buffer: GrowableBuffer,
+    /// The generation of the renderer's light buffer the bind group was made with.
+    lights_generation: Option<u64>,
     bind_group: Option<wgpu::BindGroup>,
     /// The scene BVH this frame's bind group uses (the renderer's service, shared with other tracers).
     bvh: Option<Arc<SceneBvh>>,
-    /// Indices of the visible lights of this frame, in batch order.
+    /// Indices of the visible lights of this frame (the renderer's culling), in batch order.
     visible: Vec<usize>,
-    gpu_lights: Vec<GpuLight>,
     batch_size: usize,
     counts: TechniqueCounts,
     /// BVH build time of this frame's `prepare`, when it built one.
@@ -146,11 +145,10 @@ impl Raytraced {
             pipeline,
             group_layout,
             batch_uniform,
-            lights_buffer: GrowableBuffer::new(device, "raytraced lights", 64 * 32),
+            lights_generation: None,
             bind_group: None,
             bvh: None,
             visible: Vec::new(),
-            gpu_lights: Vec::new(),
             batch_size: 1,
             counts: TechniqueCounts::default(),
             build_ms: None,
@@ -241,17 +239,9 @@ impl Technique for Raytraced {
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.build_ms = None;
-        // Step 1: view-frustum culling of range spheres.
+        // Step 1: view-frustum culling of range spheres (the renderer's, `ctx.visible_lights`).
         self.visible.clear();
-        self.visible.extend(
-            ctx.lights
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
-                .map(|(i, _)| i),
-        );
-        self.gpu_lights.clear();
-        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
+        self.visible.extend_from_slice(&ctx.visible_lights.indices);
 
         // Step 2: batches of lights.
         self.batch_size = (self.params.lights_per_step as usize).min(ctx.max_lights_per_step).max(1);
@@ -267,7 +257,8 @@ impl Technique for Raytraced {
         self.build_ms = build_ms;
         rebind |= self.bvh.as_ref().is_none_or(|b| !Arc::ptr_eq(b, &bvh));
         self.bvh = Some(bvh);
-        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
+        rebind |= self.lights_generation != Some(ctx.visible_lights.generation);
+        self.lights_generation = Some(ctx.visible_lights.generation);
         if rebind {
             let bvh = self.bvh.as_ref().expect("set above");
             self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -276,7 +267,7 @@ impl Technique for Raytraced {
                 entries: &[
                     wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: ctx.visible_lights.buffer.buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 3, resource: self.batch_uniform.as_entire_binding() },
                 ],
             }));

@@ -7,19 +7,18 @@
 //! 3. Per batch (one step): render the batch's cube maps into the reused atlas (chunk-culled per light and
 //!    per face), then shade every pixel with the batch's lights and add the result into the HDR target.
 //!
-//! Memory is the atlas of one batch plus 32 bytes per visible light, whatever the number of lights.
+//! Memory is the atlas of one batch plus the renderer's 64 bytes per visible light, whatever the number of lights.
 
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::{
     accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, CubeMapParams, FrameContext,
-    GrowableBuffer, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
+    OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, CubeStats};
-use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
@@ -49,11 +48,11 @@ pub struct PerLightShadows {
     pipeline: wgpu::RenderPipeline,
     group_layout: wgpu::BindGroupLayout,
     batch_uniform: wgpu::Buffer,
-    lights_buffer: GrowableBuffer,
     bind_group: Option<wgpu::BindGroup>,
-    /// Indices of the visible lights of this frame, in batch order.
-    visible: Vec<usize>,
-    gpu_lights: Vec<GpuLight>,
+    /// The generation of the renderer's light buffer the bind group was made with.
+    lights_generation: Option<u64>,
+    /// Visible lights of this frame (the renderer's culling), in batch order.
+    visible_count: usize,
     batch_size: usize,
 }
 
@@ -79,54 +78,45 @@ impl PerLightShadows {
             contents: bytemuck::bytes_of(&ReferenceBatchUniform::zeroed_default()),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let lights_buffer = GrowableBuffer::new(device, "reference lights", 64 * 32);
         PerLightShadows {
             cubes,
             pipeline,
             group_layout,
             batch_uniform,
-            lights_buffer,
             bind_group: None,
-            visible: Vec::new(),
-            gpu_lights: Vec::new(),
+            lights_generation: None,
+            visible_count: 0,
             batch_size: 1,
         }
     }
 
     /// Lights that passed the frustum culling of the last `prepare`.
     pub fn visible_lights(&self) -> usize {
-        self.visible.len()
+        self.visible_count
     }
 
     /// Steps 1-2: cull lights against the view frustum, split them into batches; returns the batch count.
     pub fn prepare(&mut self, ctx: &FrameContext, params: &CubeMapParams) -> usize {
-        self.visible.clear();
-        self.visible.extend(
-            ctx.lights
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
-                .map(|(i, _)| i),
-        );
-        self.gpu_lights.clear();
-        self.gpu_lights.extend(self.visible.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
-        if self.visible.is_empty() {
+        // Step 1 is the renderer's light culling (`ctx.visible_lights`).
+        self.visible_count = ctx.visible_lights.indices.len();
+        if self.visible_count == 0 {
             return 0;
         }
         let (res, budget) = params.resolution_and_budget(ctx.gpu);
         self.batch_size = CubeShadowRenderer::batch_capacity(ctx.gpu, res, budget).min(ctx.max_lights_per_step).max(1);
-        let batches = self.visible.len().div_ceil(self.batch_size);
+        let batches = self.visible_count.div_ceil(self.batch_size);
 
         let mut rebind = self.bind_group.is_none();
-        rebind |= self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
-        rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible.len()));
+        rebind |= self.lights_generation != Some(ctx.visible_lights.generation);
+        self.lights_generation = Some(ctx.visible_lights.generation);
+        rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(self.visible_count));
         if rebind {
             let atlas = self.cubes.atlas().expect("atlas was just ensured");
             self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("reference shade"),
                 layout: &self.group_layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 0, resource: ctx.visible_lights.buffer.buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
                 ],
@@ -145,8 +135,8 @@ impl PerLightShadows {
         params: &CubeMapParams,
     ) -> CubeStats {
         let first = batch * self.batch_size;
-        let last = (first + self.batch_size).min(self.visible.len());
-        let casters: Vec<CubeCaster> = self.gpu_lights[first..last]
+        let last = (first + self.batch_size).min(self.visible_count);
+        let casters: Vec<CubeCaster> = ctx.visible_lights.gpu[first..last]
             .iter()
             .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
             .collect();

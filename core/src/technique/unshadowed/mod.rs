@@ -8,12 +8,11 @@
 use wgpu::util::DeviceExt;
 
 use super::{
-    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, OverlayLayer, Param,
-    ParamError, ParamValue, Technique, TechniqueCounts,
+    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, OverlayLayer, Param, ParamError,
+    ParamValue, Technique, TechniqueCounts,
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
@@ -32,9 +31,10 @@ pub struct Unshadowed {
     pipeline: wgpu::RenderPipeline,
     group_layout: wgpu::BindGroupLayout,
     batch_uniform: wgpu::Buffer,
-    lights_buffer: GrowableBuffer,
     bind_group: Option<wgpu::BindGroup>,
-    gpu_lights: Vec<GpuLight>,
+    /// The generation of the renderer's light buffer the bind group was made with.
+    lights_generation: Option<u64>,
+    visible_count: usize,
     batch_size: usize,
     counts: TechniqueCounts,
 }
@@ -64,9 +64,9 @@ impl Unshadowed {
             pipeline,
             group_layout,
             batch_uniform,
-            lights_buffer: GrowableBuffer::new(device, "unshadowed lights", 64 * 32),
             bind_group: None,
-            gpu_lights: Vec::new(),
+            lights_generation: None,
+            visible_count: 0,
             batch_size: 1,
             counts: TechniqueCounts::default(),
         }
@@ -91,26 +91,22 @@ impl Technique for Unshadowed {
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
-        self.gpu_lights.clear();
-        self.gpu_lights.extend(
-            ctx.lights
-                .iter()
-                .filter(|l| l.is_valid() && ctx.frustum.intersects_sphere(l.position, l.range))
-                .map(GpuLight::new),
-        );
-        self.batch_size = self.gpu_lights.len().clamp(1, ctx.max_lights_per_step);
-        let batches = self.gpu_lights.len().div_ceil(self.batch_size);
-        self.counts = TechniqueCounts { lights_visible: self.gpu_lights.len(), batches, ..Default::default() };
-        if self.gpu_lights.is_empty() {
+        // The renderer culled and uploaded the lights (`ctx.visible_lights`).
+        self.visible_count = ctx.visible_lights.indices.len();
+        self.batch_size = self.visible_count.clamp(1, ctx.max_lights_per_step);
+        let batches = self.visible_count.div_ceil(self.batch_size);
+        self.counts = TechniqueCounts { lights_visible: self.visible_count, batches, ..Default::default() };
+        if self.visible_count == 0 {
             return Ok(0);
         }
-        let grown = self.lights_buffer.write(ctx.gpu, &self.gpu_lights);
-        if grown || self.bind_group.is_none() {
+        let generation = Some(ctx.visible_lights.generation);
+        if self.lights_generation != generation || self.bind_group.is_none() {
+            self.lights_generation = generation;
             self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("unshadowed shade"),
                 layout: &self.group_layout,
                 entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 0, resource: ctx.visible_lights.buffer.buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
                 ],
             }));
@@ -125,7 +121,7 @@ impl Technique for Unshadowed {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         let first = step * self.batch_size;
-        let last = (first + self.batch_size).min(self.gpu_lights.len());
+        let last = (first + self.batch_size).min(self.visible_count);
         let uniform =
             UnshadowedBatchUniform { first_light: first as u32, light_count: (last - first) as u32, _pad: [0; 2] };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
