@@ -528,3 +528,26 @@ fn interleaved_sampling_with_the_blur_stays_close_to_the_full_gather() {
     // Without the blur the pixels of a block would differ wildly; the blur makes neighbours agree.
     assert!(inter.iter().all(|p| p.iter().all(|c| c.is_finite())));
 }
+
+#[test]
+fn views_of_one_scene_share_its_gpu_copy_and_bvh_and_render_the_same() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let gpu = gpu();
+    let s = settings(Component::Total, VplSettings { count: 128, ..Default::default() });
+    let mut a = Renderer::new(&gpu, &scene, s.clone()).unwrap();
+    let mut b = a.new_view(s).unwrap();
+    assert!(std::sync::Arc::ptr_eq(&a.shared_scene(), &b.shared_scene()), "the view copied the scene");
+    let (_, built_a) = a.scene().bvh(&gpu);
+    let (_, built_b) = b.scene().bvh(&gpu);
+    assert!(built_a.is_some() && built_b.is_none(), "the BVH was built twice");
+    let mut images = Vec::new();
+    for r in [&mut a, &mut b] {
+        let t = r.create_indirect_technique("vpl-raytraced").unwrap();
+        r.set_indirect(Some(t)).unwrap();
+        let mut reference = r.create_technique("reference").unwrap();
+        r.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+        images.push(r.read_hdr().unwrap());
+    }
+    assert!(images[0] == images[1], "two views of one scene render differently");
+}

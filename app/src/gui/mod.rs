@@ -297,7 +297,7 @@ impl ShadowLabApp {
     fn init_gpu(&mut self, rs: egui_wgpu::RenderState) -> Result<()> {
         let ctx = GpuContext::from_device(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
         let main = View::new(&ctx, &rs, &self.scene)?;
-        let reference = View::new(&ctx, &rs, &self.scene)?;
+        let reference = View::sharing(&ctx, &rs, &main)?;
         // A real GPU renders a whole frame in one step; a software one starts small and adapts, and starts at
         // half resolution with 256-texel cube faces (lavapipe is ~100x slower; the user can raise both).
         let software = rs.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
@@ -342,7 +342,7 @@ impl ShadowLabApp {
         self.history.clear();
         if let Some(gpu) = &mut self.gpu {
             gpu.main.set_scene(&scene);
-            gpu.reference.set_scene(&scene);
+            gpu.reference.share_scene_of(&gpu.main);
         }
         self.scene = scene;
     }
@@ -791,7 +791,7 @@ impl ShadowLabApp {
         let (metrics, image) = if self.view.diff_visibility {
             // Shadow factors need the unshadowed and ambient-only images of the same view.
             let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
-            let mut aux = shadowlab_core::Renderer::new(&gpu.ctx, &self.scene, settings)?;
+            let mut aux = gpu.main.renderer.new_view(settings)?;
             let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
             aux.render_frame(unshadowed.as_mut(), &camera, &lights, &mut |_, _| {})?;
             let lit = Image::new(w, h, aux.read_hdr()?)?;
@@ -826,7 +826,8 @@ impl ShadowLabApp {
             .unwrap_or_default();
         self.sweep = Some(sweep::Sweep::start(sweep::SweepJob {
             gpu: gpu.ctx.clone(),
-            scene: self.scene.clone(),
+            scene: gpu.main.renderer.shared_scene(),
+            layouts: gpu.main.renderer.shared_layouts(),
             lights: self.animated_lights(),
             camera: self.camera.camera(),
             settings,

@@ -9,7 +9,7 @@ use std::thread::JoinHandle;
 
 use anyhow::{anyhow, Result};
 use shadowlab_core::compare::{self, CompareOptions, Image};
-use shadowlab_core::scene::{Camera, PointLight, Scene};
+use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::{GpuContext, RenderSettings, Renderer};
 
@@ -43,7 +43,9 @@ pub struct Sweep {
 /// What the worker renders.
 pub struct SweepJob {
     pub gpu: GpuContext,
-    pub scene: Scene,
+    /// The main view's scene on the GPU (shared, not uploaded again) and the layouts it was made with.
+    pub scene: std::sync::Arc<shadowlab_core::renderer::gpu_scene::GpuScene>,
+    pub layouts: std::sync::Arc<shadowlab_core::renderer::SharedLayouts>,
     pub lights: Vec<PointLight>,
     pub camera: Camera,
     pub settings: RenderSettings,
@@ -67,7 +69,7 @@ fn number(v: &ParamValue) -> f64 {
 fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Result<()> {
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
-    let mut renderer = Renderer::new(&job.gpu, &job.scene, settings)?;
+    let mut renderer = Renderer::for_scene(&job.gpu, job.scene.clone(), job.layouts.clone(), settings)?;
     if let Some((key, params)) = &job.indirect {
         let mut indirect =
             renderer.create_indirect_technique(key).ok_or_else(|| anyhow!("unknown indirect technique '{key}'"))?;

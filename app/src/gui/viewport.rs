@@ -142,8 +142,21 @@ pub struct View {
 
 impl View {
     pub fn new(gpu: &GpuContext, render_state: &egui_wgpu::RenderState, scene: &Scene) -> Result<View> {
-        let settings = RenderSettings { width: 64, height: 64, max_lights_per_step: 4, ..Default::default() };
-        let renderer = Renderer::new(gpu, scene, settings)?;
+        let renderer = Renderer::new(gpu, scene, Self::initial_settings())?;
+        Self::with_renderer(gpu, render_state, renderer)
+    }
+
+    /// A second view of `other`'s scene: the scene's GPU buffers, textures and BVH are shared, not copied.
+    pub fn sharing(gpu: &GpuContext, render_state: &egui_wgpu::RenderState, other: &View) -> Result<View> {
+        let renderer = other.renderer.new_view(Self::initial_settings())?;
+        Self::with_renderer(gpu, render_state, renderer)
+    }
+
+    fn initial_settings() -> RenderSettings {
+        RenderSettings { width: 64, height: 64, max_lights_per_step: 4, ..Default::default() }
+    }
+
+    fn with_renderer(gpu: &GpuContext, render_state: &egui_wgpu::RenderState, renderer: Renderer) -> Result<View> {
         let texture_id = render_state.renderer.write().register_native_texture(
             &gpu.device,
             &renderer.targets().output,
@@ -228,6 +241,12 @@ impl View {
 
     pub fn set_scene(&mut self, scene: &Scene) {
         self.renderer.set_scene(scene);
+        self.key = 0;
+    }
+
+    /// Show the scene `other` uploaded (no second copy on the GPU).
+    pub fn share_scene_of(&mut self, other: &View) {
+        self.renderer.set_shared_scene(other.renderer.shared_scene());
         self.key = 0;
     }
 

@@ -320,9 +320,10 @@ impl FrameJob {
 
 pub struct Renderer {
     gpu: GpuContext,
-    pub layouts: SharedLayouts,
+    /// Shared with the renderers made by [`Renderer::new_view`] (the scene's material bind groups use them).
+    pub layouts: std::sync::Arc<SharedLayouts>,
     settings: RenderSettings,
-    scene: GpuScene,
+    scene: std::sync::Arc<GpuScene>,
     targets: FrameTargets,
     frame_uniform: wgpu::Buffer,
     camera_uniform: wgpu::Buffer,
@@ -381,9 +382,52 @@ fn create_indirect_buffer(gpu: &GpuContext, width: u32, height: u32, enabled: bo
 impl Renderer {
     pub fn new(gpu: &GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Renderer, GpuError> {
         settings.validate()?;
+        let layouts = std::sync::Arc::new(SharedLayouts::new(&gpu.device));
+        let gpu_scene = std::sync::Arc::new(GpuScene::new(gpu, scene, &layouts.material));
+        Self::with_scene(gpu, gpu_scene, layouts, settings)
+    }
+
+    /// Another renderer (a second view, a sweep worker, a comparison) of this renderer's scene on the same
+    /// device: the scene's buffers, textures and BVH are shared, not copied; targets and pipelines are its own.
+    pub fn new_view(&self, settings: RenderSettings) -> Result<Renderer, GpuError> {
+        settings.validate()?;
+        Self::with_scene(&self.gpu, self.scene.clone(), self.layouts.clone(), settings)
+    }
+
+    /// The scene on the GPU, to share with [`Renderer::set_shared_scene`] of another view.
+    pub fn shared_scene(&self) -> std::sync::Arc<GpuScene> {
+        self.scene.clone()
+    }
+
+    /// The layouts the scene's bind groups were made with, for [`Renderer::for_scene`] on another thread.
+    pub fn shared_layouts(&self) -> std::sync::Arc<SharedLayouts> {
+        self.layouts.clone()
+    }
+
+    /// A renderer of a scene another renderer uploaded ([`Renderer::shared_scene`], [`Renderer::shared_layouts`]):
+    /// what [`Renderer::new_view`] does, for a worker thread that cannot borrow the first renderer.
+    pub fn for_scene(
+        gpu: &GpuContext,
+        scene: std::sync::Arc<GpuScene>,
+        layouts: std::sync::Arc<SharedLayouts>,
+        settings: RenderSettings,
+    ) -> Result<Renderer, GpuError> {
+        settings.validate()?;
+        Self::with_scene(gpu, scene, layouts, settings)
+    }
+
+    /// Show a scene another renderer uploaded (made by [`Renderer::new_view`] of it or sharing its layouts).
+    pub fn set_shared_scene(&mut self, scene: std::sync::Arc<GpuScene>) {
+        self.scene = scene;
+    }
+
+    fn with_scene(
+        gpu: &GpuContext,
+        gpu_scene: std::sync::Arc<GpuScene>,
+        layouts: std::sync::Arc<SharedLayouts>,
+        settings: RenderSettings,
+    ) -> Result<Renderer, GpuError> {
         let device = &gpu.device;
-        let layouts = SharedLayouts::new(device);
-        let gpu_scene = GpuScene::new(gpu, scene, &layouts.material);
         let targets = FrameTargets::new(gpu, settings.width, settings.height);
         let frame_uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
@@ -639,7 +683,7 @@ impl Renderer {
 
     /// Replace the scene's geometry and materials.
     pub fn set_scene(&mut self, scene: &Scene) {
-        self.scene = GpuScene::new(&self.gpu, scene, &self.layouts.material);
+        self.scene = std::sync::Arc::new(GpuScene::new(&self.gpu, scene, &self.layouts.material));
     }
 
     /// Create a technique by key on this renderer's device.
