@@ -479,6 +479,8 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 3, "{text}");
     assert!(lines[0].starts_with("indirect.shadow_res,") && lines[0].contains(",vpls,"), "{}", lines[0]);
+    // The technique's named figures are columns too.
+    assert!(lines[0].ends_with(",indirect.vpls"), "{}", lines[0]);
 }
 
 #[test]

@@ -932,6 +932,8 @@ fn sweep(args: SweepArgs) -> Result<()> {
         bail!("--plot needs a numeric first --param (the x axis)");
     }
     let mut rows: Vec<Vec<String>> = Vec::new();
+    // Named figures the techniques report (`vpls`, `samples`, ...), one column each after the fixed ones.
+    let mut row_figures: Vec<std::collections::BTreeMap<String, f64>> = Vec::new();
     let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
     let mut progress = Progress::new(&format!("sweep {}", args.technique), quiet).with_unit("setting");
     progress.update(0, settings.len());
@@ -1006,7 +1008,17 @@ fn sweep(args: SweepArgs) -> Result<()> {
             format!("{:.2}", ["vpl shadow maps", "vpl gather", "path tracing"].iter().map(|n| pass(n)).sum::<f64>()),
         ]);
         rows.push(row);
+        let mut figures = c.figures.clone();
+        if let Some(ind) = &r.report.indirect {
+            figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.{k}"), *v)));
+        }
+        row_figures.push(figures);
         progress.update(i + 1, settings.len());
+    }
+    let figure_keys: std::collections::BTreeSet<&String> = row_figures.iter().flat_map(|f| f.keys()).collect();
+    header.extend(figure_keys.iter().map(|k| k.to_string()));
+    for (row, figures) in rows.iter_mut().zip(&row_figures) {
+        row.extend(figure_keys.iter().map(|k| figures.get(*k).map(|v| v.to_string()).unwrap_or_default()));
     }
     let mut csv = header.join(",") + "\n";
     for row in &rows {

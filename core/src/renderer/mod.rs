@@ -286,6 +286,9 @@ pub struct IndirectReport {
     pub vpl_source: crate::vpl::VplSource,
     /// VPL samples (texels or particles) that hit nothing.
     pub vpl_misses: u32,
+    /// True when the frame reused the previous frame's VPLs (same lights, settings and scene), so the
+    /// "vpl generation" stage timed only the check.
+    pub vpls_reused: bool,
     pub counts: TechniqueCounts,
     /// CPU stages (VPL generation, the technique's own), milliseconds.
     pub cpu_stages: Vec<PassTime>,
@@ -302,6 +305,7 @@ pub struct FrameJob {
     /// Steps of the direct technique; the indirect technique's follow.
     direct_steps: usize,
     vpl_ms: f64,
+    vpls_reused: bool,
 }
 
 impl FrameJob {
@@ -654,19 +658,20 @@ impl Renderer {
         self.vpls.key = None;
     }
 
-    /// Regenerate the frame's VPLs when the lights, the VPL settings or the scene changed.
-    fn update_vpls(&mut self, technique: &dyn Technique, lights: &[PointLight]) {
+    /// Regenerate the frame's VPLs when the lights, the VPL settings or the scene changed; false when the
+    /// previous set was kept.
+    fn update_vpls(&mut self, technique: &dyn Technique, lights: &[PointLight]) -> bool {
         if self.fixed_vpls {
-            return;
+            return false;
         }
         if !technique.uses_vpls() {
             self.vpls.set = Default::default();
             self.vpls.key = None;
-            return;
+            return true;
         }
         let key = (lights.to_vec(), self.settings.vpl, std::sync::Arc::as_ptr(&self.scene.geometry) as usize);
         if self.vpls.key.as_ref() == Some(&key) {
-            return;
+            return false;
         }
         let (bvh, _) = self.scene.bvh(&self.gpu);
         let set = crate::vpl::generate(&bvh, lights, &self.settings.vpl);
@@ -674,6 +679,7 @@ impl Renderer {
         self.vpls.buffer.write(&self.gpu, &gpu);
         self.vpls.set = std::sync::Arc::new(set);
         self.vpls.key = Some(key);
+        true
     }
 
     /// The VPLs of the last frame (empty without an indirect technique).
@@ -859,6 +865,7 @@ impl Renderer {
             );
         }
         let mut vpl_ms = 0.0;
+        let mut vpls_reused = false;
         if self.indirect.is_some() {
             encoder.clear_buffer(&self.indirect_buffer, 0, None);
         }
@@ -872,7 +879,7 @@ impl Renderer {
         let mut indirect_steps = 0;
         if let Some(mut indirect) = self.indirect.take() {
             let t0 = Instant::now();
-            self.update_vpls(indirect.as_ref(), lights);
+            vpls_reused = !self.update_vpls(indirect.as_ref(), lights);
             vpl_ms = t0.elapsed().as_secs_f64() * 1000.0;
             let ctx = self.context(camera, lights);
             let prepared = indirect.prepare(&ctx);
@@ -888,6 +895,7 @@ impl Renderer {
             gbuffer_triangles,
             direct_steps,
             vpl_ms,
+            vpls_reused,
         })
     }
 
@@ -954,6 +962,7 @@ impl Renderer {
                     vpls: if t.uses_vpls() { self.vpls.set.vpls.len() } else { 0 },
                     vpl_source: self.settings.vpl.source,
                     vpl_misses: self.vpls.set.misses,
+                    vpls_reused: job.vpls_reused,
                     counts: t.counts(),
                     cpu_stages,
                 }
