@@ -200,8 +200,9 @@ impl InterleaveBlur {
 const OVERLAY_MAX_VPLS: usize = 4096;
 
 /// The overlays of a VPL set: oriented discs (squares in the VPL's tangent plane) coloured by flux or by light,
-/// their normals, and the particle paths of the first VPLs. `scene_size` scales the glyphs.
-pub fn vpl_overlays(set: &VplSet, scene_size: f32) -> Vec<OverlayLayer> {
+/// their normals, and the paths (RSM texel rays or particle bounces) of up to 48 VPLs of light `path_light`.
+/// `scene_size` scales the glyphs.
+pub fn vpl_overlays(set: &VplSet, scene_size: f32, path_light: u32) -> Vec<OverlayLayer> {
     let vpls = &set.vpls;
     let stride = vpls.len().div_ceil(OVERLAY_MAX_VPLS).max(1);
     let max_flux = vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max).max(1e-20);
@@ -247,13 +248,57 @@ pub fn vpl_overlays(set: &VplSet, scene_size: f32) -> Vec<OverlayLayer> {
                 .collect(),
         },
         OverlayLayer {
-            name: "vpl paths (first 48)",
+            name: "vpl paths (48 of the chosen light)",
             visible_by_default: false,
             primitives: vpls
                 .iter()
+                .filter(|v| v.light == path_light)
                 .take(48)
                 .map(|v| Overlay::Line { from: v.from, to: v.position, color: [1.0, 0.85, 0.3, 0.8] })
                 .collect(),
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vpl::Vpl;
+
+    fn set(n: usize, lights: u32) -> VplSet {
+        let vpls = (0..n)
+            .map(|i| Vpl {
+                position: Vec3::new(i as f32, 0.0, 0.0),
+                normal: Vec3::Y,
+                flux: Vec3::new(1.0 + i as f32, 0.5, 0.0),
+                light: i as u32 % lights,
+                from: Vec3::Y,
+            })
+            .collect();
+        VplSet { vpls, ..Default::default() }
+    }
+
+    #[test]
+    fn layers_show_every_vpl_and_the_chosen_lights_paths() {
+        let layers = vpl_overlays(&set(100, 3), 10.0, 2);
+        let by = |name: &str| layers.iter().find(|l| l.name.starts_with(name)).unwrap();
+        assert_eq!(by("vpls (flux)").primitives.len(), 100);
+        assert_eq!(by("vpl normals").primitives.len(), 100);
+        let paths = &by("vpl paths").primitives;
+        assert_eq!(paths.len(), 33);
+        // Light 2's VPLs are 2, 5, 8, ...: each path ends at its VPL.
+        assert!(matches!(paths[0], Overlay::Line { to, .. } if to == Vec3::new(2.0, 0.0, 0.0)));
+        // The brightest VPL is drawn at full brightness, hue from its flux.
+        match by("vpls (flux)").primitives[99] {
+            Overlay::Rect { color, .. } => assert!((color[0] - 1.0).abs() < 1e-5 && color[2] == 0.0),
+            _ => panic!("discs are rectangles"),
+        }
+    }
+
+    #[test]
+    fn many_vpls_are_thinned_and_say_so() {
+        let layers = vpl_overlays(&set(10_000, 1), 10.0, 0);
+        let flux = layers.iter().find(|l| l.name.starts_with("vpls (flux")).unwrap();
+        assert!(flux.name.contains("every n-th") && flux.primitives.len() <= OVERLAY_MAX_VPLS);
+    }
 }

@@ -67,6 +67,8 @@ pub struct GatherParams {
     /// Interleaved sampling (Dong section 6): each pixel of an 8x8 block gathers every 64th VPL, then a
     /// geometry-aware blur spreads them over the block. Off for the references.
     pub interleave: bool,
+    /// The light whose VPL paths the "vpl paths" overlay shows.
+    pub path_light: u32,
 }
 
 impl Default for GatherParams {
@@ -80,6 +82,7 @@ impl Default for GatherParams {
             atlas_budget_mib: 64,
             cull: true,
             interleave: false,
+            path_light: 0,
         }
     }
 }
@@ -194,6 +197,13 @@ impl Technique for VplGather {
             kind: ParamKind::Bool,
             value: ParamValue::Bool(p.interleave),
         });
+        list.push(Param {
+            key: "path_light",
+            label: "Paths of light",
+            help: "The light whose VPL paths (RSM texel rays, particle bounces) the 'vpl paths' overlay shows",
+            kind: ParamKind::Int { min: 0, max: crate::scene::layout::MAX_LIGHTS as i64 },
+            value: ParamValue::Int(p.path_light as i64),
+        });
         match self.visibility {
             Visibility::RayTraced => list.push(Param {
                 key: "bias",
@@ -256,6 +266,7 @@ impl Technique for VplGather {
             ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
+            ("path_light", ParamValue::Int(v)) => p.path_light = *v as u32,
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())
@@ -395,6 +406,6 @@ impl Technique for VplGather {
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
-        vpl_overlays(&self.vpls, self.scene_size)
+        vpl_overlays(&self.vpls, self.scene_size, self.params.path_light)
     }
 }
