@@ -79,6 +79,21 @@ fn light_inspector_shows_the_selected_light() {
 }
 
 #[test]
+fn the_inspector_turns_a_light_into_a_spot_light() {
+    let mut h = start("inspector-spot", "cornell");
+    h.state_mut().selected = Some(3);
+    h.run_steps(2);
+    assert!(h.state().lights[3].spot.is_none());
+    h.get_by_label("spot light").click();
+    h.run_steps(2);
+    let spot = h.state().lights[3].spot.expect("the checkbox made a spot light");
+    assert!((spot.outer_angle - 30f32.to_radians()).abs() < 1e-4 && spot.direction.y < -0.99, "{spot:?}");
+    assert!(h.query_all_by_label_contains("cone half-angle").count() >= 1, "the cone slider is shown");
+    // The spot's cone is drawn as an overlay layer.
+    assert!(h.query_all_by_label_contains("spot cones").count() >= 1, "no spot cone layer");
+}
+
+#[test]
 fn timings_panel_lists_passes_and_counts() {
     let mut h = start("timings", "restaurant");
     h.run_steps(2);

@@ -622,9 +622,11 @@ impl ShadowLabApp {
     pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
         let mut names: Vec<(String, bool)> = Vec::new();
+        // Only the names are needed: asking with no lights builds (almost) no primitives, every UI frame; one spot
+        // light, when the scene has one, brings the layers that only spot lights have.
+        let probe: Vec<PointLight> = self.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
         if let Ok(t) = gpu.main.technique(&self.technique) {
-            // Only the names are needed: asking with no lights builds (almost) no primitives, every UI frame.
-            names.extend(t.overlays(&[]).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
+            names.extend(t.overlays(&probe).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         }
         if self.technique != "reference" {
             names.push(("light ranges".into(), false));

@@ -510,6 +510,37 @@ fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         track(r, &mut changed, &mut committed);
         let r = ui.add(egui::Slider::new(&mut l.range, 0.01..=1000.0).logarithmic(true).text("L_att"));
         track(r, &mut changed, &mut committed);
+        // Spot lights: a cone (glTF semantics) aimed by yaw and pitch.
+        let mut is_spot = l.spot.is_some();
+        let r = ui.checkbox(&mut is_spot, "spot light");
+        if r.changed() {
+            committed = true;
+            changed = true;
+            l.spot =
+                is_spot.then(|| shadowlab_core::scene::Spot::aimed(Vec3::ZERO, Vec3::NEG_Y, 30f32.to_radians(), 0.2));
+        }
+        if let Some(spot) = &mut l.spot {
+            let d = spot.direction;
+            let mut yaw = d.x.atan2(-d.z).to_degrees();
+            let mut pitch = d.y.clamp(-1.0, 1.0).asin().to_degrees();
+            let mut cone = spot.outer_angle.to_degrees();
+            let mut softness = if spot.outer_angle > 0.0 { 1.0 - spot.inner_angle / spot.outer_angle } else { 0.0 };
+            ui.horizontal(|ui| {
+                let r =
+                    ui.add(egui::DragValue::new(&mut yaw).speed(0.5).range(-180.0..=180.0).prefix("yaw ").suffix("°"));
+                track(r, &mut changed, &mut committed);
+                let r = ui
+                    .add(egui::DragValue::new(&mut pitch).speed(0.5).range(-90.0..=90.0).prefix("pitch ").suffix("°"));
+                track(r, &mut changed, &mut committed);
+            });
+            let r = ui.add(egui::Slider::new(&mut cone, 0.0..=90.0).text("cone half-angle °"));
+            track(r, &mut changed, &mut committed);
+            let r = ui.add(egui::Slider::new(&mut softness, 0.0..=1.0).text("softness"));
+            track(r, &mut changed, &mut committed);
+            let (yaw, pitch) = (yaw.to_radians(), pitch.to_radians());
+            let direction = Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), -yaw.cos() * pitch.cos());
+            *spot = shadowlab_core::scene::Spot::aimed(Vec3::ZERO, direction, cone.to_radians(), softness);
+        }
         l.color = Vec3::from_array(rgb);
         if committed {
             app.begin_edit();

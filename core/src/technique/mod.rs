@@ -588,7 +588,7 @@ pub fn light_overlay_color(l: &PointLight) -> [f32; 4] {
 /// The overlays every technique offers for its lights: dots sized by intensity, and range spheres (`L_att`).
 pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
     let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
-    vec![
+    let mut layers = vec![
         OverlayLayer {
             name: "lights",
             visible_by_default: true,
@@ -612,7 +612,33 @@ pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
                 })
                 .collect(),
         },
-    ]
+    ];
+    // Only scenes with spot lights get the layer, so the layer list of the others stays as it was.
+    if lights.iter().any(|l| l.spot.is_some()) {
+        layers.push(OverlayLayer {
+            name: "spot cones",
+            visible_by_default: true,
+            primitives: lights
+                .iter()
+                .filter_map(|l| l.spot.map(|s| (l, s)))
+                .flat_map(|(l, s)| {
+                    // The cone's axis and four edges, a quarter of the range long.
+                    let len = l.range * 0.25;
+                    let (u, v) = s.direction.any_orthonormal_pair();
+                    let (sin, cos) = s.outer_angle.sin_cos();
+                    let [r, g, b, _] = light_overlay_color(l);
+                    let color = [r, g, b, 0.8];
+                    let mut lines = vec![Overlay::Line { from: l.position, to: l.position + s.direction * len, color }];
+                    for side in [u, -u, v, -v] {
+                        let edge = s.direction * cos + side * sin;
+                        lines.push(Overlay::Line { from: l.position, to: l.position + edge * len, color });
+                    }
+                    lines
+                })
+                .collect(),
+        });
+    }
+    layers
 }
 
 /// Helper for `set_param`: find the parameter, check the value's range, or say what exists.
