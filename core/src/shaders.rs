@@ -51,6 +51,12 @@ pub const VPL_GATHER_PARABOLOID: &str = concat!(
     include_str!("../../shaders/vpl_vis_paraboloid.wgsl"),
     include_str!("../../shaders/vpl_gather.wgsl")
 );
+pub const VAL_GATHER: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/vpl_common.wgsl"),
+    include_str!("../../shaders/vpl_basis.wgsl"),
+    include_str!("../../shaders/val_gather.wgsl")
+);
 pub const VPL_BLUR: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/vpl_blur.wgsl"));
 pub const PATHTRACE: &str = concat!(
@@ -90,6 +96,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ),
     ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "pathtrace.wgsl"], PATHTRACE),
     ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
+    ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
 ];
 
 /// Create a shader module from one of the sources above.

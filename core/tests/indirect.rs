@@ -249,8 +249,9 @@ fn closed_sphere_gives_rho_squared_e0_over_pi_everywhere() {
     let e0 = intensity * attenuation(r, range);
     let expected = rho * rho * e0 / std::f32::consts::PI;
     let vpl = VplSettings { count: 1024, clamp_world: 0.05, ..Default::default() };
-    let cases: [(&str, Vec<(&str, ParamValue)>); 3] = [
+    let cases: [(&str, Vec<(&str, ParamValue)>); 4] = [
         ("vpl-raytraced", vec![]),
+        ("val", vec![("shadow_res", ParamValue::Int(256))]),
         ("vpl-shadowmaps", vec![("shadow_res", ParamValue::Int(256))]),
         ("pathtraced", vec![("samples", ParamValue::Int(256)), ("samples_per_step", ParamValue::Int(64))]),
     ];

@@ -100,13 +100,25 @@ impl VplGatherPass {
         source: &str,
         visibility_layout: &wgpu::BindGroupLayout,
     ) -> VplGatherPass {
+        Self::with_entry(gpu, layouts, label, source, "gather_main", visibility_layout)
+    }
+
+    /// A gather with its own entry point (a technique that computes visibility per cluster, not per VPL, and
+    /// loops over the VPLs itself, with `vpl_common.wgsl`'s bindings and terms).
+    pub fn with_entry(
+        gpu: &GpuContext,
+        layouts: &SharedLayouts,
+        label: &str,
+        source: &str,
+        entry: &str,
+        visibility_layout: &wgpu::BindGroupLayout,
+    ) -> VplGatherPass {
         let device = &gpu.device;
         let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl gather"),
             entries: &[crate::technique::storage_entry(0), crate::technique::uniform_entry(1), storage_rw_entry(2)],
         });
-        let pipeline =
-            compute_pipeline(gpu, layouts, label, source, "gather_main", &[visibility_layout, &gather_layout]);
+        let pipeline = compute_pipeline(gpu, layouts, label, source, entry, &[visibility_layout, &gather_layout]);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vpl gather batch"),
             size: std::mem::size_of::<GatherBatchUniform>() as u64,

@@ -16,6 +16,7 @@ pub mod pathtraced;
 pub mod raytraced;
 pub mod reference;
 pub mod unshadowed;
+pub mod val;
 pub mod vpl_gather;
 
 use glam::{Mat4, Vec3};
@@ -706,6 +707,11 @@ pub const INDIRECT_REGISTRY: &[TechniqueEntry] = &[
         key: "vpl-unshadowed",
         label: "VPLs, no visibility",
         create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::None)),
+    },
+    TechniqueEntry {
+        key: "val",
+        label: "Virtual area lights (Dong 2009)",
+        create: |gpu, layouts| Box::new(val::VirtualAreaLights::new(gpu, layouts)),
     },
     TechniqueEntry {
         key: "pathtraced",

@@ -1,0 +1,131 @@
+//! Virtual area lights (Dong 2009) on the software adapter: M = N with hard visibility is per-VPL shadow
+//! mapping, the closed sphere stays analytic, the error against exact VPL visibility falls as M grows, and
+//! bad parameters give defined images.
+
+mod common;
+
+use common::*;
+use glam::{Vec2, Vec3};
+use shadowlab_core::renderer::Component;
+use shadowlab_core::scene::{Mesh, PointLight, Scene};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::vpl::VplSettings;
+use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+
+const W: u32 = 80;
+const H: u32 = 60;
+
+fn settings(vpls: u32) -> RenderSettings {
+    RenderSettings {
+        width: W,
+        height: H,
+        tonemap: ToneMap::Linear,
+        ambient: Vec3::ZERO,
+        background: Vec3::ZERO,
+        component: Component::Indirect,
+        vpl: VplSettings { count: vpls, ..Default::default() },
+        ..Default::default()
+    }
+}
+
+/// The plane-and-occluder scene with a back wall: the ground's VPLs light the wall, the plate shadows it.
+fn room() -> Scene {
+    let mut scene = plane_and_occluder();
+    let h = 4.0;
+    scene.meshes.push(Mesh {
+        name: "wall".into(),
+        positions: vec![
+            Vec3::new(-h, 0.0, -3.0),
+            Vec3::new(h, 0.0, -3.0),
+            Vec3::new(h, 2.0 * h, -3.0),
+            Vec3::new(-h, 2.0 * h, -3.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+    });
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    scene
+}
+
+fn render(
+    scene: &Scene,
+    lights: &[PointLight],
+    vpls: u32,
+    key: &str,
+    params: &[(&str, ParamValue)],
+) -> (Vec<[f32; 4]>, FrameReport) {
+    let gpu = gpu();
+    let mut renderer = Renderer::new(&gpu, scene, settings(vpls)).unwrap();
+    let mut t = renderer.create_indirect_technique(key).unwrap();
+    for (k, v) in params {
+        t.set_param(k, v).unwrap();
+    }
+    renderer.set_indirect(Some(t)).unwrap();
+    let mut direct = renderer.create_technique("unshadowed").unwrap();
+    let report = renderer.render_frame(direct.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
+    (renderer.read_hdr().unwrap(), report)
+}
+
+fn lights() -> Vec<PointLight> {
+    vec![white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)]
+}
+
+fn rel_rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
+    let num: f64 = a.iter().zip(b).map(|(p, q)| ((p[1] - q[1]) as f64).powi(2)).sum();
+    let den: f64 = b.iter().map(|q| (q[1] as f64).powi(2)).sum();
+    (num / den.max(1e-30)).sqrt()
+}
+
+#[test]
+fn one_val_per_vpl_with_hard_visibility_is_per_vpl_shadow_mapping() {
+    let scene = room();
+    let (sm, _) = render(&scene, &lights(), 200, "vpl-shadowmaps", &[("shadow_res", ParamValue::Int(128))]);
+    let n = 200;
+    let params = [
+        ("vals", ParamValue::Int(n)),
+        ("visibility", ParamValue::Choice("hard".into())),
+        ("shadow_res", ParamValue::Int(128)),
+    ];
+    let (val, report) = render(&scene, &lights(), 200, "val", &params);
+    let ind = report.indirect.unwrap();
+    assert_eq!(ind.counts.figures["vals"] as usize, ind.vpls, "M = N: every VAL holds one VPL");
+    let err = rel_rmse(&val, &sm);
+    assert!(err < 0.01, "M = N hard VALs differ from per-VPL shadow maps by {err:.4} (relative RMSE)");
+}
+
+#[test]
+fn the_error_against_exact_vpl_visibility_falls_as_m_grows() {
+    let scene = room();
+    let (truth, _) = render(&scene, &lights(), 256, "vpl-raytraced", &[]);
+    let mut errors = Vec::new();
+    for m in [1i64, 8, 64] {
+        let (img, report) = render(&scene, &lights(), 256, "val", &[("vals", ParamValue::Int(m))]);
+        assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        let ind = report.indirect.unwrap();
+        assert!(ind.counts.figures["vals"] >= 1.0 && ind.counts.figures["vals"] <= m as f64);
+        errors.push(rel_rmse(&img, &truth));
+    }
+    assert!(errors[2] < errors[0], "M = 64 is no better than M = 1: {errors:?}");
+    assert!(errors[2] < 0.15, "M = 64 is {:.3} off exact visibility", errors[2]);
+}
+
+#[test]
+fn degenerate_parameters_give_defined_images() {
+    let scene = room();
+    for params in [
+        vec![("vals", ParamValue::Int(256))], // more VALs than VPLs: clamped
+        vec![("iterations", ParamValue::Int(0))],
+        vec![("vals", ParamValue::Int(1)), ("interleave", ParamValue::Bool(true))],
+    ] {
+        let (img, report) = render(&scene, &lights(), 64, "val", &params);
+        assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{params:?}: NaN");
+        assert!(img.iter().any(|p| p[1] > 0.0), "{params:?}: no indirect light");
+        let ind = report.indirect.unwrap();
+        assert!(ind.counts.figures["vals"] <= ind.vpls as f64);
+    }
+    // No VPLs at all.
+    let (img, _) = render(&scene, &lights(), 0, "val", &[]);
+    assert!(img.iter().all(|p| p[1] == 0.0));
+}

@@ -1,0 +1,160 @@
+// Virtual area lights (Dong et al. 2009, section 4): every pixel is lit by all VPLs of the batch (or, with
+// interleaving, by its 1/64 share), VPL i using the visibility of its VAL C(i). The M visibilities are
+// computed once per pixel (at most MAX_VALS), then shared by the VAL's VPLs. Visibility of VAL m from its
+// paraboloid map (tile m of the atlas, the map facing the VAL's normal, vpl_basis.wgsl):
+// - hard: one depth test (the banding the paper avoids);
+// - pcss: blocker search over the VAL's angular size, z_avg, the paper's penumbra
+//   p cos(beta) = (d - z_avg) Delta / z_avg, filter angle alpha = arctan(p cos(beta) / d), kernel width
+//   alpha / pi of the map (section 4.2), then percentage-closer filtering over a grid of `grid^2` texels.
+// Receivers in a VAL's negative half-space take full visibility (section 5.1).
+// Composed after common.wgsl, vpl_common.wgsl and vpl_basis.wgsl. `GpuVal` and `ValParams` mirror
+// core/src/technique/val/mod.rs.
+
+const MAX_VALS: u32 = 256u;
+
+struct GpuVal {
+    // xyz: centre of the map, w: Delta (the VAL's size)
+    centre: vec4<f32>,
+    // xyz: unit normal, w: VPLs assigned (0: empty, visibility 1)
+    normal: vec4<f32>,
+    // x: near, y: far of its map
+    depth: vec4<f32>,
+}
+
+struct ValParams {
+    val_count: u32,
+    // 0 hard, 1 pcss
+    mode: u32,
+    // PCF and blocker-search grid side
+    grid: u32,
+    tiles_per_row: u32,
+    resolution: u32,
+    // constant depth bias, world units
+    bias: f32,
+    // receiver normal offset in texels
+    normal_offset: f32,
+    // extra bias per texel of a sample's offset from the receiver's texel, in texel footprints (a receiver
+    // sloped by up to atan(slope_bias) against the map's view direction does not shadow itself)
+    slope_bias: f32,
+}
+
+@group(1) @binding(0) var val_atlas: texture_2d<f32>;
+@group(1) @binding(1) var<storage, read> vals: array<GpuVal>;
+@group(1) @binding(2) var<storage, read> vpl_val: array<u32>;
+@group(1) @binding(3) var<uniform> val_params: ValParams;
+
+// Occluder distance stored at texel `t` (clamped into the tile) of VAL m's map.
+fn val_occluder(m: u32, t: vec2<f32>, near: f32, far: f32) -> f32 {
+    let res = val_params.resolution;
+    let texel = clamp(vec2<i32>(floor(t)), vec2<i32>(0), vec2<i32>(i32(res) - 1));
+    let origin = vec2<i32>(vec2<u32>(m % val_params.tiles_per_row, m / val_params.tiles_per_row) * res);
+    let stored = textureLoad(val_atlas, origin + texel, 0).r;
+    return near + stored * (far - near);
+}
+
+fn val_visibility(s: Surface, m: u32) -> f32 {
+    let val = vals[m];
+    if val.normal.w < 0.5 {
+        return 1.0;
+    }
+    let n = val.normal.xyz;
+    let centre = val.centre.xyz;
+    let rel0 = s.position - centre;
+    if dot(rel0, n) <= 0.0 {
+        return 1.0;
+    }
+    let res = f32(val_params.resolution);
+    let d0 = length(rel0);
+    let cos0 = dot(rel0, n) / max(d0, 1e-20);
+    let footprint = d0 * 2.0 / res * (1.0 + max(cos0, 0.0));
+    let p = s.position + s.normal * (val_params.normal_offset * footprint);
+    let basis = vpl_basis(n);
+    let rel = p - centre;
+    let local = vec3<f32>(dot(rel, basis[0]), dot(rel, basis[1]), dot(rel, basis[2]));
+    let d = length(local);
+    if !(d > 0.0) {
+        return 1.0;
+    }
+    let dir = local / d;
+    if dir.z <= 0.0 {
+        return 1.0;
+    }
+    let uv = dir.xy / (1.0 + dir.z);
+    let t = vec2<f32>(uv.x * 0.5 + 0.5, 0.5 - uv.y * 0.5) * res;
+    let near = val.depth.x;
+    let far = val.depth.y;
+    let receiver = d - val_params.bias;
+    if val_params.mode == 0u {
+        return select(0.0, 1.0, receiver <= val_occluder(m, t, near, far));
+    }
+    // Blocker search over the VAL's angular size seen from the receiver, as a width in texels (alpha / pi).
+    let delta = val.centre.w;
+    // World size of a texel at the receiver: the bias of a sample grows with its offset.
+    let texel_world = d * 2.0 / res * (1.0 + dir.z) * val_params.slope_bias;
+    let grid = max(val_params.grid, 2u);
+    let search = max(atan(delta / d) / PI * res, 1.0);
+    var z_sum = 0.0;
+    var blockers = 0.0;
+    for (var j = 0u; j < grid; j++) {
+        for (var i = 0u; i < grid; i++) {
+            let o = (vec2<f32>(f32(i), f32(j)) / f32(grid - 1u) - 0.5) * search;
+            let z = val_occluder(m, t + o, near, far);
+            if z < receiver - length(o) * texel_world {
+                z_sum += z;
+                blockers += 1.0;
+            }
+        }
+    }
+    if blockers == 0.0 {
+        return 1.0;
+    }
+    let z_avg = max(z_sum / blockers, 1e-6);
+    let p_cos_beta = (d - z_avg) * delta / z_avg;
+    let alpha = atan(p_cos_beta / d);
+    let width = max(alpha / PI * res, 1.0);
+    var lit = 0.0;
+    for (var j = 0u; j < grid; j++) {
+        for (var i = 0u; i < grid; i++) {
+            let o = (vec2<f32>(f32(i), f32(j)) / f32(grid - 1u) - 0.5) * width;
+            lit += select(0.0, 1.0, receiver - length(o) * texel_world <= val_occluder(m, t + o, near, far));
+        }
+    }
+    return lit / f32(grid * grid);
+}
+
+@compute @workgroup_size(8, 8)
+fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let width = u32(frame.viewport.x);
+    let height = u32(frame.viewport.y);
+    if id.x >= width || id.y >= height {
+        return;
+    }
+    let s = load_surface(vec2<i32>(id.xy));
+    if !s.is_geometry {
+        return;
+    }
+    var visibility: array<f32, MAX_VALS>;
+    let m_count = min(val_params.val_count, MAX_VALS);
+    for (var m = 0u; m < m_count; m++) {
+        visibility[m] = val_visibility(s, m);
+    }
+    var start = 0u;
+    var stride = 1u;
+    var scale = 1.0;
+    if gather.interleave != 0u {
+        let pixel_class = (id.x % 8u) + 8u * (id.y % 8u);
+        start = (pixel_class + 64u - gather.first_vpl % 64u) % 64u;
+        stride = 64u;
+        scale = 64.0;
+    }
+    var sum = vec3<f32>(0.0);
+    for (var k = start; k < gather.vpl_count; k += stride) {
+        let i = gather.first_vpl + k;
+        let term = vpl_term(s, vpls[i]);
+        if max(term.x, max(term.y, term.z)) > 0.0 {
+            sum += term * visibility[min(vpl_val[i], MAX_VALS - 1u)];
+        }
+    }
+    let index = id.y * width + id.x;
+    indirect_out[index] += vec4<f32>(s.albedo / PI * sum * scale, 0.0);
+}
