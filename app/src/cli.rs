@@ -1005,7 +1005,12 @@ fn sweep(args: SweepArgs) -> Result<()> {
             format!("{:.4}", m.share_over_threshold),
             c.fell_back_to_reference.to_string(),
             r.report.indirect.as_ref().map(|i| i.vpls.to_string()).unwrap_or_default(),
-            format!("{:.2}", ["vpl shadow maps", "vpl gather", "path tracing"].iter().map(|n| pass(n)).sum::<f64>()),
+            // The indirect technique's passes, by the renderer's account (whatever their names).
+            r.report
+                .indirect
+                .as_ref()
+                .map(|i| format!("{:.2}", i.passes.iter().map(|p| pass(&p.name)).sum::<f64>()))
+                .unwrap_or_default(),
         ]);
         rows.push(row);
         let mut figures = c.figures.clone();

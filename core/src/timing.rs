@@ -33,6 +33,9 @@ pub struct PassTimer {
     profiler: GpuProfiler,
     source: TimingSource,
     cpu: BTreeMap<String, (f64, u32)>,
+    /// While set, the labels of recorded passes are the indirect technique's.
+    indirect: std::cell::Cell<bool>,
+    indirect_labels: std::cell::RefCell<std::collections::BTreeSet<String>>,
 }
 
 impl PassTimer {
@@ -44,11 +47,33 @@ impl PassTimer {
         };
         let profiler = GpuProfiler::new(&gpu.device, settings).map_err(|e| GpuError::Validation(e.to_string()))?;
         let source = if gpu.timestamps { TimingSource::GpuTimestamps } else { TimingSource::CpuFallback };
-        Ok(PassTimer { profiler, source, cpu: BTreeMap::new() })
+        Ok(PassTimer {
+            profiler,
+            source,
+            cpu: BTreeMap::new(),
+            indirect: std::cell::Cell::new(false),
+            indirect_labels: Default::default(),
+        })
     }
 
     pub fn source(&self) -> TimingSource {
         self.source
+    }
+
+    /// Mark the passes recorded from now on as the indirect technique's (or not).
+    pub fn set_indirect(&self, on: bool) {
+        self.indirect.set(on);
+    }
+
+    /// The labels of the passes recorded while [`PassTimer::set_indirect`] was on since the last call.
+    pub fn take_indirect_labels(&self) -> std::collections::BTreeSet<String> {
+        std::mem::take(&mut *self.indirect_labels.borrow_mut())
+    }
+
+    fn note(&self, label: &str) {
+        if self.indirect.get() {
+            self.indirect_labels.borrow_mut().insert(label.to_string());
+        }
     }
 
     /// Record a render pass named `label`; `record` fills it. The descriptor's timestamp writes are replaced.
@@ -59,6 +84,7 @@ impl PassTimer {
         desc: wgpu::RenderPassDescriptor<'_>,
         record: impl FnOnce(&mut wgpu::RenderPass<'_>),
     ) {
+        self.note(label);
         let query = self.profiler.begin_pass_query(label, encoder);
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -78,6 +104,7 @@ impl PassTimer {
         label: &str,
         record: impl FnOnce(&mut wgpu::ComputePass<'_>),
     ) {
+        self.note(label);
         let query = self.profiler.begin_pass_query(label, encoder);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -93,6 +120,7 @@ impl PassTimer {
     /// under `cpu_label`.
     pub fn submit(&mut self, gpu: &GpuContext, encoder: wgpu::CommandEncoder, cpu_label: &str) -> Result<(), GpuError> {
         let start = Instant::now();
+        self.note(cpu_label);
         gpu.queue.submit([encoder.finish()]);
         if self.source == TimingSource::CpuFallback {
             gpu.wait_idle()?;

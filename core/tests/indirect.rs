@@ -350,6 +350,9 @@ fn batched_gathers_equal_one_batch() {
         let (_, a, ra) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &one, None);
         let (_, b, rb) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &many, None);
         assert_eq!(ra.indirect.as_ref().unwrap().counts.batches, 1);
+        // The report separates the indirect technique's passes from the direct one's.
+        let names: Vec<&str> = ra.indirect.as_ref().unwrap().passes.iter().map(|p| p.name.as_str()).collect();
+        assert!(names.contains(&"vpl gather") && !names.contains(&"shading"), "{names:?}");
         let n = ra.indirect.as_ref().unwrap().vpls;
         assert!(n > 500, "{n} VPLs");
         assert_eq!(rb.indirect.as_ref().unwrap().counts.batches, n.div_ceil(37));

@@ -292,6 +292,9 @@ pub struct IndirectReport {
     pub counts: TechniqueCounts,
     /// CPU stages (VPL generation, the technique's own), milliseconds.
     pub cpu_stages: Vec<PassTime>,
+    /// The frame's passes that the indirect technique ran (also in the frame's `passes`), and their sum.
+    pub passes: Vec<PassTime>,
+    pub gpu_ms: f64,
 }
 
 /// A frame in progress.
@@ -917,16 +920,21 @@ impl Renderer {
                 let mut indirect = self.indirect.take().ok_or_else(|| {
                     GpuError::InvalidSettings("the indirect technique was removed during a frame".into())
                 })?;
+                self.timer.set_indirect(true);
                 let result = {
                     let ctx = self.context(&job.camera, &job.lights);
                     indirect.encode_step(&ctx, job.steps_done - job.direct_steps, &mut encoder)
                 };
                 let label = indirect.step_label();
                 self.indirect = Some(indirect);
-                result?;
+                if let Err(e) = result {
+                    self.timer.set_indirect(false);
+                    return Err(e);
+                }
                 label
             };
             self.timer.submit(&self.gpu, encoder, label)?;
+            self.timer.set_indirect(false);
             job.steps_done += 1;
             n += 1;
         }
@@ -938,6 +946,9 @@ impl Renderer {
     pub fn finish_frame(&mut self, job: FrameJob, technique: &dyn Technique) -> Result<FrameReport, GpuError> {
         self.tonemap()?;
         let passes = self.timer.finish_frame(&self.gpu)?;
+        let indirect_labels = self.timer.take_indirect_labels();
+        let indirect_passes: Vec<PassTime> =
+            passes.iter().filter(|p| indirect_labels.contains(&p.name)).cloned().collect();
         let gpu_total_ms = passes.iter().map(|p| p.ms).sum();
         Ok(FrameReport {
             technique: technique.key().to_string(),
@@ -958,6 +969,8 @@ impl Renderer {
                 let mut cpu_stages = vec![PassTime { name: "vpl generation".into(), ms: job.vpl_ms, count: 1 }];
                 cpu_stages.extend(t.cpu_times());
                 IndirectReport {
+                    gpu_ms: indirect_passes.iter().map(|p| p.ms).sum(),
+                    passes: indirect_passes,
                     technique: t.key().to_string(),
                     vpls: if t.uses_vpls() { self.vpls.set.vpls.len() } else { 0 },
                     vpl_source: self.settings.vpl.source,
@@ -974,6 +987,7 @@ impl Renderer {
     /// leak into the next frame's report.
     pub fn cancel_frame(&mut self, job: FrameJob) -> Result<(), GpuError> {
         drop(job);
+        self.timer.take_indirect_labels();
         self.timer.finish_frame(&self.gpu).map(|_| ())
     }
 
