@@ -501,3 +501,44 @@ fn bad_indirect_input_gives_a_one_line_error() {
     assert_fails_with(&with(&["--indirect", "pathtraced", "--indirect-param", "samples=0"]), "samples");
     assert_fails_with(&with(&["--indirect-param", "samples=4"]), "without an --indirect");
 }
+
+#[test]
+fn animate_measures_frame_to_frame_change_and_figures() {
+    let dir = out_dir("animate");
+    let csv = dir.join("frames.csv");
+    let args = [
+        "animate",
+        "--quiet",
+        "--scene",
+        "cornell",
+        "--width",
+        "48",
+        "--height",
+        "36",
+        "--vpls",
+        "128",
+        "--frames",
+        "3",
+        "--step",
+        "0.05,0,0",
+        "--technique",
+        "unshadowed",
+        "--indirect",
+        "val",
+        "--component",
+        "indirect",
+        "--out",
+        csv.to_str().unwrap(),
+    ];
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 4, "{text}");
+    assert!(lines[0].starts_with("frame,mean_change,mean_radiance") && lines[0].contains("indirect.vals"), "{text}");
+    // Frame 0 has no previous frame; the lights move, so the later frames change.
+    let change: f64 = lines[2].split(',').nth(1).unwrap().parse().unwrap();
+    assert!(lines[1].split(',').nth(1).unwrap().is_empty() && change > 0.0, "{text}");
+    assert_fails_with(&["animate", "--scene", "cornell", "--frames", "1", "--out", "/tmp/x.csv"], "--frames 1");
+    assert_fails_with(&["animate", "--scene", "cornell", "--step", "1,2", "--out", "/tmp/x.csv"], "--step '1,2'");
+}
