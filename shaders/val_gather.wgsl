@@ -92,7 +92,8 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     // World size of a texel at the receiver: the bias of a sample grows with its offset.
     let texel_world = d * 2.0 / res * (1.0 + dir.z) * val_params.slope_bias;
     let grid = max(val_params.grid, 2u);
-    let search = max(atan(delta / d) / PI * res, 1.0);
+    // The VAL's half-size seen from the receiver: blockers further off-axis than the VAL's edge cannot hide it.
+    let search = max(atan(0.5 * delta / d) / PI * res, 1.0);
     var z_sum = 0.0;
     var blockers = 0.0;
     for (var j = 0u; j < grid; j++) {
@@ -111,7 +112,9 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     let z_avg = max(z_sum / blockers, 1e-6);
     let p_cos_beta = (d - z_avg) * delta / z_avg;
     let alpha = atan(p_cos_beta / d);
-    let width = max(alpha / PI * res, 1.0);
+    // The kernel never exceeds the search region (as in PCSS): a penumbra wider than the VAL's own angular size
+    // would average in texels that no part of the VAL is hidden by.
+    let width = clamp(alpha / PI * res, 1.0, search);
     var lit = 0.0;
     for (var j = 0u; j < grid; j++) {
         for (var i = 0u; i < grid; i++) {
