@@ -480,7 +480,7 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     assert_eq!(lines.len(), 3, "{text}");
     assert!(lines[0].starts_with("indirect.shadow_res,") && lines[0].contains(",vpls,"), "{}", lines[0]);
     // The technique's named figures are columns too.
-    assert!(lines[0].ends_with(",indirect.vpls"), "{}", lines[0]);
+    assert!(lines[0].ends_with(",indirect.figure.vpls"), "{}", lines[0]);
 }
 
 #[test]
@@ -535,7 +535,10 @@ fn animate_measures_frame_to_frame_change_and_figures() {
     let text = std::fs::read_to_string(&csv).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 4, "{text}");
-    assert!(lines[0].starts_with("frame,mean_change,mean_radiance") && lines[0].contains("indirect.vals"), "{text}");
+    assert!(
+        lines[0].starts_with("frame,mean_change,mean_radiance") && lines[0].contains("indirect.figure.vals"),
+        "{text}"
+    );
     // Frame 0 has no previous frame; the lights move, so the later frames change.
     let change: f64 = lines[2].split(',').nth(1).unwrap().parse().unwrap();
     assert!(lines[1].split(',').nth(1).unwrap().is_empty() && change > 0.0, "{text}");

@@ -1038,9 +1038,10 @@ fn sweep(args: SweepArgs) -> Result<()> {
                 .unwrap_or_default(),
         ]);
         rows.push(row);
-        let mut figures = c.figures.clone();
+        let mut figures: std::collections::BTreeMap<String, f64> =
+            c.figures.iter().map(|(k, v)| (format!("figure.{k}"), *v)).collect();
         if let Some(ind) = &r.report.indirect {
-            figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.{k}"), *v)));
+            figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
         }
         row_figures.push(figures);
         progress.update(i + 1, settings.len());
@@ -1134,9 +1135,10 @@ fn animate(args: AnimateArgs) -> Result<()> {
                 .sum::<f64>()
                 / image.len() as f64
         });
-        let mut figures = report.counts.technique.figures.clone();
+        let mut figures: std::collections::BTreeMap<String, f64> =
+            report.counts.technique.figures.iter().map(|(k, v)| (format!("figure.{k}"), *v)).collect();
         if let Some(ind) = &report.indirect {
-            figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.{k}"), *v)));
+            figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
         }
         rows.push((i, change, mean, figures));
         previous = Some(image);
