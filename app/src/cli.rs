@@ -1081,13 +1081,24 @@ fn sweep(args: SweepArgs) -> Result<()> {
         // Drawn to a temporary file, then renamed, like every output.
         let tmp = path.with_extension("png.tmp.png");
         let lights_swept = swept[0].0 == LIGHTS_KEY;
+        // With indirect techniques the names say both parts (`unshadowed + val`).
+        let with = |direct: &str, indirect: &str| {
+            if indirect == "none" {
+                direct.to_string()
+            } else {
+                format!("{direct} + {indirect}")
+            }
+        };
+        let technique_name = with(&args.technique, &f.indirect);
+        let against_name = with(&args.against, &target_indirect.key);
+        let component = if f.component == "total" { String::new() } else { format!(", {} light", f.component) };
         let title = if lights_swept {
-            format!("{} and {} on {} ({}x{})", args.technique, args.against, scene.name, f.width, f.height)
+            format!("{technique_name} and {against_name} on {} ({}x{}{component})", scene.name, f.width, f.height)
         } else {
-            format!("{} on {} ({} lights, {}x{})", args.technique, scene.name, lights.len(), f.width, f.height)
+            format!("{technique_name} on {} ({} lights, {}x{}{component})", scene.name, lights.len(), f.width, f.height)
         };
         let reference_ms = (!lights_swept).then_some(target.timing.median_ms);
-        crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, &args.against, reference_ms)?;
+        crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, &against_name, reference_ms)?;
         std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
         if !quiet {
             eprintln!("wrote {}", path.display());
