@@ -1130,7 +1130,9 @@ fn animate(args: AnimateArgs) -> Result<()> {
     apply_params(technique.as_mut(), f.shadow_res, &args.params)?;
     crate::measure::apply_indirect(&mut renderer, &f.indirect_choice())?;
     let mut previous: Option<Vec<[f32; 4]>> = None;
-    let mut rows: Vec<(u32, Option<f64>, f64, std::collections::BTreeMap<String, f64>)> = Vec::new();
+    // Per frame: index, change against the previous frame, mean radiance, figures.
+    type FrameRow = (u32, Option<f64>, f64, std::collections::BTreeMap<String, f64>);
+    let mut rows: Vec<FrameRow> = Vec::new();
     let mut progress = Progress::new(&format!("animate {}", args.technique), f.quiet).with_unit("frame");
     for i in 0..args.frames {
         let moved: Vec<PointLight> =
