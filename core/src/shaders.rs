@@ -57,6 +57,7 @@ pub const VAL_GATHER: &str = concat!(
     include_str!("../../shaders/vpl_basis.wgsl"),
     include_str!("../../shaders/val_gather.wgsl")
 );
+pub const VAL_KMEANS: &str = include_str!("../../shaders/val_kmeans.wgsl");
 pub const VPL_BLUR: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/vpl_blur.wgsl"));
 pub const PATHTRACE: &str = concat!(
@@ -96,6 +97,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ),
     ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "pathtrace.wgsl"], PATHTRACE),
     ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
+    ("val_kmeans", &["val_kmeans.wgsl"], VAL_KMEANS),
     ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
 ];
 

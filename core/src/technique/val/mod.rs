@@ -17,10 +17,10 @@
 //!    interleaving. Receivers in a VAL's negative half-space see it fully (section 5.1).
 //!
 //! Deviations, and why:
-//! - The clustering runs on the CPU ([`kmeans::cluster`], about 0.1 ms for 1,024 VPLs and 30 VALs), not as the
-//!   paper's GPU scatter passes: the VPLs are generated on the CPU here, so a GPU k-means would add two uploads
-//!   and a readback for the overlays. Its result is exactly the GPU algorithm's (same initial assignment, same
-//!   distance, same mean update, same tie rule).
+//! - The clustering runs on the GPU (`clustering = gpu`, [`gpu_kmeans`], `val_kmeans.wgsl`: one dispatch per
+//!   step, fixed-point atomic sums where the paper blends) and is read back (M VALs, and `C` for the
+//!   overlays), because the VAL maps are culled per VAL on the CPU. `clustering = cpu` runs the twin
+//!   [`kmeans::cluster`], which is also what the warm-start variant uses.
 //! - Visibility is PCSS on the paraboloid map, not the paper's convolution soft shadow maps (CSSM, a Fourier
 //!   expansion of the depth test into mip-mapped basis textures): CSSM is not implemented yet. PCSS computes
 //!   the same blocker search and penumbra estimate with explicit depth tests instead of pre-filtered ones, so
@@ -37,6 +37,7 @@
 //!   as PCSS does (an uncapped `alpha / pi` kernel for large VALs averaged in texels that hide no part of the
 //!   VAL: Sponza, 30 VALs, FLIP 0.42 uncapped against 0.37 capped, same near plane).
 
+pub mod gpu_kmeans;
 pub mod kmeans;
 
 use std::sync::Arc;
@@ -109,6 +110,8 @@ pub struct ValParams {
     /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8).
     pub warm_start: bool,
     pub vpls_per_step: u32,
+    /// `gpu` (the paper's GPU k-means, `val_kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
+    pub clustering: String,
 }
 
 impl Default for ValParams {
@@ -127,11 +130,13 @@ impl Default for ValParams {
             interleave: false,
             warm_start: false,
             vpls_per_step: crate::vpl::MAX_VPLS,
+            clustering: "gpu".into(),
         }
     }
 }
 
 const VISIBILITY_CHOICES: &[&str] = &["pcss", "hard"];
+const CLUSTERING_CHOICES: &[&str] = &["gpu", "cpu"];
 
 pub struct VirtualAreaLights {
     pub params: ValParams,
@@ -139,6 +144,9 @@ pub struct VirtualAreaLights {
     blur: InterleaveBlur,
     layout: wgpu::BindGroupLayout,
     shadows: CubeShadowRenderer,
+    gpu_kmeans: gpu_kmeans::GpuKMeans,
+    /// True when this frame's `C` is the GPU k-means' buffer (else `map_buffer`).
+    gpu_map: bool,
     vals_buffer: GrowableBuffer,
     map_buffer: GrowableBuffer,
     uniform: wgpu::Buffer,
@@ -174,6 +182,8 @@ impl VirtualAreaLights {
             blur: InterleaveBlur::new(gpu, layouts),
             layout,
             shadows: CubeShadowRenderer::new(gpu),
+            gpu_kmeans: gpu_kmeans::GpuKMeans::new(gpu),
+            gpu_map: false,
             vals_buffer: GrowableBuffer::new(device, "vals", 48 * 64),
             map_buffer: GrowableBuffer::new(device, "vpl to val", 4 * 1024),
             uniform,
@@ -213,6 +223,13 @@ impl Technique for VirtualAreaLights {
                 help: "Clusters of VPLs, each a soft-shadowing area light (clamped to the VPL count)",
                 kind: ParamKind::Int { min: 1, max: MAX_VALS as i64 },
                 value: ParamValue::Int(p.vals as i64),
+            },
+            Param {
+                key: "clustering",
+                label: "k-means on",
+                help: "gpu: the paper's scatter passes (fixed-point atomic sums); cpu: the twin (also with warm start)",
+                kind: ParamKind::Choice(CLUSTERING_CHOICES),
+                value: ParamValue::Choice(p.clustering.clone()),
             },
             Param {
                 key: "iterations",
@@ -319,6 +336,7 @@ impl Technique for VirtualAreaLights {
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
             ("vpls_per_step", ParamValue::Int(v)) => p.vpls_per_step = *v as u32,
+            ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())
@@ -344,7 +362,13 @@ impl Technique for VirtualAreaLights {
             scene_length: self.scene_size,
         };
         let warm = (self.params.warm_start && !self.previous_centres.is_empty()).then_some(&self.previous_centres[..]);
-        self.clustering = kmeans::cluster(vpls, &kp, warm);
+        // The GPU k-means restarts from the initial assignment only; warm starts run on the CPU.
+        self.gpu_map = self.params.clustering == "gpu" && warm.is_none() && !vpls.is_empty();
+        self.clustering = if self.gpu_map {
+            self.gpu_kmeans.run(ctx.gpu, ctx.timer, &ctx.vpls.buffer.buffer, vpls, &kp, bounds.min, bounds.size())?
+        } else {
+            kmeans::cluster(vpls, &kp, warm)
+        };
         self.previous_centres = self.clustering.vals.iter().map(|v| (v.position, v.normal)).collect();
         self.clustering_ms = start.elapsed().as_secs_f64() * 1000.0;
         let m = self.clustering.vals.len();
@@ -381,7 +405,9 @@ impl Technique for VirtualAreaLights {
         let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         self.shadows.ensure_tiles(ctx.gpu, res, m);
         self.vals_buffer.write(ctx.gpu, &gpu_vals);
-        self.map_buffer.write(ctx.gpu, &self.clustering.assignment);
+        if !self.gpu_map {
+            self.map_buffer.write(ctx.gpu, &self.clustering.assignment);
+        }
         self.batch_size = (self.params.vpls_per_step as usize).min(ctx.max_lights_per_step).max(1);
         self.batches = n.div_ceil(self.batch_size);
         self.counts.batches = self.batches;
@@ -429,7 +455,13 @@ impl Technique for VirtualAreaLights {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&atlas.view) },
                 wgpu::BindGroupEntry { binding: 1, resource: self.vals_buffer.buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.map_buffer.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: match (&self.gpu_kmeans.assignment, self.gpu_map) {
+                        (Some(b), true) => b.as_entire_binding(),
+                        _ => self.map_buffer.buffer.as_entire_binding(),
+                    },
+                },
                 wgpu::BindGroupEntry { binding: 3, resource: self.uniform.as_entire_binding() },
             ],
         });
