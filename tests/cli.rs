@@ -178,6 +178,34 @@ fn bad_input_gives_a_one_line_error() {
 }
 
 #[test]
+fn bad_sweeps_are_refused_before_rendering() {
+    let csv = out_dir("bad-sweep").join("r.csv");
+    let csv = csv.to_str().unwrap();
+    let sweep = |extra: &[&'static str]| -> Vec<String> {
+        let mut v: Vec<String> = ["sweep", "--scene", "cornell", "--width", "32", "--height", "24", "--out", csv]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |extra: &[&'static str], expect: &str| {
+        let args = sweep(extra);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        assert_fails_with(&args, expect);
+    };
+    // No swept parameter (it used to panic after rendering).
+    run(&[], "at least one --param");
+    // A range of 1e30 values (it used to overflow).
+    run(&["--param", "d_init=0:1e30:1"], "at most 1000");
+    // Three 1,000-value lists: a billion settings.
+    run(
+        &["--param", "d_init=0:999:1", "--param", "bias=0:0.999:0.001", "--param", "samples=1:1000:1"],
+        "at most 10000",
+    );
+}
+
+#[test]
 fn zero_lights_render_and_report_no_shadow_maps() {
     let (img, report) =
         render_ok("zero", &["--scene", "cornell", "--lights", "random:0:1", "--width", "64", "--height", "48"]);

@@ -874,6 +874,10 @@ fn sweep(args: SweepArgs) -> Result<()> {
     if args.frame.indirect == "none" && !args.frame.indirect_params.is_empty() {
         bail!("--indirect-param given without an --indirect technique");
     }
+    if swept.is_empty() {
+        bail!("sweep needs at least one --param KEY=VALUES (or --indirect-param) to sweep");
+    }
+    crate::measure::check_combinations(&swept)?;
     let settings = crate::measure::combinations(&swept);
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;

@@ -230,10 +230,12 @@ pub fn sweep_values(spec: &str) -> Result<(String, Vec<String>)> {
         if !(a.is_finite() && b.is_finite() && step.is_finite() && step > 0.0 && b >= a) {
             bail_range(spec)?;
         }
-        let count = ((b - a) / step + 1e-9).floor() as usize + 1;
-        if count > 1000 {
-            return Err(anyhow!("--param '{spec}': {count} values; at most 1000"));
+        // Counted in f64 first: `0:1e30:1` must be refused, not overflow.
+        let count_f = ((b - a) / step + 1e-9).floor() + 1.0;
+        if !(count_f <= 1000.0) {
+            return Err(anyhow!("--param '{spec}': {count_f:.0} values; at most 1000"));
         }
+        let count = count_f as usize;
         let decimals = format!("{step}").split('.').nth(1).map(|d| d.len()).unwrap_or(0);
         let integers = [a, step].iter().all(|v| v.fract() == 0.0);
         let values = (0..count)
@@ -260,6 +262,27 @@ fn bail_range(spec: &str) -> Result<()> {
 }
 
 /// Every combination of the swept values, in order (the last parameter varies fastest).
+/// Most settings one sweep renders (the product of the swept lists).
+pub const MAX_SWEEP_SETTINGS: usize = 10_000;
+
+/// The number of combinations of `params`, or an error above [`MAX_SWEEP_SETTINGS`] (checked before they are
+/// built: three 1,000-value lists would be a billion).
+pub fn check_combinations(params: &[(String, Vec<String>)]) -> Result<usize> {
+    let mut n: usize = 1;
+    for (_, values) in params {
+        n = n.saturating_mul(values.len());
+    }
+    if n > MAX_SWEEP_SETTINGS {
+        let sizes: Vec<String> = params.iter().map(|(k, v)| format!("{k}: {}", v.len())).collect();
+        return Err(anyhow!(
+            "the swept values make {} settings ({}); at most {MAX_SWEEP_SETTINGS}",
+            if n == usize::MAX { "too many".to_string() } else { n.to_string() },
+            sizes.join(", ")
+        ));
+    }
+    Ok(n)
+}
+
 pub fn combinations(params: &[(String, Vec<String>)]) -> Vec<Vec<(String, String)>> {
     let mut out: Vec<Vec<(String, String)>> = vec![Vec::new()];
     for (key, values) in params {
