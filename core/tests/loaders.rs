@@ -569,3 +569,34 @@ fn corrupted_files_never_panic() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn gltf_lights_beyond_the_limit_are_skipped_with_one_warning() {
+    let max = shadowlab_core::scene::layout::MAX_LIGHTS;
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("lit_quad.gltf")).unwrap()).unwrap();
+    let lights = doc["extensions"]["KHR_lights_punctual"]["lights"].as_array_mut().unwrap();
+    lights.push(serde_json::json!({"type": "point", "intensity": 1.0, "range": 1.0}));
+    let light_index = lights.len() - 1;
+    let nodes = doc["nodes"].as_array_mut().unwrap();
+    let first = nodes.len();
+    for i in 0..max + 5 {
+        nodes.push(serde_json::json!({
+            "translation": [i as f32 * 1e-3, 0.0, 0.0],
+            "extensions": {"KHR_lights_punctual": {"light": light_index}}
+        }));
+    }
+    let roots = doc["scenes"][0]["nodes"].as_array_mut().unwrap();
+    roots.extend((first..first + max + 5).map(|i| serde_json::json!(i)));
+    // The fixture's buffer is a data URI, so the file can live anywhere.
+    let path = std::env::temp_dir().join("shadowlab-many-lights.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = load_gltf(&path, 1.0).unwrap();
+    assert_eq!(scene.lights.len(), max);
+    assert_eq!(scene.warnings.iter().filter(|w| w.contains("lights: the rest are skipped")).count(), 1);
+    // A scene assembled in code cannot bypass the limit through `--lights scene` either.
+    let mut too_many = scene.clone();
+    too_many.lights.push(too_many.lights[0]);
+    let err = shadowlab_core::scene::layout::generate(&shadowlab_core::scene::layout::LightLayout::Scene, &too_many)
+        .unwrap_err();
+    assert!(err.to_string().contains("100000"), "{err}");
+}

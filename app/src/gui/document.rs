@@ -164,6 +164,10 @@ impl SceneFile {
         if let Some(i) = file.lights.iter().position(|l| !l.is_valid()) {
             bail!("light {i} has a non-finite or negative value");
         }
+        let max = shadowlab_core::scene::layout::MAX_LIGHTS;
+        if file.lights.len() > max {
+            bail!("the file has {} lights; the limit is {max}", file.lights.len());
+        }
         if !file.camera.is_valid() {
             bail!("the camera has non-finite or degenerate values");
         }

@@ -87,6 +87,7 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
         },
         default_material: None,
         lights_without_range: Vec::new(),
+        warned_light_limit: false,
         camera: None,
         warned: HashSet::new(),
     };
@@ -171,6 +172,8 @@ struct Loader<'a> {
     default_material: Option<usize>,
     /// Indices into `scene.lights` of lights whose file gives no range.
     lights_without_range: Vec<usize>,
+    /// The light-limit warning was given.
+    warned_light_limit: bool,
     camera: Option<FileCamera>,
     warned: HashSet<String>,
 }
@@ -302,6 +305,15 @@ impl Loader<'_> {
 
     fn add_light(&mut self, node: &gltf::Node, light: &gltf::khr_lights_punctual::Light, world: Mat4) {
         let name = light.name().or(node.name()).unwrap_or("unnamed").to_string();
+        // The renderer's light limit holds for files too: the rest are dropped, once, with a warning.
+        let max = crate::scene::layout::MAX_LIGHTS;
+        if self.scene.lights.len() >= max {
+            if self.scene.lights.len() == max && !self.warned_light_limit {
+                self.warned_light_limit = true;
+                self.warn(format!("more than {max} lights: the rest are skipped (the limit of every layout)"));
+            }
+            return;
+        }
         match light.kind() {
             gltf::khr_lights_punctual::Kind::Point => {
                 let position = world.transform_point3(Vec3::ZERO) * self.unit_scale;

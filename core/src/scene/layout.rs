@@ -263,7 +263,17 @@ pub fn generate(layout: &LightLayout, scene: &Scene) -> Result<Vec<PointLight>, 
         LightLayout::Circles { circles, per_circle, range } => circle_lights(&bounds, circles, per_circle, range),
         LightLayout::Grid { nx, ny, range } => grid_lights(&bounds, nx, ny, range),
         LightLayout::Paper => paper_lights(scene)?,
-        LightLayout::Scene => scene.lights.clone(),
+        LightLayout::Scene => {
+            // A scene assembled in code (or a future loader) must not bypass the limit either.
+            if scene.lights.len() > MAX_LIGHTS {
+                return Err(LayoutError::TooManyLights {
+                    spec: "scene".into(),
+                    count: scene.lights.len(),
+                    max: MAX_LIGHTS,
+                });
+            }
+            scene.lights.clone()
+        }
         LightLayout::Spot { position, target, cone_deg, range } => {
             let intensity = layout_intensity(range, 1, 1.0 / light_volume(bounds.size()));
             let spot = crate::scene::Spot::aimed(position, target, cone_deg.to_radians(), 0.2);
