@@ -47,6 +47,8 @@ pub enum GpuError {
     RequestDevice(String),
     #[error("GPU error: {0}")]
     Validation(String),
+    #[error("the GPU ran out of memory: {0} (lower the image size, shadow-map resolution or batch memory)")]
+    OutOfMemory(String),
     #[error("reading back a GPU buffer failed: {0}")]
     Readback(String),
     #[error("invalid render settings: {0}")]

@@ -80,6 +80,24 @@ impl GpuContext {
         format!("{} ({:?}, {:?})", self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type)
     }
 
+    /// Run `f` inside out-of-memory and validation error scopes: a wgpu error it causes becomes a
+    /// [`GpuError`] (the last good state is the caller's to keep) instead of the default handler's panic.
+    /// Scopes are per thread; `f` must not leave work for another thread.
+    pub fn guarded<T>(&self, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let result = f();
+        let validation = pollster::block_on(validation.pop());
+        let oom = pollster::block_on(oom.pop());
+        if let Some(e) = oom {
+            return Err(GpuError::OutOfMemory(e.to_string()));
+        }
+        if let Some(e) = validation {
+            return Err(GpuError::Validation(e.to_string()));
+        }
+        result
+    }
+
     /// Block until all submitted work is done.
     pub fn wait_idle(&self) -> Result<(), GpuError> {
         self.device

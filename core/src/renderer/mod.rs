@@ -389,6 +389,10 @@ fn create_indirect_buffer(gpu: &GpuContext, width: u32, height: u32, enabled: bo
 impl Renderer {
     pub fn new(gpu: &GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Renderer, GpuError> {
         settings.validate()?;
+        gpu.guarded(|| Self::new_unguarded(gpu, scene, settings))
+    }
+
+    fn new_unguarded(gpu: &GpuContext, scene: &Scene, settings: RenderSettings) -> Result<Renderer, GpuError> {
         let layouts = std::sync::Arc::new(SharedLayouts::new(&gpu.device));
         let gpu_scene = std::sync::Arc::new(GpuScene::new(gpu, scene, &layouts.material));
         Self::with_scene(gpu, gpu_scene, layouts, settings)
@@ -607,6 +611,11 @@ impl Renderer {
 
     /// Change settings; resizes the targets when the size changed.
     pub fn set_settings(&mut self, settings: RenderSettings) -> Result<(), GpuError> {
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.set_settings_unguarded(settings))
+    }
+
+    fn set_settings_unguarded(&mut self, settings: RenderSettings) -> Result<(), GpuError> {
         settings.validate()?;
         if settings.width != self.settings.width || settings.height != self.settings.height {
             // Checked first, so a refused size leaves the renderer as it was.
@@ -629,6 +638,11 @@ impl Renderer {
     /// Choose the indirect technique (None: direct light only, the default). Its steps run after the direct
     /// technique's in every frame.
     pub fn set_indirect(&mut self, technique: Option<Box<dyn Technique>>) -> Result<(), GpuError> {
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.set_indirect_unguarded(technique))
+    }
+
+    fn set_indirect_unguarded(&mut self, technique: Option<Box<dyn Technique>>) -> Result<(), GpuError> {
         let (w, h) = (self.settings.width, self.settings.height);
         self.indirect_buffer = create_indirect_buffer(&self.gpu, w, h, technique.is_some())?;
         self.indirect = technique;
@@ -736,6 +750,16 @@ impl Renderer {
 
     /// Start a frame: upload the camera, let the technique prepare, and render the G-buffer and ambient passes.
     pub fn begin_frame(
+        &mut self,
+        technique: &mut dyn Technique,
+        camera: &Camera,
+        lights: &[PointLight],
+    ) -> Result<FrameJob, GpuError> {
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.begin_frame_unguarded(technique, camera, lights))
+    }
+
+    fn begin_frame_unguarded(
         &mut self,
         technique: &mut dyn Technique,
         camera: &Camera,
@@ -909,6 +933,16 @@ impl Renderer {
         technique: &mut dyn Technique,
         max_steps: usize,
     ) -> Result<bool, GpuError> {
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.advance_unguarded(job, technique, max_steps))
+    }
+
+    fn advance_unguarded(
+        &mut self,
+        job: &mut FrameJob,
+        technique: &mut dyn Technique,
+        max_steps: usize,
+    ) -> Result<bool, GpuError> {
         let mut n = 0;
         while !job.is_done() && n < max_steps {
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
@@ -944,6 +978,11 @@ impl Renderer {
     /// Tone-map whatever has been accumulated (also of an unfinished job, for progressive display) and, when
     /// the job is done, collect the frame's timings.
     pub fn finish_frame(&mut self, job: FrameJob, technique: &dyn Technique) -> Result<FrameReport, GpuError> {
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.finish_frame_unguarded(job, technique))
+    }
+
+    fn finish_frame_unguarded(&mut self, job: FrameJob, technique: &dyn Technique) -> Result<FrameReport, GpuError> {
         self.tonemap()?;
         let passes = self.timer.finish_frame(&self.gpu)?;
         let indirect_labels = self.timer.take_indirect_labels();
