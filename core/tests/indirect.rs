@@ -555,3 +555,23 @@ fn views_of_one_scene_share_its_gpu_copy_and_bvh_and_render_the_same() {
     }
     assert!(images[0] == images[1], "two views of one scene render differently");
 }
+
+#[test]
+fn a_light_exactly_on_a_surface_gives_no_nan_in_any_direct_technique() {
+    let scene = room();
+    // On the ground, on the wall, and on the plate's corner: d = 0 for the pixels under it.
+    let lights = [
+        white_light(Vec3::new(0.0, 0.0, 1.0), 5.0, 10.0),
+        white_light(Vec3::new(1.0, 1.0, -3.0), 5.0, 10.0),
+        white_light(Vec3::new(0.5, 1.0, 0.5), 5.0, 10.0),
+    ];
+    let gpu = gpu();
+    for key in ["reference", "unshadowed", "raytraced", "lightcluster", "insm"] {
+        let mut renderer = Renderer::new(&gpu, &scene, settings(Component::Total, VplSettings::default())).unwrap();
+        let mut t = renderer.create_technique(key).unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+        let hdr = renderer.read_hdr().unwrap();
+        assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key}: a NaN or infinite pixel");
+        assert!(hdr.iter().any(|p| p[0] > 0.0), "{key}: nothing lit");
+    }
+}
