@@ -101,6 +101,26 @@ pub struct ViewSettings {
     pub compare_against: String,
 }
 
+impl ViewSettings {
+    /// Every field in range, so a file never leaves a permanent render error (a NaN exposure, say).
+    pub fn validate(&self) -> Result<()> {
+        let in_range = |name: &str, v: f32, lo: f32, hi: f32| -> Result<()> {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                bail!("view setting {name} = {v} must be between {lo} and {hi}");
+            }
+            Ok(())
+        };
+        in_range("split", self.split, 0.0, 1.0)?;
+        in_range("resolution_scale", self.resolution_scale, 0.1, 2.0)?;
+        in_range("exposure", self.exposure, 1e-3, 1e3)?;
+        in_range("diff_gain", self.diff_gain, 0.01, 1e4)?;
+        if !["reference", "raytraced"].contains(&self.compare_against.as_str()) {
+            bail!("view setting compare_against = '{}' must be reference or raytraced", self.compare_against);
+        }
+        Ok(())
+    }
+}
+
 impl Default for ViewSettings {
     fn default() -> Self {
         ViewSettings {
@@ -172,6 +192,7 @@ impl SceneFile {
             bail!("the camera has non-finite or degenerate values");
         }
         file.indirect.validate()?;
+        file.view.validate()?;
         Ok((file, warnings))
     }
 
@@ -277,6 +298,24 @@ mod tests {
     fn f_with_extra(ron_text: &str) -> String {
         let i = ron_text.rfind(')').unwrap();
         format!("{}    future_feature: 42,\n)", &ron_text[..i])
+    }
+
+    #[test]
+    fn view_settings_out_of_range_are_refused() {
+        for bad in [
+            ViewSettings { exposure: f32::NAN, ..Default::default() },
+            ViewSettings { exposure: 0.0, ..Default::default() },
+            ViewSettings { resolution_scale: 50.0, ..Default::default() },
+            ViewSettings { split: -1.0, ..Default::default() },
+            ViewSettings { diff_gain: f32::INFINITY, ..Default::default() },
+            ViewSettings { compare_against: "nope".into(), ..Default::default() },
+        ] {
+            let f = SceneFile { view: bad.clone(), ..file() };
+            let text = f.to_ron().unwrap();
+            let err = SceneFile::from_ron(&text).expect_err(&format!("{bad:?} was accepted"));
+            assert!(err.to_string().contains("view setting"), "{err}");
+        }
+        assert!(SceneFile::from_ron(&file().to_ron().unwrap()).is_ok());
     }
 
     #[test]
