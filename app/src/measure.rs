@@ -232,7 +232,7 @@ pub fn sweep_values(spec: &str) -> Result<(String, Vec<String>)> {
         }
         // Counted in f64 first: `0:1e30:1` must be refused, not overflow.
         let count_f = ((b - a) / step + 1e-9).floor() + 1.0;
-        if !(count_f <= 1000.0) {
+        if count_f.is_nan() || count_f > 1000.0 {
             return Err(anyhow!("--param '{spec}': {count_f:.0} values; at most 1000"));
         }
         let count = count_f as usize;
