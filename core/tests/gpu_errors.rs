@@ -30,3 +30,38 @@ fn a_buffer_past_the_limits_is_an_error_not_a_panic() {
     let lights = [common::white_light(glam::Vec3::new(0.0, 3.0, 0.0), 5.0, 20.0)];
     renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
 }
+
+#[test]
+fn no_single_pass_shades_more_than_the_bounded_work() {
+    let gpu = common::gpu();
+    let scene = common::plane_and_occluder();
+    let settings = shadowlab_core::RenderSettings { width: 16, height: 12, ..Default::default() };
+    let mut renderer = shadowlab_core::Renderer::new(&gpu, &scene, settings).unwrap();
+    let max = shadowlab_core::technique::MAX_LIGHT_WORK_PER_PASS;
+    // Lights above the plane, all in view.
+    let lights: Vec<_> = (0..max + 100)
+        .map(|i| {
+            common::white_light(
+                glam::Vec3::new((i % 100) as f32 * 0.05 - 2.5, 2.0, (i / 100) as f32 * 0.05 - 1.0),
+                0.01,
+                30.0,
+            )
+        })
+        .collect();
+    let mut t = renderer.create_technique("unshadowed").unwrap();
+    let report = renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    assert!(
+        report.counts.technique.batches >= 2,
+        "{} lights in {} pass(es)",
+        lights.len(),
+        report.counts.technique.batches
+    );
+    // Soft ray-traced shadows: lights x rays per pass bounded too.
+    let mut rt = renderer.create_technique("raytraced").unwrap();
+    rt.set_param("soft", &shadowlab_core::technique::ParamValue::Bool(true)).unwrap();
+    rt.set_param("samples", &shadowlab_core::technique::ParamValue::Int(256)).unwrap();
+    rt.set_param("lights_per_step", &shadowlab_core::technique::ParamValue::Int(4096)).unwrap();
+    let few = &lights[..64];
+    let report = renderer.render_frame(rt.as_mut(), &scene.camera, few, &mut |_, _| {}).unwrap();
+    assert_eq!(report.counts.technique.batches, 64 * 256 / max, "64 lights x 256 rays in passes of {max}");
+}

@@ -378,6 +378,11 @@ pub trait Technique {
     }
 }
 
+/// Most light evaluations (lights x shadow rays) one full-screen pass may do per pixel: a single pass over
+/// 100,000 lights (or 4,096 lights x 256 rays) can run for seconds and lose a real GPU's device to its
+/// watchdog, so passes are split to stay under this. The image does not change.
+pub const MAX_LIGHT_WORK_PER_PASS: usize = 4096;
+
 /// A full-screen pass that adds `pipeline`'s output into the HDR target: group 0 is the screen bind group,
 /// group 1 the technique's. The shading passes of all techniques go through here.
 pub fn accumulate_pass(

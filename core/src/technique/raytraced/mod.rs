@@ -244,7 +244,10 @@ impl Technique for Raytraced {
         self.visible.extend_from_slice(&ctx.visible_lights.indices);
 
         // Step 2: batches of lights.
-        self.batch_size = (self.params.lights_per_step as usize).min(ctx.max_lights_per_step).max(1);
+        // Bounded work per pass: lights x rays per pixel at most `MAX_LIGHT_WORK_PER_PASS`.
+        let rays = if self.params.soft { self.params.samples.max(1) as usize } else { 1 };
+        let by_work = (super::MAX_LIGHT_WORK_PER_PASS / rays).max(1);
+        self.batch_size = (self.params.lights_per_step as usize).min(ctx.max_lights_per_step).min(by_work).max(1);
         let batches = self.visible.len().div_ceil(self.batch_size);
         self.counts = TechniqueCounts { lights_visible: self.visible.len(), batches, ..Default::default() };
         if self.visible.is_empty() {

@@ -93,7 +93,7 @@ impl Technique for Unshadowed {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         // The renderer culled and uploaded the lights (`ctx.visible_lights`).
         self.visible_count = ctx.visible_lights.indices.len();
-        self.batch_size = self.visible_count.clamp(1, ctx.max_lights_per_step);
+        self.batch_size = self.visible_count.clamp(1, ctx.max_lights_per_step.min(super::MAX_LIGHT_WORK_PER_PASS));
         let batches = self.visible_count.div_ceil(self.batch_size);
         self.counts = TechniqueCounts { lights_visible: self.visible_count, batches, ..Default::default() };
         if self.visible_count == 0 {
