@@ -600,3 +600,16 @@ fn gltf_lights_beyond_the_limit_are_skipped_with_one_warning() {
         .unwrap_err();
     assert!(err.to_string().contains("100000"), "{err}");
 }
+
+#[test]
+fn an_accessor_offset_near_the_end_of_memory_is_a_clear_error() {
+    // byteOffset + element size overflows usize: the bounds check must say so, not panic (the loader's
+    // catch_unwind backstop would report "malformed data (...)" instead).
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("lit_quad.gltf")).unwrap()).unwrap();
+    doc["accessors"][0]["byteOffset"] = serde_json::json!(u64::MAX - 4);
+    let path = std::env::temp_dir().join("shadowlab-offset-overflow.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let err = load_gltf(&path, 1.0).unwrap_err().to_string();
+    assert!(!err.contains("malformed data ("), "the loader panicked: {err}");
+    assert!(err.contains("reads past the end") || err.contains("offset"), "{err}");
+}

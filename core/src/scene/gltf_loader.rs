@@ -547,7 +547,7 @@ fn accessor_bytes(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<Vec<
         }
         let start = accessor.offset();
         if count > 0 {
-            let end = (count - 1).checked_mul(stride).and_then(|e| e.checked_add(start + element));
+            let end = (count - 1).checked_mul(stride).and_then(|e| e.checked_add(start.checked_add(element)?));
             if end.is_none_or(|end| end > data.len()) {
                 return Err(format!(
                     "accessor {} reads past the end of buffer view {} ({} bytes)",
