@@ -36,6 +36,11 @@ struct ValParams {
     // extra bias per texel of a sample's offset from the receiver's texel, in texel footprints (a receiver
     // sloped by up to atan(slope_bias) against the map's view direction does not shadow itself)
     slope_bias: f32,
+    // >= 0: only the VPLs of this VAL light the image (its contribution alone, the paper's Fig. 9)
+    solo: i32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(0) var val_atlas: texture_2d<f32>;
@@ -153,6 +158,9 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     var sum = vec3<f32>(0.0);
     for (var k = start; k < gather.vpl_count; k += stride) {
         let i = gather.first_vpl + k;
+        if val_params.solo >= 0 && vpl_val[i] != u32(val_params.solo) {
+            continue;
+        }
         let term = vpl_term(s, vpls[i]);
         if max(term.x, max(term.y, term.z)) > 0.0 {
             sum += term * visibility[min(vpl_val[i], MAX_VALS - 1u)];

@@ -175,3 +175,21 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         }
     }
 }
+
+#[test]
+fn the_vals_contributions_alone_add_up_to_the_whole() {
+    let scene = room();
+    let m = 4;
+    let (all, _) = render(&scene, &lights(), 128, "val", &[("vals", ParamValue::Int(m))]);
+    let mut sum = vec![[0.0f32; 4]; all.len()];
+    for k in 0..m {
+        let (one, _) =
+            render(&scene, &lights(), 128, "val", &[("vals", ParamValue::Int(m)), ("solo", ParamValue::Int(k))]);
+        assert!(one.iter().any(|p| p[1] > 0.0), "VAL {k} lights nothing");
+        for (s, p) in sum.iter_mut().zip(&one) {
+            s[1] += p[1];
+        }
+    }
+    let err = rel_rmse(&sum, &all);
+    assert!(err < 1e-3, "the VALs' contributions alone sum to the whole within {err}");
+}

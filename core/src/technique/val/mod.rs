@@ -87,8 +87,10 @@ struct ValParamsUniform {
     bias: f32,
     normal_offset: f32,
     slope_bias: f32,
+    solo: i32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 32);
+const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 48);
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct ValParams {
@@ -110,6 +112,8 @@ pub struct ValParams {
     /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8).
     pub warm_start: bool,
     pub vpls_per_step: u32,
+    /// Show one VAL's contribution alone (its VPLs with its soft visibility; -1 = all VALs).
+    pub solo: i32,
     /// `gpu` (the paper's GPU k-means, `val_kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
     pub clustering: String,
 }
@@ -131,6 +135,7 @@ impl Default for ValParams {
             warm_start: false,
             vpls_per_step: crate::vpl::MAX_VPLS,
             clustering: "gpu".into(),
+            solo: -1,
         }
     }
 }
@@ -310,6 +315,13 @@ impl Technique for VirtualAreaLights {
                 value: ParamValue::Bool(p.warm_start),
             },
             Param {
+                key: "solo",
+                label: "Show one VAL",
+                help: "The contribution of one VAL alone: its VPLs with its soft shadow (-1: all VALs)",
+                kind: ParamKind::Int { min: -1, max: MAX_VALS as i64 - 1 },
+                value: ParamValue::Int(p.solo as i64),
+            },
+            Param {
                 key: "vpls_per_step",
                 label: "VPLs per step",
                 help: "VPLs gathered in one pass (the image does not change)",
@@ -337,6 +349,7 @@ impl Technique for VirtualAreaLights {
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
             ("vpls_per_step", ParamValue::Int(v)) => p.vpls_per_step = *v as u32,
             ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
+            ("solo", ParamValue::Int(v)) => p.solo = *v as i32,
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())
@@ -447,6 +460,8 @@ impl Technique for VirtualAreaLights {
             bias: self.params.bias_world,
             normal_offset: self.params.normal_offset_texels,
             slope_bias: self.params.slope_bias,
+            solo: self.params.solo,
+            _pad: [0; 3],
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
