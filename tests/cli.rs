@@ -573,3 +573,52 @@ fn animate_measures_frame_to_frame_change_and_figures() {
     assert_fails_with(&["animate", "--scene", "cornell", "--frames", "1", "--out", "/tmp/x.csv"], "--frames 1");
     assert_fails_with(&["animate", "--scene", "cornell", "--step", "1,2", "--out", "/tmp/x.csv"], "--step '1,2'");
 }
+
+#[test]
+fn maps_out_saves_the_shadow_atlases() {
+    let dir = out_dir("maps");
+    let maps = dir.join("maps.png");
+    let indirect = dir.join("maps-indirect.png");
+    let _ = std::fs::remove_file(&maps);
+    let _ = std::fs::remove_file(&indirect);
+    let maps_arg = maps.to_str().unwrap().to_string();
+    let extra = [
+        "--scene",
+        "cornell",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--shadow-res",
+        "32",
+        "--vpls",
+        "64",
+        "--indirect",
+        "val",
+        "--indirect-param",
+        "shadow_res=32",
+        "--maps-out",
+        &maps_arg,
+    ];
+    render_ok("maps", &extra);
+    let direct = image::open(&maps).unwrap().to_rgba8();
+    let val = image::open(&indirect).unwrap().to_rgba8();
+    // Drawn depth is grey to white somewhere, empty texels black.
+    assert!(direct.pixels().any(|p| p[0] > 64) && val.pixels().any(|p| p[0] > 64));
+    assert_eq!(val.width() % 32, 0);
+    let png = dir.join("x.png");
+    assert_fails_with(
+        &[
+            "render",
+            "--scene",
+            "cornell",
+            "--technique",
+            "unshadowed",
+            "--out",
+            png.to_str().unwrap(),
+            "--maps-out",
+            &maps_arg,
+        ],
+        "renders shadow maps",
+    );
+}

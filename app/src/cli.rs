@@ -223,6 +223,10 @@ pub struct RenderArgs {
     pub overlays: bool,
     #[arg(long = "overlay-layer", value_name = "NAME")]
     pub overlay_layers: Vec<String>,
+    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, and the indirect
+    /// technique's as `<name>-indirect.png` (the last batch when a frame had several).
+    #[arg(long)]
+    pub maps_out: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -559,6 +563,9 @@ fn encode_png(image: &image::RgbaImage) -> Result<Vec<u8>> {
 
 fn render(args: RenderArgs) -> Result<()> {
     check_output_path(&args.out, "png")?;
+    if let Some(m) = &args.maps_out {
+        check_output_path(m, "png")?;
+    }
     if let Some(r) = &args.report {
         check_output_path(r, "json")?;
     }
@@ -586,6 +593,30 @@ fn render(args: RenderArgs) -> Result<()> {
     }
     let timing = crate::measure::summarize(&reports);
     let report = reports.pop().expect("at least one measured frame");
+    if let Some(path) = &args.maps_out {
+        let mut wrote = 0;
+        if let Some((atlas, what)) = technique.shadow_atlas() {
+            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            write_atomic(path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        if let Some((atlas, what)) = renderer.indirect().and_then(|t| t.shadow_atlas()) {
+            let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps");
+            let indirect_path = path.with_file_name(format!("{stem}-indirect.png"));
+            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            write_atomic(&indirect_path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", indirect_path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        if wrote == 0 {
+            bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.technique);
+        }
+    }
     if args.overlays || !args.overlay_layers.is_empty() {
         let mut layers = technique.overlays(&lights);
         if let Some(i) = renderer.indirect() {

@@ -77,6 +77,28 @@ pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, G
     map_read(gpu, &staging, buffer.size())
 }
 
+/// A depth atlas as a grey PNG-ready image: near is white, far (and empty) is black, stretched between the
+/// nearest and farthest drawn depth so both hardware (cube) and linear (paraboloid) depth are readable.
+pub fn depth_atlas_image(
+    gpu: &GpuContext,
+    atlas: &crate::renderer::cube_shadows::CubeAtlas,
+) -> Result<image::RgbaImage, GpuError> {
+    let size = atlas.texture.size();
+    let bytes = read_texture(gpu, &atlas.texture, size.width, size.height, 4)?;
+    let depths: Vec<f32> = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
+    let drawn = depths.iter().copied().filter(|&d| d < 1.0);
+    let (lo, hi) = drawn.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    let span = (hi - lo).max(1e-6);
+    let grey: Vec<u8> = depths
+        .iter()
+        .flat_map(|&d| {
+            let g = if d >= 1.0 { 0 } else { (255.0 * (1.0 - 0.85 * (d - lo) / span)) as u8 };
+            [g, g, g, 255]
+        })
+        .collect();
+    image::RgbaImage::from_raw(size.width, size.height, grey).ok_or_else(|| GpuError::Readback("size mismatch".into()))
+}
+
 /// IEEE half to single precision.
 pub fn f16_to_f32(h: u16) -> f32 {
     let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };

@@ -376,6 +376,11 @@ pub trait Technique {
     fn uses_vpls(&self) -> bool {
         false
     }
+    /// The shadow-map atlas of the last step (the last batch when the frame had several), with what its tiles
+    /// are, for inspection; None for techniques without one.
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        None
+    }
 }
 
 /// Most light evaluations (lights x shadow rays) one full-screen pass may do per pixel: a single pass over

@@ -90,6 +90,11 @@ impl PerLightShadows {
         }
     }
 
+    /// The atlas of the last batch.
+    pub fn atlas(&self) -> Option<&crate::renderer::cube_shadows::CubeAtlas> {
+        self.cubes.atlas()
+    }
+
     /// Lights that passed the frustum culling of the last `prepare`.
     pub fn visible_lights(&self) -> usize {
         self.visible_count
@@ -221,6 +226,10 @@ impl Technique for Reference {
 
     fn step_label(&self) -> &'static str {
         "shadow maps + shading"
+    }
+
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        self.shadows.atlas().map(|a| (a, "cube maps of the last batch, six faces per light (+x -x +y -y +z -z)"))
     }
 
     fn counts(&self) -> TechniqueCounts {

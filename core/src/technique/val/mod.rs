@@ -497,6 +497,10 @@ impl Technique for VirtualAreaLights {
         "val"
     }
 
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        self.shadows.atlas().map(|a| (a, "one paraboloid map per VAL, facing its normal"))
+    }
+
     fn counts(&self) -> TechniqueCounts {
         self.counts.clone()
     }

@@ -397,6 +397,10 @@ impl Technique for VplGather {
         }
     }
 
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        self.shadows.as_ref().and_then(|s| s.atlas()).map(|a| (a, "paraboloid maps of the last batch, one per VPL"))
+    }
+
     fn counts(&self) -> TechniqueCounts {
         self.counts.clone()
     }
