@@ -4,7 +4,8 @@
 //! 2. Assignment: each VPL goes to the VAL of least `d = w_x * dx / L + w_a * da` (section 5.1), `dx` the
 //!    position distance normalised by the scene length `L` (the diagonal of the scene's bounds, so `w_x` and
 //!    `w_a` weigh metres and radians comparably whatever the scene's scale), `da` the angle between normals in
-//!    radians. Ties go to the lower VAL index.
+//!    radians. Ties go to the lower VAL index. (The technique passes `L` = a share of the diagonal, a tenth by
+//!    default: the paper's raw metres correspond to about that in its scenes.)
 //! 3. Update: each VAL's position and normal become the mean of its VPLs' (the normal renormalised); a VAL that
 //!    lost all its VPLs keeps its last centre (it may win VPLs back in a later iteration).
 //! 4. Steps 2-3 repeat `iterations` times; a final assignment gives the map `C` (VPL -> VAL).
