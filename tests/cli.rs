@@ -622,3 +622,32 @@ fn maps_out_saves_the_shadow_atlases() {
         "renders shadow maps",
     );
 }
+
+#[test]
+fn a_scene_without_lights_gets_a_default_layout_and_says_so() {
+    let dir = out_dir("unlit");
+    let png = dir.join("out.png");
+    let json = dir.join("report.json");
+    let quad = fixtures().join("quad.obj");
+    let args = [
+        "render",
+        "--warmup",
+        "0",
+        "--width",
+        "48",
+        "--height",
+        "36",
+        "--scene",
+        quad.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+        "--report",
+        json.to_str().unwrap(),
+    ];
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("has no lights; using --lights random:16:"), "{stderr}");
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(report["frame"]["counts"]["lights_total"], 16);
+}

@@ -326,7 +326,11 @@ pub fn load_scene(args: &SceneArgs) -> Result<(Scene, Vec<PointLight>)> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    let layout: LightLayout = layout::parse(&args.lights)?;
+    let mut layout: LightLayout = layout::parse(&args.lights)?;
+    if layout == LightLayout::Scene && scene.lights.is_empty() {
+        layout = layout::default_for_unlit(&scene);
+        eprintln!("note: {} has no lights; using --lights {layout} (give --lights to choose)", scene.name);
+    }
     let lights = layout::generate(&layout, &scene)?;
     Ok((scene, lights))
 }

@@ -337,6 +337,18 @@ impl ShadowLabApp {
             });
         }
         self.lights = scene.lights.clone();
+        if self.lights.is_empty() {
+            // Most OBJ files and many glTF models come without lights: start lit, and say so.
+            let layout = layout::default_for_unlit(&scene);
+            if let Ok(lights) = layout::generate(&layout, &scene) {
+                self.lights = lights;
+                self.toasts.push(Toast {
+                    text: format!("{} has no lights: placed {layout} (Lights panel to change)", scene.name),
+                    error: false,
+                    until: Instant::now() + std::time::Duration::from_secs(6),
+                });
+            }
+        }
         self.camera = CameraController::from_camera(&scene.camera, &scene.bounds);
         self.selected = None;
         self.history.clear();

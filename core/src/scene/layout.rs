@@ -254,6 +254,14 @@ fn check_range(range: f32) -> Result<(), String> {
     }
 }
 
+/// The layout a scene without lights starts with (most OBJ files, many glTF models): 16 seeded lights inside
+/// its bounds reaching a third of its diagonal, so the first image is lit rather than ambient-only.
+pub fn default_for_unlit(scene: &Scene) -> LightLayout {
+    let diagonal = usable_bounds(&scene.bounds).size().length();
+    let range = (diagonal / 3.0).clamp(1e-3, 1e6);
+    LightLayout::Random { count: 16, range, seed: 1 }
+}
+
 /// Place the lights of `layout` in `scene`. Deterministic: the same layout and scene give the same lights.
 pub fn generate(layout: &LightLayout, scene: &Scene) -> Result<Vec<PointLight>, LayoutError> {
     layout.validate()?;
