@@ -613,3 +613,20 @@ fn an_accessor_offset_near_the_end_of_memory_is_a_clear_error() {
     assert!(!err.contains("malformed data ("), "the loader panicked: {err}");
     assert!(err.contains("reads past the end") || err.contains("offset"), "{err}");
 }
+
+#[test]
+fn files_requiring_unsupported_compression_are_refused_naming_the_extension_first() {
+    for ext in ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_texture_basisu"] {
+        let mut doc: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(fixture("lit_quad.gltf")).unwrap()).unwrap();
+        doc["extensionsRequired"] = serde_json::json!([ext]);
+        doc["extensionsUsed"].as_array_mut().unwrap().push(serde_json::json!(ext));
+        // Break the buffers too: the extension must be reported, not the missing data.
+        doc["buffers"][0]["uri"] = serde_json::json!("missing.bin");
+        let path = std::env::temp_dir().join(format!("shadowlab-{ext}.gltf"));
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        let err = load_gltf(&path, 1.0).unwrap_err().to_string();
+        assert!(err.contains(ext) && err.to_lowercase().contains("unsupported extension"), "{ext}: {err}");
+        assert!(!err.contains("missing.bin"), "{ext}: the missing data was reported before the extension: {err}");
+    }
+}

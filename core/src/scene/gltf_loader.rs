@@ -28,8 +28,16 @@ use super::texture::{decode_parallel, decode_texture_bytes, find_file_case_insen
 use super::{Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource, TextureImage};
 use crate::error::LoadError;
 
-/// Required extensions that change how geometry is stored; without support the meshes would be garbage.
-const UNSUPPORTED_GEOMETRY_EXTENSIONS: &[&str] = &["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
+/// Required extensions that change how geometry or textures are stored; without support the meshes would be
+/// garbage or every texture missing, so the file is refused with the extension named, before anything else.
+const UNSUPPORTED_GEOMETRY_EXTENSIONS: &[&str] = &[
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
+    "KHR_texture_basisu",
+    "EXT_texture_webp",
+    "EXT_texture_avif",
+];
 
 /// Load a `.gltf` (external or embedded buffers) or `.glb` file: every mesh of the default scene with its node
 /// transform baked, base colour factor/texture, emissive, and `KHR_lights_punctual` point lights.
