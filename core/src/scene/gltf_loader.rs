@@ -66,6 +66,7 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(error("the file is empty".into()));
     }
+    check_glb_header(bytes).map_err(error)?;
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| error(e.to_string()))?;
     validate(&document).map_err(error)?;
@@ -523,6 +524,29 @@ fn load_buffers(document: &gltf::Document, dir: &Path, mut blob: Option<Vec<u8>>
         buffers.push(data);
     }
     Ok(buffers)
+}
+
+/// A binary glTF's 12-byte header and chunk headers, checked before the `gltf` crate reads them (it subtracts
+/// the header size from the declared length without checking, and trusts chunk lengths).
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let u32_at = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize);
+    let length = u32_at(8).ok_or("the GLB header is cut short")?;
+    if length < 12 || length > bytes.len() {
+        return Err(format!("the GLB header declares {length} bytes; the file has {}", bytes.len()));
+    }
+    let mut at = 12;
+    while at + 8 <= length {
+        let chunk = u32_at(at).ok_or("a GLB chunk header is cut short")?;
+        let end = (at + 8).checked_add(chunk).filter(|&e| e <= length);
+        match end {
+            Some(e) => at = e,
+            None => return Err(format!("a GLB chunk at byte {at} declares {chunk} bytes past the end of the file")),
+        }
+    }
+    Ok(())
 }
 
 /// The bytes of a buffer view, checked against its buffer.

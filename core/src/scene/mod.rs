@@ -319,7 +319,8 @@ impl Scene {
     pub fn update_bounds(&mut self) {
         let mut b = Aabb::EMPTY;
         for m in &self.meshes {
-            for &p in &m.positions {
+            // Only finite points: a vertex no triangle uses may still hold inf (a file with `1e39` in it).
+            for &p in m.positions.iter().filter(|p| p.is_finite()) {
                 b.extend(p);
             }
         }
