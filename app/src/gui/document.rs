@@ -301,6 +301,42 @@ mod tests {
     }
 
     #[test]
+    fn mutated_scene_files_load_or_fail_without_panicking() {
+        let original = file().to_ron().unwrap().into_bytes();
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |n: usize| {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x9e37_79b9_7f4a_7c15) % n.max(1) as u64) as usize
+        };
+        let (mut ok, mut refused) = (0, 0);
+        for _ in 0..3000 {
+            let mut b = original.clone();
+            match next(3) {
+                0 => b.truncate(next(b.len() + 1)),
+                1 => {
+                    let i = next(b.len());
+                    b[i] ^= 1 << next(8);
+                }
+                _ => {
+                    let (from, to) = (next(b.len()), next(b.len()));
+                    let len = next((b.len() - from.max(to)).max(1));
+                    let chunk = b[from..from + len].to_vec();
+                    b[to..to + len].copy_from_slice(&chunk);
+                }
+            }
+            let text = String::from_utf8_lossy(&b);
+            match std::panic::catch_unwind(|| SceneFile::from_ron(&text)) {
+                Ok(Ok(_)) => ok += 1,
+                Ok(Err(_)) => refused += 1,
+                Err(_) => panic!("a mutated scene file panicked the parser:\n{text}"),
+            }
+        }
+        assert!(ok > 0 && refused > 0, "{ok} loaded, {refused} refused");
+    }
+
+    #[test]
     fn view_settings_out_of_range_are_refused() {
         for bad in [
             ViewSettings { exposure: f32::NAN, ..Default::default() },
