@@ -36,6 +36,13 @@ struct DotVertex {
 
 /// Segments per circle of a wireframe sphere.
 const CIRCLE_SEGMENTS: usize = 48;
+/// Above this many spheres in one draw, each is one horizontal circle of [`CHEAP_SEGMENTS`] instead of three
+/// great circles of [`CIRCLE_SEGMENTS`] (24x fewer vertices): 100,000 range spheres would otherwise be
+/// ~600 MB of line vertices every UI frame.
+pub const MAX_FULL_SPHERES: usize = 2048;
+const CHEAP_SEGMENTS: usize = 6;
+/// Spheres drawn at all; the rest are left out (the lights' own dots still show where they are).
+pub const MAX_SPHERES: usize = 32_768;
 
 pub struct OverlayRenderer {
     uniform: wgpu::Buffer,
@@ -68,6 +75,9 @@ fn colorize_ids(ids: &[u32], alpha: f32) -> Vec<u8> {
 
 /// Line-list vertices and dot triangles for a set of primitives.
 fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Vec<DotVertex>) {
+    let spheres = primitives.iter().filter(|p| matches!(p, Overlay::Sphere { .. })).count();
+    let cheap = spheres > MAX_FULL_SPHERES;
+    let mut spheres_drawn = 0usize;
     let mut seg = |a: Vec3, b: Vec3, color: [f32; 4]| {
         if a.is_finite() && b.is_finite() {
             lines.push(LineVertex { position: a.to_array(), color });
@@ -78,18 +88,24 @@ fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Ve
         match p {
             Overlay::Line { from, to, color } => seg(*from, *to, *color),
             Overlay::Sphere { center, radius, color } => {
-                for axis in 0..3 {
+                spheres_drawn += 1;
+                if spheres_drawn > MAX_SPHERES {
+                    continue;
+                }
+                let (axes, segments) = if cheap { (1, CHEAP_SEGMENTS) } else { (3, CIRCLE_SEGMENTS) };
+                for axis in 0..axes {
                     let point = |i: usize| {
-                        let a = i as f32 / CIRCLE_SEGMENTS as f32 * std::f32::consts::TAU;
+                        let a = i as f32 / segments as f32 * std::f32::consts::TAU;
                         let (s, c) = a.sin_cos();
-                        let v = match axis {
+                        // The cheap form keeps the horizontal circle (axis 1): a range seen from above reads best.
+                        let v = match if cheap { 1 } else { axis } {
                             0 => Vec3::new(c, s, 0.0),
                             1 => Vec3::new(c, 0.0, s),
                             _ => Vec3::new(0.0, c, s),
                         };
                         *center + v * *radius
                     };
-                    for i in 0..CIRCLE_SEGMENTS {
+                    for i in 0..segments {
                         seg(point(i), point(i + 1), *color);
                     }
                 }
@@ -422,5 +438,21 @@ mod tests {
         for v in &lines[2..2 + 3 * CIRCLE_SEGMENTS * 2] {
             assert!((Vec3::from_array(v.position).length() - 1.0).abs() < 1e-5);
         }
+    }
+
+    #[test]
+    fn a_hundred_thousand_range_spheres_stay_within_a_vertex_budget() {
+        let c = [1.0; 4];
+        let spheres: Vec<Overlay> =
+            (0..100_000).map(|i| Overlay::Sphere { center: Vec3::splat(i as f32), radius: 1.0, color: c }).collect();
+        let (mut lines, mut dots) = (Vec::new(), Vec::new());
+        tessellate(&spheres, &mut lines, &mut dots);
+        assert_eq!(lines.len(), MAX_SPHERES * CHEAP_SEGMENTS * 2);
+        // About 12 MB of vertices instead of ~600 MB.
+        assert!(lines.len() * std::mem::size_of::<LineVertex>() < 16 << 20);
+        // Few spheres keep their full form.
+        let (mut few, mut d) = (Vec::new(), Vec::new());
+        tessellate(&spheres[..10], &mut few, &mut d);
+        assert_eq!(few.len(), 10 * 3 * CIRCLE_SEGMENTS * 2);
     }
 }
