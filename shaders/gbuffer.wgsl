@@ -9,7 +9,7 @@ struct Material {
     base_color: vec4<f32>,
     // rgb emissive, w: 1 when the base colour texture is used
     emissive: vec4<f32>,
-    // x: specular intensity, y: shininess
+    // x: specular intensity, y: shininess, z: 1 when the emissive texture is used
     specular: vec4<f32>,
 }
 
@@ -17,6 +17,7 @@ struct Material {
 @group(1) @binding(0) var<uniform> material: Material;
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
 @group(1) @binding(2) var material_sampler: sampler;
+@group(1) @binding(3) var emissive_texture: texture_2d<f32>;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -65,6 +66,10 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var out: GBufferOut;
     out.albedo = vec4<f32>(color.rgb, 1.0);
     out.normal = vec4<f32>(n, material.specular.y);
-    out.emissive = vec4<f32>(material.emissive.rgb, material.specular.x);
+    var emission = material.emissive.rgb;
+    if material.specular.z > 0.5 {
+        emission *= textureSample(emissive_texture, material_sampler, in.uv).rgb;
+    }
+    out.emissive = vec4<f32>(emission, material.specular.x);
     return out;
 }

@@ -217,3 +217,43 @@ fn the_gl_backend_renders_the_same_analytic_image() {
     assert_matches_analytic("gl-umbra", &scene.camera, &[light], &r.hdr);
     assert_eq!(r.report.counts.technique.shadow_maps, 1);
 }
+
+#[test]
+fn a_gltf_emissive_texture_modulates_the_emission_instead_of_a_flat_glow() {
+    // lit_quad.gltf's material emits (4, 2, 0); with its checker as the emissive texture the quad shows the
+    // checker in emission, without it a flat colour.
+    let fixture = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/lit_quad.gltf"));
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture).unwrap()).unwrap();
+    let render_emission = |doc: &serde_json::Value, name: &str| -> (Scene, Vec<[f32; 4]>) {
+        let path = std::env::temp_dir().join(name);
+        std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+        let scene = Scene::load(&path, 1.0).unwrap();
+        let gpu = gpu();
+        let s = RenderSettings { width: 64, height: 64, ambient: Vec3::ZERO, ..settings() };
+        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
+        let mut t = renderer.create_technique("unshadowed").unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
+        (scene, renderer.read_hdr().unwrap())
+    };
+    let distinct = |img: &[[f32; 4]]| {
+        let mut colours: Vec<[u32; 3]> =
+            img.iter().filter(|p| p[0] > 0.01).map(|p| [0, 1, 2].map(|c| (p[c] * 64.0) as u32)).collect();
+        colours.sort();
+        colours.dedup();
+        colours.len()
+    };
+    let (_, flat) = render_emission(&doc, "shadowlab-emissive-flat.gltf");
+    doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0});
+    let (scene, textured) = render_emission(&doc, "shadowlab-emissive-textured.gltf");
+    assert_eq!(scene.materials[0].emissive_texture, Some(0));
+    assert!(flat.iter().any(|p| p[0] > 0.01), "the quad is not in view");
+    assert!(distinct(&flat) <= 2, "flat emission should be one colour, got {}", distinct(&flat));
+    assert!(distinct(&textured) >= 2, "the emissive texture's pattern is missing");
+    // Where the checker is dark in a channel the emission is dimmed there.
+    let dimmed = textured
+        .iter()
+        .zip(&flat)
+        .filter(|(t, f)| f[0] > 0.01 && (0..3).any(|c| f[c] > 0.05 && t[c] < 0.7 * f[c]))
+        .count();
+    assert!(dimmed > 0, "no texel dimmed the emission");
+}

@@ -91,12 +91,17 @@ pub struct MaterialUniform {
 const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 48);
 
 impl MaterialUniform {
-    pub fn new(m: &Material, has_texture: bool) -> Self {
+    pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool) -> Self {
         let spec: Vec3 = m.specular;
         MaterialUniform {
             base_color: m.base_color.to_array(),
             emissive: [m.emissive.x, m.emissive.y, m.emissive.z, if has_texture { 1.0 } else { 0.0 }],
-            specular: [(spec.x + spec.y + spec.z) / 3.0, m.shininess.clamp(1.0, 4096.0), 0.0, 0.0],
+            specular: [
+                (spec.x + spec.y + spec.z) / 3.0,
+                m.shininess.clamp(1.0, 4096.0),
+                if has_emissive_texture { 1.0 } else { 0.0 },
+                0.0,
+            ],
         }
     }
 }

@@ -55,6 +55,17 @@ impl GpuScene {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
+                // The emissive texture (white when the material has none).
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         })
     }
@@ -94,7 +105,8 @@ impl GpuScene {
             .iter()
             .map(|m| {
                 let texture = m.base_color_texture.and_then(|i| textures.get(i));
-                let uniform = MaterialUniform::new(m, texture.is_some());
+                let emissive = m.emissive_texture.and_then(|i| textures.get(i));
+                let uniform = MaterialUniform::new(m, texture.is_some(), emissive.is_some());
                 let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("material"),
                     contents: bytemuck::bytes_of(&uniform),
@@ -110,6 +122,10 @@ impl GpuScene {
                             resource: wgpu::BindingResource::TextureView(texture.unwrap_or(&white)),
                         },
                         wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::TextureView(emissive.unwrap_or(&white)),
+                        },
                     ],
                 })
             })

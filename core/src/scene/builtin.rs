@@ -71,6 +71,7 @@ impl SceneBuilder {
             base_color: rgb.extend(1.0),
             base_color_texture: None,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
             specular: Vec3::splat(specular),
             shininess,
         });

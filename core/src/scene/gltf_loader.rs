@@ -211,8 +211,10 @@ impl Loader<'_> {
         // Decode each image used as a base colour texture once, in parallel.
         let mut images: Vec<usize> = Vec::new();
         for material in self.document.materials() {
-            if let Some(info) = material.pbr_metallic_roughness().base_color_texture() {
-                let image = info.texture().source().index();
+            let base = material.pbr_metallic_roughness().base_color_texture().map(|i| i.texture());
+            let emissive = material.emissive_texture().map(|i| i.texture());
+            for texture in base.into_iter().chain(emissive) {
+                let image = texture.source().index();
                 if !images.contains(&image) {
                     images.push(image);
                 }
@@ -237,6 +239,8 @@ impl Loader<'_> {
             let texture =
                 pbr.base_color_texture().and_then(|info| texture_of_image.get(&info.texture().source().index()));
             let strength = material.emissive_strength().unwrap_or(1.0);
+            let emissive_texture =
+                material.emissive_texture().and_then(|info| texture_of_image.get(&info.texture().source().index()));
             self.scene.materials.push(Material {
                 name: material
                     .name()
@@ -245,6 +249,7 @@ impl Loader<'_> {
                 base_color: Vec4::from(pbr.base_color_factor()).max(Vec4::ZERO),
                 base_color_texture: texture.copied(),
                 emissive: (Vec3::from(material.emissive_factor()) * strength).max(Vec3::ZERO),
+                emissive_texture: emissive_texture.copied(),
                 specular: Vec3::ZERO,
                 shininess: Material::default().shininess,
             });

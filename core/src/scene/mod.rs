@@ -107,6 +107,9 @@ pub struct Material {
     /// Index into [`Scene::textures`].
     pub base_color_texture: Option<usize>,
     pub emissive: Vec3,
+    /// Index into [`Scene::textures`] of an sRGB emissive texture that multiplies `emissive` (glTF
+    /// `emissiveTexture`).
+    pub emissive_texture: Option<usize>,
     /// Blinn-Phong specular colour (linear) and exponent; zero specular means pure Lambert.
     pub specular: Vec3,
     pub shininess: f32,
@@ -119,6 +122,7 @@ impl Default for Material {
             base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
             base_color_texture: None,
             emissive: Vec3::ZERO,
+            emissive_texture: None,
             specular: Vec3::ZERO,
             shininess: 32.0,
         }
