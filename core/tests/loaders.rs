@@ -642,3 +642,23 @@ fn files_requiring_unsupported_compression_are_refused_naming_the_extension_firs
         assert!(!err.contains("missing.bin"), "{ext}: the missing data was reported before the extension: {err}");
     }
 }
+
+#[test]
+fn khr_texture_transform_is_baked_into_the_uvs() {
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture("lit_quad.gltf")).unwrap()).unwrap();
+    let plain = load_gltf(&fixture("lit_quad.gltf"), 1.0).unwrap();
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"] = serde_json::json!({
+        "KHR_texture_transform": {"offset": [0.5, 0.25], "scale": [2.0, 3.0], "rotation": std::f32::consts::FRAC_PI_2}
+    });
+    doc["extensionsUsed"].as_array_mut().unwrap().push(serde_json::json!("KHR_texture_transform"));
+    let path = std::env::temp_dir().join("shadowlab-texture-transform.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let moved = load_gltf(&path, 1.0).unwrap();
+    let (a, b) = (&plain.meshes[0].uvs, &moved.meshes[0].uvs);
+    assert_eq!(a.len(), b.len());
+    for (p, q) in a.iter().zip(b) {
+        // Scale (2, 3), rotate 90 degrees counter-clockwise (u' = v, v' = -u), then offset.
+        let expected = glam::Vec2::new(p.y * 3.0 + 0.5, -p.x * 2.0 + 0.25);
+        assert!((*q - expected).length() < 1e-5, "{p} -> {q}, expected {expected}");
+    }
+}

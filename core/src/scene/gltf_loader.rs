@@ -400,13 +400,33 @@ impl Loader<'_> {
             }
 
             let material = primitive.material();
-            let uv_set = material.pbr_metallic_roughness().base_color_texture().map_or(0, |info| info.tex_coord());
+            let base_info = material.pbr_metallic_roughness().base_color_texture();
+            // KHR_texture_transform: it may override the texcoord set, and its affine map is baked into the UVs.
+            let transform = base_info.as_ref().and_then(|info| info.texture_transform());
+            let uv_set = transform
+                .as_ref()
+                .and_then(|t| t.tex_coord())
+                .unwrap_or_else(|| base_info.as_ref().map_or(0, |info| info.tex_coord()));
             let mut uvs = match primitive.get(&Semantic::TexCoords(uv_set)) {
                 Some(accessor) => {
                     read_vec2(&accessor, self.buffers).map_err(|e| format!("{label}, TEXCOORD_{uv_set}: {e}"))?
                 }
                 None => Vec::new(),
             };
+            if let Some(t) = &transform {
+                // uv' = T(offset) R(rotation) S(scale) uv, as the extension defines it.
+                let ([ox, oy], r, [sx, sy]) = (t.offset(), t.rotation(), t.scale());
+                let (sin, cos) = r.sin_cos();
+                let ok = [ox, oy, r, sx, sy].iter().all(|v| v.is_finite());
+                if ok {
+                    for uv in &mut uvs {
+                        let (u, v) = (uv.x * sx, uv.y * sy);
+                        *uv = Vec2::new(cos * u + sin * v + ox, -sin * u + cos * v + oy);
+                    }
+                } else {
+                    self.warn(format!("{label}: a non-finite KHR_texture_transform is ignored"));
+                }
+            }
             if !uvs.is_empty() && uvs.len() != vertex_count {
                 self.warn(format!("{label}: TEXCOORD_{uv_set} count differs from POSITION count; ignored"));
                 uvs.clear();
