@@ -9,7 +9,8 @@ struct Material {
     base_color: vec4<f32>,
     // rgb emissive, w: 1 when the base colour texture is used
     emissive: vec4<f32>,
-    // x: specular intensity, y: shininess, z: 1 when the emissive texture is used
+    // x: specular intensity, y: shininess, z: 1 when the emissive texture is used, w: occlusion strength (0: no
+    // occlusion texture)
     specular: vec4<f32>,
 }
 
@@ -18,6 +19,7 @@ struct Material {
 @group(1) @binding(1) var base_color_texture: texture_2d<f32>;
 @group(1) @binding(2) var material_sampler: sampler;
 @group(1) @binding(3) var emissive_texture: texture_2d<f32>;
+@group(1) @binding(4) var occlusion_texture: texture_2d<f32>;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
@@ -64,7 +66,15 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
         n = -n;
     }
     var out: GBufferOut;
-    out.albedo = vec4<f32>(color.rgb, 1.0);
+    // Ambient occlusion rides in the albedo's alpha (the ambient pass multiplies the ambient term by it).
+    var occlusion = 1.0;
+    if material.specular.w > 0.0 {
+        // Textures are uploaded as sRGB; occlusion is stored linear, so undo the decode for the raw value.
+        let x = textureSample(occlusion_texture, material_sampler, in.uv).r;
+        let raw = select(1.055 * pow(x, 1.0 / 2.4) - 0.055, 12.92 * x, x <= 0.0031308);
+        occlusion = 1.0 + material.specular.w * (clamp(raw, 0.0, 1.0) - 1.0);
+    }
+    out.albedo = vec4<f32>(color.rgb, occlusion);
     out.normal = vec4<f32>(n, material.specular.y);
     var emission = material.emissive.rgb;
     if material.specular.z > 0.5 {

@@ -257,3 +257,45 @@ fn a_gltf_emissive_texture_modulates_the_emission_instead_of_a_flat_glow() {
         .count();
     assert!(dimmed > 0, "no texel dimmed the emission");
 }
+
+#[test]
+fn a_gltf_occlusion_texture_darkens_the_ambient_term_only() {
+    let fixture = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/lit_quad.gltf"));
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture).unwrap()).unwrap();
+    // No emission, so the image is the ambient term alone.
+    doc["materials"][0]["emissiveFactor"] = serde_json::json!([0.0, 0.0, 0.0]);
+    let render = |doc: &serde_json::Value, name: &str| -> Vec<[f32; 4]> {
+        let path = std::env::temp_dir().join(name);
+        std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+        let scene = Scene::load(&path, 1.0).unwrap();
+        let gpu = gpu();
+        let s = RenderSettings { width: 64, height: 64, ambient: Vec3::splat(1.0), ..settings() };
+        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
+        let mut t = renderer.create_technique("unshadowed").unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
+        renderer.read_hdr().unwrap()
+    };
+    let plain = render(&doc, "shadowlab-ao-none.gltf");
+    // A 2x2 occlusion texture, red 255 (unoccluded) in one column and 0 (fully occluded) in the other.
+    let ao = image::RgbaImage::from_fn(2, 2, |x, _| {
+        if x == 0 {
+            image::Rgba([255, 0, 0, 255])
+        } else {
+            image::Rgba([0, 0, 0, 255])
+        }
+    });
+    ao.save(std::env::temp_dir().join("shadowlab-ao.png")).unwrap();
+    doc["images"].as_array_mut().unwrap().push(serde_json::json!({"uri": "shadowlab-ao.png"}));
+    doc["textures"].as_array_mut().unwrap().push(serde_json::json!({"source": 1}));
+    doc["materials"][0]["occlusionTexture"] = serde_json::json!({"index": 1, "strength": 1.0});
+    let occluded = render(&doc, "shadowlab-ao.gltf");
+    // Brightness as the sum of the channels (the checker's texels differ in hue).
+    let sum = |p: &[f32; 4]| p[0] + p[1] + p[2];
+    let lit: Vec<(f32, f32)> =
+        plain.iter().zip(&occluded).filter(|(p, _)| sum(p) > 0.01).map(|(p, q)| (sum(p), sum(q))).collect();
+    assert!(!lit.is_empty(), "the quad is not in view");
+    // Unoccluded in one column, occluded in the other.
+    assert!(lit.iter().any(|(p, q)| (p - q).abs() < 0.02 * p), "nowhere unoccluded");
+    assert!(lit.iter().any(|(p, q)| *q < 0.5 * p), "nowhere occluded");
+    assert!(lit.iter().all(|(p, q)| *q <= p * 1.001), "occlusion brightened something");
+}

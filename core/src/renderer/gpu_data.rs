@@ -91,7 +91,7 @@ pub struct MaterialUniform {
 const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 48);
 
 impl MaterialUniform {
-    pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool) -> Self {
+    pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool, occlusion_strength: f32) -> Self {
         let spec: Vec3 = m.specular;
         MaterialUniform {
             base_color: m.base_color.to_array(),
@@ -100,7 +100,7 @@ impl MaterialUniform {
                 (spec.x + spec.y + spec.z) / 3.0,
                 m.shininess.clamp(1.0, 4096.0),
                 if has_emissive_texture { 1.0 } else { 0.0 },
-                0.0,
+                occlusion_strength,
             ],
         }
     }

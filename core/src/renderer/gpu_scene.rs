@@ -66,6 +66,17 @@ impl GpuScene {
                     },
                     count: None,
                 },
+                // The ambient-occlusion texture (white when none).
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
             ],
         })
     }
@@ -106,7 +117,9 @@ impl GpuScene {
             .map(|m| {
                 let texture = m.base_color_texture.and_then(|i| textures.get(i));
                 let emissive = m.emissive_texture.and_then(|i| textures.get(i));
-                let uniform = MaterialUniform::new(m, texture.is_some(), emissive.is_some());
+                let occlusion = m.occlusion_texture.and_then(|(i, s)| textures.get(i).map(|t| (t, s)));
+                let uniform =
+                    MaterialUniform::new(m, texture.is_some(), emissive.is_some(), occlusion.map_or(0.0, |o| o.1));
                 let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("material"),
                     contents: bytemuck::bytes_of(&uniform),
@@ -125,6 +138,10 @@ impl GpuScene {
                         wgpu::BindGroupEntry {
                             binding: 3,
                             resource: wgpu::BindingResource::TextureView(emissive.unwrap_or(&white)),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 4,
+                            resource: wgpu::BindingResource::TextureView(occlusion.map_or(&white, |o| o.0)),
                         },
                     ],
                 })

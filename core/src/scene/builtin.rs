@@ -72,6 +72,7 @@ impl SceneBuilder {
             base_color_texture: None,
             emissive: Vec3::ZERO,
             emissive_texture: None,
+            occlusion_texture: None,
             specular: Vec3::splat(specular),
             shininess,
         });

@@ -213,7 +213,8 @@ impl Loader<'_> {
         for material in self.document.materials() {
             let base = material.pbr_metallic_roughness().base_color_texture().map(|i| i.texture());
             let emissive = material.emissive_texture().map(|i| i.texture());
-            for texture in base.into_iter().chain(emissive) {
+            let occlusion = material.occlusion_texture().map(|i| i.texture());
+            for texture in base.into_iter().chain(emissive).chain(occlusion) {
                 let image = texture.source().index();
                 if !images.contains(&image) {
                     images.push(image);
@@ -241,6 +242,12 @@ impl Loader<'_> {
             let strength = material.emissive_strength().unwrap_or(1.0);
             let emissive_texture =
                 material.emissive_texture().and_then(|info| texture_of_image.get(&info.texture().source().index()));
+            let occlusion_texture = material.occlusion_texture().and_then(|info| {
+                let strength = info.strength();
+                texture_of_image
+                    .get(&info.texture().source().index())
+                    .map(|&t| (t, if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 1.0 }))
+            });
             self.scene.materials.push(Material {
                 name: material
                     .name()
@@ -250,6 +257,7 @@ impl Loader<'_> {
                 base_color_texture: texture.copied(),
                 emissive: (Vec3::from(material.emissive_factor()) * strength).max(Vec3::ZERO),
                 emissive_texture: emissive_texture.copied(),
+                occlusion_texture,
                 specular: Vec3::ZERO,
                 shininess: Material::default().shininess,
             });

@@ -110,6 +110,9 @@ pub struct Material {
     /// Index into [`Scene::textures`] of an sRGB emissive texture that multiplies `emissive` (glTF
     /// `emissiveTexture`).
     pub emissive_texture: Option<usize>,
+    /// Index into [`Scene::textures`] of an ambient-occlusion texture (glTF `occlusionTexture`, red channel,
+    /// linear) and its strength: the ambient term is multiplied by `1 + strength * (ao - 1)`.
+    pub occlusion_texture: Option<(usize, f32)>,
     /// Blinn-Phong specular colour (linear) and exponent; zero specular means pure Lambert.
     pub specular: Vec3,
     pub shininess: f32,
@@ -123,6 +126,7 @@ impl Default for Material {
             base_color_texture: None,
             emissive: Vec3::ZERO,
             emissive_texture: None,
+            occlusion_texture: None,
             specular: Vec3::ZERO,
             shininess: 32.0,
         }

@@ -361,6 +361,7 @@ fn convert_materials(mtl: &[tobj::Material], dir: &Path, scene: &mut Scene) {
             base_color_texture: file.and_then(|f| texture_of_file[f]),
             emissive: m.emissive.map_or(Vec3::ZERO, Vec3::from).max(Vec3::ZERO),
             emissive_texture: None,
+            occlusion_texture: None,
             specular,
             shininess: m.shininess.filter(|s| *s > 0.0).unwrap_or(Material::default().shininess),
         });
