@@ -438,7 +438,9 @@ impl Technique for VirtualAreaLights {
         if !self.gpu_map {
             self.map_buffer.write(ctx.gpu, &self.clustering.assignment);
         }
-        self.batch_size = (self.params.vpls_per_step as usize).min(ctx.max_lights_per_step).max(1);
+        // Not bounded by `max_lights_per_step`: every batch recomputes the pixel's M VAL visibilities, which is
+        // most of a step's cost, so small batches would multiply the work instead of splitting it.
+        self.batch_size = (self.params.vpls_per_step as usize).max(1);
         self.batches = n.div_ceil(self.batch_size);
         self.counts.batches = self.batches;
         Ok(if self.params.interleave { self.batches + 1 } else { self.batches })
