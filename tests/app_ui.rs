@@ -462,3 +462,27 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     assert!(format!("{err:#}").contains("unknown indirect technique 'vpl-nonsense'"), "{err:#}");
     assert_eq!(fresh.state().indirect, saved);
 }
+
+#[test]
+fn the_app_can_start_with_an_indirect_technique() {
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("startup-indirect")),
+        synchronous: true,
+        builtin: Some("cornell".into()),
+        indirect: Some("val".into()),
+        ..Default::default()
+    });
+    h.run_steps(3);
+    assert_eq!(h.state().indirect.technique.as_deref(), Some("val"));
+    assert!(h.query_all_by_label_contains("VALs (M)").count() >= 1, "the VAL parameter panel is shown");
+    // An unknown key is a message, not a panic, and no indirect technique.
+    let mut bad = harness(Startup {
+        data_dir: Some(data_dir("startup-indirect-bad")),
+        synchronous: true,
+        indirect: Some("magic".into()),
+        ..Default::default()
+    });
+    bad.run_steps(2);
+    assert!(bad.state().indirect.technique.is_none());
+    bad.get_by_label_contains("unknown indirect technique 'magic'");
+}

@@ -36,6 +36,9 @@ pub struct Cli {
     /// App: start on this built-in scene (cornell, arcade, restaurant).
     #[arg(long = "app-scene", value_name = "NAME")]
     pub app_scene: Option<String>,
+    /// App: start with this indirect technique (vpl-shadowmaps, vpl-raytraced, vpl-unshadowed, val, pathtraced).
+    #[arg(long = "app-indirect", value_name = "KEY")]
+    pub app_indirect: Option<String>,
     /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
     #[arg(long, hide = true)]
     pub screenshot: Option<PathBuf>,

@@ -40,6 +40,7 @@ fn main() -> ExitCode {
             technique: args.app_technique,
             view: args.app_view,
             builtin: args.app_scene,
+            indirect: args.app_indirect,
         }),
     };
     match result {

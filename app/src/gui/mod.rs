@@ -52,6 +52,8 @@ pub struct Startup {
     pub view: Option<String>,
     /// Start on this built-in scene.
     pub builtin: Option<String>,
+    /// Start with this indirect technique key.
+    pub indirect: Option<String>,
     /// Window size in points.
     pub window_size: Option<(f32, f32)>,
 }
@@ -281,6 +283,16 @@ impl ShadowLabApp {
                 app.technique = t;
             } else {
                 app.error(format!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()));
+            }
+        }
+        if let Some(k) = startup.indirect {
+            if shadowlab_core::technique::INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
+                app.indirect.technique = Some(k);
+            } else {
+                app.error(format!(
+                    "unknown indirect technique '{k}' (choose one of: {})",
+                    shadowlab_core::technique::indirect_keys()
+                ));
             }
         }
         match startup.view.as_deref() {
