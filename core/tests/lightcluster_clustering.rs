@@ -380,6 +380,15 @@ fn matches_brute_force_reference() {
         // The reusing path gives the same result after arbitrary previous inputs.
         clusterer.cluster_into(&case.lights, case.camera.position, &case.frustum, &case.params, &mut reused);
         assert_eq!(reused, expected, "{} (reused)", case.name);
+        // With step 1 done by the renderer's light list (the same test), the same result.
+        let visible: Vec<usize> = (0..case.lights.len())
+            .filter(|&i| {
+                let l = &case.lights[i];
+                l.is_valid() && case.frustum.intersects_sphere(l.position, l.range)
+            })
+            .collect();
+        clusterer.cluster_visible_into(&case.lights, &visible, case.camera.position, &case.params, &mut reused);
+        assert_eq!(reused, expected, "{} (pre-culled)", case.name);
         kinds[clusterer.grid_info().kind as usize] += 1;
     }
     assert!(kinds[0] > 0 && kinds[1] > 0, "grid kinds used (none, dense, hash, mixed): {kinds:?}");

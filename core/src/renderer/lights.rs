@@ -1,7 +1,7 @@
 //! Light culling and upload, a renderer service: once per frame (`Renderer::begin_frame`) the lights whose
 //! range sphere touches the view frustum are found and uploaded as `array<Light>` (`common.wgsl`), in the
 //! order of the frame's lights. The reference (and INSM through it), the unshadowed preview and the ray tracer
-//! shade from this list; LightCluster culls the same way but uploads its lights in cluster order.
+//! shade from this list; LightCluster clusters it (its step 1) and uploads its lights in cluster order.
 
 use super::gpu_data::GpuLight;
 use crate::gpu::GpuContext;

@@ -360,6 +360,39 @@ impl Clusterer {
     ) {
         assert!(lights.len() < MAX_LIGHTS, "at most {} lights can be clustered", MAX_LIGHTS - 1);
         self.cull(lights, frustum);
+        self.cluster_culled(lights, camera_position, params, out);
+    }
+
+    /// [`Clusterer::cluster_into`] with step 1 already done: `visible` are the indices (ascending) of the valid
+    /// lights whose range touches the frustum, as the renderer's light list (`VisibleLights`) holds them. The
+    /// result is the same as `cluster_into`'s with that frustum.
+    pub fn cluster_visible_into(
+        &mut self,
+        lights: &[PointLight],
+        visible: &[usize],
+        camera_position: Vec3,
+        params: &ClusterParams,
+        out: &mut Clustering,
+    ) {
+        assert!(lights.len() < MAX_LIGHTS, "at most {} lights can be clustered", MAX_LIGHTS - 1);
+        self.keys.clear();
+        self.keys.extend(
+            visible
+                .iter()
+                .filter(|&&i| i < lights.len())
+                .map(|&i| ((!lights[i].range.to_bits()) as u64) << 32 | i as u64),
+        );
+        self.cluster_culled(lights, camera_position, params, out);
+    }
+
+    /// Steps 2 onwards, from the culled keys.
+    fn cluster_culled(
+        &mut self,
+        lights: &[PointLight],
+        camera_position: Vec3,
+        params: &ClusterParams,
+        out: &mut Clustering,
+    ) {
         sort_by_range(&mut self.keys, &mut self.keys_tmp, &mut self.radix_counts);
         let (min, max) = self.gather(lights, camera_position, params);
 

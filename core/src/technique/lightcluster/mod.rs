@@ -260,10 +260,11 @@ impl Technique for LightCluster {
         let start = std::time::Instant::now();
         let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
         let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
-        self.clusterer.cluster_into(
+        // Step 1 (frustum culling) is the renderer's light list, shared with every technique.
+        self.clusterer.cluster_visible_into(
             ctx.lights,
+            &ctx.visible_lights.indices,
             ctx.camera.position,
-            &ctx.frustum,
             &cluster_params,
             &mut self.clustering,
         );
