@@ -4,7 +4,7 @@
 // pdf cos/pi the estimate of the reflected radiance is rho(x) * L(y -> x), and
 // L(y -> x) = rho(y)/pi * I * attenuation(d) * cos(theta_y) * V / p_light. Hits reflect their material's mean
 // albedo, carried in the triangle's w components (see core/src/renderer/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
-// index and the seed, so a frame is reproducible. Composed after common.wgsl and raytrace_bvh.wgsl.
+// index and the seed, so a frame is reproducible. Composed after common.wgsl, raytrace_bvh.wgsl and vpl_basis.wgsl.
 // `PtStep` mirrors `PtStepUniform` in core/src/technique/pathtraced/mod.rs.
 
 struct PtStep {
@@ -31,14 +31,6 @@ fn pt_hash(x: u32) -> u32 {
 
 fn pt_unit(h: u32) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
-}
-
-fn pt_basis(n: vec3<f32>) -> mat3x3<f32> {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    return mat3x3<f32>(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        vec3<f32>(b, sign + n.y * n.y * a, -n.y), n);
 }
 
 // Index of the light whose cumulative probability first exceeds u.
@@ -72,7 +64,7 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let eps = step.bias * max(1.0, length(frame.camera_position.xyz - s.position));
     let origin = s.position + s.normal * eps;
-    let basis = pt_basis(s.normal);
+    let basis = vpl_basis(s.normal);
     let pixel_hash = pt_hash(id.x + pt_hash(id.y + pt_hash(step.seed)));
     var sum = vec3<f32>(0.0);
     for (var k = 0u; k < step.sample_count; k++) {

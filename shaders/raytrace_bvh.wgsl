@@ -48,26 +48,7 @@ fn bvh_dot(a: vec3<f32>, b: vec3<f32>) -> f32 {
 
 // Möller–Trumbore: true when the ray hits the triangle at 0 < t < t_max.
 fn bvh_ray_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: BvhTriangle, t_max: f32) -> bool {
-    let e1 = tri.e1.xyz;
-    let e2 = tri.e2.xyz;
-    let p = cross(dir, e2);
-    let det = bvh_dot(e1, p);
-    if det == 0.0 {
-        return false;
-    }
-    let inv_det = 1.0 / det;
-    let s = origin - tri.v0.xyz;
-    let u = bvh_dot(s, p) * inv_det;
-    if u < 0.0 || u > 1.0 {
-        return false;
-    }
-    let q = cross(s, e1);
-    let v = bvh_dot(dir, q) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return false;
-    }
-    let t = bvh_dot(e2, q) * inv_det;
-    return t > 0.0 && t < t_max;
+    return bvh_ray_triangle_hit(origin, dir, tri, t_max).x < BVH_MISS;
 }
 
 // Any-hit: true when a triangle lies on origin + t * dir for 0 < t < t_max. Stack-based, near child first.

@@ -146,17 +146,9 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var m = 0u; m < m_count; m++) {
         visibility[m] = val_visibility(s, m);
     }
-    var start = 0u;
-    var stride = 1u;
-    var scale = 1.0;
-    if gather.interleave != 0u {
-        let pixel_class = (id.x % 8u) + 8u * (id.y % 8u);
-        start = (pixel_class + 64u - gather.first_vpl % 64u) % 64u;
-        stride = 64u;
-        scale = 64.0;
-    }
+    let range = gather_range(id.xy);
     var sum = vec3<f32>(0.0);
-    for (var k = start; k < gather.vpl_count; k += stride) {
+    for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let i = gather.first_vpl + k;
         if val_params.solo >= 0 && vpl_val[i] != u32(val_params.solo) {
             continue;
@@ -167,5 +159,5 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     let index = id.y * width + id.x;
-    indirect_out[index] += vec4<f32>(s.albedo / PI * sum * scale, 0.0);
+    indirect_out[index] += vec4<f32>(s.albedo / PI * sum * range.scale, 0.0);
 }

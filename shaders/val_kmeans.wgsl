@@ -8,7 +8,7 @@
 // rectangles use atomicMin/atomicMax on i32 fixed point (units of L / 2^29).
 // Entry points, one dispatch each: km_init (M), then per iteration km_clear (M), km_assign (N), km_update (M);
 // then km_clear, km_final (N: the map C and the members' sums and bounds), km_finish (M).
-// `KmParams`, `ValState` mirror core/src/technique/val/gpu_kmeans.rs.
+// Composed after vpl_basis.wgsl. `KmParams`, `ValState` mirror core/src/technique/val/gpu_kmeans.rs.
 
 struct KmParams {
     vpl_count: u32,
@@ -139,15 +139,6 @@ fn km_update(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// The Duff et al. basis of vpl_basis.wgsl (glam's any_orthonormal_pair on the CPU).
-fn km_basis(n: vec3<f32>) -> mat2x3<f32> {
-    let sign = select(-1.0, 1.0, n.z >= 0.0);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    return mat2x3<f32>(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        vec3<f32>(b, sign + n.y * n.y * a, -n.y));
-}
-
 @compute @workgroup_size(64)
 fn km_final(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
@@ -157,7 +148,8 @@ fn km_final(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = km_nearest(i);
     assignment[i] = k;
     atomicAdd(&acc[k * ACC + 6u], 1u);
-    let axes = km_basis(vals[k].normal.xyz);
+    // The Duff et al. basis (vpl_basis.wgsl; glam's any_orthonormal_pair on the CPU): columns 0 and 1.
+    let axes = vpl_basis(vals[k].normal.xyz);
     let rel = km_vpls[i].position.xyz - vals[k].position.xyz;
     let unit = f32(1 << 29u) / max(km.scene_length, 1e-20);
     let s = i32(clamp(dot(rel, axes[0]) * unit, -2.0e9, 2.0e9));

@@ -38,6 +38,29 @@ struct GatherBatch {
 @group(2) @binding(1) var<uniform> gather: GatherBatch;
 @group(2) @binding(2) var<storage, read_write> indirect_out: array<vec4<f32>>;
 
+// Which of the batch's VPLs a pixel gathers: all of them, or with interleaved sampling the pixel of class
+// c = (x mod 8) + 8 (y mod 8) takes those whose frame index is c mod 64, weighted by 64 (vpl_blur.wgsl spreads
+// them over the block again).
+struct GatherRange {
+    start: u32,
+    stride: u32,
+    scale: f32,
+}
+
+fn gather_range(pixel: vec2<u32>) -> GatherRange {
+    var r: GatherRange;
+    r.start = 0u;
+    r.stride = 1u;
+    r.scale = 1.0;
+    if gather.interleave != 0u {
+        let pixel_class = (pixel.x % 8u) + 8u * (pixel.y % 8u);
+        r.start = (pixel_class + 64u - gather.first_vpl % 64u) % 64u;
+        r.stride = 64u;
+        r.scale = 64.0;
+    }
+    return r;
+}
+
 // Irradiance-like term of one VPL at a receiver, before visibility and the receiver's rho/pi:
 // Phi/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2). Zero (never NaN) when the receiver lies on the VPL,
 // behind it, or faces away.

@@ -14,26 +14,16 @@ fn gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if !s.is_geometry {
         return;
     }
-    // Interleaved sampling: the pixel of class c = (x mod 8) + 8 (y mod 8) takes the VPLs whose frame index is
-    // c mod 64, weighted by 64 (vpl_blur.wgsl spreads them over the block again).
-    var start = 0u;
-    var stride = 1u;
-    var scale = 1.0;
-    if gather.interleave != 0u {
-        let pixel_class = (id.x % 8u) + 8u * (id.y % 8u);
-        start = (pixel_class + 64u - gather.first_vpl % 64u) % 64u;
-        stride = 64u;
-        scale = 64.0;
-    }
+    let range = gather_range(id.xy);
     var sum = vec3<f32>(0.0);
-    for (var k = start; k < gather.vpl_count; k += stride) {
+    for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let v = vpls[gather.first_vpl + k];
         let term = vpl_term(s, v);
         if max(term.x, max(term.y, term.z)) > 0.0 {
             sum += term * vpl_visibility(s, v, k);
         }
     }
-    sum *= scale;
+    sum *= range.scale;
     let index = id.y * width + id.x;
     indirect_out[index] += vec4<f32>(s.albedo / PI * sum, 0.0);
 }

@@ -57,12 +57,14 @@ pub const VAL_GATHER: &str = concat!(
     include_str!("../../shaders/vpl_basis.wgsl"),
     include_str!("../../shaders/val_gather.wgsl")
 );
-pub const VAL_KMEANS: &str = include_str!("../../shaders/val_kmeans.wgsl");
+pub const VAL_KMEANS: &str =
+    concat!(include_str!("../../shaders/vpl_basis.wgsl"), include_str!("../../shaders/val_kmeans.wgsl"));
 pub const VPL_BLUR: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/vpl_blur.wgsl"));
 pub const PATHTRACE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/raytrace_bvh.wgsl"),
+    include_str!("../../shaders/vpl_basis.wgsl"),
     include_str!("../../shaders/pathtrace.wgsl")
 );
 
@@ -95,9 +97,9 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
         &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "vpl_vis_paraboloid.wgsl", "vpl_gather.wgsl"],
         VPL_GATHER_PARABOLOID,
     ),
-    ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "pathtrace.wgsl"], PATHTRACE),
+    ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "vpl_basis.wgsl", "pathtrace.wgsl"], PATHTRACE),
     ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
-    ("val_kmeans", &["val_kmeans.wgsl"], VAL_KMEANS),
+    ("val_kmeans", &["vpl_basis.wgsl", "val_kmeans.wgsl"], VAL_KMEANS),
     ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
 ];
 

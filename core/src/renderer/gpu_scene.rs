@@ -13,6 +13,8 @@ pub struct GpuScene {
     pub index_buffer: wgpu::Buffer,
     /// CPU copy of the chunks for culling.
     pub chunks: Vec<Chunk>,
+    /// Bounds of all chunks (the drawn geometry), computed once.
+    pub bounds: crate::scene::Aabb,
     /// CPU copy of the merged geometry (vertices, indices, chunks), for techniques that need the triangles
     /// themselves (the ray tracer builds its BVH from it). Shared, so a technique can cache by pointer.
     pub geometry: std::sync::Arc<ChunkedGeometry>,
@@ -26,6 +28,16 @@ pub struct GpuScene {
 
 impl GpuScene {
     pub fn material_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        let texture = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
         device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("material"),
             entries: &[
@@ -39,16 +51,7 @@ impl GpuScene {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture(1),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -56,27 +59,9 @@ impl GpuScene {
                     count: None,
                 },
                 // The emissive texture (white when the material has none).
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture(3),
                 // The ambient-occlusion texture (white when none).
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture(4),
             ],
         })
     }
@@ -149,6 +134,7 @@ impl GpuScene {
             .collect();
         let material_albedo = scene.materials.iter().map(|m| mean_albedo(scene, m)).collect();
         GpuScene {
+            bounds: geometry.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             material_albedo,
             bvh_cell: std::sync::OnceLock::new(),
             vertex_buffer,

@@ -116,11 +116,6 @@ impl SceneBvh {
             albedo: Vec3::from_slice(&s.albedo[..3]),
         })
     }
-
-    /// True when something lies on `origin + t * dir` for `0 < t < t_max`.
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
-        bvh::occluded_cpu(&self.cpu, origin, dir, t_max)
-    }
 }
 
 impl GpuScene {

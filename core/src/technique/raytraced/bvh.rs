@@ -389,27 +389,7 @@ pub fn ray_box(origin: Vec3, inv_dir: Vec3, min: [f32; 3], max: [f32; 3], t_max:
 
 /// Möller–Trumbore (`bvh_ray_triangle`): true when the ray hits the triangle at `0 < t < t_max`.
 pub fn ray_triangle(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) -> bool {
-    let (o, d) = (origin.to_array(), dir.to_array());
-    let e1 = v3(&tri.e1);
-    let e2 = v3(&tri.e2);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
-    if det == 0.0 {
-        return false;
-    }
-    let inv_det = 1.0 / det;
-    let s = sub(o, v3(&tri.v0));
-    let u = dot(s, p) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return false;
-    }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return false;
-    }
-    let t = dot(e2, q) * inv_det;
-    t > 0.0 && t < t_max
+    ray_triangle_hit(origin, dir, tri, t_max).is_some()
 }
 
 /// Any-hit traversal, the CPU twin of `bvh_occluded` in `raytrace_bvh.wgsl`: same layout, same order, same

@@ -211,11 +211,6 @@ impl VirtualAreaLights {
             clustering_ms: 0.0,
         }
     }
-
-    /// The clustering of the last frame.
-    pub fn clustering(&self) -> &Clustering {
-        &self.clustering
-    }
 }
 
 impl Technique for VirtualAreaLights {
@@ -378,7 +373,7 @@ impl Technique for VirtualAreaLights {
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
-        let bounds = ctx.scene.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds));
+        let bounds = ctx.scene.bounds;
         self.scene_size = bounds.size().length().max(1e-6);
         let vpls = &self.vpls.vpls;
         let n = vpls.len();

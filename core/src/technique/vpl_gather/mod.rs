@@ -95,7 +95,7 @@ pub struct VplGather {
     visibility_layout: wgpu::BindGroupLayout,
     visibility_group: Option<wgpu::BindGroup>,
     shadows: Option<CubeShadowRenderer>,
-    /// The atlas view the visibility group was made with (shadow maps), to rebind when it changes.
+    /// The BVH the visibility group was made with (ray traced), to rebind when the scene changes.
     bvh: Option<Arc<SceneBvh>>,
     vpls: Arc<VplSet>,
     batch_size: usize,
@@ -279,14 +279,7 @@ impl Technique for VplGather {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.build_ms = None;
         self.vpls = ctx.vpls.set.clone();
-        self.scene_size = ctx
-            .scene
-            .chunks
-            .iter()
-            .fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds))
-            .size()
-            .length()
-            .max(1e-6);
+        self.scene_size = ctx.scene.bounds.size().length().max(1e-6);
         let n = self.vpls.vpls.len();
         self.batch_size = (self.params.vpls_per_step as usize).min(ctx.max_lights_per_step).max(1);
         if self.visibility == Visibility::ShadowMaps {
