@@ -10,6 +10,7 @@
 //! The renderer owns what all techniques share: the G-buffer, the HDR accumulation target (already holding
 //! ambient and emission when steps run), tone mapping and timing.
 
+pub mod fuzzy;
 pub mod insm;
 pub mod lightcluster;
 pub mod pathtraced;

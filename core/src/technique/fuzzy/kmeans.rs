@@ -1,0 +1,642 @@
+//! Colom, Marques, Santos 2022, section 3.2-3.3: K-means of surface points (VPLs or shading points) with the
+//! distance of equation 7, a regular grid over the centroids, and the fuzzy final assignment (Algorithm 2).
+//! The CPU twin of `fuzzy_kmeans.wgsl` (same initial centroids, search, fixed-point means, tie rule), pure and
+//! deterministic; the property tests below run on it and a GPU test compares the two.
+//!
+//! Algorithm 1 (symbols of the paper):
+//! 1. `D'` = downsample(`D`, `gamma`): the points at every `gamma`-th column and row (a 1-row dataset, the VPLs,
+//!    keeps every `gamma`-th point); `S` = |`D'`|.
+//! 2. initialCentroids(`K`, `D'`): centroid `k` is the first valid point of `D'` at or after index `k S / K`
+//!    (the paper picks "often random, but it can also leverage some structure in the data"; a stride through
+//!    the image spreads them over the view and is deterministic). `K` is clamped to `S`; a centroid whose
+//!    share holds no valid point (sky) stays inactive.
+//! 3. Per iteration: `G` = grid(`C`) (a regular grid over the scene's bounds, centroids binned into cells),
+//!    then each `d_s` in `D'` joins its nearest centroid by `dist` (equation 7: `|p1 - p2|` when
+//!    `n1 . n2 > n_t`, else infinity), searched in the 27 cells around `d_s`'s cell, and the centroids become
+//!    the mean position and (renormalised) mean normal of their members.
+//! 4. clusterAssign(`C`, `D`, `F`) (Algorithm 2): every point of the full dataset gets its `F` nearest
+//!    centroids `I_m` and inverse distances `W_m = 1 / R_m`.
+//!
+//! Deviations, and why:
+//! - The neighbourhood grows past the paper's 27 cells until it provably holds the nearest centroids: after
+//!   the shell of Chebyshev radius `r` around the point's cell every unvisited centroid is at least `r` cells
+//!   away, so the search stops once the `F`-th distance found is `<= r * cell` (or the grid is exhausted).
+//!   The paper's fixed 27 cells can miss the nearest centroid where clusters are sparse; the result here
+//!   equals a brute-force search (tested), at the cost of larger searches there.
+//! - A point whose normal matches no centroid (`dist` infinite for all: a lone surface orientation, or a zero
+//!   normal) would join the last centroid tested in Algorithm 1 (`dist <= minDist` with both infinite): here
+//!   it joins the nearest centroid by position, with inverse distance 0 (the shading then uses it alone).
+//! - Ties go to the lower centroid index (the paper's `<=` keeps the last one visited, which depends on the
+//!   grid's order).
+//! - `W` uses `1 / max(R, r_min)` so a point on a centroid gets a finite weight.
+//! - Means are fixed point, as on the GPU (WGSL has no float atomics): each member adds its position as a
+//!   fraction of the scene's bounds and its normal as `(n + 1) / 2`, times 2^24, into 64-bit sums (two u32
+//!   atomics with carry on the GPU), so a mean keeps 2^-24 of the bounds (6e-8) whatever the member count.
+
+use glam::Vec3;
+
+/// Most clusters a point may belong to (`F`).
+pub const MAX_F: usize = 8;
+/// Cells per axis of the centroid grid at most (32^3 cells).
+pub const MAX_GRID: u32 = 32;
+/// Fixed-point scale of the sums (2^24).
+pub const FIXED: f32 = 16_777_216.0;
+
+/// A surface point: a VPL or a shading point. Invalid points (sky pixels) take no part.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Point {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub valid: bool,
+}
+
+/// The clustering's inputs besides the points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KMeansParams {
+    /// `K` asked for (clamped to the number of samples).
+    pub clusters: usize,
+    pub iterations: u32,
+    /// `gamma`: every `gamma`-th column and row of the dataset takes part in the iterations.
+    pub gamma: u32,
+    /// `F`, 1 to [`MAX_F`].
+    pub fuzziness: usize,
+    /// `n_t` of equation 7.
+    pub n_t: f32,
+    /// Smallest distance in `W = 1 / R` (world units).
+    pub min_distance: f32,
+    /// The dataset's layout: `width x height` points (shading points: the image; VPLs: N x 1).
+    pub width: u32,
+    pub height: u32,
+    /// Bounds of the grid and of the fixed-point sums (the scene's).
+    pub bounds_min: Vec3,
+    pub bounds_extent: Vec3,
+}
+
+/// A centroid of `C`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Centroid {
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// False when its initial share had no valid point: it never takes part.
+    pub active: bool,
+}
+
+/// The result of Algorithm 1 with Algorithm 2's final assignment.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Clustering {
+    pub centroids: Vec<Centroid>,
+    /// `A`: for point `m`, entries `m F .. m F + F`, nearest first; `u32::MAX` where fewer than `F` clusters
+    /// are compatible (or the point is invalid).
+    pub assignment: Vec<u32>,
+    /// `W`: the inverse distances of `assignment`'s entries (0 for the by-position fallback and empty entries).
+    pub inverse_distance: Vec<f32>,
+    /// Points whose nearest cluster (entry 0) is this one.
+    pub members: Vec<u32>,
+    /// Per cluster: the member nearest its centroid (lowest index on ties), `None` when it has no member.
+    pub representative: Vec<Option<u32>>,
+    /// The mean normal of the final members (renormalised; the centroid's when none).
+    pub member_normal: Vec<Vec3>,
+    /// `F` used (the parameter clamped to 1..=MAX_F).
+    pub fuzziness: usize,
+}
+
+impl Clustering {
+    /// Clusters with at least one member.
+    pub fn non_empty(&self) -> usize {
+        self.members.iter().filter(|&&m| m > 0).count()
+    }
+}
+
+/// Equation 7, with infinity as `None`.
+pub fn dist(n_t: f32, position: Vec3, normal: Vec3, c: &Centroid) -> Option<f32> {
+    (normal.dot(c.normal) > n_t).then(|| (position - c.position).length())
+}
+
+/// The regular grid over the centroids (rebuilt every iteration).
+#[derive(Clone, Debug)]
+pub struct Grid {
+    pub origin: Vec3,
+    pub cell: f32,
+    pub dims: [u32; 3],
+    /// Cell `c`'s centroids are `items[start[c] .. start[c + 1]]`.
+    pub start: Vec<u32>,
+    pub items: Vec<u32>,
+}
+
+/// Cell size and cells per axis for `k` centroids in `extent`: cubic cells, about `2 cbrt(k)` along the
+/// longest axis (a few centroids per occupied cell on surfaces), at most [`MAX_GRID`] per axis.
+pub fn grid_shape(extent: Vec3, k: usize) -> (f32, [u32; 3]) {
+    let along = ((2.0 * (k.max(1) as f32).cbrt()).ceil() as u32).clamp(1, MAX_GRID);
+    let longest = extent.max_element();
+    let cell = if longest > 0.0 && longest.is_finite() { longest / along as f32 } else { 1.0 };
+    let axis = |e: f32| ((e / cell).ceil() as u32).clamp(1, MAX_GRID);
+    (cell, [axis(extent.x), axis(extent.y), axis(extent.z)])
+}
+
+impl Grid {
+    pub fn cell_of(&self, p: Vec3) -> [i32; 3] {
+        let c = ((p - self.origin) / self.cell).floor();
+        let clamp = |v: f32, d: u32| (if v.is_finite() { v } else { 0.0 }).clamp(0.0, d as f32 - 1.0) as i32;
+        [clamp(c.x, self.dims[0]), clamp(c.y, self.dims[1]), clamp(c.z, self.dims[2])]
+    }
+
+    fn index(&self, c: [i32; 3]) -> usize {
+        (c[0] as u32 + self.dims[0] * (c[1] as u32 + self.dims[1] * c[2] as u32)) as usize
+    }
+
+    pub fn build(params: &KMeansParams, centroids: &[Centroid]) -> Grid {
+        let (cell, dims) = grid_shape(params.bounds_extent, centroids.len());
+        let mut grid = Grid { origin: params.bounds_min, cell, dims, start: Vec::new(), items: Vec::new() };
+        let cells = (dims[0] * dims[1] * dims[2]) as usize;
+        let mut count = vec![0u32; cells + 1];
+        let keys: Vec<Option<usize>> =
+            centroids.iter().map(|c| c.active.then(|| grid.index(grid.cell_of(c.position)))).collect();
+        for &k in keys.iter().flatten() {
+            count[k] += 1;
+        }
+        let mut start = vec![0u32; cells + 1];
+        for c in 0..cells {
+            start[c + 1] = start[c] + count[c];
+        }
+        let mut cursor = start.clone();
+        let mut items = vec![0u32; start[cells] as usize];
+        for (k, key) in keys.iter().enumerate() {
+            if let Some(c) = key {
+                items[cursor[*c] as usize] = k as u32;
+                cursor[*c] += 1;
+            }
+        }
+        grid.start = start;
+        grid.items = items;
+        grid
+    }
+
+    /// The `f_max` nearest compatible centroids of `(position, normal)` by equation 7, nearest first (ties: lower
+    /// index), searched shell by shell from the 27 cells around the point until provably complete. Also the
+    /// nearest active centroid by position alone (the fallback when none is compatible).
+    pub fn nearest(
+        &self,
+        centroids: &[Centroid],
+        n_t: f32,
+        position: Vec3,
+        normal: Vec3,
+        f_max: usize,
+    ) -> (Vec<(f32, u32)>, Option<(f32, u32)>) {
+        let mut best: Vec<(f32, u32)> = Vec::with_capacity(f_max + 1);
+        let mut any: Option<(f32, u32)> = None;
+        let c = self.cell_of(position);
+        let dims = self.dims.map(|d| d as i32);
+        let reach = (0..3).map(|a| c[a].max(dims[a] - 1 - c[a])).max().unwrap_or(0);
+        let mut r = 0;
+        loop {
+            self.visit_shell(c, r, |cell| {
+                let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
+                for &k in &self.items[s..e] {
+                    let centroid = &centroids[k as usize];
+                    let d = (position - centroid.position).length();
+                    if any.is_none_or(|a| (d, k) < a) {
+                        any = Some((d, k));
+                    }
+                    if normal.dot(centroid.normal) > n_t {
+                        insert(&mut best, f_max, (d, k));
+                    }
+                }
+            });
+            let complete = best.len() == f_max && best[f_max - 1].0 <= r as f32 * self.cell;
+            if (r >= 1 && complete) || r >= reach {
+                break;
+            }
+            r += 1;
+        }
+        (best, any)
+    }
+
+    /// Calls `f` with the index of every grid cell at Chebyshev distance exactly `r` from `c`.
+    fn visit_shell(&self, c: [i32; 3], r: i32, mut f: impl FnMut(usize)) {
+        let dims = self.dims.map(|d| d as i32);
+        let lo = |a: usize| (c[a] - r).max(0);
+        let hi = |a: usize| (c[a] + r).min(dims[a] - 1);
+        for z in lo(2)..=hi(2) {
+            for y in lo(1)..=hi(1) {
+                let edge = (z - c[2]).abs() == r || (y - c[1]).abs() == r;
+                if edge {
+                    for x in lo(0)..=hi(0) {
+                        f(self.index([x, y, z]));
+                    }
+                } else {
+                    for x in [c[0] - r, c[0] + r] {
+                        if x >= 0 && x < dims[0] {
+                            f(self.index([x, y, z]));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Insert `item` into the ascending list `best`, keeping at most `f_max`.
+fn insert(best: &mut Vec<(f32, u32)>, f_max: usize, item: (f32, u32)) {
+    let at = best.iter().position(|b| item < *b).unwrap_or(best.len());
+    if at < f_max {
+        best.insert(at, item);
+        best.truncate(f_max);
+    }
+}
+
+/// The indices of `D'` in the full dataset (step 1).
+pub fn samples(params: &KMeansParams) -> Vec<u32> {
+    let g = params.gamma.max(1);
+    let mut out = Vec::new();
+    for y in (0..params.height).step_by(g as usize) {
+        for x in (0..params.width).step_by(g as usize) {
+            out.push(y * params.width + x);
+        }
+    }
+    out
+}
+
+/// 64-bit fixed-point sums of positions (fractions of the bounds) and normals ((n + 1) / 2), as the GPU does.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    p: [u64; 3],
+    n: [u64; 3],
+    count: u32,
+}
+
+fn quantize(v: f32) -> u64 {
+    // `u32(clamp(v, 0, 1) * 2^24)` on the GPU.
+    (v.clamp(0.0, 1.0) * FIXED) as u64
+}
+
+impl Sums {
+    fn add(&mut self, params: &KMeansParams, p: &Point) {
+        let f = (p.position - params.bounds_min) / params.bounds_extent.max(Vec3::splat(1e-12));
+        let n = p.normal * 0.5 + Vec3::splat(0.5);
+        for a in 0..3 {
+            self.p[a] += quantize(f[a]);
+            self.n[a] += quantize(n[a]);
+        }
+        self.count += 1;
+    }
+
+    /// The mean, in f32 exactly as the shader computes it: `(f32(hi) * 2^32 + f32(lo)) / (count * 2^24)`.
+    fn mean(v: u64, count: u32) -> f32 {
+        let (hi, lo) = ((v >> 32) as u32, v as u32);
+        (hi as f32 * 4_294_967_296.0 + lo as f32) / (count as f32 * FIXED)
+    }
+
+    fn position(&self, params: &KMeansParams) -> Vec3 {
+        let f = Vec3::new(
+            Self::mean(self.p[0], self.count),
+            Self::mean(self.p[1], self.count),
+            Self::mean(self.p[2], self.count),
+        );
+        params.bounds_min + f * params.bounds_extent.max(Vec3::splat(1e-12))
+    }
+
+    /// The renormalised mean normal, or None when it vanishes (opposite normals).
+    fn normal(&self) -> Option<Vec3> {
+        let n = Vec3::new(
+            Self::mean(self.n[0], self.count),
+            Self::mean(self.n[1], self.count),
+            Self::mean(self.n[2], self.count),
+        ) * 2.0
+            - Vec3::ONE;
+        (n.length_squared() > 1e-12).then(|| n.normalize())
+    }
+}
+
+/// Algorithm 1 (with Algorithm 2 as its last line) over `points` (`width x height`, row-major).
+pub fn cluster(points: &[Point], params: &KMeansParams) -> Clustering {
+    let f_max = params.fuzziness.clamp(1, MAX_F);
+    let valid = |p: &Point| p.valid && p.position.is_finite() && p.normal.is_finite();
+    // Step 1.
+    let samples: Vec<u32> = samples(params).into_iter().filter(|&m| (m as usize) < points.len()).collect();
+    let s = samples.len();
+    let k_count = params.clusters.min(s);
+    // Step 2.
+    let mut centroids: Vec<Centroid> = (0..k_count)
+        .map(|k| {
+            let (a, b) = (k * s / k_count, (k + 1) * s / k_count);
+            match samples[a..b].iter().map(|&m| &points[m as usize]).find(|p| valid(p)) {
+                Some(p) => Centroid { position: p.position, normal: p.normal, active: true },
+                None => Centroid { position: Vec3::ZERO, normal: Vec3::Z, active: false },
+            }
+        })
+        .collect();
+    let nearest_one = |grid: &Grid, centroids: &[Centroid], p: &Point| -> Option<(f32, u32, bool)> {
+        let (best, any) = grid.nearest(centroids, params.n_t, p.position, p.normal, 1);
+        match best.first() {
+            Some(&(d, k)) => Some((d, k, true)),
+            None => any.map(|(d, k)| (d, k, false)),
+        }
+    };
+    // Step 3.
+    for _ in 0..params.iterations {
+        let grid = Grid::build(params, &centroids);
+        let mut sums = vec![Sums::default(); k_count];
+        for &m in &samples {
+            let p = &points[m as usize];
+            if !valid(p) {
+                continue;
+            }
+            if let Some((_, k, _)) = nearest_one(&grid, &centroids, p) {
+                sums[k as usize].add(params, p);
+            }
+        }
+        for (c, s) in centroids.iter_mut().zip(&sums) {
+            if c.active && s.count > 0 {
+                c.position = s.position(params);
+                if let Some(n) = s.normal() {
+                    c.normal = n;
+                }
+            }
+        }
+    }
+    // Step 4: Algorithm 2 over the full dataset.
+    let grid = Grid::build(params, &centroids);
+    let mut assignment = vec![u32::MAX; points.len() * f_max];
+    let mut inverse_distance = vec![0.0f32; points.len() * f_max];
+    let mut members = vec![0u32; k_count];
+    let mut rep: Vec<Option<(f32, u32)>> = vec![None; k_count];
+    let mut normals = vec![Sums::default(); k_count];
+    for (m, p) in points.iter().enumerate() {
+        if !valid(p) {
+            continue;
+        }
+        let (best, any) = grid.nearest(&centroids, params.n_t, p.position, p.normal, f_max);
+        let entries: Vec<(f32, u32, f32)> = if best.is_empty() {
+            any.map(|(d, k)| (d, k, 0.0)).into_iter().collect()
+        } else {
+            best.iter().map(|&(d, k)| (d, k, 1.0 / d.max(params.min_distance))).collect()
+        };
+        for (f, &(_, k, w)) in entries.iter().enumerate() {
+            assignment[m * f_max + f] = k;
+            inverse_distance[m * f_max + f] = w;
+        }
+        if let Some(&(d, k, _)) = entries.first() {
+            let k = k as usize;
+            members[k] += 1;
+            normals[k].add(params, p);
+            if rep[k].is_none_or(|r| (d, m as u32) < r) {
+                rep[k] = Some((d, m as u32));
+            }
+        }
+    }
+    let member_normal =
+        normals.iter().zip(&centroids).map(|(s, c)| if s.count > 0 { s.normal() } else { None }.unwrap_or(c.normal));
+    Clustering {
+        member_normal: member_normal.collect(),
+        centroids,
+        assignment,
+        inverse_distance,
+        members,
+        representative: rep.iter().map(|r| r.map(|(_, m)| m)).collect(),
+        fuzziness: f_max,
+    }
+}
+
+/// Visibility weights of one point's entries for a shading mode (equations 8-10): `hard` (F = 1: entry 0 only),
+/// `fuzzy` (the mean over its entries), `weighted` (inverse-distance weights). The by-position fallback (all
+/// inverse distances 0) gets weight 1 on entry 0. Empty entries weigh 0; the weights sum to 1 (or all 0 for an
+/// invalid point).
+pub fn weights(mode: ShadeMode, entries: &[u32], inverse_distance: &[f32]) -> Vec<f32> {
+    let used = entries.iter().take_while(|&&k| k != u32::MAX).count();
+    let mut w = vec![0.0; entries.len()];
+    if used == 0 {
+        return w;
+    }
+    let total: f32 = inverse_distance[..used].iter().sum();
+    match mode {
+        _ if total <= 0.0 => w[0] = 1.0,
+        ShadeMode::Hard => w[0] = 1.0,
+        ShadeMode::Fuzzy => w[..used].fill(1.0 / used as f32),
+        ShadeMode::Weighted => {
+            for f in 0..used {
+                w[f] = inverse_distance[f] / total;
+            }
+        }
+    }
+    w
+}
+
+/// How a shading point's visibility combines its clusters' (section 3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadeMode {
+    Hard,
+    Fuzzy,
+    Weighted,
+}
+
+impl ShadeMode {
+    pub fn index(self) -> u32 {
+        match self {
+            ShadeMode::Hard => 0,
+            ShadeMode::Fuzzy => 1,
+            ShadeMode::Weighted => 2,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift), for the property tests.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// Points on the six faces of a 2 m box (and some invalid ones), `w x h`.
+    fn box_points(w: u32, h: u32, seed: u64) -> Vec<Point> {
+        let mut rng = Rng(seed.wrapping_mul(2_654_435_761).max(1));
+        (0..w * h)
+            .map(|i| {
+                let face = (rng.next() * 6.0) as usize % 6;
+                let (u, v) = (rng.next() * 2.0 - 1.0, rng.next() * 2.0 - 1.0);
+                let axis = [Vec3::X, Vec3::Y, Vec3::Z][face % 3];
+                let sign = if face < 3 { 1.0 } else { -1.0 };
+                let (t, b) = axis.any_orthonormal_pair();
+                Point {
+                    position: axis * sign + t * u + b * v,
+                    normal: -axis * sign,
+                    valid: i % 17 != 5,
+                }
+            })
+            .collect()
+    }
+
+    fn params(k: usize, f: usize, w: u32, h: u32) -> KMeansParams {
+        KMeansParams {
+            clusters: k,
+            iterations: 6,
+            gamma: 2,
+            fuzziness: f,
+            n_t: 3f32.sqrt() / 2.0,
+            min_distance: 1e-6,
+            width: w,
+            height: h,
+            bounds_min: Vec3::splat(-1.0),
+            bounds_extent: Vec3::splat(2.0),
+        }
+    }
+
+    fn brute(c: &Clustering, p: &Point, n_t: f32) -> Vec<(f32, u32)> {
+        let mut all: Vec<(f32, u32)> = c
+            .centroids
+            .iter()
+            .enumerate()
+            .filter(|(_, x)| x.active)
+            .filter_map(|(k, x)| dist(n_t, p.position, p.normal, x).map(|d| (d, k as u32)))
+            .collect();
+        all.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        all
+    }
+
+    #[test]
+    fn the_grid_search_finds_the_f_nearest_as_brute_force_does() {
+        for (seed, k, f) in [(1, 40, 6), (2, 7, 3), (3, 150, 8), (4, 1, 1), (5, 300, 6)] {
+            let pts = box_points(40, 30, seed);
+            let p = params(k, f, 40, 30);
+            let c = cluster(&pts, &p);
+            for (m, point) in pts.iter().enumerate() {
+                if !point.valid {
+                    assert!(c.assignment[m * c.fuzziness..][..c.fuzziness].iter().all(|&k| k == u32::MAX));
+                    continue;
+                }
+                let expect = brute(&c, point, p.n_t);
+                let got = &c.assignment[m * c.fuzziness..][..c.fuzziness];
+                if expect.is_empty() {
+                    // No compatible cluster: the nearest active one by position, inverse distance 0.
+                    let by_position = c
+                        .centroids
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, x)| x.active)
+                        .map(|(k, x)| ((point.position - x.position).length(), k as u32))
+                        .fold((f32::INFINITY, u32::MAX), |a, b| if b < a { b } else { a });
+                    assert_eq!(got[0], by_position.1);
+                    assert_eq!(c.inverse_distance[m * c.fuzziness], 0.0);
+                    assert!(got[1..].iter().all(|&k| k == u32::MAX));
+                    continue;
+                }
+                let n = expect.len().min(c.fuzziness);
+                for i in 0..n {
+                    assert_eq!(got[i], expect[i].1, "seed {seed} point {m} entry {i}");
+                    let w = c.inverse_distance[m * c.fuzziness + i];
+                    assert!((w - 1.0 / expect[i].0.max(1e-6)).abs() <= 1e-4 * w.max(1.0));
+                }
+                assert!(got[n..].iter().all(|&k| k == u32::MAX));
+            }
+        }
+    }
+
+    #[test]
+    fn weights_sum_to_one_and_follow_the_mode() {
+        let pts = box_points(32, 32, 9);
+        let p = params(60, 6, 32, 32);
+        let c = cluster(&pts, &p);
+        for m in 0..pts.len() {
+            let e = &c.assignment[m * 6..m * 6 + 6];
+            let w = &c.inverse_distance[m * 6..m * 6 + 6];
+            for mode in [ShadeMode::Hard, ShadeMode::Fuzzy, ShadeMode::Weighted] {
+                let ws = weights(mode, e, w);
+                let sum: f32 = ws.iter().sum();
+                if pts[m].valid {
+                    assert!((sum - 1.0).abs() < 1e-5, "point {m} {mode:?}: {sum}");
+                } else {
+                    assert_eq!(sum, 0.0);
+                }
+                if mode == ShadeMode::Weighted && pts[m].valid && w[1] > 0.0 {
+                    // Nearer clusters weigh more.
+                    assert!(ws[0] >= ws[1]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn deterministic_and_centroids_are_member_means() {
+        let pts = box_points(48, 32, 3);
+        let p = params(50, 6, 48, 32);
+        let a = cluster(&pts, &p);
+        assert_eq!(a, cluster(&pts, &p));
+        // Wall clusters never mix orientations: every member of a cluster has a normal within n_t of its
+        // centroid's, or joined by the by-position fallback (none here: every wall has clusters).
+        for (m, pt) in pts.iter().enumerate().filter(|(_, x)| x.valid) {
+            let k = a.assignment[m * 6] as usize;
+            assert!(pt.normal.dot(a.centroids[k].normal) > p.n_t);
+            assert!(a.inverse_distance[m * 6] > 0.0);
+        }
+        // Members and representatives are consistent.
+        let valid = pts.iter().filter(|x| x.valid).count() as u32;
+        assert_eq!(a.members.iter().sum::<u32>(), valid);
+        for (k, r) in a.representative.iter().enumerate() {
+            assert_eq!(r.is_some(), a.members[k] > 0);
+            if let Some(r) = r {
+                assert_eq!(a.assignment[*r as usize * 6] as usize, k);
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_inputs_are_well_defined() {
+        // More clusters than points: one cluster per sample.
+        let pts = box_points(4, 4, 5);
+        let p = KMeansParams { gamma: 1, ..params(1000, 6, 4, 4) };
+        let c = cluster(&pts, &p);
+        assert_eq!(c.centroids.len(), 16);
+        assert!(c.members.iter().all(|&m| m <= 1));
+        // F above K: at most K entries used, weights still sum to 1.
+        let c = cluster(&box_points(10, 10, 6), &KMeansParams { fuzziness: 8, ..params(3, 8, 10, 10) });
+        assert_eq!(c.fuzziness, 8);
+        for m in 0..100 {
+            let e = &c.assignment[m * 8..m * 8 + 8];
+            assert!(e.iter().filter(|&&k| k != u32::MAX).count() <= 3);
+        }
+        // No valid point (sky only): every centroid inactive, nothing assigned.
+        let sky = vec![Point { position: Vec3::ZERO, normal: Vec3::Z, valid: false }; 64];
+        let c = cluster(&sky, &params(8, 6, 8, 8));
+        assert!(c.centroids.iter().all(|x| !x.active) && c.non_empty() == 0);
+        assert!(c.assignment.iter().all(|&k| k == u32::MAX));
+        // Zero or NaN normals: no cluster is compatible, the nearest by position is used with weight 1.
+        let odd: Vec<Point> = (0..16)
+            .map(|i| Point {
+                position: Vec3::new(i as f32 * 0.1 - 0.8, 0.0, 0.0),
+                normal: if i % 2 == 0 { Vec3::ZERO } else { Vec3::Y },
+                valid: true,
+            })
+            .collect();
+        let c = cluster(&odd, &KMeansParams { gamma: 1, ..params(4, 6, 16, 1) });
+        for m in 0..16 {
+            let e = &c.assignment[m * 6..m * 6 + 6];
+            assert_ne!(e[0], u32::MAX, "point {m} unassigned");
+            let w = weights(ShadeMode::Weighted, e, &c.inverse_distance[m * 6..m * 6 + 6]);
+            assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        }
+        let nan = vec![Point { position: Vec3::NAN, normal: Vec3::Y, valid: true }; 4];
+        assert_eq!(cluster(&nan, &params(2, 6, 2, 2)).non_empty(), 0);
+        assert_eq!(cluster(&[], &params(8, 6, 0, 0)).centroids.len(), 0);
+    }
+
+    #[test]
+    fn shells_visit_every_cell_once() {
+        let p = params(200, 1, 1, 1);
+        let grid = Grid::build(&p, &[]);
+        let cells = (grid.dims[0] * grid.dims[1] * grid.dims[2]) as usize;
+        for c in [[0, 0, 0], [3, 5, 2], [grid.dims[0] as i32 - 1, 0, 4]] {
+            let mut seen = vec![0u32; cells];
+            for r in 0..(MAX_GRID as i32) {
+                grid.visit_shell(c, r, |i| seen[i] += 1);
+            }
+            assert!(seen.iter().all(|&s| s == 1), "cell {c:?}");
+        }
+    }
+}
