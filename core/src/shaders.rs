@@ -68,6 +68,17 @@ pub const PATHTRACE: &str = concat!(
     include_str!("../../shaders/pathtrace.wgsl")
 );
 
+pub const FUZZY_KMEANS: &str = include_str!("../../shaders/fuzzy_kmeans.wgsl");
+pub const FUZZY_POINTS: &str =
+    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/fuzzy_points.wgsl"));
+pub const FUZZY_VISIBILITY: &str =
+    concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/fuzzy_visibility.wgsl"));
+pub const FUZZY_SHADE: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/vpl_common.wgsl"),
+    include_str!("../../shaders/fuzzy_shade.wgsl")
+);
+
 /// Every composed shader module: (name, the files it is made of, source).
 pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("gbuffer", &["gbuffer.wgsl"], GBUFFER),
@@ -101,6 +112,10 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
     ("val_kmeans", &["vpl_basis.wgsl", "val_kmeans.wgsl"], VAL_KMEANS),
     ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
+    ("fuzzy_kmeans", &["fuzzy_kmeans.wgsl"], FUZZY_KMEANS),
+    ("fuzzy_points", &["common.wgsl", "fuzzy_points.wgsl"], FUZZY_POINTS),
+    ("fuzzy_visibility", &["raytrace_bvh.wgsl", "fuzzy_visibility.wgsl"], FUZZY_VISIBILITY),
+    ("fuzzy_shade", &["common.wgsl", "vpl_common.wgsl", "fuzzy_shade.wgsl"], FUZZY_SHADE),
 ];
 
 /// Create a shader module from one of the sources above.

@@ -139,7 +139,7 @@ fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Ve
                 }
             }
             // Drawn as a texture, not as lines or dots.
-            Overlay::IdMap { .. } => {}
+            Overlay::IdMap { .. } | Overlay::ColorMap { .. } => {}
             Overlay::Point { position, color, radius_px } => {
                 if !position.is_finite() {
                     continue;
@@ -321,9 +321,20 @@ impl OverlayRenderer {
         // ID maps become textures, drawn first (under the lines and dots).
         let id_maps: Vec<wgpu::BindGroup> = primitives
             .iter()
-            .filter_map(|p| match p {
-                Overlay::IdMap { width, height, ids, alpha }
-                    if *width > 0 && *height > 0 && ids.len() == (*width as usize) * (*height as usize) =>
+            .filter_map(|p| {
+                let (width, height, pixels) = match p {
+                    Overlay::IdMap { width, height, ids, alpha }
+                        if *width > 0 && *height > 0 && ids.len() == (*width as usize) * (*height as usize) =>
+                    {
+                        (width, height, colorize_ids(ids, *alpha))
+                    }
+                    Overlay::ColorMap { width, height, rgba }
+                        if *width > 0 && *height > 0 && rgba.len() == (*width as usize) * (*height as usize) =>
+                    {
+                        (width, height, bytemuck::cast_slice(rgba.as_slice()).to_vec())
+                    }
+                    _ => return None,
+                };
                 {
                     let texture = gpu.device.create_texture_with_data(
                         &gpu.queue,
@@ -338,7 +349,7 @@ impl OverlayRenderer {
                             view_formats: &[],
                         },
                         wgpu::util::TextureDataOrder::LayerMajor,
-                        &colorize_ids(ids, *alpha),
+                        &pixels,
                     );
                     let view = texture.create_view(&Default::default());
                     Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -350,7 +361,6 @@ impl OverlayRenderer {
                         }],
                     }))
                 }
-                _ => None,
             })
             .collect();
         if lines.is_empty() && dots.is_empty() && id_maps.is_empty() {

@@ -136,7 +136,20 @@ impl VplGatherPass {
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
         visibility_group: &wgpu::BindGroup,
+        batch: GatherBatchUniform,
+    ) {
+        self.encode_lights(ctx, encoder, label, visibility_group, batch, &ctx.vpls.buffer.buffer);
+    }
+
+    /// [`Self::encode`] over another set of lights in the `GpuVpl` layout (e.g. VPL clusters).
+    pub fn encode_lights(
+        &self,
+        ctx: &FrameContext,
+        encoder: &mut wgpu::CommandEncoder,
+        label: &str,
+        visibility_group: &wgpu::BindGroup,
         mut batch: GatherBatchUniform,
+        lights: &wgpu::Buffer,
     ) {
         batch.clamp_sq = ctx.vpl_settings.clamp_world * ctx.vpl_settings.clamp_world;
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&batch));
@@ -144,7 +157,7 @@ impl VplGatherPass {
             label: Some("vpl gather"),
             layout: &self.gather_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: ctx.vpls.buffer.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 0, resource: lights.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: self.uniform.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: ctx.indirect_buffer.as_entire_binding() },
             ],

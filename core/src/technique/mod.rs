@@ -318,6 +318,13 @@ pub enum Overlay {
         ids: std::sync::Arc<Vec<u32>>,
         alpha: f32,
     },
+    /// A per-pixel colour map over the whole view (e.g. a blend of the clusters a pixel belongs to): `rgba`
+    /// row-major at `width x height`, straight (not premultiplied) alpha.
+    ColorMap {
+        width: u32,
+        height: u32,
+        rgba: std::sync::Arc<Vec<[u8; 4]>>,
+    },
 }
 
 /// A distinct, stable colour per index (golden-ratio hue walk), for clusters and ID maps.
@@ -723,6 +730,11 @@ pub const INDIRECT_REGISTRY: &[TechniqueEntry] = &[
         key: "val",
         label: "Virtual area lights (Dong 2009)",
         create: |gpu, layouts| Box::new(val::VirtualAreaLights::new(gpu, layouts)),
+    },
+    TechniqueEntry {
+        key: "fuzzy",
+        label: "Fuzzy clustering of shading points and VPLs (Colom 2022)",
+        create: |gpu, layouts| Box::new(fuzzy::FuzzyClustering::new(gpu, layouts)),
     },
     TechniqueEntry {
         key: "pathtraced",

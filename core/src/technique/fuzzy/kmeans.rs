@@ -112,6 +112,9 @@ pub fn dist(n_t: f32, position: Vec3, normal: Vec3, c: &Centroid) -> Option<f32>
     (normal.dot(c.normal) > n_t).then(|| (position - c.position).length())
 }
 
+/// A centroid found by a search: (distance, index).
+pub type Candidate = (f32, u32);
+
 /// The regular grid over the centroids (rebuilt every iteration).
 #[derive(Clone, Debug)]
 pub struct Grid {
@@ -181,7 +184,7 @@ impl Grid {
         position: Vec3,
         normal: Vec3,
         f_max: usize,
-    ) -> (Vec<(f32, u32)>, Option<(f32, u32)>) {
+    ) -> (Vec<Candidate>, Option<Candidate>) {
         let mut best: Vec<(f32, u32)> = Vec::with_capacity(f_max + 1);
         let mut any: Option<(f32, u32)> = None;
         let c = self.cell_of(position);
@@ -464,11 +467,7 @@ mod tests {
                 let axis = [Vec3::X, Vec3::Y, Vec3::Z][face % 3];
                 let sign = if face < 3 { 1.0 } else { -1.0 };
                 let (t, b) = axis.any_orthonormal_pair();
-                Point {
-                    position: axis * sign + t * u + b * v,
-                    normal: -axis * sign,
-                    valid: i % 17 != 5,
-                }
+                Point { position: axis * sign + t * u + b * v, normal: -axis * sign, valid: i % 17 != 5 }
             })
             .collect()
     }
@@ -543,18 +542,18 @@ mod tests {
         let pts = box_points(32, 32, 9);
         let p = params(60, 6, 32, 32);
         let c = cluster(&pts, &p);
-        for m in 0..pts.len() {
+        for (m, point) in pts.iter().enumerate() {
             let e = &c.assignment[m * 6..m * 6 + 6];
             let w = &c.inverse_distance[m * 6..m * 6 + 6];
             for mode in [ShadeMode::Hard, ShadeMode::Fuzzy, ShadeMode::Weighted] {
                 let ws = weights(mode, e, w);
                 let sum: f32 = ws.iter().sum();
-                if pts[m].valid {
+                if point.valid {
                     assert!((sum - 1.0).abs() < 1e-5, "point {m} {mode:?}: {sum}");
                 } else {
                     assert_eq!(sum, 0.0);
                 }
-                if mode == ShadeMode::Weighted && pts[m].valid && w[1] > 0.0 {
+                if mode == ShadeMode::Weighted && point.valid && w[1] > 0.0 {
                     // Nearer clusters weigh more.
                     assert!(ws[0] >= ws[1]);
                 }

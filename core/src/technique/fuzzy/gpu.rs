@@ -1,0 +1,334 @@
+//! Algorithms 1 and 2 on the GPU (`fuzzy_kmeans.wgsl`), the twin of [`super::kmeans::cluster`]: one dispatch
+//! per step over a buffer of points in the `GpuVpl` layout (the frame's VPLs as they are, or the shading points
+//! written from the G-buffer by `fuzzy_points.wgsl`). Its outputs stay on the GPU for the visibility and
+//! shading passes: `clusters` (the first `K` entries: each cluster as a light / ray endpoint, its
+//! representative's position, normal and the members' flux) and `assignment` (per point, `F` clusters with
+//! inverse distances). [`GpuKMeans::read_clusters`] and [`GpuKMeans::read_assignment`] read them back for the
+//! counts and overlays.
+
+use glam::Vec3;
+
+use super::kmeans::{grid_shape, KMeansParams, MAX_F};
+use crate::error::GpuError;
+use crate::gpu::GpuContext;
+use crate::renderer::readback;
+use crate::shaders;
+use crate::timing::PassTimer;
+
+/// Mirrors `KmParams` in `fuzzy_kmeans.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct KmParamsUniform {
+    point_count: u32,
+    width: u32,
+    height: u32,
+    gamma: u32,
+    sample_count: u32,
+    cluster_count: u32,
+    fuzziness: u32,
+    has_flux: u32,
+    n_t: f32,
+    min_distance: f32,
+    cell: f32,
+    cells: u32,
+    dims: [u32; 4],
+    bounds_min: [f32; 4],
+    bounds_extent: [f32; 4],
+    flux_scale: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 112);
+
+/// A point, cluster or light as the shaders store it (`KmPoint`, `Vpl`, `Endpoint`: the `GpuVpl` layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPoint {
+    /// xyz, w: 1 when it exists (a valid point; a cluster with members).
+    pub position: [f32; 4],
+    /// xyz, w: members (clusters).
+    pub normal: [f32; 4],
+    pub flux: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuPoint>() == 48);
+
+impl GpuPoint {
+    pub fn exists(&self) -> bool {
+        self.position[3] > 0.5
+    }
+    pub fn position(&self) -> Vec3 {
+        Vec3::from_slice(&self.position[..3])
+    }
+    pub fn normal(&self) -> Vec3 {
+        Vec3::from_slice(&self.normal[..3])
+    }
+    pub fn members(&self) -> u32 {
+        self.normal[3] as u32
+    }
+}
+
+/// Words of the accumulators per cluster (`ACC` in the shader).
+const ACC: u64 = 24;
+/// Most clusters (the initial-centroid arithmetic of the shader stays within u32).
+pub const MAX_CLUSTERS: usize = 65_536;
+
+/// What one clustering run was sized for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunShape {
+    /// Points in the dataset (M).
+    pub points: usize,
+    /// Clusters used (K clamped to the samples).
+    pub clusters: usize,
+    /// F.
+    pub fuzziness: usize,
+}
+
+pub struct GpuKMeans {
+    label: &'static str,
+    layout: wgpu::BindGroupLayout,
+    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+    uniform: wgpu::Buffer,
+    /// `2 K` points: the clusters as lights / endpoints, then the working centroids.
+    pub clusters: Option<wgpu::Buffer>,
+    work: Option<wgpu::Buffer>,
+    /// Per point `F` entries of (cluster, inverse-distance bits).
+    pub assignment: Option<wgpu::Buffer>,
+    pub shape: RunShape,
+}
+
+fn storage(gpu: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(64),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// Workgroups of 64 for `n` invocations, as `(x, y)` (x at most 32,768: `global_index` in the shader).
+fn groups(n: usize) -> (u32, u32) {
+    let g = n.div_ceil(64).max(1) as u32;
+    if g <= 65_535 {
+        (g, 1)
+    } else {
+        (32_768, g.div_ceil(32_768))
+    }
+}
+
+const ENTRIES: &[&str] = &[
+    "km_init",
+    "grid_clear",
+    "grid_count",
+    "grid_scan",
+    "grid_fill",
+    "acc_clear",
+    "km_assign",
+    "km_update",
+    "km_final",
+    "rep_pick",
+    "rep_finish",
+];
+
+impl GpuKMeans {
+    pub fn new(gpu: &GpuContext, label: &'static str) -> GpuKMeans {
+        let device = &gpu.device;
+        let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("fuzzy kmeans"),
+            entries: &[
+                buffer(0, wgpu::BufferBindingType::Uniform),
+                buffer(1, wgpu::BufferBindingType::Storage { read_only: true }),
+                buffer(2, rw),
+                buffer(3, rw),
+                buffer(4, rw),
+            ],
+        });
+        let module = shaders::create_module(device, "fuzzy_kmeans", shaders::FUZZY_KMEANS);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("fuzzy kmeans"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipelines = ENTRIES
+            .iter()
+            .map(|&entry| {
+                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
+                (entry, pipeline)
+            })
+            .collect();
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fuzzy kmeans params"),
+            size: std::mem::size_of::<KmParamsUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        GpuKMeans {
+            label,
+            layout,
+            pipelines,
+            uniform,
+            clusters: None,
+            work: None,
+            assignment: None,
+            shape: RunShape::default(),
+        }
+    }
+
+    fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
+        &self.pipelines.iter().find(|(e, _)| *e == entry).expect("every entry point has a pipeline").1
+    }
+
+    /// Encode Algorithm 1 (and 2 as its last line) over the `params.width x params.height` points of `points`.
+    /// `max_flux`: the largest flux component of the points when they are VPLs (the clusters then carry their
+    /// members' flux and mean normal), None for shading points.
+    pub fn encode(
+        &mut self,
+        gpu: &GpuContext,
+        timer: &PassTimer,
+        encoder: &mut wgpu::CommandEncoder,
+        points: &wgpu::Buffer,
+        params: &KMeansParams,
+        max_flux: Option<f32>,
+    ) -> Result<RunShape, GpuError> {
+        let m = params.width as usize * params.height as usize;
+        let g = params.gamma.max(1) as usize;
+        let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
+        let k = params.clusters.min(samples).min(MAX_CLUSTERS);
+        let f = params.fuzziness.clamp(1, MAX_F);
+        let (cell, dims) = grid_shape(params.bounds_extent, k);
+        let cells = (dims[0] * dims[1] * dims[2]) as u64;
+        let assignment_bytes = m as u64 * f as u64 * 8;
+        let limit = gpu.device.limits().max_storage_buffer_binding_size;
+        if assignment_bytes > limit {
+            return Err(GpuError::InvalidSettings(format!(
+                "{}: {m} points x F = {f} need {} MiB of cluster assignments, above the adapter's {} MiB per \
+                 buffer (lower F or the image size)",
+                self.label,
+                assignment_bytes >> 20,
+                limit >> 20
+            )));
+        }
+        let grow = |slot: &mut Option<wgpu::Buffer>, label: &str, size: u64| {
+            if slot.as_ref().is_none_or(|b| b.size() < size) {
+                *slot = Some(storage(gpu, label, size.next_power_of_two()));
+            }
+        };
+        grow(&mut self.clusters, "fuzzy clusters", (2 * k.max(1) * 48) as u64);
+        grow(&mut self.work, "fuzzy kmeans work", (k as u64 * ACC + 2 * cells + 1 + k as u64) * 4);
+        grow(&mut self.assignment, "fuzzy assignment", assignment_bytes);
+        self.shape = RunShape { points: m, clusters: k, fuzziness: f };
+        let (clusters, work, assignment) = (
+            self.clusters.as_ref().expect("grown"),
+            self.work.as_ref().expect("grown"),
+            self.assignment.as_ref().expect("grown"),
+        );
+        if k == 0 || m == 0 {
+            // Nothing to cluster: no cluster exists and every point is unassigned.
+            encoder.clear_buffer(clusters, 0, None);
+            encoder.clear_buffer(assignment, 0, None);
+            return Ok(self.shape);
+        }
+        let max_flux = max_flux.filter(|v| v.is_finite() && *v > 0.0);
+        let uniform = KmParamsUniform {
+            point_count: m as u32,
+            width: params.width,
+            height: params.height,
+            gamma: g as u32,
+            sample_count: samples as u32,
+            cluster_count: k as u32,
+            fuzziness: f as u32,
+            has_flux: max_flux.is_some() as u32,
+            n_t: params.n_t,
+            min_distance: params.min_distance,
+            cell,
+            cells: cells as u32,
+            dims: [dims[0], dims[1], dims[2], 0],
+            bounds_min: params.bounds_min.extend(0.0).to_array(),
+            bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
+            flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
+        };
+        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("fuzzy kmeans"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: points.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: clusters.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: work.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: assignment.as_entire_binding() },
+            ],
+        });
+        let over_k = groups(k);
+        let over_cells = groups(cells as usize);
+        let over_samples = groups(samples);
+        let over_points = groups(m);
+        let name = format!("fuzzy clustering ({})", self.label);
+        timer.compute_pass(encoder, &name, |pass| {
+            pass.set_bind_group(0, &group, &[]);
+            let mut run = |entry: &str, (x, y): (u32, u32)| {
+                pass.set_pipeline(self.pipeline(entry));
+                pass.dispatch_workgroups(x, y, 1);
+            };
+            let grid = |run: &mut dyn FnMut(&str, (u32, u32))| {
+                run("grid_clear", over_cells);
+                run("grid_count", over_k);
+                run("grid_scan", (1, 1));
+                run("grid_fill", over_k);
+            };
+            run("km_init", over_k);
+            for _ in 0..params.iterations {
+                grid(&mut run);
+                run("acc_clear", over_k);
+                run("km_assign", over_samples);
+                run("km_update", over_k);
+            }
+            grid(&mut run);
+            run("acc_clear", over_k);
+            run("km_final", over_points);
+            run("rep_pick", over_points);
+            run("rep_finish", over_k);
+        });
+        Ok(self.shape)
+    }
+
+    /// The clusters of the last run (submitted) as lights / endpoints: `K` entries.
+    pub fn read_clusters(&self, gpu: &GpuContext) -> Result<Vec<GpuPoint>, GpuError> {
+        let Some(buffer) = &self.clusters else { return Ok(Vec::new()) };
+        let bytes = readback::read_buffer(gpu, buffer)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..self.shape.clusters * 48]))
+    }
+
+    /// The working centroids of the last run (`K` entries: position w = 1 when active; normal).
+    pub fn read_centroids(&self, gpu: &GpuContext) -> Result<Vec<GpuPoint>, GpuError> {
+        let Some(buffer) = &self.clusters else { return Ok(Vec::new()) };
+        let bytes = readback::read_buffer(gpu, buffer)?;
+        let k = self.shape.clusters;
+        Ok(bytemuck::pod_collect_to_vec(&bytes[k * 48..2 * k * 48]))
+    }
+
+    /// The assignment of the last run: per point, `F` (cluster or `u32::MAX`, inverse distance).
+    pub fn read_assignment(&self, gpu: &GpuContext) -> Result<(Vec<u32>, Vec<f32>), GpuError> {
+        let Some(buffer) = &self.assignment else { return Ok((Vec::new(), Vec::new())) };
+        let n = self.shape.points * self.shape.fuzziness;
+        if n == 0 {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let bytes = readback::read_buffer(gpu, buffer)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..n * 8]);
+        let clusters = words[..2 * n].iter().step_by(2).copied().collect();
+        let inverse = words[1..2 * n].iter().step_by(2).map(|&w| f32::from_bits(w)).collect();
+        Ok((clusters, inverse))
+    }
+}
