@@ -149,8 +149,23 @@ fn visit_cell(c: vec3<i32>, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     }
 }
 
+// How far every centroid outside the block of radius r around cell c is from p at least: the distance to the
+// block's nearest face with cells beyond it (kmeans.rs `Grid::guarantee`).
+fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
+    var g = 3.0e38;
+    for (var a = 0; a < 3; a++) {
+        if c[a] - r > 0 {
+            g = min(g, p[a] - (km.bounds_min[a] + f32(c[a] - r) * km.cell));
+        }
+        if c[a] + r < i32(km.dims[a]) - 1 {
+            g = min(g, km.bounds_min[a] + f32(c[a] + r + 1) * km.cell - p[a]);
+        }
+    }
+    return g;
+}
+
 // Shell by shell (Chebyshev radius r) from the point's cell: at least the 27 cells of the paper, more until the
-// F-th distance found is within r cells (every unvisited centroid is farther) or the grid is exhausted.
+// F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
 fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     best_n = 0u;
     any_k = NONE;
@@ -179,7 +194,7 @@ fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
                 }
             }
         }
-        let complete = best_n == f_max && best_d[f_max - 1u] <= f32(r) * km.cell;
+        let complete = best_n == f_max && best_d[f_max - 1u] <= guarantee(p, c, r);
         if (r >= 1 && complete) || r >= reach {
             break;
         }

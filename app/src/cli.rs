@@ -992,6 +992,9 @@ fn sweep(args: SweepArgs) -> Result<()> {
             "fallback",
             "vpls",
             "indirect_ms",
+            "wall_ms",
+            "against_wall_ms",
+            "wall_speedup",
         ]
         .map(String::from),
     );
@@ -1078,12 +1081,22 @@ fn sweep(args: SweepArgs) -> Result<()> {
                 .as_ref()
                 .map(|i| format!("{:.2}", i.passes.iter().map(|p| pass(&p.name)).sum::<f64>()))
                 .unwrap_or_default(),
+            format!("{:.2}", r.timing.wall_median_ms),
+            format!("{:.2}", target.timing.wall_median_ms),
+            format!("{:.2}", target.timing.wall_median_ms / r.timing.wall_median_ms.max(1e-9)),
         ]);
         rows.push(row);
         let mut figures: std::collections::BTreeMap<String, f64> =
             c.figures.iter().map(|(k, v)| (format!("figure.{k}"), *v)).collect();
         if let Some(ind) = &r.report.indirect {
             figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
+            // The indirect technique's own passes and CPU stages, one column each (medians over frames).
+            for p in &ind.passes {
+                figures.insert(format!("indirect.pass.{}_ms", p.name), pass(&p.name));
+            }
+        }
+        for st in &r.timing.cpu_stages_median_ms {
+            figures.insert(format!("cpu.{}_ms", st.name), st.ms);
         }
         row_figures.push(figures);
         progress.update(i + 1, settings.len());

@@ -22,6 +22,11 @@ pub struct TimingSummary {
     pub best3_mean_ms: f64,
     /// Per pass, the median over frames.
     pub passes_median_ms: Vec<PassTime>,
+    /// Median wall-clock time of a frame, from its start to its last readback (CPU stages, waits and all
+    /// passes; the figure to compare where a pass's timestamps are missing or unreliable).
+    pub wall_median_ms: f64,
+    /// Per CPU stage of the techniques (e.g. clustering, readbacks), the median over frames.
+    pub cpu_stages_median_ms: Vec<PassTime>,
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -60,7 +65,32 @@ pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
             PassTime { name, ms: median(v), count }
         })
         .collect();
+    let mut stage_names: Vec<String> = Vec::new();
+    let stages = |r: &FrameReport| -> Vec<PassTime> {
+        let mut all = r.cpu_stages.clone();
+        if let Some(i) = &r.indirect {
+            all.extend(i.cpu_stages.iter().cloned());
+        }
+        all
+    };
+    for r in reports {
+        for p in stages(r) {
+            if !stage_names.contains(&p.name) {
+                stage_names.push(p.name.clone());
+            }
+        }
+    }
+    let cpu_stages_median_ms = stage_names
+        .into_iter()
+        .map(|name| {
+            let v: Vec<f64> =
+                reports.iter().map(|r| stages(r).iter().filter(|p| p.name == name).map(|p| p.ms).sum()).collect();
+            PassTime { name, ms: median(v), count: 1 }
+        })
+        .collect();
     TimingSummary {
+        wall_median_ms: median(reports.iter().map(|r| r.wall_ms).collect()),
+        cpu_stages_median_ms,
         frames: reports.len(),
         median_ms: median(totals),
         min_ms: sorted.first().copied().unwrap_or(0.0),
