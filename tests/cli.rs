@@ -662,3 +662,62 @@ fn a_scene_without_lights_gets_a_default_layout_and_says_so() {
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(report["frame"]["counts"]["lights_total"], 16);
 }
+
+#[test]
+fn fuzzy_clustering_traces_particles_by_default_and_sweeps_its_time_split() {
+    let small = ["--scene", "cornell", "--width", "64", "--height", "48", "--vpls", "128"];
+    // `--vpl-source auto` (the default): fuzzy takes the traced particles of its paper; others take RSMs.
+    let mut args: Vec<&str> = small.to_vec();
+    args.extend([
+        "--indirect",
+        "fuzzy",
+        "--overlays",
+        "--indirect-param",
+        "probe_x=32",
+        "--indirect-param",
+        "probe_y=30",
+    ]);
+    let (_, report) = render_ok("fuzzy-render", &args);
+    assert_eq!(report["frame"]["indirect"]["vpl_source"], "traced");
+    let figures = &report["frame"]["indirect"]["counts"];
+    assert!(figures["k_sp"].as_f64().unwrap() > 0.0 && figures["k_vpl"].as_f64().unwrap() > 0.0, "{figures}");
+    let mut args: Vec<&str> = small.to_vec();
+    args.extend(["--indirect", "vpl-raytraced"]);
+    let (_, report) = render_ok("fuzzy-rsm", &args);
+    assert_eq!(report["frame"]["indirect"]["vpl_source"], "rsm");
+    // A sweep over the visibility modes against vpl-raytraced: wall-clock columns and the technique's passes.
+    let dir = out_dir("fuzzy-sweep");
+    let csv = dir.join("modes.csv");
+    let mut args: Vec<&str> = vec!["sweep", "--quiet", "--warmup", "0", "--out", csv.to_str().unwrap()];
+    args.extend(small);
+    args.extend(["--technique", "unshadowed", "--against", "unshadowed", "--component", "indirect"]);
+    args.extend([
+        "--indirect",
+        "fuzzy",
+        "--indirect-param",
+        "mode=hard,weighted",
+        "--against-indirect",
+        "vpl-raytraced",
+    ]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    for column in [
+        "wall_ms",
+        "against_wall_ms",
+        "wall_speedup",
+        "indirect.pass.fuzzy visibility_ms",
+        "indirect.pass.fuzzy shading_ms",
+        "cpu.fuzzy clustering + readback_ms",
+        "indirect.figure.k_sp",
+    ] {
+        assert!(header.contains(&column), "no column {column} in {header:?}");
+    }
+    assert_eq!(text.lines().count(), 3, "{text}");
+    let wall = header.iter().position(|h| *h == "wall_ms").unwrap();
+    for row in text.lines().skip(1) {
+        let ms: f64 = row.split(',').nth(wall).unwrap().parse().unwrap();
+        assert!(ms > 0.0, "{row}");
+    }
+}

@@ -175,8 +175,9 @@ pub struct FrameArgs {
     /// VPLs (RSM texels or traced particles) shared by every VPL technique; 0 = no indirect light.
     #[arg(long, default_value_t = 1024)]
     pub vpls: u32,
-    /// Where VPLs come from: rsm (reflective shadow maps) or traced (particles through the BVH).
-    #[arg(long, default_value = "rsm")]
+    /// Where VPLs come from: rsm (reflective shadow maps), traced (particles through the BVH) or auto (the
+    /// indirect technique's paper's choice: traced for fuzzy, else rsm).
+    #[arg(long, default_value = "auto")]
     pub vpl_source: String,
     /// Bounces of traced particles (the rsm source is one bounce).
     #[arg(long, default_value_t = 1)]
@@ -501,8 +502,11 @@ fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Rende
         "linear" => ToneMap::Linear,
         other => bail!("--tonemap '{other}': choose aces, reinhard or linear"),
     };
-    let source = VplSource::parse(&frame.vpl_source)
-        .ok_or_else(|| anyhow!("--vpl-source '{}': choose {}", frame.vpl_source, VplSource::NAMES.join(" or ")))?;
+    let source = match frame.vpl_source.as_str() {
+        "auto" => shadowlab_core::technique::preferred_vpl_source(&frame.indirect).unwrap_or_default(),
+        other => VplSource::parse(other)
+            .ok_or_else(|| anyhow!("--vpl-source '{other}': choose {} or auto", VplSource::NAMES.join(", ")))?,
+    };
     let component = Component::parse(&frame.component)
         .ok_or_else(|| anyhow!("--component '{}': choose {}", frame.component, Component::NAMES.join(", ")))?;
     check_indirect(&frame.indirect)?;
@@ -1318,7 +1322,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             indirect: "none".into(),
             indirect_params: Vec::new(),
             vpls: VplSettings::default().count,
-            vpl_source: "rsm".into(),
+            vpl_source: "auto".into(),
             bounces: 1,
             vpl_clamp: VplSettings::default().clamp_world,
             vpl_seed: 0,

@@ -287,6 +287,9 @@ impl ShadowLabApp {
         }
         if let Some(k) = startup.indirect {
             if shadowlab_core::technique::INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
+                if let Some(source) = shadowlab_core::technique::preferred_vpl_source(&k) {
+                    app.indirect.vpl.source = source;
+                }
                 app.indirect.technique = Some(k);
             } else {
                 app.error(format!(
@@ -606,6 +609,23 @@ impl ShadowLabApp {
             }
             None => (None, BTreeMap::new()),
         }
+    }
+
+    /// Alt+click: hand the clicked pixel to the indirect technique's probe (the parameters it names), so its
+    /// probe overlay shows that pixel; the app knows no technique, only `probe_params`.
+    fn probe_at(&mut self, pos: egui::Pos2, rect: egui::Rect) {
+        let (Some(key), Some(gpu)) = (self.indirect.technique.clone(), &mut self.gpu) else { return };
+        let size = gpu.main.size;
+        let Ok(technique) = gpu.main.indirect_technique(&key) else { return };
+        let Some((px, py)) = technique.borrow().probe_params() else { return };
+        let u = ((pos.x - rect.min.x) / rect.width().max(1.0)).clamp(0.0, 1.0);
+        let v = ((pos.y - rect.min.y) / rect.height().max(1.0)).clamp(0.0, 1.0);
+        let x = ((u * size.0 as f32) as i64).min(size.0 as i64 - 1);
+        let y = ((v * size.1 as f32) as i64).min(size.1 as i64 - 1);
+        let params = self.indirect.params.entry(key).or_default();
+        params.insert(px.to_string(), ParamValue::Int(x));
+        params.insert(py.to_string(), ParamValue::Int(y));
+        self.status = format!("probe at pixel ({x}, {y})");
     }
 
     /// The overlay layers of the indirect technique, from the instance the main view renders with.
@@ -1119,7 +1139,10 @@ impl ShadowLabApp {
         if response.clicked() {
             if let Some(pos) = response.interact_pointer_pos() {
                 let ctrl = ui.input(|i| i.modifiers.command);
-                if ctrl {
+                let alt = ui.input(|i| i.modifiers.alt);
+                if alt {
+                    self.probe_at(pos, projection.rect);
+                } else if ctrl {
                     let (o, d) = projection.ray(pos);
                     if let Some((t, n)) = gizmo::pick_surface(&self.scene, o, d) {
                         self.add_light_at(o + d * t, n);

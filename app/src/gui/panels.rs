@@ -288,7 +288,13 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.selectable_value(&mut choice, Some(e.key.to_string()), e.label);
             }
         });
-    // A change restarts the views' frames: the indirect key is part of what a frame depends on.
+    // A change restarts the views' frames: the indirect key is part of what a frame depends on. A technique
+    // whose paper uses another VPL source switches to it (the user can switch back below).
+    if choice != app.indirect.technique {
+        if let Some(source) = choice.as_deref().and_then(shadowlab_core::technique::preferred_vpl_source) {
+            app.indirect.vpl.source = source;
+        }
+    }
     app.indirect.technique = choice;
     let mut uses_vpls = false;
     if let (Some(key), Some(gpu)) = (app.indirect.technique.clone(), &mut app.gpu) {

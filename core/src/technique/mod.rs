@@ -380,6 +380,12 @@ pub trait Technique {
     fn cameras_in_use(&self, _key: &str) -> Vec<CameraPose> {
         Vec::new()
     }
+    /// The integer parameters `(x, y)` that a click in the view sets to the clicked pixel, for a technique
+    /// that can show what happens at one pixel (e.g. a shading point's clusters and rays); None when it has
+    /// no such probe.
+    fn probe_params(&self) -> Option<(&'static str, &'static str)> {
+        None
+    }
     /// True for indirect techniques that gather the frame's VPLs (the renderer generates them only then).
     fn uses_vpls(&self) -> bool {
         false
@@ -677,6 +683,8 @@ pub struct TechniqueEntry {
     pub key: &'static str,
     pub label: &'static str,
     pub create: fn(&GpuContext, &SharedLayouts) -> Box<dyn Technique>,
+    /// The VPL source an indirect technique's paper uses, taken when the user chose none (`--vpl-source auto`).
+    pub vpl_source: Option<crate::vpl::VplSource>,
 }
 
 /// Every technique ShadowLab has. The app's selector and the CLI's `--technique` read this list.
@@ -685,26 +693,31 @@ pub const REGISTRY: &[TechniqueEntry] = &[
         key: "reference",
         label: "Reference (cube shadow map per light)",
         create: |gpu, layouts| Box::new(reference::Reference::new(gpu, layouts)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "unshadowed",
         label: "Unshadowed (no shadows, preview)",
         create: |gpu, layouts| Box::new(unshadowed::Unshadowed::new(gpu, layouts)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "lightcluster",
         label: "LightCluster (clustered cube maps, PCF/PCSS)",
         create: |gpu, layouts| Box::new(lightcluster::LightCluster::new(gpu, layouts)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "insm",
         label: "INSM (intermediate shadow maps)",
         create: |gpu, layouts| Box::new(insm::Insm::new(gpu, layouts)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "raytraced",
         label: "Ray traced (ground truth)",
         create: |gpu, layouts| Box::new(raytraced::Raytraced::new(gpu, layouts)),
+        vpl_source: None,
     },
 ];
 
@@ -715,37 +728,49 @@ pub const INDIRECT_REGISTRY: &[TechniqueEntry] = &[
         key: "vpl-shadowmaps",
         label: "VPLs, a shadow map each (instant radiosity)",
         create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::ShadowMaps)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "vpl-raytraced",
         label: "VPLs, ray-traced visibility (ground truth)",
         create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::RayTraced)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "vpl-unshadowed",
         label: "VPLs, no visibility",
         create: |gpu, layouts| Box::new(vpl_gather::VplGather::new(gpu, layouts, vpl_gather::Visibility::None)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "val",
         label: "Virtual area lights (Dong 2009)",
         create: |gpu, layouts| Box::new(val::VirtualAreaLights::new(gpu, layouts)),
+        vpl_source: None,
     },
     TechniqueEntry {
         key: "fuzzy",
         label: "Fuzzy clustering of shading points and VPLs (Colom 2022)",
         create: |gpu, layouts| Box::new(fuzzy::FuzzyClustering::new(gpu, layouts)),
+        vpl_source: Some(crate::vpl::VplSource::Traced),
     },
     TechniqueEntry {
         key: "pathtraced",
         label: "Path traced one bounce (truth)",
         create: |gpu, layouts| Box::new(pathtraced::PathTraced::new(gpu, layouts)),
+        vpl_source: None,
     },
 ];
 
 /// Create an indirect technique by key.
 pub fn create_indirect(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {
     INDIRECT_REGISTRY.iter().find(|e| e.key == key).map(|e| (e.create)(gpu, layouts))
+}
+
+/// The VPL source the indirect technique `key`'s paper uses (Colom 2022 traces particles), None when it has
+/// no preference or is unknown.
+pub fn preferred_vpl_source(key: &str) -> Option<crate::vpl::VplSource> {
+    INDIRECT_REGISTRY.iter().find(|e| e.key == key).and_then(|e| e.vpl_source)
 }
 
 /// The keys of all indirect techniques, for error messages.

@@ -495,7 +495,8 @@ impl Technique for FuzzyClustering {
             Param {
                 key: "probe_x",
                 label: "Probe pixel x",
-                help: "The pixel whose F clusters and visibility rays the probe overlay shows (-1: none)",
+                help: "The pixel whose F clusters and visibility rays the probe overlay shows (-1: none; in the app, \
+                       Alt+click a pixel)",
                 kind: ParamKind::Int { min: -1, max: 16_384 },
                 value: ParamValue::Int(p.probe_x as i64),
             },
@@ -549,6 +550,10 @@ impl Technique for FuzzyClustering {
 
     fn uses_vpls(&self) -> bool {
         true
+    }
+
+    fn probe_params(&self) -> Option<(&'static str, &'static str)> {
+        Some(("probe_x", "probe_y"))
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
