@@ -34,6 +34,7 @@ struct KmParams {
     min_distance: f32,
     cell: f32,
     cells: u32,
+    // xyz: grid cells per axis, w: the largest ring searched once a compatible centroid is found (0: exact)
     dims: vec4<u32>,
     bounds_min: vec4<f32>,
     bounds_extent: vec4<f32>,
@@ -195,7 +196,9 @@ fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
             }
         }
         let complete = best_n == f_max && best_d[f_max - 1u] <= guarantee(p, c, r);
-        if (r >= 1 && complete) || r >= reach {
+        // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
+        let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
+        if (r >= 1 && (complete || ring_done)) || r >= reach {
             break;
         }
         r++;

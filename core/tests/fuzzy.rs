@@ -243,7 +243,9 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         usage: wgpu::BufferUsages::STORAGE,
     });
     let mut km = GpuKMeans::new(&gpu, "test");
-    for (k, f, gamma) in [(1usize, 1usize, 1u32), (20, 6, 2), (150, 8, 1), (600, 3, 4)] {
+    for (k, f, gamma, max_ring) in
+        [(1usize, 1usize, 1u32, 0u32), (20, 6, 2, 0), (150, 8, 1, 0), (600, 3, 4, 0), (150, 6, 2, 1)]
+    {
         let p = KMeansParams {
             clusters: k,
             iterations: 6,
@@ -251,6 +253,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
             fuzziness: f,
             n_t: 3f32.sqrt() / 2.0,
             min_distance: 1e-6,
+            max_ring,
             width: w,
             height: h,
             bounds_min: Vec3::new(-2.0, 0.0, -2.0),

@@ -253,7 +253,7 @@ impl GpuKMeans {
             min_distance: params.min_distance,
             cell,
             cells: cells as u32,
-            dims: [dims[0], dims[1], dims[2], 0],
+            dims: [dims[0], dims[1], dims[2], params.max_ring],
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],

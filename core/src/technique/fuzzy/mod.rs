@@ -116,6 +116,8 @@ pub struct FuzzyParams {
     pub probe_y: i32,
     /// Shadow rays one visibility step traces at most.
     pub rays_per_step: u32,
+    /// `exact` (the search grows until it holds the F nearest) or `paper` (the 27 cells around a point).
+    pub search: String,
     /// Lights one shading step sums.
     pub lights_per_step: u32,
 }
@@ -139,6 +141,7 @@ impl Default for FuzzyParams {
             probe_x: -1,
             probe_y: -1,
             rays_per_step: 1 << 22,
+            search: "exact".into(),
             lights_per_step: super::MAX_LIGHT_WORK_PER_PASS as u32,
         }
     }
@@ -173,6 +176,7 @@ impl FuzzyParams {
 
 const MODE_CHOICES: &[&str] = &["weighted", "fuzzy", "hard"];
 const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
+const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
 
 /// What the last frame's clusterings left on the CPU (for counts and overlays).
 #[derive(Default)]
@@ -351,6 +355,7 @@ impl FuzzyClustering {
             fuzziness: f,
             n_t: self.params.n_t,
             min_distance: self.scene_size * 1e-6,
+            max_ring: if self.params.search == "paper" { 1 } else { 0 },
             width,
             height,
             bounds_min: bounds.min,
@@ -479,6 +484,14 @@ impl Technique for FuzzyClustering {
                 value: ParamValue::Float(p.n_t),
             },
             Param {
+                key: "search",
+                label: "Cluster search",
+                help: "exact: the grid search grows until it holds the F nearest clusters; paper: the 27 cells \
+                       around a point only (faster; a far cluster can be missed)",
+                kind: ParamKind::Choice(SEARCH_CHOICES),
+                value: ParamValue::Choice(p.search.clone()),
+            },
+            Param {
                 key: "bias",
                 label: "Ray offset",
                 help: "Ray ends offset along their normals, world units per metre of camera distance",
@@ -538,6 +551,7 @@ impl Technique for FuzzyClustering {
             ("iterations", ParamValue::Int(v)) => p.iterations = *v as u32,
             ("n_t", ParamValue::Float(v)) => p.n_t = *v,
             ("bias", ParamValue::Float(v)) => p.ray_bias = *v,
+            ("search", ParamValue::Choice(v)) => p.search = v.clone(),
             ("inspect", ParamValue::Bool(v)) => p.inspect = *v,
             ("probe_x", ParamValue::Int(v)) => p.probe_x = *v as i32,
             ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
