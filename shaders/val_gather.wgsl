@@ -3,6 +3,7 @@
 // computed once per pixel (at most MAX_VALS), then shared by the VAL's VPLs. Visibility of VAL m from its
 // paraboloid map (tile m of the atlas, the map facing the VAL's normal, vpl_basis.wgsl):
 // - hard: one depth test (the banding the paper avoids);
+// - cssm (the paper): convolution soft shadow maps, Fourier basis textures filtered by mip-mapping (below);
 // - pcss: blocker search over the VAL's angular size, z_avg, the paper's penumbra
 //   p cos(beta) = (d - z_avg) Delta / z_avg, filter angle alpha = arctan(p cos(beta) / d), kernel width
 //   alpha / pi of the map (section 4.2), then percentage-closer filtering over a grid of `grid^2` texels.
@@ -23,7 +24,7 @@ struct GpuVal {
 
 struct ValParams {
     val_count: u32,
-    // 0 hard, 1 pcss
+    // 0 hard, 1 pcss, 2 cssm
     mode: u32,
     // PCF and blocker-search grid side
     grid: u32,
@@ -38,15 +39,92 @@ struct ValParams {
     slope_bias: f32,
     // >= 0: only the VPLs of this VAL light the image (its contribution alone, the paper's Fig. 9)
     solo: i32,
+    // cssm: mip levels of the basis textures
+    levels: u32,
+    // cssm: the receiver's depth moved toward the VAL by this share of the map's depth range (the Fourier
+    // step of 4 terms at half phase rises over about 1/4 of the range, so a receiver at its own depth would be
+    // half lit)
+    cssm_offset: f32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 @group(1) @binding(0) var val_atlas: texture_2d<f32>;
 @group(1) @binding(1) var<storage, read> vals: array<GpuVal>;
 @group(1) @binding(2) var<storage, read> vpl_val: array<u32>;
 @group(1) @binding(3) var<uniform> val_params: ValParams;
+// cssm: the mip-mapped Fourier basis textures of the atlas (val_cssm.wgsl) and a linear sampler.
+@group(1) @binding(4) var cssm_a: texture_2d<f32>;
+@group(1) @binding(5) var cssm_b: texture_2d<f32>;
+@group(1) @binding(6) var cssm_za: texture_2d<f32>;
+@group(1) @binding(7) var cssm_zb: texture_2d<f32>;
+@group(1) @binding(8) var cssm_sampler: sampler;
+
+// The four basis textures filtered over 2^lod texels around texel t of VAL m's tile (kept inside the tile).
+struct CssmSample {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    za: vec4<f32>,
+    zb: vec4<f32>,
+}
+
+fn cssm_fetch(m: u32, t: vec2<f32>, lod: f32) -> CssmSample {
+    let res = f32(val_params.resolution);
+    let half = 0.5 * exp2(ceil(lod));
+    let inside = clamp(t, vec2<f32>(half), vec2<f32>(res - half));
+    let origin = vec2<f32>(vec2<u32>(m % val_params.tiles_per_row, m / val_params.tiles_per_row)) * res;
+    let uv = (origin + inside) / vec2<f32>(textureDimensions(cssm_a));
+    var out: CssmSample;
+    out.a = textureSampleLevel(cssm_a, cssm_sampler, uv, lod) * 2.0 - 1.0;
+    out.b = textureSampleLevel(cssm_b, cssm_sampler, uv, lod) * 2.0 - 1.0;
+    out.za = textureSampleLevel(cssm_za, cssm_sampler, uv, lod);
+    out.zb = textureSampleLevel(cssm_zb, cssm_sampler, uv, lod);
+    return out;
+}
+
+// sum_k (1/c_k) [cos(c_k d) <sin(c_k z)> - sin(c_k d) <cos(c_k z)>] for (cos, sin) pairs of terms 1-4.
+fn cssm_series(d: f32, t12: vec4<f32>, t34: vec4<f32>, terms: u32) -> f32 {
+    var sum = 0.0;
+    for (var k = 0u; k < terms; k++) {
+        let c = PI * f32(2u * k + 1u);
+        var cs = t12.xy;
+        if k == 1u {
+            cs = t12.zw;
+        } else if k == 2u {
+            cs = t34.xy;
+        } else if k == 3u {
+            cs = t34.zw;
+        }
+        sum += (cos(c * d) * cs.y - sin(c * d) * cs.x) / c;
+    }
+    return sum;
+}
+
+// CSSM visibility of VAL m at the receiver's normalised depth `dn` around texel t (section 4.1-4.2): the
+// blocker search over the VAL's angular size from the filtered basis-z (z_avg = <z (1 - f)> / <1 - f>), the
+// penumbra p cos(beta) = (d - z_avg) Delta / z_avg, alpha = arctan(p cos(beta) / d), and the filtered step
+// over a kernel of alpha / pi of the map.
+fn cssm_visibility(m: u32, t: vec2<f32>, d: f32, dn: f32, search: f32, delta: f32, near: f32, far: f32) -> f32 {
+    let res = f32(val_params.resolution);
+    let max_lod = f32(val_params.levels) - 1.0;
+    // Half phase, as the basis (val_cssm.wgsl): the step over z - d in (-1/2, 1/2).
+    let ds = 0.5 * (dn - val_params.cssm_offset);
+    let region = cssm_fetch(m, t, clamp(log2(search), 0.0, max_lod));
+    let lit = clamp(0.5 + 2.0 * cssm_series(ds, region.a, region.b, 4u), 0.0, 1.0);
+    let blocked = 1.0 - lit;
+    if blocked < 1e-3 {
+        return 1.0;
+    }
+    // <z f> over the region from basis-z (3 terms), so <z (1 - f)> = <z> - <z f>.
+    let z_mean = region.zb.z;
+    let z_lit = 0.5 * z_mean + 2.0 * cssm_series(ds, region.za, vec4<f32>(region.zb.xy, 0.0, 0.0), 3u);
+    let z_blockers = clamp((z_mean - z_lit) / blocked, 0.0, dn);
+    let z_avg = max(near + z_blockers * (far - near), 1e-6);
+    let p_cos_beta = max(d - z_avg, 0.0) * delta / z_avg;
+    let alpha = atan(p_cos_beta / d);
+    let width = clamp(alpha / PI * res, 1.0, search);
+    let kernel = cssm_fetch(m, t, clamp(log2(width), 0.0, max_lod));
+    return clamp(0.5 + 2.0 * cssm_series(ds, kernel.a, kernel.b, 4u), 0.0, 1.0);
+}
 
 // Occluder distance stored at texel `t` (clamped into the tile) of VAL m's map.
 fn val_occluder(m: u32, t: vec2<f32>, near: f32, far: f32) -> f32 {
@@ -94,6 +172,10 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     }
     // Blocker search over the VAL's angular size seen from the receiver, as a width in texels (alpha / pi).
     let delta = val.centre.w;
+    if val_params.mode == 2u {
+        let search_cssm = max(atan(0.5 * delta / d) / PI * res, 1.0);
+        return cssm_visibility(m, t, d, (receiver - near) / max(far - near, 1e-20), search_cssm, delta, near, far);
+    }
     // World size of a texel at the receiver: the bias of a sample grows with its offset.
     let texel_world = d * 2.0 / res * (1.0 + dir.z) * val_params.slope_bias;
     let grid = max(val_params.grid, 2u);

@@ -57,6 +57,7 @@ pub const VAL_GATHER: &str = concat!(
     include_str!("../../shaders/vpl_basis.wgsl"),
     include_str!("../../shaders/val_gather.wgsl")
 );
+pub const VAL_CSSM: &str = include_str!("../../shaders/val_cssm.wgsl");
 pub const VAL_KMEANS: &str =
     concat!(include_str!("../../shaders/vpl_basis.wgsl"), include_str!("../../shaders/val_kmeans.wgsl"));
 pub const VPL_BLUR: &str =
@@ -111,6 +112,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "vpl_basis.wgsl", "pathtrace.wgsl"], PATHTRACE),
     ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
     ("val_kmeans", &["vpl_basis.wgsl", "val_kmeans.wgsl"], VAL_KMEANS),
+    ("val_cssm", &["val_cssm.wgsl"], VAL_CSSM),
     ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
     ("fuzzy_kmeans", &["fuzzy_kmeans.wgsl"], FUZZY_KMEANS),
     ("fuzzy_points", &["common.wgsl", "fuzzy_points.wgsl"], FUZZY_POINTS),
