@@ -25,6 +25,8 @@ pub struct TimingSummary {
     /// Median wall-clock time of a frame, from its start to its last readback (CPU stages, waits and all
     /// passes; the figure to compare where a pass's timestamps are missing or unreliable).
     pub wall_median_ms: f64,
+    /// The fastest frame's wall-clock time (the least disturbed on a shared machine).
+    pub wall_min_ms: f64,
     /// Per CPU stage of the techniques (e.g. clustering, readbacks), the median over frames.
     pub cpu_stages_median_ms: Vec<PassTime>,
 }
@@ -90,6 +92,7 @@ pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
         .collect();
     TimingSummary {
         wall_median_ms: median(reports.iter().map(|r| r.wall_ms).collect()),
+        wall_min_ms: reports.iter().map(|r| r.wall_ms).reduce(f64::min).unwrap_or(0.0),
         cpu_stages_median_ms,
         frames: reports.len(),
         median_ms: median(totals),
