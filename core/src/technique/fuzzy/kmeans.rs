@@ -131,17 +131,23 @@ pub struct Grid {
     pub items: Vec<u32>,
 }
 
-/// Cell size and cells per axis for `k` centroids in `extent`: cubic cells, `sqrt(k / 8)` along the longest
-/// axis, at most [`MAX_GRID`] per axis. Centroids lie on surfaces, not in a volume: in a box of side `L`
-/// their spacing is about `L sqrt(6 / k)`, so a cell is about 1.2 spacings and the 27 cells around a point
-/// usually hold its `F = 6` nearest (measured on the Cornell box: `2 cbrt(k)` cells, the volume rule, made
-/// the search visit 5 to 10 times more cells).
+/// Cell size and cells per axis for `k` centroids in `extent`: cubic cells of 1.5 times the centroids'
+/// expected spacing on surfaces, `sqrt(A / k)` with `A` the surface of the bounding box (centroids lie on
+/// surfaces, not in a volume), so the 27 cells around a point usually hold its `F = 6` nearest; at most
+/// [`MAX_GRID`] per axis. The exact search returns the same clusters whatever the cells; they only change
+/// how many centroids a search visits.
 pub fn grid_shape(extent: Vec3, k: usize) -> (f32, [u32; 3]) {
-    let along = ((k.max(1) as f32 / 8.0).sqrt().round() as u32).clamp(1, MAX_GRID);
-    let longest = extent.max_element();
-    let cell = if longest > 0.0 && longest.is_finite() { longest / along as f32 } else { 1.0 };
-    let axis = |e: f32| ((e / cell).ceil() as u32).clamp(1, MAX_GRID);
-    (cell, [axis(extent.x), axis(extent.y), axis(extent.z)])
+    let e = extent.max(Vec3::ZERO);
+    let area = 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+    let longest = e.max_element();
+    let mut cell = 1.5 * (area / k.max(1) as f32).sqrt();
+    if !(cell > 0.0 && cell.is_finite()) {
+        cell = if longest > 0.0 && longest.is_finite() { longest } else { 1.0 };
+    }
+    // No more than MAX_GRID cells along any axis: the grid must still cover the bounds.
+    cell = cell.max(longest / MAX_GRID as f32);
+    let axis = |v: f32| ((v / cell).ceil() as u32).clamp(1, MAX_GRID);
+    (cell, [axis(e.x), axis(e.y), axis(e.z)])
 }
 
 impl Grid {

@@ -628,7 +628,10 @@ impl Technique for FuzzyClustering {
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, &mut encoder, points, &kp, None)?;
         }
         // Timed from the submission to the clusters read back: the clustering's GPU work and the readback (the
-        // GPU timestamps of lavapipe are unreliable; this wall time is not).
+        // GPU timestamps of lavapipe are unreliable; this wall time is not). The work submitted before (the
+        // G-buffer, the direct technique's steps) is waited for first, so it is not counted here; the readback
+        // below waits for the queue anyway.
+        ctx.gpu.wait_idle()?;
         let start = std::time::Instant::now();
         ctx.gpu.queue.submit([encoder.finish()]);
 
