@@ -486,3 +486,60 @@ fn the_app_can_start_with_an_indirect_technique() {
     assert!(bad.state().indirect.technique.is_none());
     bad.get_by_label_contains("unknown indirect technique 'magic'");
 }
+
+#[test]
+fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("fuzzy", "cornell");
+    h.state_mut().indirect.vpl.count = 64;
+    h.state_mut().indirect.technique = Some("fuzzy".into());
+    h.run_steps(8);
+    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let indirect = report.indirect.expect("fuzzy ran");
+    assert_eq!(indirect.technique, "fuzzy");
+    let figures = &indirect.counts.figures;
+    assert!(figures["k_sp"] > 0.0 && figures["k_vpl"] > 0.0 && figures["shadow rays"] > 0.0, "{figures:?}");
+    // Its layers are listed: VPL clusters and the per-pixel shading-point clusters.
+    let layers = h.state_mut().overlay_layers();
+    assert!(layers.iter().any(|(name, _)| name.starts_with("shading-point clusters")), "{layers:?}");
+    // Alt+click in the view: the technique's probe parameters get the clicked pixel.
+    let rect = h.state().last_viewport_rect.expect("the view was laid out");
+    let pos = rect.center();
+    h.event(egui::Event::ModifiersChanged(egui::Modifiers::ALT));
+    press(&mut h, pos, true, egui::Modifiers::ALT);
+    press(&mut h, pos, false, egui::Modifiers::ALT);
+    h.event(egui::Event::ModifiersChanged(egui::Modifiers::NONE));
+    h.run_steps(8);
+    let params = h.state().indirect.params.get("fuzzy").cloned().unwrap_or_default();
+    let (x, y) = (params.get("probe_x"), params.get("probe_y"));
+    assert!(matches!(x, Some(ParamValue::Int(v)) if *v > 0), "probe_x {x:?}");
+    assert!(matches!(y, Some(ParamValue::Int(v)) if *v > 0), "probe_y {y:?}");
+    // The probe layer then holds the pixel's clusters and their rays.
+    let gpu = h.state_mut().gpu.as_mut().unwrap();
+    let technique = gpu.main.indirect_technique("fuzzy").unwrap();
+    let layers = technique.borrow().overlays(&[]);
+    let probe = layers.iter().find(|l| l.name.starts_with("probe")).expect("a probe layer");
+    assert!(probe.primitives.len() > 1, "the probe shows nothing");
+    // And the VPL source switched to the paper's traced particles when fuzzy was chosen at startup only; here
+    // it was set in code, so the user's source is kept.
+    assert_eq!(h.state().indirect.vpl.source, shadowlab_core::vpl::VplSource::Rsm);
+}
+
+#[test]
+fn every_techniques_parameter_panel_draws_without_a_panic() {
+    // Generated panels for every registered technique and indirect technique: a slider with a range egui
+    // refuses (e.g. logarithmic across zero) panics the whole app, so each panel is drawn once here.
+    let mut h = start("panels", "cornell");
+    h.state_mut().indirect.vpl.count = 16;
+    for entry in shadowlab_core::technique::REGISTRY {
+        h.state_mut().technique = entry.key.to_string();
+        h.run_steps(2);
+    }
+    h.state_mut().technique = "unshadowed".into();
+    for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
+        h.state_mut().indirect.technique = Some(entry.key.to_string());
+        h.run_steps(2);
+        // The selector names it; its generated panel shows its first parameter.
+        assert!(h.query_all_by_label_contains(entry.key).count() >= 1, "{}: not selected", entry.key);
+    }
+}

@@ -115,7 +115,8 @@ fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str
     ui.horizontal(|ui| match (kind, value) {
         (ParamKind::Float { min, max }, ParamValue::Float(v)) => {
             let mut x = *v;
-            let logarithmic = *max / min.max(1e-6) > 1000.0;
+            // egui's logarithmic sliders need a range that does not cross zero (a negative minimum panics).
+            let logarithmic = *min >= 0.0 && *max / min.max(1e-6) > 1000.0;
             let r = ui.add(egui::Slider::new(&mut x, *min..=*max).logarithmic(logarithmic).text(label));
             if r.changed() {
                 out = Some(ParamValue::Float(x));
@@ -123,7 +124,7 @@ fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str
         }
         (ParamKind::Int { min, max }, ParamValue::Int(v)) => {
             let mut x = *v;
-            let logarithmic = *max / (*min).max(1) > 100;
+            let logarithmic = *min >= 0 && *max / (*min).max(1) > 100;
             if ui.add(egui::Slider::new(&mut x, *min..=*max).logarithmic(logarithmic).text(label)).changed() {
                 out = Some(ParamValue::Int(x));
             }
