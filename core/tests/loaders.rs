@@ -662,3 +662,24 @@ fn khr_texture_transform_is_baked_into_the_uvs() {
         assert!((*q - expected).length() < 1e-5, "{p} -> {q}, expected {expected}");
     }
 }
+
+#[test]
+fn a_texture_on_another_texcoord_set_is_mapped_with_the_base_colours_and_said_so() {
+    let fixture = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/lit_quad.gltf"));
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture).unwrap()).unwrap();
+    doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0, "texCoord": 1});
+    let path = std::env::temp_dir().join("shadowlab-texcoord1.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
+    assert_eq!(scene.materials[0].emissive_texture, Some(0), "the texture is still used");
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("emissive texture uses TEXCOORD_1")),
+        "no warning: {:?}",
+        scene.warnings
+    );
+    // On the base colour's own set: no warning.
+    doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0});
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
+    assert!(!scene.warnings.iter().any(|w| w.contains("TEXCOORD_")), "{:?}", scene.warnings);
+}

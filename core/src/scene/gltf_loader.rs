@@ -415,6 +415,19 @@ impl Loader<'_> {
                 .as_ref()
                 .and_then(|t| t.tex_coord())
                 .unwrap_or_else(|| base_info.as_ref().map_or(0, |info| info.tex_coord()));
+            // One UV set per vertex: the base colour's. A texture on another set is mapped with it, and said so.
+            let other_sets = [
+                material.emissive_texture().map(|i| ("emissive", i.tex_coord())),
+                material.occlusion_texture().map(|i| ("occlusion", i.tex_coord())),
+            ];
+            for (name, set) in other_sets.into_iter().flatten() {
+                if set != uv_set {
+                    self.warn(format!(
+                        "{label}: the {name} texture uses TEXCOORD_{set}; ShadowLab reads one set per vertex and maps \
+                         it with TEXCOORD_{uv_set} (the base colour's)"
+                    ));
+                }
+            }
             let mut uvs = match primitive.get(&Semantic::TexCoords(uv_set)) {
                 Some(accessor) => {
                     read_vec2(&accessor, self.buffers).map_err(|e| format!("{label}, TEXCOORD_{uv_set}: {e}"))?
