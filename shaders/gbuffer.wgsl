@@ -12,6 +12,8 @@ struct Material {
     // x: specular intensity, y: shininess, z: 1 when the emissive texture is used, w: occlusion strength (0: no
     // occlusion texture)
     specular: vec4<f32>,
+    // x: alpha cutoff (0: opaque, alpha ignored)
+    alpha: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -56,8 +58,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     if material.emissive.w > 0.5 {
         color *= textureSample(base_color_texture, material_sampler, in.uv);
     }
-    // Alpha-tested foliage and the like: cut out, as Sponza's MTL expects.
-    if color.a < 0.5 {
+    // Alpha-tested foliage and the like (glTF MASK, OBJ cut-outs): cut out below the material's cutoff.
+    if color.a < material.alpha.x {
         discard;
     }
     // Two-sided lighting: real scenes have single-sided walls seen from both sides.

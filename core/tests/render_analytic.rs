@@ -299,3 +299,38 @@ fn a_gltf_occlusion_texture_darkens_the_ambient_term_only() {
     assert!(lit.iter().any(|(p, q)| *q < 0.5 * p), "nowhere occluded");
     assert!(lit.iter().all(|(p, q)| *q <= p * 1.001), "occlusion brightened something");
 }
+
+#[test]
+fn gltf_alpha_modes_cut_out_only_masked_materials() {
+    // lit_quad.gltf's base colour made fully transparent: OPAQUE ignores alpha (the quad is drawn), MASK cuts it
+    // out below alphaCutoff, BLEND is drawn opaque with a warning.
+    let fixture = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/lit_quad.gltf"));
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture).unwrap()).unwrap();
+    let drawn = |doc: &serde_json::Value, name: &str| -> (Scene, usize) {
+        let path = std::env::temp_dir().join(name);
+        std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+        let scene = Scene::load(&path, 1.0).unwrap();
+        let gpu = gpu();
+        let s = RenderSettings { width: 48, height: 48, background: Vec3::ZERO, ..settings() };
+        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
+        let mut t = renderer.create_technique("unshadowed").unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
+        let img = renderer.read_hdr().unwrap();
+        (scene, img.iter().filter(|p| p[0] + p[1] + p[2] > 1e-4).count())
+    };
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 0.2]);
+    doc["materials"][0]["emissiveFactor"] = serde_json::json!([1.0, 1.0, 1.0]);
+    let (_, opaque) = drawn(&doc, "shadowlab-alpha-opaque.gltf");
+    assert!(opaque > 0, "OPAQUE must ignore alpha");
+    doc["materials"][0]["alphaMode"] = serde_json::json!("MASK");
+    let (scene, masked) = drawn(&doc, "shadowlab-alpha-mask.gltf");
+    assert_eq!(scene.materials[0].alpha_cutoff, 0.5, "the default alphaCutoff");
+    assert_eq!(masked, 0, "alpha 0.2 under the default cutoff 0.5 is cut out");
+    doc["materials"][0]["alphaCutoff"] = serde_json::json!(0.1);
+    let (_, low) = drawn(&doc, "shadowlab-alpha-mask-low.gltf");
+    assert_eq!(low, opaque, "alpha 0.2 over a cutoff of 0.1 is kept");
+    doc["materials"][0]["alphaMode"] = serde_json::json!("BLEND");
+    let (scene, blend) = drawn(&doc, "shadowlab-alpha-blend.gltf");
+    assert_eq!(blend, opaque, "BLEND is drawn opaque");
+    assert!(scene.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", scene.warnings);
+}

@@ -87,8 +87,10 @@ pub struct MaterialUniform {
     pub base_color: [f32; 4],
     pub emissive: [f32; 4],
     pub specular: [f32; 4],
+    /// x: alpha cutoff (0: opaque).
+    pub alpha: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 48);
+const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 64);
 
 impl MaterialUniform {
     pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool, occlusion_strength: f32) -> Self {
@@ -102,6 +104,7 @@ impl MaterialUniform {
                 if has_emissive_texture { 1.0 } else { 0.0 },
                 occlusion_strength,
             ],
+            alpha: [if m.alpha_cutoff.is_finite() { m.alpha_cutoff.clamp(0.0, 1.0) } else { 0.0 }, 0.0, 0.0, 0.0],
         }
     }
 }

@@ -75,6 +75,7 @@ impl SceneBuilder {
             occlusion_texture: None,
             specular: Vec3::splat(specular),
             shininess,
+            alpha_cutoff: 0.0,
         });
         self.materials.len() - 1
     }

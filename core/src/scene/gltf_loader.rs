@@ -248,7 +248,21 @@ impl Loader<'_> {
                     .get(&info.texture().source().index())
                     .map(|&t| (t, if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 1.0 }))
             });
+            let name_for_warning = material.name().unwrap_or("(unnamed)").to_string();
+            let alpha_cutoff = match material.alpha_mode() {
+                gltf::material::AlphaMode::Opaque => 0.0,
+                gltf::material::AlphaMode::Mask => {
+                    material.alpha_cutoff().filter(|c| c.is_finite()).unwrap_or(0.5).clamp(0.0, 1.0)
+                }
+                gltf::material::AlphaMode::Blend => {
+                    self.warn(format!(
+                        "material {name_for_warning}: alphaMode BLEND is drawn opaque (ShadowLab has no transparency)"
+                    ));
+                    0.0
+                }
+            };
             self.scene.materials.push(Material {
+                alpha_cutoff,
                 name: material
                     .name()
                     .map(str::to_string)

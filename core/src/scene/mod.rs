@@ -116,6 +116,10 @@ pub struct Material {
     /// Blinn-Phong specular colour (linear) and exponent; zero specular means pure Lambert.
     pub specular: Vec3,
     pub shininess: f32,
+    /// Fragments whose alpha (base colour times texture) is below this are cut out (glTF `alphaMode` MASK and
+    /// `alphaCutoff`; OBJ/MTL cut-outs at 0.5); 0: opaque, alpha ignored (glTF OPAQUE, and BLEND, which is
+    /// drawn opaque). Shadow maps and the ray tracer do not cut out (the caster stays whole).
+    pub alpha_cutoff: f32,
 }
 
 impl Default for Material {
@@ -129,6 +133,7 @@ impl Default for Material {
             occlusion_texture: None,
             specular: Vec3::ZERO,
             shininess: 32.0,
+            alpha_cutoff: 0.5,
         }
     }
 }

@@ -364,6 +364,8 @@ fn convert_materials(mtl: &[tobj::Material], dir: &Path, scene: &mut Scene) {
             occlusion_texture: None,
             specular,
             shininess: m.shininess.filter(|s| *s > 0.0).unwrap_or(Material::default().shininess),
+            // Sponza's MTL expects its leaves' texture alpha to cut them out.
+            alpha_cutoff: 0.5,
         });
     }
 }
