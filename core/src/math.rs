@@ -113,6 +113,97 @@ pub fn cube_face_of(v: Vec3) -> usize {
     }
 }
 
+/// Spheres binned into a uniform grid, to find those containing a point without testing all of them (the
+/// app's per-pixel cluster map asks this for every pixel). Cells are about the median radius; a sphere that
+/// would span more than [`SphereGrid::MAX_CELLS_PER_SPHERE`] cells is kept in a list tested for every point.
+pub struct SphereGrid {
+    origin: Vec3,
+    cell: f32,
+    dims: [usize; 3],
+    start: Vec<u32>,
+    items: Vec<u32>,
+    big: Vec<u32>,
+}
+
+impl SphereGrid {
+    pub const MAX_CELLS_PER_SPHERE: usize = 512;
+    const MAX_CELLS: usize = 1 << 18;
+
+    /// `spheres`: (centre, radius); non-finite or negative radii contain nothing.
+    pub fn new(spheres: &[(Vec3, f32)]) -> SphereGrid {
+        let ok = |(c, r): &(Vec3, f32)| c.is_finite() && r.is_finite() && *r >= 0.0;
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        let mut radii: Vec<f32> = Vec::new();
+        for s in spheres.iter().filter(|s| ok(s)) {
+            lo = lo.min(s.0 - Vec3::splat(s.1));
+            hi = hi.max(s.0 + Vec3::splat(s.1));
+            radii.push(s.1);
+        }
+        if radii.is_empty() {
+            return SphereGrid {
+                origin: Vec3::ZERO,
+                cell: 1.0,
+                dims: [1, 1, 1],
+                start: vec![0, 0],
+                items: vec![],
+                big: vec![],
+            };
+        }
+        radii.sort_by(f32::total_cmp);
+        let extent = (hi - lo).max(Vec3::splat(1e-6));
+        let mut cell = (radii[radii.len() / 2] * 2.0).max(extent.max_element() / 64.0).max(1e-6);
+        let cells = |c: f32| (extent / c).ceil().max(Vec3::ONE);
+        while cells(cell).x * cells(cell).y * cells(cell).z > Self::MAX_CELLS as f32 {
+            cell *= 1.5;
+        }
+        let n = cells(cell);
+        let dims = [n.x as usize, n.y as usize, n.z as usize];
+        let index = |c: [usize; 3]| c[0] + dims[0] * (c[1] + dims[1] * c[2]);
+        let clamp_cell = |p: Vec3| {
+            let c = ((p - lo) / cell).floor();
+            [0, 1, 2].map(|a| (c[a].max(0.0) as usize).min(dims[a] - 1))
+        };
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        let mut big = Vec::new();
+        for (i, s) in spheres.iter().enumerate().filter(|(_, s)| ok(s)) {
+            let (a, b) = (clamp_cell(s.0 - Vec3::splat(s.1)), clamp_cell(s.0 + Vec3::splat(s.1)));
+            let span = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
+            if span > Self::MAX_CELLS_PER_SPHERE {
+                big.push(i as u32);
+                continue;
+            }
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        lists[index([x, y, z])].push(i as u32);
+                    }
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        start.push(0);
+        for l in &lists {
+            items.extend_from_slice(l);
+            start.push(items.len() as u32);
+        }
+        SphereGrid { origin: lo, cell, dims, start, items, big }
+    }
+
+    /// The indices of the spheres that may contain `p` (a superset; test each), in increasing order per cell.
+    pub fn candidates(&self, p: Vec3) -> impl Iterator<Item = u32> + '_ {
+        let c = ((p - self.origin) / self.cell).floor();
+        let inside = p.is_finite() && (0..3).all(|a| c[a] >= 0.0 && (c[a] as usize) < self.dims[a]);
+        let cell = if inside {
+            let i = c.x as usize + self.dims[0] * (c.y as usize + self.dims[1] * c.z as usize);
+            &self.items[self.start[i] as usize..self.start[i + 1] as usize]
+        } else {
+            &self.items[0..0]
+        };
+        cell.iter().chain(self.big.iter()).copied()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -145,5 +236,36 @@ mod tests {
             let opposite = CUBE_FACES[f ^ 1];
             assert!(!opposite.intersects_aabb(light, &b));
         }
+    }
+
+    #[test]
+    fn sphere_grid_finds_what_brute_force_finds() {
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let spheres: Vec<(Vec3, f32)> = (0..300)
+            .map(|i| {
+                let c = Vec3::new(next(), next(), next()) * 20.0;
+                let r = if i % 50 == 0 { 30.0 } else { next() * 2.0 };
+                (c, r)
+            })
+            .chain([(Vec3::NAN, 1.0), (Vec3::ZERO, f32::NAN)])
+            .collect();
+        let grid = SphereGrid::new(&spheres);
+        for _ in 0..2000 {
+            let p = Vec3::new(next(), next(), next()) * 24.0 - Vec3::splat(2.0);
+            let mut got: Vec<u32> =
+                grid.candidates(p).filter(|&i| spheres[i as usize].0.distance(p) <= spheres[i as usize].1).collect();
+            got.sort();
+            let want: Vec<u32> = (0..spheres.len() as u32)
+                .filter(|&i| spheres[i as usize].0.distance(p) <= spheres[i as usize].1)
+                .collect();
+            assert_eq!(got, want, "at {p:?}");
+        }
+        assert_eq!(SphereGrid::new(&[]).candidates(Vec3::ZERO).count(), 0);
     }
 }

@@ -387,15 +387,20 @@ impl Technique for LightCluster {
     /// whose shadow map shades it most.
     fn pixel_ids(&self, positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
         let clusters = &self.clustering.clusters;
+        // A grid of the C_att spheres: each pixel tests the clusters of its cell, not all (the app draws this map
+        // on its UI thread; testing every cluster is 460 M distance tests for 0.9 M pixels and 500 clusters).
+        let grid = crate::math::SphereGrid::new(&clusters.iter().map(|c| (c.position, c.c_att)).collect::<Vec<_>>());
         let ids = positions
             .iter()
             .map(|p| {
                 let Some(p) = p else { return u32::MAX };
                 let mut best = (u32::MAX, f32::INFINITY);
-                for (i, c) in clusters.iter().enumerate() {
+                for i in grid.candidates(*p) {
+                    let c = &clusters[i as usize];
                     let d = c.position.distance_squared(*p);
-                    if d <= c.c_att * c.c_att && d < best.1 {
-                        best = (i as u32, d);
+                    // Ties to the lower index, as the full scan had it.
+                    if d <= c.c_att * c.c_att && (d < best.1 || (d == best.1 && i < best.0)) {
+                        best = (i, d);
                     }
                 }
                 best.0
