@@ -20,6 +20,10 @@ struct ParaboloidOut {
 
 @vertex
 fn vs_main(@location(0) position: vec3<f32>) -> ParaboloidOut {
+    return paraboloid_project(position);
+}
+
+fn paraboloid_project(position: vec3<f32>) -> ParaboloidOut {
     let basis = vpl_basis(view.normal.xyz);
     let rel = position - view.centre.xyz;
     let local = vec3<f32>(dot(rel, basis[0]), dot(rel, basis[1]), dot(rel, basis[2]));
@@ -39,6 +43,47 @@ fn vs_main(@location(0) position: vec3<f32>) -> ParaboloidOut {
 @fragment
 fn fs_main(in: ParaboloidOut) {
     if in.height < 0.0 {
+        discard;
+    }
+}
+
+// Alpha-tested casters (cut-out materials), as in shadow_depth.wgsl: keep `Material` in sync with gbuffer.wgsl.
+struct Material {
+    base_color: vec4<f32>,
+    // w: 1 when the base colour texture is used
+    emissive: vec4<f32>,
+    specular: vec4<f32>,
+    // x: alpha cutoff
+    alpha: vec4<f32>,
+}
+
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var material_sampler: sampler;
+
+struct ParaboloidMaskedOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) height: f32,
+    @location(1) uv: vec2<f32>,
+}
+
+@vertex
+fn vs_masked(@location(0) position: vec3<f32>, @location(2) uv: vec2<f32>) -> ParaboloidMaskedOut {
+    let p = paraboloid_project(position);
+    var out: ParaboloidMaskedOut;
+    out.clip = p.clip;
+    out.height = p.height;
+    out.uv = uv;
+    return out;
+}
+
+@fragment
+fn fs_masked(in: ParaboloidMaskedOut) {
+    var alpha = material.base_color.a;
+    if material.emissive.w > 0.5 {
+        alpha *= textureSampleLevel(base_color_texture, material_sampler, in.uv, 0.0).a;
+    }
+    if in.height < 0.0 || alpha < material.alpha.x {
         discard;
     }
 }

@@ -334,3 +334,52 @@ fn gltf_alpha_modes_cut_out_only_masked_materials() {
     assert_eq!(blend, opaque, "BLEND is drawn opaque");
     assert!(scene.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", scene.warnings);
 }
+
+#[test]
+fn cut_out_casters_cast_cut_out_shadows() {
+    // The plate's material cut out on one half (a texture whose left column is transparent): the reference's
+    // cube maps alpha-test it, so the ground under the cut half is lit; with the cutoff off it is shadowed.
+    let render = |cutoff: f32| -> (Vec<[f32; 4]>, Scene) {
+        let mut scene = plane_and_occluder();
+        let texture = shadowlab_core::scene::TextureImage {
+            name: "half".into(),
+            width: 4,
+            height: 1,
+            rgba8: [[255, 255, 255, 0], [255, 255, 255, 0], [255, 255, 255, 255], [255, 255, 255, 255]].concat(),
+        };
+        scene.textures.push(texture);
+        let mut cut = scene.materials[0].clone();
+        cut.name = "cut".into();
+        cut.base_color_texture = Some(scene.textures.len() - 1);
+        cut.alpha_cutoff = cutoff;
+        scene.materials.push(cut);
+        let plate = scene.meshes.iter_mut().find(|m| m.name == "plate").unwrap();
+        plate.material = 1;
+        scene.finalize(std::path::Path::new("test")).unwrap();
+        let gpu = gpu();
+        let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
+        let mut t = renderer.create_technique("reference").unwrap();
+        let light = [white_light(Vec3::new(0.0, 4.0, 0.0), 10.0, 20.0)];
+        renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
+        (renderer.read_hdr().unwrap(), scene)
+    };
+    let (opaque, _) = render(0.0);
+    let (cut, scene) = render(0.5);
+    // The ground under the plate's transparent half: lit only when the shadow map cuts the plate out.
+    let probe = Vec3::new(-0.35, 0.0, 0.0) * 4.0 / 3.0; // under x = -0.26 of the plate (its cut half)
+    let (px, py) = project(&scene.camera, probe);
+    let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
+    assert!(c > o * 1.5 + 1e-3, "under the cut half: {c} (cut out) vs {o} (opaque caster)");
+    // Under the opaque half both shadow.
+    let probe = Vec3::new(0.3, 0.0, 0.0) * 4.0 / 3.0;
+    let (px, py) = project(&scene.camera, probe);
+    let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
+    assert!((c - o).abs() <= 0.05 * o.max(1e-3) + 1e-4, "under the opaque half: {c} vs {o}");
+}
+
+/// The pixel a world point lands on.
+fn project(camera: &shadowlab_core::scene::Camera, p: Vec3) -> (usize, usize) {
+    let clip = camera.clip_from_world(W as f32 / H as f32) * p.extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    (((ndc.x * 0.5 + 0.5) * W as f32) as usize, ((0.5 - ndc.y * 0.5) * H as f32) as usize)
+}

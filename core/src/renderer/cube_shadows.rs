@@ -47,6 +47,45 @@ pub struct CubeGeometry<'a> {
     pub triangle_count: u64,
     /// Cull chunks per caster (range sphere) and per face (pyramid); false draws every chunk into every face.
     pub cull: bool,
+    /// The materials of geometry that has them (the scene's; None for INSM's meshes): chunks of a cut-out
+    /// material are drawn alpha-tested, so leaves cast leaf-shaped shadows.
+    pub cutouts: Option<Cutouts<'a>>,
+}
+
+/// Per material: its bind group (`GpuScene::material_layout`) and whether it is cut out (alpha-tested).
+#[derive(Clone, Copy)]
+pub struct Cutouts<'a> {
+    pub bind_groups: &'a [wgpu::BindGroup],
+    pub masked: &'a [bool],
+}
+
+impl CubeGeometry<'_> {
+    fn masked(&self, chunk: usize) -> bool {
+        self.cutouts.is_some_and(|c| c.masked.get(self.chunks[chunk].material as usize).copied().unwrap_or(false))
+    }
+}
+
+/// One tile's draws: its opaque ranges `all_ranges[first..first + count]` and its cut-out chunks
+/// `all_masked[first_masked..first_masked + masked]`.
+#[derive(Clone, Copy)]
+struct TileDraw {
+    tile: u32,
+    first: usize,
+    count: usize,
+    first_masked: usize,
+    masked: usize,
+}
+
+/// Splits `ids` into `opaque` (merged into draw ranges by the caller) and `masked` chunks.
+fn split_cutouts(geometry: &CubeGeometry<'_>, ids: &[u32], opaque: &mut Vec<u32>, masked: &mut Vec<u32>) {
+    opaque.clear();
+    for &id in ids {
+        if geometry.masked(id as usize) {
+            masked.push(id);
+        } else {
+            opaque.push(id);
+        }
+    }
 }
 
 impl GpuScene {
@@ -58,6 +97,7 @@ impl GpuScene {
             chunks: &self.chunks,
             triangle_count: self.triangle_count,
             cull: true,
+            cutouts: Some(Cutouts { bind_groups: &self.material_bind_groups, masked: &self.material_cutout }),
         }
     }
 }
@@ -106,6 +146,10 @@ pub struct CubeShadowRenderer {
     pipeline: wgpu::RenderPipeline,
     /// Paraboloid depth pipeline, created on first use.
     paraboloid_pipeline: Option<wgpu::RenderPipeline>,
+    /// Alpha-tested variants (cube faces and views, paraboloids), created when cut-out chunks are first drawn.
+    masked_pipeline: Option<wgpu::RenderPipeline>,
+    paraboloid_masked_pipeline: Option<wgpu::RenderPipeline>,
+    opaque: Vec<u32>,
     faces_layout: wgpu::BindGroupLayout,
     vertex_stride: u64,
     faces: wgpu::Buffer,
@@ -161,6 +205,9 @@ impl CubeShadowRenderer {
         CubeShadowRenderer {
             pipeline,
             paraboloid_pipeline: None,
+            masked_pipeline: None,
+            paraboloid_masked_pipeline: None,
+            opaque: Vec::new(),
             faces_layout: layout,
             vertex_stride,
             faces,
@@ -180,22 +227,49 @@ impl CubeShadowRenderer {
         label: &str,
         with_fragment: bool,
     ) -> wgpu::RenderPipeline {
+        Self::depth_pipeline_with(device, layout, None, module, vertex_stride, label, with_fragment)
+    }
+
+    /// The depth pipeline; with `material` the alpha-tested variant (`vs_masked`/`fs_masked`, group 1 the
+    /// material, the UVs at location 2).
+    #[allow(clippy::too_many_arguments)]
+    fn depth_pipeline_with(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        material: Option<&wgpu::BindGroupLayout>,
+        module: &wgpu::ShaderModule,
+        vertex_stride: u64,
+        label: &str,
+        with_fragment: bool,
+    ) -> wgpu::RenderPipeline {
+        let mut groups = vec![Some(layout)];
+        groups.extend(material.map(Some));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(label),
-            bind_group_layouts: &[Some(layout)],
+            bind_group_layouts: &groups,
             immediate_size: 0,
         });
+        let masked = material.is_some();
+        let attributes: &[wgpu::VertexAttribute] = if masked {
+            &wgpu::vertex_attr_array![0 => Float32x3, 2 => Float32x2]
+        } else {
+            &wgpu::vertex_attr_array![0 => Float32x3]
+        };
+        let attributes: Vec<wgpu::VertexAttribute> = attributes
+            .iter()
+            .map(|a| wgpu::VertexAttribute { offset: if a.shader_location == 2 { 24 } else { 0 }, ..*a })
+            .collect();
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
                 module,
-                entry_point: Some("vs_main"),
+                entry_point: Some(if masked { "vs_masked" } else { "vs_main" }),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: vertex_stride,
                     step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    attributes: &attributes,
                 })],
             },
             // No back-face culling: real scenes have single-sided walls that must still cast shadows.
@@ -209,15 +283,48 @@ impl CubeShadowRenderer {
             }),
             multisample: Default::default(),
             // Depth-only; a fragment stage only where it must discard (paraboloids), as it costs early depth tests.
-            fragment: with_fragment.then_some(wgpu::FragmentState {
+            fragment: (with_fragment || masked).then_some(wgpu::FragmentState {
                 module,
-                entry_point: Some("fs_main"),
+                entry_point: Some(if masked { "fs_masked" } else { "fs_main" }),
                 compilation_options: Default::default(),
                 targets: &[],
             }),
             multiview_mask: None,
             cache: None,
         })
+    }
+
+    /// Create the alpha-tested pipelines when `geometry` has cut-out materials.
+    fn ensure_masked(&mut self, gpu: &GpuContext, geometry: &CubeGeometry<'_>, paraboloid: bool) {
+        if !geometry.cutouts.is_some_and(|c| c.masked.iter().any(|&m| m)) {
+            return;
+        }
+        let slot_empty =
+            if paraboloid { self.paraboloid_masked_pipeline.is_none() } else { self.masked_pipeline.is_none() };
+        if !slot_empty {
+            return;
+        }
+        let material_layout = crate::renderer::gpu_scene::GpuScene::material_layout(&gpu.device);
+        let (label, source) = if paraboloid {
+            ("paraboloid depth (alpha-tested)", shaders::PARABOLOID_DEPTH)
+        } else {
+            ("shadow depth (alpha-tested)", shaders::SHADOW_DEPTH)
+        };
+        let module = shaders::create_module(&gpu.device, label, source);
+        let pipeline = Self::depth_pipeline_with(
+            &gpu.device,
+            &self.faces_layout,
+            Some(&material_layout),
+            &module,
+            self.vertex_stride,
+            label,
+            true,
+        );
+        if paraboloid {
+            self.paraboloid_masked_pipeline = Some(pipeline);
+        } else {
+            self.masked_pipeline = Some(pipeline);
+        }
     }
 
     /// Render `geometry` into one paraboloid map per caster, tiles `first_tile + i` of the atlas (sized by
@@ -257,9 +364,11 @@ impl CubeShadowRenderer {
             .collect();
         let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&views));
+        self.ensure_masked(gpu, &geometry, true);
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
-        let mut draws: Vec<(u32, usize, usize)> = Vec::new();
+        let mut draws: Vec<TileDraw> = Vec::new();
         let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        let mut all_masked: Vec<u32> = Vec::new();
         for (i, c) in casters.iter().enumerate() {
             self.visible.clear();
             let mut tris = 0u64;
@@ -274,12 +383,21 @@ impl CubeShadowRenderer {
             }
             stats.triangles_submitted += tris;
             stats.triangles_culled += geometry.triangle_count - tris;
-            merge_draw_ranges(geometry.chunks, self.visible.iter().copied(), &mut self.ranges);
-            draws.push(((first_tile + i) as u32, all_ranges.len(), self.ranges.len()));
+            let first_masked = all_masked.len();
+            split_cutouts(&geometry, &self.visible, &mut self.opaque, &mut all_masked);
+            merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
+            draws.push(TileDraw {
+                tile: (first_tile + i) as u32,
+                first: all_ranges.len(),
+                count: self.ranges.len(),
+                first_masked,
+                masked: all_masked.len() - first_masked,
+            });
             all_ranges.extend_from_slice(&self.ranges);
         }
         let pipeline = self.paraboloid_pipeline.as_ref().expect("created above");
-        self.record(pipeline, geometry, timer, encoder, label, &draws, &all_ranges, true);
+        let masked = self.paraboloid_masked_pipeline.as_ref();
+        self.record(pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, true);
         stats
     }
 
@@ -360,9 +478,11 @@ impl CubeShadowRenderer {
         let matrices: Vec<MatrixUniform> = views.iter().map(|m| MatrixUniform::new(*m)).collect();
         let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&matrices));
+        self.ensure_masked(gpu, &geometry, false);
         let mut stats = CubeStats::default();
-        let mut draws: Vec<(u32, usize, usize)> = Vec::new();
+        let mut draws: Vec<TileDraw> = Vec::new();
         let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        let mut all_masked: Vec<u32> = Vec::new();
         for (vi, m) in views.iter().enumerate() {
             let frustum = crate::math::Frustum::from_clip_from_world(m);
             self.visible.clear();
@@ -375,11 +495,20 @@ impl CubeShadowRenderer {
             }
             stats.triangles_submitted += tris;
             stats.triangles_culled += geometry.triangle_count - tris;
-            merge_draw_ranges(geometry.chunks, self.visible.iter().copied(), &mut self.ranges);
-            draws.push(((first_tile + vi) as u32, all_ranges.len(), self.ranges.len()));
+            let first_masked = all_masked.len();
+            split_cutouts(&geometry, &self.visible, &mut self.opaque, &mut all_masked);
+            merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
+            draws.push(TileDraw {
+                tile: (first_tile + vi) as u32,
+                first: all_ranges.len(),
+                count: self.ranges.len(),
+                first_masked,
+                masked: all_masked.len() - first_masked,
+            });
             all_ranges.extend_from_slice(&self.ranges);
         }
-        self.record(&self.pipeline, geometry, timer, encoder, label, &draws, &all_ranges, clear);
+        let masked = self.masked_pipeline.as_ref();
+        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, clear);
         stats
     }
 
@@ -405,9 +534,11 @@ impl CubeShadowRenderer {
 
         // Culling on the CPU, draw lists per face.
         let total_triangles = geometry.triangle_count;
+        self.ensure_masked(gpu, &geometry, false);
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
-        let mut draws: Vec<(u32, usize, usize)> = Vec::new(); // (tile, first range, range count)
+        let mut draws: Vec<TileDraw> = Vec::new();
         let mut all_ranges: Vec<(u32, u32)> = Vec::new();
+        let mut all_masked: Vec<u32> = Vec::new();
         for (ci, caster) in casters.iter().enumerate() {
             self.visible.clear();
             self.visible.extend(
@@ -430,13 +561,22 @@ impl CubeShadowRenderer {
                 }
                 stats.triangles_submitted += tris;
                 stats.triangles_culled += total_triangles - tris;
-                merge_draw_ranges(geometry.chunks, self.face_visible.iter().copied(), &mut self.ranges);
-                draws.push(((ci * 6 + fi) as u32, all_ranges.len(), self.ranges.len()));
+                let first_masked = all_masked.len();
+                split_cutouts(&geometry, &self.face_visible, &mut self.opaque, &mut all_masked);
+                merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
+                draws.push(TileDraw {
+                    tile: (ci * 6 + fi) as u32,
+                    first: all_ranges.len(),
+                    count: self.ranges.len(),
+                    first_masked,
+                    masked: all_masked.len() - first_masked,
+                });
                 all_ranges.extend_from_slice(&self.ranges);
             }
         }
 
-        self.record(&self.pipeline, geometry, timer, encoder, label, &draws, &all_ranges, true);
+        let masked = self.masked_pipeline.as_ref();
+        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, true);
         stats
     }
 
@@ -446,12 +586,14 @@ impl CubeShadowRenderer {
     fn record(
         &self,
         pipeline: &wgpu::RenderPipeline,
+        masked_pipeline: Option<&wgpu::RenderPipeline>,
         geometry: CubeGeometry<'_>,
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
-        draws: &[(u32, usize, usize)],
+        draws: &[TileDraw],
         all_ranges: &[(u32, u32)],
+        all_masked: &[u32],
         clear: bool,
     ) {
         let atlas = self.atlas.as_ref().expect("the atlas exists when recording");
@@ -480,8 +622,9 @@ impl CubeShadowRenderer {
                 pass.set_pipeline(pipeline);
                 pass.set_vertex_buffer(0, geometry.vertex_buffer.slice(..));
                 pass.set_index_buffer(geometry.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                for &(tile, first, count) in draws {
-                    if count == 0 {
+                for d in draws {
+                    let (tile, first, count) = (d.tile, d.first, d.count);
+                    if count == 0 && d.masked == 0 {
                         continue;
                     }
                     let x = (tile % tiles_per_row) * res;
@@ -492,6 +635,17 @@ impl CubeShadowRenderer {
                     pass.set_bind_group(0, bind_group, &[offset]);
                     for &(first_index, index_count) in &all_ranges[first..first + count] {
                         pass.draw_indexed(first_index..first_index + index_count, 0, 0..1);
+                    }
+                    // Cut-out chunks: alpha-tested, one draw each with its material.
+                    if let (Some(masked), Some(cutouts), true) = (masked_pipeline, geometry.cutouts, d.masked > 0) {
+                        pass.set_pipeline(masked);
+                        for &id in &all_masked[d.first_masked..d.first_masked + d.masked] {
+                            let chunk = &geometry.chunks[id as usize];
+                            let Some(group) = cutouts.bind_groups.get(chunk.material as usize) else { continue };
+                            pass.set_bind_group(1, group, &[]);
+                            pass.draw_indexed(chunk.first_index..chunk.first_index + chunk.index_count, 0, 0..1);
+                        }
+                        pass.set_pipeline(pipeline);
                     }
                 }
             },

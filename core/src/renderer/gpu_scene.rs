@@ -20,6 +20,9 @@ pub struct GpuScene {
     pub geometry: std::sync::Arc<ChunkedGeometry>,
     pub triangle_count: u64,
     pub material_bind_groups: Vec<wgpu::BindGroup>,
+    /// Per material, true when it cuts out some of its surface (a cutoff above 0 and alpha below it in its
+    /// factor or texture): the depth passes alpha-test its chunks.
+    pub material_cutout: Vec<bool>,
     /// Per material, the mean linear albedo (factor times the texture's mean): what a ray hit reflects.
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
@@ -133,7 +136,21 @@ impl GpuScene {
             })
             .collect();
         let material_albedo = scene.materials.iter().map(|m| mean_albedo(scene, m)).collect();
+        let material_cutout = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let cutoff = m.alpha_cutoff;
+                let texture = m.base_color_texture.and_then(|i| scene.textures.get(i));
+                cutoff > 0.0
+                    && (m.base_color.w < cutoff
+                        || texture.is_some_and(|t| {
+                            t.rgba8.chunks_exact(4).any(|p| (p[3] as f32 / 255.0) * m.base_color.w < cutoff)
+                        }))
+            })
+            .collect();
         GpuScene {
+            material_cutout,
             bounds: geometry.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             material_albedo,
             bvh_cell: std::sync::OnceLock::new(),

@@ -118,7 +118,8 @@ pub struct Material {
     pub shininess: f32,
     /// Fragments whose alpha (base colour times texture) is below this are cut out (glTF `alphaMode` MASK and
     /// `alphaCutoff`; OBJ/MTL cut-outs at 0.5); 0: opaque, alpha ignored (glTF OPAQUE, and BLEND, which is
-    /// drawn opaque). Shadow maps and the ray tracer do not cut out (the caster stays whole).
+    /// drawn opaque). Shadow maps alpha-test cut-out chunks too; the ray tracer's BVH does not (the caster stays
+    /// whole there).
     pub alpha_cutoff: f32,
 }
 

@@ -597,6 +597,7 @@ impl Technique for Insm {
             chunks: &self.tiles,
             triangle_count: self.mesh_triangles,
             cull: true,
+            cutouts: None,
         };
         let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.params.cube);
         self.counts.add_cube_stats(&stats);
