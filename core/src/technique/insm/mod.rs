@@ -623,6 +623,33 @@ impl Technique for Insm {
         }
     }
 
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let palette = super::index_color(0);
+        let mut legend = match layer.name {
+            "INSM viewpoints" => vec![
+                LegendEntry::new(Glyph::Dot, [1.0, 0.85, 0.2, 1.0], "a viewpoint of an intermediate depth image"),
+                LegendEntry::new(Glyph::Frustum, palette, "its frustum, one colour per viewpoint"),
+            ],
+            "INSM samples" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a depth sample, in its viewpoint's colour")]
+            }
+            "INSM mesh (wireframe)" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                "kept edges of the mesh triangulated from the samples (Algorithm 2)",
+            )],
+            "INSM dropped edges" => vec![LegendEntry::new(
+                Glyph::Line,
+                [1.0, 0.2, 0.2, 1.0],
+                "edges dropped by the ε test: depth discontinuities",
+            )],
+            _ => super::light_layer_legend(layer).unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
+
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let mut layers = super::light_overlays(lights);
         let frustum_color = [1.0, 0.85, 0.2, 1.0];

@@ -437,4 +437,47 @@ impl Technique for LightCluster {
             OverlayLayer { name: "C_att spheres", visible_by_default: false, primitives: c_att_spheres },
         ]
     }
+
+    fn light_details(&self, index: usize) -> Option<super::LightDetails> {
+        let (ci, c) = self.clustering.clusters.iter().enumerate().find(|(_, c)| c.members.contains(&index))?;
+        let role = if c.center == index { "its center" } else { "a member" };
+        Some(super::LightDetails {
+            lines: vec![
+                format!("cluster {ci} ({role}): {} lights, center light {}", c.members.len(), c.center),
+                format!("d_min {:.3} · C_att {:.3} · radius d_C {:.3}", c.d_min, c.c_att, c.radius),
+            ],
+            group: c.members.clone(),
+        })
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let n = self.clustering.clusters.len();
+        let white = [1.0; 4];
+        let palette = cluster_color(0);
+        let mut legend = match layer.name {
+            "lights by cluster" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                format!("a visible light, in its cluster's colour ({n} clusters)"),
+            )],
+            "cluster centers" => {
+                vec![LegendEntry::new(Glyph::Dot, white, "a cluster's center: its cube map is rendered from here")]
+            }
+            "member -> center" => vec![LegendEntry::new(Glyph::Palette, palette, "joins a member light to its center")],
+            "d_min spheres" => vec![LegendEntry::new(
+                Glyph::Circle,
+                palette,
+                "d_min = d_init·(1 − |C_pos|/z_far): the cluster's disc-light radius",
+            )],
+            "C_att spheres" => vec![LegendEntry::new(
+                Glyph::Circle,
+                palette,
+                "C_att: the cluster's range; pixels beyond it skip the cluster",
+            )],
+            _ => super::light_layer_legend(layer).unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
 }
