@@ -827,6 +827,7 @@ fn compare(args: CompareArgs) -> Result<()> {
     let speedup = target.timing.median_ms / tech.timing.median_ms.max(1e-9);
     if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
         use crate::figure::{compose, metrics_caption, FigurePane};
+        let metrics_lines = metrics_caption(&metrics);
         let params = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
         let title = format!(
             "{} · {} lights · {}x{} · {}",
@@ -859,12 +860,8 @@ fn compare(args: CompareArgs) -> Result<()> {
                     image: diff.clone(),
                     caption: vec![
                         format!("{:?} difference ×{}", args.mode, args.gain).to_lowercase(),
-                        metrics_caption(&metrics),
-                        format!(
-                            "{:.2} % of pixels over {:.0} %",
-                            metrics.share_over_threshold * 100.0,
-                            metrics.threshold * 100.0
-                        ),
+                        metrics_lines[0].clone(),
+                        metrics_lines[1].clone(),
                     ],
                 },
             ],

@@ -26,15 +26,22 @@ pub fn figure_size(width: u32, height: u32, panes: u32) -> (u32, u32) {
     (panes * width + (panes + 1) * GAP, TITLE_HEIGHT + height + GAP + CAPTION_LINES * LINE_HEIGHT + GAP)
 }
 
-/// The metrics as one caption line.
-pub fn metrics_caption(m: &Metrics) -> String {
-    format!(
-        "RMSE {:.4} · PSNR {} · FLIP {} · shadow error {}",
-        m.rmse,
-        m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
-        m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
-        m.shadow_intensity_error.map(|e| format!("{:.2} %", e * 100.0)).unwrap_or_else(|| "-".into()),
-    )
+/// The metrics as two caption lines (short enough for panes of 320 pixels).
+pub fn metrics_caption(m: &Metrics) -> [String; 2] {
+    [
+        format!(
+            "RMSE {:.4} · PSNR {}",
+            m.rmse,
+            m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into())
+        ),
+        format!(
+            "FLIP {} · shadow err. {} · {:.1} % > {:.0} %",
+            m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
+            m.shadow_intensity_error.map(|e| format!("{:.2} %", e * 100.0)).unwrap_or_else(|| "-".into()),
+            m.share_over_threshold * 100.0,
+            m.threshold * 100.0,
+        ),
+    ]
 }
 
 /// Lay out `panes` (all the size of the first; others are scaled to it) on white with their captions.

@@ -89,6 +89,7 @@ impl ShadowLabApp {
             lights.len(),
             renderer.gpu().adapter_description()
         );
+        let metrics_lines = figure::metrics_caption(&metrics);
         let shown = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
         let panes = [
             FigurePane {
@@ -111,12 +112,8 @@ impl ShadowLabApp {
                 image: diff,
                 caption: vec![
                     format!("|difference| ×{gain} (dark blue 0 → red {:.2})", 1.0 / gain),
-                    figure::metrics_caption(&metrics),
-                    format!(
-                        "{:.2} % of pixels over {:.0} %",
-                        metrics.share_over_threshold * 100.0,
-                        metrics.threshold * 100.0
-                    ),
+                    metrics_lines[0].clone(),
+                    metrics_lines[1].clone(),
                 ],
             },
         ];
