@@ -651,3 +651,22 @@ fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
     assert!(images[0] != images[1], "the camera moved between frames");
     assert!(h.state_mut().save_orbit_sequence(0).is_err(), "no frames is an error, not a panic");
 }
+
+#[test]
+fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
+    let mut h = start("inspector-maps", "cornell");
+    h.state_mut().layout.focus(Pane::Maps);
+    h.run_steps(3);
+    let app = h.state();
+    let atlas = app.inspector.atlas.as_ref().expect("the reference's atlas was read back");
+    assert!(atlas.tiles >= 6 && atlas.resolution == 256, "{} tiles of {}", atlas.tiles, atlas.resolution);
+    let cross = app.inspector.shown.as_ref().expect("a cube map is shown");
+    assert_eq!((cross.width, cross.height), (4 * atlas.resolution, 3 * atlas.resolution), "unfolded as a cross");
+    // Six faces of texels, outside them nothing; the light's walls within its range are drawn.
+    let inside = cross.depths.iter().filter(|d| !d.is_nan()).count();
+    assert_eq!(inside, 6 * (atlas.resolution * atlas.resolution) as usize);
+    assert!(cross.depths.iter().any(|d| *d > 0.0 && *d < 1.0), "some geometry in the cube map");
+    let centre = cross.readout(2 * atlas.resolution - atlas.resolution / 2, atlas.resolution * 3 / 2).unwrap();
+    assert!(centre.contains("cube 0 face +z") && centre.contains("depth "), "{centre}");
+    h.get_by_label_contains("tiles of 256² texels");
+}

@@ -24,10 +24,11 @@ pub enum Pane {
     Scene,
     Sweep,
     Timings,
+    Maps,
 }
 
 impl Pane {
-    pub const ALL: [Pane; 8] = [
+    pub const ALL: [Pane; 9] = [
         Pane::View,
         Pane::Technique,
         Pane::Render,
@@ -36,6 +37,7 @@ impl Pane {
         Pane::Scene,
         Pane::Sweep,
         Pane::Timings,
+        Pane::Maps,
     ];
 
     pub fn title(self) -> &'static str {
@@ -48,13 +50,15 @@ impl Pane {
             Pane::Scene => "Scene",
             Pane::Sweep => "Sweep",
             Pane::Timings => "Timings",
+            Pane::Maps => "Shadow maps",
         }
     }
 }
 
 /// Share of the window's width the left column of panels gets by default.
 const LEFT_COLUMN_SHARE: f32 = 0.3;
-const LAYOUT_VERSION: u32 = 1;
+/// Version 2 added the shadow-map inspector; older files give the default layout.
+const LAYOUT_VERSION: u32 = 2;
 
 #[derive(Serialize, Deserialize)]
 struct LayoutFile {
@@ -73,7 +77,7 @@ pub struct Layout {
 
 impl Layout {
     /// The default: a column of tabbed panels on the left (technique, render, overlays, lights above; timings,
-    /// sweep, scene below), the 3D view on the right.
+    /// shadow maps, sweep, scene below), the 3D view on the right.
     pub fn default_tree() -> Tree<Pane> {
         let mut tiles = Tiles::default();
         let view = tiles.insert_pane(Pane::View);
@@ -82,7 +86,7 @@ impl Layout {
             .map(|p| tiles.insert_pane(p))
             .collect();
         let bottom: Vec<TileId> =
-            [Pane::Timings, Pane::Sweep, Pane::Scene].into_iter().map(|p| tiles.insert_pane(p)).collect();
+            [Pane::Timings, Pane::Maps, Pane::Sweep, Pane::Scene].into_iter().map(|p| tiles.insert_pane(p)).collect();
         let top = tiles.insert_tab_tile(top);
         let bottom = tiles.insert_tab_tile(bottom);
         let left = tiles.insert_container(Linear::new_binary(LinearDir::Vertical, [top, bottom], 0.6));
@@ -243,8 +247,8 @@ impl egui_tiles::Behavior<Pane> for Panes<'_> {
         }
         egui::Frame::NONE.inner_margin(egui::Margin::same(6)).fill(ui.visuals().panel_fill).show(ui, |ui| {
             ui.set_min_size(ui.available_size());
-            if *pane == Pane::Timings {
-                // It has its own scroll area for the table, under the plot.
+            if matches!(*pane, Pane::Timings | Pane::Maps) {
+                // They fill the panel themselves (the timings' table scrolls, the maps zoom and pan).
                 super::panels::pane_ui(self.app, ui, *pane);
             } else {
                 egui::ScrollArea::vertical().id_salt(pane.title()).auto_shrink([false, false]).show(ui, |ui| {

@@ -8,6 +8,7 @@ pub mod camera;
 pub mod capture;
 pub mod document;
 pub mod gizmo;
+pub mod inspector;
 pub mod layout;
 pub mod legend;
 pub mod panels;
@@ -229,6 +230,8 @@ pub struct ShadowLabApp {
     pub last_view_pixels: egui::Vec2,
     /// Frames of an orbit image sequence (File menu).
     pub orbit_frames: usize,
+    /// The shadow-map inspector's state.
+    pub inspector: inspector::Inspector,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -286,6 +289,7 @@ impl ShadowLabApp {
             legends: Vec::new(),
             last_view_pixels: egui::vec2(640.0, 360.0),
             orbit_frames: 36,
+            inspector: inspector::Inspector::default(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -701,6 +705,36 @@ impl ShadowLabApp {
             out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
         }
         (out, legends)
+    }
+
+    /// The shadow-map inspector: reads the chosen technique's atlas back once per completed frame (not for the
+    /// preview while the camera moves), then shows it.
+    pub fn maps_ui(&mut self, ui: &mut egui::Ui) {
+        use inspector::{AtlasDepths, MapSource};
+        let has_indirect = self.indirect.technique.is_some();
+        if !has_indirect {
+            self.inspector.source = MapSource::Direct;
+        }
+        let key = self.technique.clone();
+        if let Some(gpu) = &mut self.gpu {
+            let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
+            let from = (gpu.main.frame_key(), self.inspector.source);
+            if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
+                let ctx = gpu.ctx.clone();
+                let read = |t: &dyn shadowlab_core::technique::Technique| {
+                    t.shadow_atlas().map(|(a, what)| AtlasDepths::read(&ctx, a, what)).transpose()
+                };
+                let result = match self.inspector.source {
+                    MapSource::Direct => gpu.main.technique(&key).and_then(|t| read(t.as_ref())),
+                    MapSource::Indirect => match self.indirect.technique.clone() {
+                        Some(k) => gpu.main.indirect_technique(&k).and_then(|t| read(t.borrow().as_ref())),
+                        None => Ok(None),
+                    },
+                };
+                self.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
+            }
+        }
+        self.inspector.ui(ui, has_indirect);
     }
 
     /// What the current technique made of light `index` in its last frame (its cluster, say).

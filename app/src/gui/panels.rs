@@ -97,7 +97,8 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                         }
                         ui.close();
                     }
-                    ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720).suffix(" frames"));
+                    let label = ui.label("frames");
+                    ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720)).labelled_by(label.id);
                 });
             });
             ui.menu_button("Scene", |ui| {
@@ -860,5 +861,6 @@ pub fn pane_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui, pane: Pane) {
         Pane::Scene => stats_ui(app, ui),
         Pane::Sweep => sweep_ui(app, ui),
         Pane::Timings => timings_ui(app, ui),
+        Pane::Maps => app.maps_ui(ui),
     }
 }
