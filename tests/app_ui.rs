@@ -670,3 +670,35 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
     assert!(centre.contains("cube 0 face +z") && centre.contains("depth "), "{centre}");
     h.get_by_label_contains("tiles of 256² texels");
 }
+
+#[test]
+fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
+    let mut h = start("explain", "cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(3);
+    h.state_mut().layout.focus(Pane::Explain);
+    h.run_steps(1);
+    h.get_by_label("2. Cluster centers").click();
+    h.run_steps(2);
+    let on = |h: &mut Harness<'static, ShadowLabApp>, name: &str| {
+        h.state_mut().overlay_layers().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{name}")).1
+    };
+    assert!(on(&mut h, "cluster centers") && on(&mut h, "d_min spheres"));
+    assert!(!on(&mut h, "member -> center") && !on(&mut h, "lights by cluster"));
+    h.get_by_label_contains("from every center so far");
+    // The cube-map step brings the shadow maps forward.
+    h.get_by_label("4. One cube map per cluster").click();
+    h.run_steps(2);
+    assert!(h.state().layout.is_on_screen(Pane::Maps));
+    // INSM: the mesh step shows the wireframe and the dropped edges.
+    h.state_mut().technique = "insm".into();
+    h.state_mut().layout.focus(Pane::Explain);
+    h.run_steps(3);
+    h.get_by_label("3. Their meshes").click();
+    h.run_steps(2);
+    assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));
+    // A technique without steps says so.
+    h.state_mut().technique = "unshadowed".into();
+    h.run_steps(2);
+    h.get_by_label_contains("describes no steps");
+}

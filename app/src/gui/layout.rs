@@ -25,10 +25,11 @@ pub enum Pane {
     Sweep,
     Timings,
     Maps,
+    Explain,
 }
 
 impl Pane {
-    pub const ALL: [Pane; 9] = [
+    pub const ALL: [Pane; 10] = [
         Pane::View,
         Pane::Technique,
         Pane::Render,
@@ -38,6 +39,7 @@ impl Pane {
         Pane::Sweep,
         Pane::Timings,
         Pane::Maps,
+        Pane::Explain,
     ];
 
     pub fn title(self) -> &'static str {
@@ -51,14 +53,15 @@ impl Pane {
             Pane::Sweep => "Sweep",
             Pane::Timings => "Timings",
             Pane::Maps => "Shadow maps",
+            Pane::Explain => "Explain",
         }
     }
 }
 
 /// Share of the window's width the left column of panels gets by default.
 const LEFT_COLUMN_SHARE: f32 = 0.3;
-/// Version 2 added the shadow-map inspector; older files give the default layout.
-const LAYOUT_VERSION: u32 = 2;
+/// Version 2 added the shadow-map inspector, 3 the Explain panel; older files give the default layout.
+const LAYOUT_VERSION: u32 = 3;
 
 #[derive(Serialize, Deserialize)]
 struct LayoutFile {
@@ -73,15 +76,17 @@ pub struct Layout {
     /// Every panel (and the menu bar) hidden: the view fills the window.
     pub full_view: bool,
     dirty: bool,
+    /// A panel to bring forward once the tiles are drawn (a pane's UI cannot change the tree it is drawn in).
+    pending_focus: Option<Pane>,
 }
 
 impl Layout {
-    /// The default: a column of tabbed panels on the left (technique, render, overlays, lights above; timings,
+    /// The default: a column of tabbed panels on the left (technique, render, overlays, lights, explain above; timings,
     /// shadow maps, sweep, scene below), the 3D view on the right.
     pub fn default_tree() -> Tree<Pane> {
         let mut tiles = Tiles::default();
         let view = tiles.insert_pane(Pane::View);
-        let top: Vec<TileId> = [Pane::Technique, Pane::Render, Pane::Overlays, Pane::Lights]
+        let top: Vec<TileId> = [Pane::Technique, Pane::Render, Pane::Overlays, Pane::Lights, Pane::Explain]
             .into_iter()
             .map(|p| tiles.insert_pane(p))
             .collect();
@@ -95,7 +100,7 @@ impl Layout {
     }
 
     pub fn new() -> Layout {
-        Layout { tree: Self::default_tree(), full_view: false, dirty: false }
+        Layout { tree: Self::default_tree(), full_view: false, dirty: false, pending_focus: None }
     }
 
     fn path(dir: &Path) -> PathBuf {
@@ -108,7 +113,7 @@ impl Layout {
         let Ok(text) = std::fs::read_to_string(&path) else { return Layout::new() };
         match ron::from_str::<LayoutFile>(&text) {
             Ok(file) if file.version == LAYOUT_VERSION && Self::is_complete(&file.tree) => {
-                Layout { tree: file.tree, full_view: file.full_view, dirty: false }
+                Layout { tree: file.tree, full_view: file.full_view, dirty: false, pending_focus: None }
             }
             Ok(_) => {
                 log::warn!("{}: not a layout of this version; using the default", path.display());
@@ -216,6 +221,11 @@ impl Layout {
         }
     }
 
+    /// [`Layout::focus`] from inside a pane's UI: done when the tiles have been drawn.
+    pub fn request_focus(&mut self, pane: Pane) {
+        self.pending_focus = Some(pane);
+    }
+
     /// Where the pane was laid out last frame.
     pub fn rect(&self, pane: Pane) -> Option<egui::Rect> {
         self.tree.tiles.find_pane(&pane).and_then(|id| self.tree.tiles.rect(id))
@@ -308,6 +318,9 @@ pub fn tiles_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     app.layout.tree = tree;
     if edited || hide.is_some() {
         app.layout.mark_changed();
+    }
+    if let Some(pane) = app.layout.pending_focus.take() {
+        app.layout.focus(pane);
     }
 }
 

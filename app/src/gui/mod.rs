@@ -232,6 +232,8 @@ pub struct ShadowLabApp {
     pub orbit_frames: usize,
     /// The shadow-map inspector's state.
     pub inspector: inspector::Inspector,
+    /// The Explain panel's chosen step: (technique key, step index).
+    pub explain_step: Option<(String, usize)>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -290,6 +292,7 @@ impl ShadowLabApp {
             last_view_pixels: egui::vec2(640.0, 360.0),
             orbit_frames: 36,
             inspector: inspector::Inspector::default(),
+            explain_step: None,
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -705,6 +708,18 @@ impl ShadowLabApp {
             out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
         }
         (out, legends)
+    }
+
+    /// Show what an Explain step shows: its overlay layers on, the technique's others off, and the shadow-map
+    /// panel in front when the step is about the shadow maps.
+    pub fn show_explain_step(&mut self, step: &shadowlab_core::technique::ExplainStep) {
+        for (name, _) in self.overlay_layers() {
+            let on = step.layers.contains(&name.as_str());
+            self.view.overlays.insert(name, on);
+        }
+        if step.shows_shadow_maps {
+            self.layout.request_focus(layout::Pane::Maps);
+        }
     }
 
     /// The shadow-map inspector: reads the chosen technique's atlas back once per completed frame (not for the

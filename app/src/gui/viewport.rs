@@ -120,6 +120,9 @@ impl Technique for SharedTechnique {
     fn light_details(&self, index: usize) -> Option<LightDetails> {
         self.0.borrow().light_details(index)
     }
+    fn explain(&self) -> Vec<shadowlab_core::technique::ExplainStep> {
+        self.0.borrow().explain()
+    }
     fn cameras_in_use(&self, key: &str) -> Vec<CameraPose> {
         self.0.borrow().cameras_in_use(key)
     }

@@ -433,6 +433,16 @@ pub struct LightDetails {
     pub group: Vec<usize>,
 }
 
+/// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
+/// overlay layers to switch on (the technique's others are switched off) and whether its shadow maps show it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExplainStep {
+    pub title: &'static str,
+    pub text: &'static str,
+    pub layers: &'static [&'static str],
+    pub shows_shadow_maps: bool,
+}
+
 /// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.
 pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
     let white = [1.0, 1.0, 1.0, 1.0];
@@ -497,6 +507,10 @@ pub trait Technique {
         let mut legend = light_layer_legend(layer).unwrap_or_default();
         legend.extend(layer.summary());
         legend
+    }
+    /// The steps of the technique's paper, in order, with what shows each (empty: none described).
+    fn explain(&self) -> Vec<ExplainStep> {
+        Vec::new()
     }
     /// What the last frame made of light `index` (of the lights it was given): e.g. its cluster, with that
     /// cluster's members. None: nothing beyond the light's own fields.

@@ -623,6 +623,45 @@ impl Technique for Insm {
         }
     }
 
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. Viewpoints",
+                text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom).",
+                layers: &["INSM viewpoints"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. Intermediate depth images",
+                text: "One depth image of the scene per viewpoint (insm_res²); each sample is a point on a surface.",
+                layers: &["INSM viewpoints", "INSM samples"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3. Their meshes",
+                text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge kept \
+                       only where the second difference of depth is below ε. Red: dropped edges.",
+                layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "4. Cube maps from the meshes",
+                text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
+                       light and face in tiles.",
+                layers: &["lights"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "5. Final image",
+                text: "Shaded as the reference; the only difference is the geometry in the cube maps (light leaks \
+                       where thin geometry eroded).",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
         use super::{Glyph, LegendEntry};
         let palette = super::index_color(0);

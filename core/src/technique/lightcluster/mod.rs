@@ -438,6 +438,55 @@ impl Technique for LightCluster {
         ]
     }
 
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. Visible lights",
+                text: "Lights whose range sphere (L_att) misses the view frustum are culled; the visible ones are \
+                       sorted by L_att, largest first. Each dot is a visible light.",
+                layers: &["lights by cluster"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. Cluster centers",
+                text: "A light becomes a center when it is farther than d_min = d_init·(1 − |C_pos|/z_far) from \
+                       every center so far: clusters are smaller far from the camera. White dots: centers; circles: \
+                       d_min.",
+                layers: &["cluster centers", "d_min spheres"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3. Members joined to centers",
+                text: "Every other light joins its nearest center; the cluster's range grows to \
+                       C_att = max(C_att, d_C + L_att). Lines: member → center; large circles: C_att.",
+                layers: &["lights by cluster", "member -> center", "C_att spheres"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "4. One cube map per cluster",
+                text: "One cube shadow map per cluster, rendered from its center with far plane C_att (the \
+                       Shadow maps panel shows the last batch's).",
+                layers: &["cluster centers"],
+                shows_shadow_maps: true,
+            },
+            ExplainStep {
+                title: "5. Soft visibility per cluster",
+                text: "Per pixel and cluster within C_att: visibility of a disc light of radius d_min (PCF, or \
+                       PCSS: blocker search, penumbra w = d_min (d_r − d_b) / d_b), multiplied into the summed \
+                       light of the cluster's members.",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "6. Final image",
+                text: "The sum over clusters; compare it with the reference (View → Difference).",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
     fn light_details(&self, index: usize) -> Option<super::LightDetails> {
         let (ci, c) = self.clustering.clusters.iter().enumerate().find(|(_, c)| c.members.contains(&index))?;
         let role = if c.center == index { "its center" } else { "a member" };
