@@ -702,3 +702,22 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     h.run_steps(2);
     h.get_by_label_contains("describes no steps");
 }
+
+#[test]
+fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
+    let mut h = start("viewpoint-tooltip", "arcade");
+    h.state_mut().technique = "insm".into();
+    h.run_steps(4);
+    let p = projection(&h);
+    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
+    let cameras = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let pos = cameras
+        .iter()
+        .filter_map(|c| p.to_screen(c.position))
+        .find(|s| rect.contains(*s))
+        .expect("a viewpoint is on screen");
+    let lines = h.state_mut().camera_tooltip(&p, pos);
+    assert!(lines.len() == 3 && lines[0].contains(&format!("of {}", cameras.len())), "{lines:?}");
+    assert!(lines[2].starts_with("looking at"), "{lines:?}");
+    assert!(h.state_mut().camera_tooltip(&p, egui::pos2(-100.0, -100.0)).is_empty());
+}

@@ -772,6 +772,29 @@ impl ShadowLabApp {
         lines
     }
 
+    /// The tooltip of a camera the technique used (a `Cameras` parameter's, e.g. an INSM viewpoint) under `pos`.
+    pub fn camera_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let Ok(technique) = gpu.main.technique(&self.technique) else { return Vec::new() };
+        for p in technique.params() {
+            if let shadowlab_core::technique::ParamKind::Cameras { .. } = p.kind {
+                let cameras = technique.cameras_in_use(p.key);
+                if let Some(i) = gizmo::pick_point(projection, cameras.iter().map(|c| c.position), pos, 10.0) {
+                    let c = cameras[i];
+                    return vec![
+                        format!("{} #{} of {}", p.label, i + 1, cameras.len()),
+                        format!("position ({:.2}, {:.2}, {:.2})", c.position.x, c.position.y, c.position.z),
+                        format!(
+                            "looking at ({:.2}, {:.2}, {:.2}) · fov {:.0}°",
+                            c.target.x, c.target.y, c.target.z, c.fov_y_deg
+                        ),
+                    ];
+                }
+            }
+        }
+        Vec::new()
+    }
+
     /// Names of the overlay layers the current technique offers, with their state.
     pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
@@ -1422,8 +1445,11 @@ impl ShadowLabApp {
         // A light under the pointer: its details in a tooltip.
         if self.drag.is_none() && !interacting {
             if let Some(pos) = response.hover_pos() {
-                if let Some(i) = gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
-                    let lines = self.light_tooltip(i);
+                let lines = match gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
+                    Some(i) => self.light_tooltip(i),
+                    None => self.camera_tooltip(&projection, pos),
+                };
+                if !lines.is_empty() {
                     response.clone().on_hover_ui_at_pointer(|ui| {
                         for l in &lines {
                             ui.label(l);
