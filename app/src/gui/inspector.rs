@@ -58,8 +58,14 @@ impl AtlasDepths {
         ((t % self.tiles_per_row) * self.resolution + u, (t / self.tiles_per_row) * self.resolution + v)
     }
 
+    /// Cube maps in the atlas; 0 for paraboloid atlases (VPLs, VALs), whose tiles are single maps. The trait
+    /// describes an atlas only in words, so this goes by its description.
     pub fn cubes(&self) -> usize {
-        self.tiles / 6
+        if self.what.contains("cube") {
+            self.tiles / 6
+        } else {
+            0
+        }
     }
 }
 
@@ -303,8 +309,15 @@ mod tests {
         let (r, per_row, tiles) = (2u32, 4u32, 12usize);
         let (w, h) = (r * per_row, r * 3);
         let depths = (0..h).flat_map(|y| (0..w).map(move |x| ((y / r) * per_row + x / r) as f32 / 100.0)).collect();
-        let atlas =
-            AtlasDepths { depths, width: w, height: h, resolution: r, tiles_per_row: per_row, tiles, what: "test" };
+        let atlas = AtlasDepths {
+            depths,
+            width: w,
+            height: h,
+            resolution: r,
+            tiles_per_row: per_row,
+            tiles,
+            what: "cube maps",
+        };
         assert_eq!(atlas.cubes(), 2);
         let cross = Shown::new(&atlas, Some(1));
         assert_eq!((cross.width, cross.height), (4 * r, 3 * r));
@@ -314,6 +327,10 @@ mod tests {
         assert!(cross.depths[0].is_nan(), "outside the cross");
         assert!(cross.readout(0, 0).is_none());
         assert!(cross.readout(3 * r, r).unwrap().contains("cube 1 face -z"));
+        let paraboloids = AtlasDepths { what: "paraboloid maps", depths: atlas.depths.clone(), ..atlas };
+        assert_eq!(paraboloids.cubes(), 0);
+        assert_eq!(Shown::new(&paraboloids, Some(1)).width, w, "no cross of paraboloid maps: the whole atlas");
+        let atlas = paraboloids;
         let whole = Shown::new(&atlas, None);
         assert_eq!((whole.width, whole.height), (w, h));
         assert_eq!(whole.image().size, [w as usize, h as usize]);
