@@ -8,6 +8,7 @@ use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use shadowlab::gui::gizmo::{self, Projection};
+use shadowlab::gui::layout::Pane;
 use shadowlab::gui::{ShadowLabApp, Startup};
 
 fn data_dir(name: &str) -> PathBuf {
@@ -21,13 +22,19 @@ const SIZE: (f32, f32) = (900.0, 560.0);
 
 /// Snapshots without the timings panel (its milliseconds change from run to run) and toasts.
 fn snapshot(h: &mut Harness<'static, ShadowLabApp>, name: &str) {
-    h.mask(egui::Rect::from_min_max(egui::pos2(0.0, SIZE.1 - 220.0), egui::pos2(SIZE.0, SIZE.1)));
+    let timings = h.state().layout.rect(Pane::Timings).expect("the timings panel is laid out");
+    h.mask(timings);
+    h.mask(egui::Rect::from_min_max(egui::pos2(SIZE.0 - 420.0, SIZE.1 - 120.0), egui::pos2(SIZE.0, SIZE.1)));
     h.snapshot(name);
 }
 
 fn harness(startup: Startup) -> Harness<'static, ShadowLabApp> {
+    harness_sized(startup, SIZE)
+}
+
+fn harness_sized(startup: Startup, size: (f32, f32)) -> Harness<'static, ShadowLabApp> {
     let mut h = Harness::builder()
-        .with_size(egui::vec2(SIZE.0, SIZE.1))
+        .with_size(egui::vec2(size.0, size.1))
         .wgpu_setup(shadowlab::gui::wgpu_setup())
         .with_max_steps(40)
         .build_eframe(move |cc| ShadowLabApp::new(cc, startup).expect("the app starts on the software adapter"));
@@ -62,7 +69,8 @@ fn main_window_on_a_builtin_scene() {
     let mut h = start("main", "cornell");
     assert_eq!(h.state().lights.len(), 32);
     h.get_by_label("Technique");
-    h.get_by_label("Lights (32)");
+    // The lights' panel is a tab of the left column.
+    h.get_by_label("Lights");
     let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     assert_eq!(report.counts.technique.shadow_maps, 32);
     snapshot(&mut h, "main_window_cornell");
@@ -90,6 +98,8 @@ fn the_inspector_turns_a_light_into_a_spot_light() {
     assert!((spot.outer_angle - 30f32.to_radians()).abs() < 1e-4 && spot.direction.y < -0.99, "{spot:?}");
     assert!(h.query_all_by_label_contains("cone half-angle").count() >= 1, "the cone slider is shown");
     // The spot's cone is drawn as an overlay layer.
+    h.state_mut().layout.focus(Pane::Overlays);
+    h.run_steps(1);
     assert!(h.query_all_by_label_contains("spot cones").count() >= 1, "no spot cone layer");
 }
 
@@ -218,6 +228,8 @@ fn difference_view_measures_the_technique_against_the_reference() {
     h.run_steps(4);
     let m = &h.state().difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
+    h.state_mut().layout.focus(Pane::Render);
+    h.run_steps(1);
     h.get_by_label("RMSE");
     // The session's comparison table has both techniques.
     let times = &h.state().session_times;
@@ -542,4 +554,227 @@ fn every_techniques_parameter_panel_draws_without_a_panic() {
         // The selector names it; its generated panel shows its first parameter.
         assert!(h.query_all_by_label_contains(entry.key).count() >= 1, "{}: not selected", entry.key);
     }
+}
+
+/// The share of the window the 3D view's rect covers.
+fn view_share(h: &Harness<'static, ShadowLabApp>, size: (f32, f32)) -> f32 {
+    let r = h.state().last_viewport_rect.expect("the view was laid out");
+    r.area() / (size.0 * size.1)
+}
+
+#[test]
+fn the_default_layout_gives_the_view_most_of_the_window() {
+    for size in [(1024.0, 640.0), (1400.0, 860.0)] {
+        let mut h = harness_sized(
+            Startup {
+                data_dir: Some(data_dir(&format!("layout-{}", size.0))),
+                synchronous: true,
+                builtin: Some("cornell".into()),
+                ..Default::default()
+            },
+            size,
+        );
+        h.run_steps(2);
+        let share = view_share(&h, size);
+        assert!(share >= 0.6, "the view covers {:.1} % of a {}x{} window", share * 100.0, size.0, size.1);
+        // The panels are still there: the technique selector and the timings.
+        h.get_by_label("Technique");
+        h.get_by_label_contains("adapter:");
+    }
+}
+
+#[test]
+fn full_view_hides_every_panel_and_tab_brings_them_back() {
+    let mut h = start("full-view", "cornell");
+    h.get_by_label("Technique");
+    h.key_press(egui::Key::Tab);
+    h.run_steps(2);
+    assert!(h.state().layout.full_view);
+    assert_eq!(h.query_all_by_label("Technique").count(), 0, "the technique panel is hidden");
+    assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
+    assert_eq!(h.query_all_by_label("File").count(), 0, "the menu bar is hidden");
+    let share = view_share(&h, SIZE);
+    assert!(share > 0.97, "the view fills the window in full view: {:.1} %", share * 100.0);
+    h.key_press(egui::Key::F11);
+    h.run_steps(2);
+    assert!(!h.state().layout.full_view);
+    h.get_by_label("Technique");
+    // The button over the view leaves full view too.
+    h.key_press(egui::Key::F11);
+    h.run_steps(2);
+    h.get_by_label("Show panels (Tab)").click();
+    h.run_steps(2);
+    h.get_by_label("Technique");
+}
+
+#[test]
+fn a_hidden_panel_is_restored_from_the_menu_and_the_layout_is_saved() {
+    let dir = data_dir("layout-saved");
+    let mut h = harness(Startup {
+        data_dir: Some(dir.clone()),
+        synchronous: true,
+        builtin: Some("cornell".into()),
+        ..Default::default()
+    });
+    let before = view_share(&h, SIZE);
+    // Hide the column's lower tab group (timings) with its tab bar's button.
+    h.get_by_label("Timings").click();
+    h.run_steps(1);
+    let hide: Vec<_> = h.get_all_by_label("hide").collect();
+    assert_eq!(hide.len(), 2, "one hide button per tab bar");
+    // The lower one: the timings' tab bar is right above the timings.
+    let timings = h.state().layout.rect(Pane::Timings).unwrap();
+    let lower = hide.into_iter().max_by(|a, b| a.rect().center().y.total_cmp(&b.rect().center().y)).unwrap();
+    assert!((lower.rect().center().y - timings.top()).abs() < 30.0, "{:?} vs {timings:?}", lower.rect());
+    lower.click();
+    h.run_steps(3);
+    assert!(!h.state().layout.is_shown(Pane::Timings));
+    assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
+    // Saved as it changed: a new app opens with the same layout.
+    let mut fresh = harness(Startup { data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
+    fresh.run_steps(2);
+    assert!(!fresh.state().layout.is_shown(Pane::Timings), "the layout was saved with the app state");
+    assert!(fresh.state().layout.is_shown(Pane::Lights));
+    // The Panels menu shows it again.
+    fresh.get_by_label("Panels").click();
+    fresh.run_steps(2);
+    fresh.get_by_label("Timings").click();
+    fresh.run_steps(2);
+    assert!(fresh.state().layout.is_shown(Pane::Timings));
+    fresh.get_by_label_contains("adapter:");
+    assert!(before > 0.6);
+}
+
+#[test]
+fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
+    let mut h = start("legend", "cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(3);
+    h.state_mut().layout.focus(Pane::Overlays);
+    h.run_steps(2);
+    // "lights by cluster" is on by default: its legend is listed under its checkbox.
+    h.get_by_label_contains("in its cluster's colour");
+    let names: Vec<String> = h.state().legends.iter().map(|(n, _)| n.clone()).collect();
+    assert!(names.iter().any(|n| n == "lights by cluster"), "{names:?}");
+    assert!(!names.iter().any(|n| n == "d_min spheres"), "a hidden layer has no legend: {names:?}");
+    assert_eq!(h.query_all_by_label_contains("disc-light radius").count(), 0);
+    h.state_mut().view.overlays.insert("d_min spheres".into(), true);
+    h.run_steps(3);
+    let legends = &h.state().legends;
+    let d_min = legends.iter().find(|(n, _)| n == "d_min spheres").expect("shown now, with its legend");
+    assert!(d_min.1.iter().any(|e| e.text.contains("disc-light radius")), "{:?}", d_min.1);
+    // A light's tooltip names its cluster; selecting it selects the cluster's members for highlighting.
+    let lines = h.state_mut().light_tooltip(0);
+    assert!(lines.iter().any(|l| l.starts_with("cluster ")) && lines[0] == "light 0", "{lines:?}");
+    let group = h.state_mut().light_details(0).expect("light 0 is in a cluster").group;
+    assert!(group.contains(&0));
+}
+
+#[test]
+fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
+    use shadowlab::figure::{figure_size, GAP, TITLE_HEIGHT};
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("figure", "cornell");
+    let app = h.state_mut();
+    app.technique = "lightcluster".into();
+    app.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
+    h.run_steps(3);
+    let path = h.state_mut().save_figure().unwrap();
+    let (w, hgt) = h.state().gpu.as_ref().unwrap().main.size;
+    let img = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), figure_size(w, hgt, 3), "three panes of the view's render size");
+    assert!(path.file_name().unwrap().to_string_lossy().contains("figure"));
+    // Three different images: the technique, the reference, the difference (mostly dark blue).
+    let mean = |pane: u32| {
+        let x0 = GAP + pane * (w + GAP);
+        let mut sum = [0f64; 3];
+        for y in TITLE_HEIGHT..TITLE_HEIGHT + hgt {
+            for x in x0..x0 + w {
+                let p = img.get_pixel(x, y).0;
+                (0..3).for_each(|c| sum[c] += p[c] as f64);
+            }
+        }
+        sum.map(|s| s / (w * hgt) as f64)
+    };
+    let (t, r, d) = (mean(0), mean(1), mean(2));
+    assert!(t != r, "LightCluster differs from the reference: {t:?} {r:?}");
+    assert!(d[2] > d[0] && d[0] < 100.0, "the difference is mostly dark blue: {d:?}");
+    assert!(t.iter().all(|c| *c < 250.0), "the panes are not the white background: {t:?}");
+    // An orbit of 3 frames: 3 PNGs at the render size, not all the same.
+    let frames = h.state_mut().save_orbit_sequence(3).unwrap();
+    assert_eq!(frames.len(), 3);
+    let images: Vec<_> = frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    assert!(images.iter().all(|i| i.dimensions() == (w, hgt)));
+    assert!(images[0] != images[1], "the camera moved between frames");
+    assert!(h.state_mut().save_orbit_sequence(0).is_err(), "no frames is an error, not a panic");
+}
+
+#[test]
+fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
+    let mut h = start("inspector-maps", "cornell");
+    h.state_mut().layout.focus(Pane::Maps);
+    h.run_steps(3);
+    let app = h.state();
+    let atlas = app.inspector.atlas.as_ref().expect("the reference's atlas was read back");
+    assert!(atlas.tiles >= 6 && atlas.resolution == 256, "{} tiles of {}", atlas.tiles, atlas.resolution);
+    let cross = app.inspector.shown.as_ref().expect("a cube map is shown");
+    assert_eq!((cross.width, cross.height), (4 * atlas.resolution, 3 * atlas.resolution), "unfolded as a cross");
+    // Six faces of texels, outside them nothing; the light's walls within its range are drawn.
+    let inside = cross.depths.iter().filter(|d| !d.is_nan()).count();
+    assert_eq!(inside, 6 * (atlas.resolution * atlas.resolution) as usize);
+    assert!(cross.depths.iter().any(|d| *d > 0.0 && *d < 1.0), "some geometry in the cube map");
+    let centre = cross.readout(2 * atlas.resolution - atlas.resolution / 2, atlas.resolution * 3 / 2).unwrap();
+    assert!(centre.contains("cube 0 face +z") && centre.contains("depth "), "{centre}");
+    h.get_by_label_contains("tiles of 256² texels");
+}
+
+#[test]
+fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
+    let mut h = start("explain", "cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(3);
+    h.state_mut().layout.focus(Pane::Explain);
+    h.run_steps(1);
+    h.get_by_label("2. Cluster centers").click();
+    h.run_steps(2);
+    let on = |h: &mut Harness<'static, ShadowLabApp>, name: &str| {
+        h.state_mut().overlay_layers().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("{name}")).1
+    };
+    assert!(on(&mut h, "cluster centers") && on(&mut h, "d_min spheres"));
+    assert!(!on(&mut h, "member -> center") && !on(&mut h, "lights by cluster"));
+    h.get_by_label_contains("from every center so far");
+    // The cube-map step brings the shadow maps forward.
+    h.get_by_label("4. One cube map per cluster").click();
+    h.run_steps(2);
+    assert!(h.state().layout.is_on_screen(Pane::Maps));
+    // INSM: the mesh step shows the wireframe and the dropped edges.
+    h.state_mut().technique = "insm".into();
+    h.state_mut().layout.focus(Pane::Explain);
+    h.run_steps(3);
+    h.get_by_label("3. Their meshes").click();
+    h.run_steps(2);
+    assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));
+    // A technique without steps says so.
+    h.state_mut().technique = "unshadowed".into();
+    h.run_steps(2);
+    h.get_by_label_contains("describes no steps");
+}
+
+#[test]
+fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
+    let mut h = start("viewpoint-tooltip", "arcade");
+    h.state_mut().technique = "insm".into();
+    h.run_steps(4);
+    let p = projection(&h);
+    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
+    let cameras = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let pos = cameras
+        .iter()
+        .filter_map(|c| p.to_screen(c.position))
+        .find(|s| rect.contains(*s))
+        .expect("a viewpoint is on screen");
+    let lines = h.state_mut().camera_tooltip(&p, pos);
+    assert!(lines.len() == 3 && lines[0].contains(&format!("of {}", cameras.len())), "{lines:?}");
+    assert!(lines[2].starts_with("looking at"), "{lines:?}");
+    assert!(h.state_mut().camera_tooltip(&p, egui::pos2(-100.0, -100.0)).is_empty());
 }

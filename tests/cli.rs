@@ -240,9 +240,12 @@ fn compare_writes_a_difference_image_and_metrics() {
     let dir = out_dir("compare");
     let diff = dir.join("diff.png");
     let json = dir.join("metrics.json");
+    let figure = dir.join("figure.png");
     let out = shadowlab(&[
         "compare",
         "--quiet",
+        "--figure",
+        figure.to_str().unwrap(),
         "--scene",
         "cornell",
         "--technique",
@@ -271,6 +274,9 @@ fn compare_writes_a_difference_image_and_metrics() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = image::open(&diff).unwrap();
     assert_eq!((img.width(), img.height()), (96, 64));
+    // The figure: technique, reference and difference side by side, with captions.
+    let fig = image::open(&figure).unwrap();
+    assert_eq!((fig.width(), fig.height()), shadowlab::figure::figure_size(96, 64, 3));
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0);
     assert!(r["metrics"]["flip_mean"].as_f64().is_some());

@@ -271,6 +271,9 @@ pub struct CompareArgs {
     /// The technique's own image (PNG).
     #[arg(long)]
     pub image: Option<PathBuf>,
+    /// A paper-style figure (PNG): the technique, the target and the difference side by side, with captions.
+    #[arg(long)]
+    pub figure: Option<PathBuf>,
     /// Metrics and timings as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -768,6 +771,9 @@ fn compare(args: CompareArgs) -> Result<()> {
     if let Some(r) = &args.image {
         check_output_path(r, "png")?;
     }
+    if let Some(r) = &args.figure {
+        check_output_path(r, "png")?;
+    }
     check_technique(&args.technique)?;
     check_technique(&args.against)?;
     if !(args.gain.is_finite() && args.gain > 0.0) {
@@ -795,6 +801,7 @@ fn compare(args: CompareArgs) -> Result<()> {
         f.repeat,
         &mut say,
     )?;
+    let target_image = args.figure.as_ref().map(|_| renderer.read_output()).transpose()?;
     let tech = crate::measure::render_technique(
         &mut renderer,
         &args.technique,
@@ -807,8 +814,9 @@ fn compare(args: CompareArgs) -> Result<()> {
         f.repeat,
         &mut say,
     )?;
+    let tech_image = renderer.read_output()?;
     if let Some(path) = &args.image {
-        write_atomic(path, &encode_png(&renderer.read_output()?)?)?;
+        write_atomic(path, &encode_png(&tech_image)?)?;
     }
     let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
     let (metrics, diff) = crate::measure::compare_images(
@@ -820,8 +828,51 @@ fn compare(args: CompareArgs) -> Result<()> {
         !args.no_flip,
         f.exposure,
     )?;
-    write_atomic(&args.out, &encode_png(&diff)?)?;
     let speedup = target.timing.median_ms / tech.timing.median_ms.max(1e-9);
+    if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
+        use crate::figure::{compose, metrics_caption, FigurePane};
+        let metrics_lines = metrics_caption(&metrics);
+        let params = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
+        let title = format!(
+            "{} · {} lights · {}x{} · {}",
+            scene.name,
+            lights.len(),
+            f.width,
+            f.height,
+            gpu.adapter_description()
+        );
+        let figure = compose(
+            &title,
+            &[
+                FigurePane {
+                    image: tech_image,
+                    caption: vec![
+                        args.technique.clone(),
+                        params(&args.params),
+                        format!("{:.1} ms (median of {}), ×{speedup:.2}", tech.timing.median_ms, tech.timing.frames),
+                    ],
+                },
+                FigurePane {
+                    image: target_image,
+                    caption: vec![
+                        args.against.clone(),
+                        params(&args.against_params),
+                        format!("{:.1} ms (median of {})", target.timing.median_ms, target.timing.frames),
+                    ],
+                },
+                FigurePane {
+                    image: diff.clone(),
+                    caption: vec![
+                        format!("{:?} difference ×{}", args.mode, args.gain).to_lowercase(),
+                        metrics_lines[0].clone(),
+                        metrics_lines[1].clone(),
+                    ],
+                },
+            ],
+        )?;
+        write_atomic(path, &encode_png(&figure)?)?;
+    }
+    write_atomic(&args.out, &encode_png(&diff)?)?;
     if !quiet {
         eprintln!(
             "{} vs {} on {} ({}x{}): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over {:.0}%",

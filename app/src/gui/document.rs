@@ -99,6 +99,8 @@ pub struct ViewSettings {
     pub diff_gain: f32,
     /// What side-by-side, split and difference views compare with: `reference` or `raytraced`.
     pub compare_against: String,
+    /// A legend of the visible overlay layers drawn over the 3D view.
+    pub legend: bool,
 }
 
 impl ViewSettings {
@@ -135,6 +137,7 @@ impl Default for ViewSettings {
             diff_visibility: false,
             diff_gain: 1.0,
             compare_against: "reference".into(),
+            legend: true,
         }
     }
 }

@@ -5,8 +5,12 @@
 //! generated panel, the shared VPL settings and the component (total, direct, indirect) the views show.
 
 pub mod camera;
+pub mod capture;
 pub mod document;
 pub mod gizmo;
+pub mod inspector;
+pub mod layout;
+pub mod legend;
 pub mod panels;
 pub mod sweep;
 pub mod viewport;
@@ -19,10 +23,11 @@ use std::time::Instant;
 use anyhow::{anyhow, Context, Result};
 use eframe::{egui, egui_wgpu};
 use glam::Vec3;
+use shadowlab_core::renderer::overlay::OverlayStyle;
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::layout::{self, LightLayout};
+use shadowlab_core::scene::layout::{self as light_layout, LightLayout};
 use shadowlab_core::scene::{PointLight, Scene, SceneSource};
-use shadowlab_core::technique::{CameraPose, Overlay, ParamValue};
+use shadowlab_core::technique::{CameraPose, LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::{GpuContext, RenderSettings, ToneMap};
 
@@ -85,11 +90,10 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
     egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
-/// The window size when none is given: 1400x860, or 1024x640 on a software rasterizer, where egui's drawing and
-/// the presentation of the window cost in proportion to its area (orbiting the arcade on lavapipe: 13 fps at
-/// 1400x860, 20 fps at 1000x640; README).
-pub fn default_window_size() -> [f32; 2] {
-    if shadowlab_core::gpu::GpuContext::default_adapter_is_software() == Some(true) {
+/// The window size when none is given: 1400x860, or 1024x640 on a software rasterizer (`software`), where
+/// egui's drawing and the presentation of the window cost in proportion to its area (README, "The app").
+pub fn default_window_size(software: bool) -> [f32; 2] {
+    if software {
         eprintln!("software rasterizer: opening a 1024x640 window (--window-size to choose)");
         [1024.0, 640.0]
     } else {
@@ -99,12 +103,15 @@ pub fn default_window_size() -> [f32; 2] {
 
 /// Open the window.
 pub fn run(startup: Startup) -> Result<()> {
+    let software = shadowlab_core::gpu::GpuContext::default_adapter_is_software() == Some(true);
+    let size = startup.window_size.map(|(w, h)| [w, h]).unwrap_or_else(|| default_window_size(software));
     let options = eframe::NativeOptions {
-        viewport: egui::ViewportBuilder::default()
-            .with_inner_size(startup.window_size.map(|(w, h)| [w, h]).unwrap_or_else(default_window_size))
-            .with_title("ShadowLab"),
+        viewport: egui::ViewportBuilder::default().with_inner_size(size).with_title("ShadowLab"),
         renderer: eframe::Renderer::Wgpu,
         wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: wgpu_setup(), ..Default::default() },
+        // egui's dithering is per-pixel noise in its fragment shader, over the whole window every frame: on a
+        // software rasterizer that costs, and banding in 8-bit UI colours is invisible.
+        dithering: !software,
         ..Default::default()
     };
     eframe::run_native("ShadowLab", options, Box::new(move |cc| Ok(Box::new(ShadowLabApp::new(cc, startup)?))))
@@ -213,6 +220,20 @@ pub struct ShadowLabApp {
     quitting: bool,
     orbit_demo: bool,
     ui_frames: u64,
+    /// The tiles of the window (panels around the 3D view) and the full-view flag.
+    pub layout: layout::Layout,
+    /// The selection of the last UI frame: a new one brings the light inspector forward.
+    last_selected: Option<usize>,
+    /// The legends of the overlay layers drawn in the last UI frame: (layer name, entries).
+    pub legends: Vec<(String, Vec<LegendEntry>)>,
+    /// The 3D view's size in physical pixels (captures render at its render resolution).
+    pub last_view_pixels: egui::Vec2,
+    /// Frames of an orbit image sequence (File menu).
+    pub orbit_frames: usize,
+    /// The shadow-map inspector's state.
+    pub inspector: inspector::Inspector,
+    /// The Explain panel's chosen step: (technique key, step index).
+    pub explain_step: Option<(String, usize)>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -227,6 +248,7 @@ impl ShadowLabApp {
     pub fn new(cc: &eframe::CreationContext<'_>, startup: Startup) -> Result<ShadowLabApp> {
         let scene = Scene::builtin("arcade")?;
         let data_dir = startup.data_dir.clone().unwrap_or_else(default_data_dir);
+        let layout = layout::Layout::load(&data_dir);
         let mut app = ShadowLabApp {
             lights: scene.lights.clone(),
             camera: CameraController::from_camera(&scene.camera, &scene.bounds),
@@ -264,6 +286,13 @@ impl ShadowLabApp {
             quitting: false,
             orbit_demo: startup.orbit_demo,
             ui_frames: 0,
+            layout,
+            last_selected: None,
+            legends: Vec::new(),
+            last_view_pixels: egui::vec2(640.0, 360.0),
+            orbit_frames: 36,
+            inspector: inspector::Inspector::default(),
+            explain_step: None,
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -354,8 +383,8 @@ impl ShadowLabApp {
         self.lights = scene.lights.clone();
         if self.lights.is_empty() {
             // Most OBJ files and many glTF models come without lights: start lit, and say so.
-            let layout = layout::default_for_unlit(&scene);
-            if let Ok(lights) = layout::generate(&layout, &scene) {
+            let layout = light_layout::default_for_unlit(&scene);
+            if let Ok(lights) = light_layout::generate(&layout, &scene) {
                 self.lights = lights;
                 self.toasts.push(Toast {
                     text: format!("{} has no lights: placed {layout} (Lights panel to change)", scene.name),
@@ -532,7 +561,12 @@ impl ShadowLabApp {
     pub fn add_light_at(&mut self, point: Vec3, normal: Vec3) {
         let template = self.selected.and_then(|i| self.lights.get(i).copied()).unwrap_or_else(|| {
             let range = (self.scene.bounds.size().length() * 0.15).max(0.5);
-            PointLight::new(Vec3::ZERO, Vec3::new(1.0, 0.9, 0.8), layout::default_intensity_for_range(range), range)
+            PointLight::new(
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.9, 0.8),
+                light_layout::default_intensity_for_range(range),
+                range,
+            )
         });
         self.begin_edit();
         let offset = (template.range * 0.05).clamp(0.02, 0.5);
@@ -541,7 +575,7 @@ impl ShadowLabApp {
     }
 
     pub fn apply_layout(&mut self, spec: &str) {
-        match layout::parse(spec).and_then(|l: LightLayout| layout::generate(&l, &self.scene)) {
+        match light_layout::parse(spec).and_then(|l: LightLayout| light_layout::generate(&l, &self.scene)) {
             Ok(lights) => {
                 self.begin_edit();
                 self.lights = lights;
@@ -637,29 +671,148 @@ impl ShadowLabApp {
         }
     }
 
-    /// The overlay primitives of the current technique that the user has switched on, plus the selection.
-    fn overlay_primitives(&mut self, lights: &[PointLight]) -> Vec<Overlay> {
+    /// The overlay primitives of the current technique that the user has switched on, plus the selection, and
+    /// the legend of each of those layers (as the layers describe themselves through their technique).
+    fn overlay_primitives(&mut self, lights: &[PointLight]) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
         let mut out = Vec::new();
-        let Some(gpu) = &mut self.gpu else { return out };
-        let Ok(technique) = gpu.main.technique(&self.technique) else { return out };
-        let mut layers = technique.overlays(lights);
+        let mut legends = Vec::new();
+        let overlays = &self.view.overlays;
+        let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
+        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>| {
+            for layer in layers.into_iter().filter(|l| is_on(l)) {
+                legends.push((layer.name.to_string(), technique.overlay_legend(&layer)));
+                out.extend(layer.primitives);
+            }
+        };
+        let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
+        if let Ok(technique) = gpu.main.technique(&self.technique) {
+            let layers = technique.overlays(lights);
+            take(technique.as_ref(), layers, &mut out);
+        }
         if self.technique != "reference" {
             if let Ok(reference) = gpu.main.technique("reference") {
-                layers.extend(reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges"));
+                let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
+                take(reference.as_ref(), layers, &mut out);
             }
         }
-        layers.extend(self.indirect_overlay_layers(lights));
-        for layer in layers {
-            let on = *self.view.overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
-            if on {
-                out.extend(layer.primitives);
+        if let Some(key) = self.indirect.technique.clone() {
+            if let Ok(t) = gpu.main.indirect_technique(&key) {
+                let t = t.borrow();
+                let layers = t.overlays(lights);
+                take(t.as_ref(), layers, &mut out);
+            }
+        }
+        // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
+        if let Some(group) = self.selected.and_then(|i| self.light_details(i)).map(|d| d.group).filter(|g| g.len() > 1)
+        {
+            let at: Vec<Vec3> = group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position).collect();
+            let member = |p: &Vec3| at.contains(p);
+            for o in &mut out {
+                let keep = match o {
+                    Overlay::Point { position, .. } => member(position),
+                    Overlay::Line { from, to, .. } => member(from) || member(to),
+                    Overlay::Sphere { center, .. } => member(center),
+                    _ => true,
+                };
+                if !keep {
+                    if let Overlay::Point { color, .. } | Overlay::Line { color, .. } | Overlay::Sphere { color, .. } =
+                        o
+                    {
+                        color[3] *= 0.2;
+                    }
+                }
             }
         }
         if let Some(l) = self.selected.and_then(|i| lights.get(i)) {
             out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
             out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
         }
-        out
+        (out, legends)
+    }
+
+    /// Show what an Explain step shows: its overlay layers on, the technique's others off, and the shadow-map
+    /// panel in front when the step is about the shadow maps.
+    pub fn show_explain_step(&mut self, step: &shadowlab_core::technique::ExplainStep) {
+        for (name, _) in self.overlay_layers() {
+            let on = step.layers.contains(&name.as_str());
+            self.view.overlays.insert(name, on);
+        }
+        if step.shows_shadow_maps {
+            self.layout.request_focus(layout::Pane::Maps);
+        }
+    }
+
+    /// The shadow-map inspector: reads the chosen technique's atlas back once per completed frame (not for the
+    /// preview while the camera moves), then shows it.
+    pub fn maps_ui(&mut self, ui: &mut egui::Ui) {
+        use inspector::{AtlasDepths, MapSource};
+        let has_indirect = self.indirect.technique.is_some();
+        if !has_indirect {
+            self.inspector.source = MapSource::Direct;
+        }
+        let key = self.technique.clone();
+        if let Some(gpu) = &mut self.gpu {
+            let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
+            let from = (gpu.main.frame_key(), self.inspector.source);
+            if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
+                let ctx = gpu.ctx.clone();
+                let read = |t: &dyn shadowlab_core::technique::Technique| {
+                    t.shadow_atlas().map(|(a, what)| AtlasDepths::read(&ctx, a, what)).transpose()
+                };
+                let result = match self.inspector.source {
+                    MapSource::Direct => gpu.main.technique(&key).and_then(|t| read(t.as_ref())),
+                    MapSource::Indirect => match self.indirect.technique.clone() {
+                        Some(k) => gpu.main.indirect_technique(&k).and_then(|t| read(t.borrow().as_ref())),
+                        None => Ok(None),
+                    },
+                };
+                self.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
+            }
+        }
+        self.inspector.ui(ui, has_indirect);
+    }
+
+    /// What the current technique made of light `index` in its last frame (its cluster, say).
+    pub fn light_details(&mut self, index: usize) -> Option<shadowlab_core::technique::LightDetails> {
+        let gpu = self.gpu.as_mut()?;
+        gpu.main.technique(&self.technique).ok()?.light_details(index)
+    }
+
+    /// The tooltip of a light in the view: its fields, and what the technique made of it.
+    pub fn light_tooltip(&mut self, index: usize) -> Vec<String> {
+        let Some(l) = self.lights.get(index).copied() else { return Vec::new() };
+        let mut lines = vec![
+            format!("light {index}{}", if l.spot.is_some() { " (spot)" } else { "" }),
+            format!("position ({:.2}, {:.2}, {:.2})", l.position.x, l.position.y, l.position.z),
+            format!("intensity {:.2} · L_att {:.2}", l.intensity, l.range),
+        ];
+        if let Some(d) = self.light_details(index) {
+            lines.extend(d.lines);
+        }
+        lines
+    }
+
+    /// The tooltip of a camera the technique used (a `Cameras` parameter's, e.g. an INSM viewpoint) under `pos`.
+    pub fn camera_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let Ok(technique) = gpu.main.technique(&self.technique) else { return Vec::new() };
+        for p in technique.params() {
+            if let shadowlab_core::technique::ParamKind::Cameras { .. } = p.kind {
+                let cameras = technique.cameras_in_use(p.key);
+                if let Some(i) = gizmo::pick_point(projection, cameras.iter().map(|c| c.position), pos, 10.0) {
+                    let c = cameras[i];
+                    return vec![
+                        format!("{} #{} of {}", p.label, i + 1, cameras.len()),
+                        format!("position ({:.2}, {:.2}, {:.2})", c.position.x, c.position.y, c.position.z),
+                        format!(
+                            "looking at ({:.2}, {:.2}, {:.2}) · fov {:.0}°",
+                            c.target.x, c.target.y, c.target.z, c.fov_y_deg
+                        ),
+                    ];
+                }
+            }
+        }
+        Vec::new()
     }
 
     /// Names of the overlay layers the current technique offers, with their state.
@@ -687,7 +840,8 @@ impl ShadowLabApp {
     fn render_views(&mut self, size: egui::Vec2, pixels_per_point: f32, interacting: bool) -> Result<()> {
         let lights = self.animated_lights();
         let camera = self.camera.camera();
-        let mut overlays = self.overlay_primitives(&lights);
+        let (mut overlays, legends) = self.overlay_primitives(&lights);
+        self.legends = legends;
         let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.technique.clone() };
         let two = self.view.mode != ViewMode::Single;
         let per_view = if self.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
@@ -699,6 +853,8 @@ impl ShadowLabApp {
                 *radius_px *= render_pixels_per_point;
             }
         }
+        // Lines about 2 points wide on screen, whatever the render resolution; occluded parts faded.
+        let style = OverlayStyle { line_width_px: (2.0 * render_pixels_per_point).max(1.0), occluded_alpha: 0.25 };
         let params = self.params.get(&technique).cloned().unwrap_or_default();
         // Both views get the same indirect technique and parameters, so a comparison compares the same light.
         let (indirect, indirect_params) = self.indirect_inputs(interacting);
@@ -737,6 +893,8 @@ impl ShadowLabApp {
                 }
             }
         }
+        gpu.main.renderer.set_overlay_style(style);
+        gpu.reference.renderer.set_overlay_style(style);
         gpu.main.overlays(&camera, &overlays, x_ray)?;
         let mut total_spent = spent;
         let mut total_steps = steps;
@@ -905,6 +1063,14 @@ impl ShadowLabApp {
         self.data_dir.join("screenshots").join(name)
     }
 
+    /// Export a figure and say where it went (or why not).
+    pub fn export_figure(&mut self) {
+        match self.save_figure() {
+            Ok(p) => self.toast(format!("saved {}", p.display())),
+            Err(e) => self.error(format!("figure export failed: {e:#}")),
+        }
+    }
+
     /// Save the 3D view at its render resolution (no UI). Returns the path.
     pub fn save_view_screenshot(&mut self) -> Result<PathBuf> {
         let path = self.screenshot_name("view");
@@ -928,15 +1094,22 @@ impl ShadowLabApp {
     // ----- UI -----
 
     fn handle_shortcuts(&mut self, ctx: &egui::Context) {
-        let (undo, redo, duplicate, f12, shift_f12) = ctx.input_mut(|i| {
+        let full_view = ctx.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::F11))
+            || (!ctx.egui_wants_keyboard_input()
+                && ctx.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::Tab)));
+        if full_view {
+            self.layout.toggle_full_view();
+        }
+        let (undo, redo, duplicate, f12, shift_f12, figure) = ctx.input_mut(|i| {
             // Redo first: Ctrl+Shift+Z would otherwise also match Ctrl+Z.
             let redo = i.consume_key(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z)
                 || i.consume_key(egui::Modifiers::COMMAND, egui::Key::Y);
             let undo = i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z);
+            let figure = i.consume_key(egui::Modifiers::COMMAND, egui::Key::F12);
             let shift_f12 = i.consume_key(egui::Modifiers::SHIFT, egui::Key::F12);
             let f12 = i.consume_key(egui::Modifiers::NONE, egui::Key::F12);
             let duplicate = i.consume_key(egui::Modifiers::COMMAND, egui::Key::D);
-            (undo, redo, duplicate, f12, shift_f12)
+            (undo, redo, duplicate, f12, shift_f12, figure)
         });
         // Plain keys belong to a text field when one has the focus.
         let (delete, frame) = if ctx.egui_wants_keyboard_input() {
@@ -973,6 +1146,9 @@ impl ShadowLabApp {
         }
         if shift_f12 {
             self.request_window_screenshot(ctx);
+        }
+        if figure {
+            self.export_figure();
         }
     }
 
@@ -1185,6 +1361,7 @@ impl ShadowLabApp {
             || self.last_interaction.is_some_and(|t| t.elapsed().as_secs_f32() < 0.25);
 
         let ppp = ui.ctx().pixels_per_point();
+        self.last_view_pixels = rect.size() * ppp;
         if let Err(e) = self.render_views(rect.size() * ppp, ppp, interacting) {
             self.status = format!("render error: {e:#}");
         }
@@ -1284,6 +1461,25 @@ impl ShadowLabApp {
         if let Some(at) = self.gizmo_target().and_then(|t| self.target_position(&t)) {
             let hover = pointer.and_then(|p| gizmo::hit_handle(&projection, at, p));
             gizmo::paint(&painter, &projection, at, self.drag.as_ref().map(|d| d.handle).or(hover));
+        }
+        if self.view.legend {
+            legend::paint_in_view(&painter, rect, &self.legends);
+        }
+        // A light under the pointer: its details in a tooltip.
+        if self.drag.is_none() && !interacting {
+            if let Some(pos) = response.hover_pos() {
+                let lines = match gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
+                    Some(i) => self.light_tooltip(i),
+                    None => self.camera_tooltip(&projection, pos),
+                };
+                if !lines.is_empty() {
+                    response.clone().on_hover_ui_at_pointer(|ui| {
+                        for l in &lines {
+                            ui.label(l);
+                        }
+                    });
+                }
+            }
         }
         if interacting || self.animation != Animation::Off {
             ui.ctx().request_repaint();
@@ -1433,9 +1629,36 @@ impl eframe::App for ShadowLabApp {
         }
         self.handle_dropped_files(&ctx);
         self.handle_shortcuts(&ctx);
-        panels::menu_bar(self, ui);
-        panels::side_panels(self, ui);
-        egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| self.viewport_ui(ui));
+        if self.selected != self.last_selected {
+            if self.selected.is_some() {
+                self.layout.focus(layout::Pane::Lights);
+            }
+            self.last_selected = self.selected;
+        }
+        if self.layout.full_view {
+            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| {
+                self.viewport_ui(ui);
+                let at = ui.max_rect().right_top() + egui::vec2(-8.0, 8.0);
+                egui::Area::new(egui::Id::unique("leave full view")).fixed_pos(at).pivot(egui::Align2::RIGHT_TOP).show(
+                    ui.ctx(),
+                    |ui| {
+                        if ui.button("Show panels (Tab)").clicked() {
+                            self.layout.toggle_full_view();
+                        }
+                    },
+                );
+            });
+        } else {
+            panels::menu_bar(self, ui);
+            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| layout::tiles_ui(self, ui));
+        }
+        self.layout.save_if_changed(&self.data_dir, &ctx);
         self.toasts_ui(&ctx);
+    }
+
+    fn on_exit(&mut self) {
+        if let Err(e) = self.layout.save(&self.data_dir) {
+            log::warn!("cannot save the layout: {e:#}");
+        }
     }
 }

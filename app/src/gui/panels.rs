@@ -13,6 +13,7 @@ use shadowlab_core::vpl::{VplSource, MAX_BOUNCES, MAX_VPLS};
 
 use super::camera::CameraMode;
 use super::document::{IndirectSettings, ViewMode};
+use super::layout::Pane;
 use super::{Animation, ShadowLabApp};
 
 pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
@@ -73,6 +74,32 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     app.request_window_screenshot(ui.ctx());
                     ui.close();
                 }
+                if ui
+                    .button("Export figure: view, reference, difference (Ctrl+F12)")
+                    .on_hover_text("One PNG with captions; both images are rendered completely first")
+                    .clicked()
+                {
+                    app.export_figure();
+                    ui.close();
+                }
+                ui.horizontal(|ui| {
+                    if ui
+                        .button("Orbit image sequence")
+                        .on_hover_text("PNGs of a full orbit, each frame complete")
+                        .clicked()
+                    {
+                        match app.save_orbit_sequence(app.orbit_frames) {
+                            Ok(p) => {
+                                let dir = p.first().and_then(|f| f.parent()).map(|d| d.display().to_string());
+                                app.toast(format!("saved {} frames in {}", p.len(), dir.unwrap_or_default()));
+                            }
+                            Err(e) => app.error(format!("orbit sequence failed: {e:#}")),
+                        }
+                        ui.close();
+                    }
+                    let label = ui.label("frames");
+                    ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720)).labelled_by(label.id);
+                });
             });
             ui.menu_button("Scene", |ui| {
                 for name in shadowlab_core::scene::builtin::NAMES {
@@ -105,6 +132,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.separator();
                 ui.checkbox(&mut app.view.x_ray, "X-ray overlays");
             });
+            ui.menu_button("Panels", |ui| super::layout::panels_menu(app, ui));
         });
     });
 }
@@ -458,12 +486,24 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             });
         }
     }
+}
+
+fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Overlays");
-    ui.checkbox(&mut app.view.x_ray, "X-ray (through geometry)");
+    ui.checkbox(&mut app.view.x_ray, "X-ray (through geometry)")
+        .on_hover_text("Off: the parts behind surfaces are drawn faded; on: everything is drawn in full on top");
+    ui.checkbox(&mut app.view.legend, "Legend over the view");
+    ui.label("Hover a light for its details; click it to select it (and its cluster, when it has one).");
     for (name, on) in app.overlay_layers() {
         let mut x = on;
         if ui.checkbox(&mut x, &name).changed() {
-            app.view.overlays.insert(name, x);
+            app.view.overlays.insert(name.clone(), x);
+        }
+        // The legend of the layers drawn in the last frame.
+        if let Some((_, entries)) = app.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
+            for e in entries {
+                super::legend::entry_ui(ui, e);
+            }
         }
     }
 }
@@ -585,7 +625,7 @@ fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     let Some(gpu) = &app.gpu else { return };
     let ui_ms = app.ui_frame_ms.iter().copied().sum::<f64>() / app.ui_frame_ms.len().max(1) as f64;
-    ui.horizontal(|ui| {
+    ui.horizontal_wrapped(|ui| {
         ui.label(format!("adapter: {}", gpu.ctx.adapter_description()));
         ui.separator();
         ui.label(format!("UI {:.0} fps", 1000.0 / ui_ms.max(1e-3)));
@@ -596,9 +636,9 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             ui.colored_label(egui::Color32::LIGHT_RED, &app.status);
         }
     });
-    ui.columns(2, |cols| {
+    let table = |ui: &mut egui::Ui| {
         // A scroll area, so more rows never resize the panel (and with it the 3D view, which would restart).
-        egui::ScrollArea::vertical().id_salt("timings table").auto_shrink([false, false]).show(&mut cols[0], |ui| {
+        egui::ScrollArea::vertical().id_salt("timings table").auto_shrink([false, false]).show(ui, |ui| {
             if let Some(r) = &gpu.main.last_report {
                 egui::Grid::new("passes").striped(true).num_columns(3).show(ui, |ui| {
                     ui.strong("pass");
@@ -678,7 +718,8 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.label("rendering the first frame…");
             }
         });
-        let ui = &mut cols[1];
+    };
+    let plot = |ui: &mut egui::Ui| {
         let mut names: Vec<String> = Vec::new();
         for (_, _, passes) in &app.timings {
             for p in passes {
@@ -687,7 +728,7 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 }
             }
         }
-        Plot::new("timings").legend(Legend::default()).height(140.0).y_axis_label("ms").show(ui, |plot| {
+        Plot::new("timings").legend(Legend::default()).height(130.0).y_axis_label("ms").show(ui, |plot| {
             let total: PlotPoints = app.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
             plot.line(Line::new("frame (GPU)", total));
             for name in names {
@@ -699,7 +740,17 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 plot.line(Line::new(name, pts));
             }
         });
-    });
+    };
+    // Side by side when the panel is wide, the plot above the table when it is a narrow column.
+    if ui.available_width() >= 560.0 {
+        ui.columns(2, |cols| {
+            table(&mut cols[0]);
+            plot(&mut cols[1]);
+        });
+    } else {
+        plot(ui);
+        table(ui);
+    }
 }
 
 /// A technique's named figures (`vpls 1024 · samples 16`), in key order, whatever the technique.
@@ -801,24 +852,53 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     }
 }
 
-pub fn side_panels(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    egui::Panel::bottom("timings").resizable(true).default_size(190.0).show(ui, |ui| timings_ui(app, ui));
-    egui::Panel::left("controls").resizable(true).default_size(300.0).show(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| {
+/// The UI of one panel (a tile of the layout).
+pub fn pane_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui, pane: Pane) {
+    match pane {
+        // Drawn by the layout itself.
+        Pane::View => {}
+        Pane::Technique => {
             technique_ui(app, ui);
             ui.separator();
             indirect_ui(app, ui);
-            ui.separator();
-            render_ui(app, ui);
-        });
-    });
-    egui::Panel::right("lights").resizable(true).default_size(280.0).show(ui, |ui| {
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            lights_ui(app, ui);
-            ui.separator();
-            stats_ui(app, ui);
-            ui.separator();
-            sweep_ui(app, ui);
-        });
-    });
+        }
+        Pane::Render => render_ui(app, ui),
+        Pane::Overlays => overlays_ui(app, ui),
+        Pane::Lights => lights_ui(app, ui),
+        Pane::Scene => stats_ui(app, ui),
+        Pane::Sweep => sweep_ui(app, ui),
+        Pane::Timings => timings_ui(app, ui),
+        Pane::Maps => app.maps_ui(ui),
+        Pane::Explain => explain_ui(app, ui),
+    }
+}
+
+/// The steps of the current technique's paper, as the technique declares them; choosing one switches the
+/// overlay layers (and the shadow-map panel) that show it.
+fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+    ui.heading("Explain");
+    let key = app.technique.clone();
+    let Some(gpu) = &mut app.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&key) else { return };
+    let (label, steps) = (technique.label(), technique.explain());
+    if steps.is_empty() {
+        ui.label(format!("{label} describes no steps."));
+        return;
+    }
+    ui.label(format!("The steps of {label}, as in its paper; choose one to see it in the view."));
+    let mut chosen = None;
+    for (i, step) in steps.iter().enumerate() {
+        let selected = app.explain_step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
+        if ui.selectable_label(selected, step.title).clicked() {
+            chosen = Some(i);
+        }
+    }
+    if let Some(i) = chosen {
+        app.show_explain_step(&steps[i]);
+        app.explain_step = Some((key.clone(), i));
+    }
+    if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {
+        ui.separator();
+        ui.label(step.text);
+    }
 }

@@ -21,7 +21,8 @@ use eframe::{egui, egui_wgpu};
 use shadowlab_core::renderer::FrameJob;
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::{
-    CameraPose, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts,
+    CameraPose, FrameContext, LegendEntry, LightDetails, Overlay, OverlayLayer, Param, ParamError, ParamValue,
+    Technique, TechniqueCounts,
 };
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::GpuError;
@@ -112,6 +113,15 @@ impl Technique for SharedTechnique {
     }
     fn pixel_ids(&self, positions: &[Option<glam::Vec3>]) -> Option<(&'static str, Vec<u32>)> {
         self.0.borrow().pixel_ids(positions)
+    }
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<LegendEntry> {
+        self.0.borrow().overlay_legend(layer)
+    }
+    fn light_details(&self, index: usize) -> Option<LightDetails> {
+        self.0.borrow().light_details(index)
+    }
+    fn explain(&self) -> Vec<shadowlab_core::technique::ExplainStep> {
+        self.0.borrow().explain()
     }
     fn cameras_in_use(&self, key: &str) -> Vec<CameraPose> {
         self.0.borrow().cameras_in_use(key)

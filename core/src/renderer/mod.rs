@@ -344,6 +344,7 @@ pub struct Renderer {
     timer: PassTimer,
     draw_ranges: Vec<(u32, u32)>,
     overlay: Option<overlay::OverlayRenderer>,
+    overlay_style: overlay::OverlayStyle,
     /// The indirect technique, when one is chosen; its steps run after the direct technique's.
     indirect: Option<Box<dyn Technique>>,
     /// Indirect radiance per pixel, linear RGBA f32 (a tiny placeholder without an indirect technique).
@@ -549,6 +550,7 @@ impl Renderer {
             timer,
             draw_ranges: Vec::new(),
             overlay: None,
+            overlay_style: Default::default(),
             indirect: None,
             indirect_buffer,
             vpls: VplFrame {
@@ -1094,9 +1096,15 @@ impl Renderer {
             (t.width, t.height),
             primitives,
             x_ray,
+            self.overlay_style,
         );
         self.gpu.queue.submit([encoder.finish()]);
         Ok(())
+    }
+
+    /// Line width and the fading of occluded parts for [`Renderer::draw_overlays`].
+    pub fn set_overlay_style(&mut self, style: overlay::OverlayStyle) {
+        self.overlay_style = style;
     }
 
     /// Render a whole frame; `progress(done, total)` is called after each step.

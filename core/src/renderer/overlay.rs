@@ -1,6 +1,7 @@
 //! Drawing a technique's overlay primitives ([`crate::technique::Overlay`]) over the tone-mapped output:
-//! lines for segments, wireframe spheres (three great circles) and camera frusta; screen-sized round dots for
-//! points. Depth-tested against the G-buffer depth, or drawn on top in x-ray mode.
+//! lines for segments, wireframe spheres (three great circles) and camera frusta, each segment a screen-space
+//! quad of [`OverlayStyle::line_width_px`]; screen-sized round dots for points. Depth-tested against the G-buffer
+//! depth with the occluded parts drawn faded ([`OverlayStyle::occluded_alpha`]), or drawn on top in x-ray mode.
 
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
@@ -16,15 +17,35 @@ use crate::technique::Overlay;
 struct OverlayUniform {
     clip_from_world: [[f32; 4]; 4],
     viewport: [f32; 4],
+    /// line width in pixels, alpha factor of occluded parts, unused, unused
+    style: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<OverlayUniform>() == 80);
+const _: () = assert!(std::mem::size_of::<OverlayUniform>() == 96);
 
+/// How overlays look, in the render target's pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OverlayStyle {
+    /// Width of lines (segments, sphere circles, frusta) in pixels of the render target.
+    pub line_width_px: f32,
+    /// Alpha factor of the parts hidden behind the scene's surfaces (depth-tested mode; 0 hides them).
+    pub occluded_alpha: f32,
+}
+
+impl Default for OverlayStyle {
+    fn default() -> Self {
+        OverlayStyle { line_width_px: 1.5, occluded_alpha: 0.25 }
+    }
+}
+
+/// One line segment, drawn as an instanced quad of six vertices. Mirrors `SegmentIn` in `overlay.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct LineVertex {
-    position: [f32; 3],
+    a: [f32; 3],
+    b: [f32; 3],
     color: [f32; 4],
 }
+const _: () = assert!(std::mem::size_of::<LineVertex>() == 40);
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -47,9 +68,9 @@ pub const MAX_SPHERES: usize = 32_768;
 pub struct OverlayRenderer {
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
-    /// [depth tested, x-ray]
-    line_pipelines: [wgpu::RenderPipeline; 2],
-    dot_pipelines: [wgpu::RenderPipeline; 2],
+    /// [depth tested, x-ray, occluded parts faded]
+    line_pipelines: [wgpu::RenderPipeline; 3],
+    dot_pipelines: [wgpu::RenderPipeline; 3],
     idmap_pipeline: wgpu::RenderPipeline,
     idmap_layout: wgpu::BindGroupLayout,
 }
@@ -73,15 +94,14 @@ fn colorize_ids(ids: &[u32], alpha: f32) -> Vec<u8> {
         .collect()
 }
 
-/// Line-list vertices and dot triangles for a set of primitives.
+/// Segments (one per line) and dot triangles for a set of primitives.
 fn tessellate(primitives: &[Overlay], lines: &mut Vec<LineVertex>, dots: &mut Vec<DotVertex>) {
     let spheres = primitives.iter().filter(|p| matches!(p, Overlay::Sphere { .. })).count();
     let cheap = spheres > MAX_FULL_SPHERES;
     let mut spheres_drawn = 0usize;
     let mut seg = |a: Vec3, b: Vec3, color: [f32; 4]| {
         if a.is_finite() && b.is_finite() {
-            lines.push(LineVertex { position: a.to_array(), color });
-            lines.push(LineVertex { position: b.to_array(), color });
+            lines.push(LineVertex { a: a.to_array(), b: b.to_array(), color });
         }
     };
     for p in primitives {
@@ -234,7 +254,7 @@ impl OverlayRenderer {
             multiview_mask: None,
             cache: None,
         });
-        let make = |vs: &str, fs: &str, topology, buffer: wgpu::VertexBufferLayout, x_ray: bool| {
+        let make = |vs: &str, fs: &str, topology, buffer: wgpu::VertexBufferLayout, depth_compare| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("overlay"),
                 layout: Some(&pipeline_layout),
@@ -248,11 +268,7 @@ impl OverlayRenderer {
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: SharedLayouts::DEPTH_FORMAT,
                     depth_write_enabled: Some(false),
-                    depth_compare: Some(if x_ray {
-                        wgpu::CompareFunction::Always
-                    } else {
-                        wgpu::CompareFunction::LessEqual
-                    }),
+                    depth_compare: Some(depth_compare),
                     stencil: Default::default(),
                     bias: Default::default(),
                 }),
@@ -271,12 +287,13 @@ impl OverlayRenderer {
                 cache: None,
             })
         };
-        const LINE_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+        const LINE_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
         const DOT_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Float32x4];
         let line_layout = || wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<LineVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
+            step_mode: wgpu::VertexStepMode::Instance,
             attributes: &LINE_ATTRIBUTES,
         };
         let dot_layout = || wgpu::VertexBufferLayout {
@@ -284,18 +301,20 @@ impl OverlayRenderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &DOT_ATTRIBUTES,
         };
-        let lines = wgpu::PrimitiveTopology::LineList;
         let tris = wgpu::PrimitiveTopology::TriangleList;
+        use wgpu::CompareFunction::{Always, Greater, LessEqual};
         OverlayRenderer {
             uniform,
             bind_group,
             line_pipelines: [
-                make("line_vs", "line_fs", lines, line_layout(), false),
-                make("line_vs", "line_fs", lines, line_layout(), true),
+                make("line_vs", "line_fs", tris, line_layout(), LessEqual),
+                make("line_vs", "line_fs", tris, line_layout(), Always),
+                make("line_vs", "line_faded_fs", tris, line_layout(), Greater),
             ],
             dot_pipelines: [
-                make("dot_vs", "dot_fs", tris, dot_layout(), false),
-                make("dot_vs", "dot_fs", tris, dot_layout(), true),
+                make("dot_vs", "dot_fs", tris, dot_layout(), LessEqual),
+                make("dot_vs", "dot_fs", tris, dot_layout(), Always),
+                make("dot_vs", "dot_faded_fs", tris, dot_layout(), Greater),
             ],
             idmap_pipeline,
             idmap_layout,
@@ -314,6 +333,7 @@ impl OverlayRenderer {
         size: (u32, u32),
         primitives: &[Overlay],
         x_ray: bool,
+        style: OverlayStyle,
     ) {
         let mut lines = Vec::new();
         let mut dots = Vec::new();
@@ -367,8 +387,11 @@ impl OverlayRenderer {
             return;
         }
         let (w, h) = (size.0 as f32, size.1 as f32);
-        let uniform =
-            OverlayUniform { clip_from_world: clip_from_world.to_cols_array_2d(), viewport: [w, h, 1.0 / w, 1.0 / h] };
+        let uniform = OverlayUniform {
+            clip_from_world: clip_from_world.to_cols_array_2d(),
+            viewport: [w, h, 1.0 / w, 1.0 / h],
+            style: [style.line_width_px.clamp(0.5, 16.0), style.occluded_alpha.clamp(0.0, 1.0), 0.0, 0.0],
+        };
         gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let buffer = |data: &[u8]| {
             gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -396,22 +419,31 @@ impl OverlayRenderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let i = usize::from(x_ray);
+        // X-ray: everything on top. Otherwise the occluded parts faded first, then the visible ones.
+        let passes: &[usize] = if x_ray {
+            &[1]
+        } else if style.occluded_alpha > 0.0 {
+            &[2, 0]
+        } else {
+            &[0]
+        };
         pass.set_bind_group(0, &self.bind_group, &[]);
         for group in &id_maps {
             pass.set_pipeline(&self.idmap_pipeline);
             pass.set_bind_group(1, group, &[]);
             pass.draw(0..3, 0..1);
         }
-        if let Some(b) = &line_buffer {
-            pass.set_pipeline(&self.line_pipelines[i]);
-            pass.set_vertex_buffer(0, b.slice(..));
-            pass.draw(0..lines.len() as u32, 0..1);
-        }
-        if let Some(b) = &dot_buffer {
-            pass.set_pipeline(&self.dot_pipelines[i]);
-            pass.set_vertex_buffer(0, b.slice(..));
-            pass.draw(0..dots.len() as u32, 0..1);
+        for &i in passes {
+            if let Some(b) = &line_buffer {
+                pass.set_pipeline(&self.line_pipelines[i]);
+                pass.set_vertex_buffer(0, b.slice(..));
+                pass.draw(0..6, 0..lines.len() as u32);
+            }
+            if let Some(b) = &dot_buffer {
+                pass.set_pipeline(&self.dot_pipelines[i]);
+                pass.set_vertex_buffer(0, b.slice(..));
+                pass.draw(0..dots.len() as u32, 0..1);
+            }
         }
     }
 }
@@ -437,7 +469,7 @@ mod tests {
             &mut lines,
             &mut dots,
         );
-        assert_eq!(lines.len(), 2 + 3 * CIRCLE_SEGMENTS * 2 + 12 * 2 + 4 * 2);
+        assert_eq!(lines.len(), 1 + 3 * CIRCLE_SEGMENTS + 12 + 4, "one instance per segment");
         assert_eq!(dots.len(), 6, "a NaN point is skipped");
         let colored = colorize_ids(&[0, u32::MAX, 1], 0.5);
         assert_eq!(colored.len(), 12);
@@ -445,8 +477,9 @@ mod tests {
         assert_eq!(colored[3], 127);
         assert_ne!(colored[0..3], colored[8..11], "two IDs, two colours");
         // Sphere points lie on the sphere.
-        for v in &lines[2..2 + 3 * CIRCLE_SEGMENTS * 2] {
-            assert!((Vec3::from_array(v.position).length() - 1.0).abs() < 1e-5);
+        for v in &lines[1..1 + 3 * CIRCLE_SEGMENTS] {
+            assert!((Vec3::from_array(v.a).length() - 1.0).abs() < 1e-5);
+            assert!((Vec3::from_array(v.b).length() - 1.0).abs() < 1e-5);
         }
     }
 
@@ -457,12 +490,12 @@ mod tests {
             (0..100_000).map(|i| Overlay::Sphere { center: Vec3::splat(i as f32), radius: 1.0, color: c }).collect();
         let (mut lines, mut dots) = (Vec::new(), Vec::new());
         tessellate(&spheres, &mut lines, &mut dots);
-        assert_eq!(lines.len(), MAX_SPHERES * CHEAP_SEGMENTS * 2);
-        // About 12 MB of vertices instead of ~600 MB.
+        assert_eq!(lines.len(), MAX_SPHERES * CHEAP_SEGMENTS);
+        // About 8 MB of segments instead of ~600 MB.
         assert!(lines.len() * std::mem::size_of::<LineVertex>() < 16 << 20);
         // Few spheres keep their full form.
         let (mut few, mut d) = (Vec::new(), Vec::new());
         tessellate(&spheres[..10], &mut few, &mut d);
-        assert_eq!(few.len(), 10 * 3 * CIRCLE_SEGMENTS * 2);
+        assert_eq!(few.len(), 10 * 3 * CIRCLE_SEGMENTS);
     }
 }

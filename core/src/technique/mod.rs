@@ -327,14 +327,139 @@ pub enum Overlay {
     },
 }
 
-/// A distinct, stable colour per index (golden-ratio hue walk), for clusters and ID maps.
+/// A distinct, stable colour per index, for clusters and ID maps: a golden-ratio walk of the hue (neighbouring
+/// indices far apart on the colour wheel), with saturation and brightness stepping through three levels every
+/// 16 indices, so hundreds of clusters stay distinguishable from their neighbours.
 pub fn index_color(index: usize) -> [f32; 4] {
-    let h = (index as f32 * 0.618_034) % 1.0;
+    let h = (index as f64 * 0.618_033_988_75).fract() as f32;
+    let (saturation, value) = [(0.85, 1.0), (0.55, 0.95), (0.95, 0.7)][(index / 16) % 3];
     let k = |n: f32| {
         let k = (n + h * 6.0) % 6.0;
-        1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * 0.85
+        value * (1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * saturation)
     };
     [k(5.0), k(3.0), k(1.0), 1.0]
+}
+
+/// What a legend line shows next to its text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Glyph {
+    Dot,
+    Line,
+    Circle,
+    Frustum,
+    Rect,
+    /// Coloured pixels over the view (ID maps).
+    Pixels,
+    /// Many colours: one per cluster (or per index).
+    Palette,
+}
+
+/// One line of an overlay layer's legend: what a glyph of a colour means.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendEntry {
+    pub glyph: Glyph,
+    pub color: [f32; 4],
+    pub text: String,
+}
+
+impl LegendEntry {
+    pub fn new(glyph: Glyph, color: [f32; 4], text: impl Into<String>) -> LegendEntry {
+        LegendEntry { glyph, color, text: text.into() }
+    }
+}
+
+impl OverlayLayer {
+    /// Counts per primitive kind, with the first colour of each, and the cheaper forms the overlay renderer
+    /// switches to for this many primitives: a legend any layer has without describing itself.
+    pub fn summary(&self) -> Vec<LegendEntry> {
+        // Per glyph: its first colour, its count, and its distinct colours (up to 64, as 8-bit RGB).
+        type Kind = (Glyph, [f32; 4], usize, Vec<[u32; 3]>);
+        let mut counts: Vec<Kind> = Vec::new();
+        for p in &self.primitives {
+            let (glyph, color) = match p {
+                Overlay::Point { color, .. } => (Glyph::Dot, *color),
+                Overlay::Line { color, .. } => (Glyph::Line, *color),
+                Overlay::Sphere { color, .. } => (Glyph::Circle, *color),
+                Overlay::Frustum { color, .. } => (Glyph::Frustum, *color),
+                Overlay::Rect { color, .. } => (Glyph::Rect, *color),
+                Overlay::IdMap { .. } | Overlay::ColorMap { .. } => (Glyph::Pixels, [1.0; 4]),
+            };
+            let key = [color[0], color[1], color[2]].map(|c| (c * 255.0) as u32);
+            match counts.iter_mut().find(|(g, ..)| *g == glyph) {
+                Some((_, _, n, colors)) => {
+                    *n += 1;
+                    if colors.len() < 64 && !colors.contains(&key) {
+                        colors.push(key);
+                    }
+                }
+                None => counts.push((glyph, color, 1, vec![key])),
+            }
+        }
+        let mut out: Vec<LegendEntry> = counts
+            .into_iter()
+            .map(|(glyph, color, n, colors)| {
+                let what = match glyph {
+                    Glyph::Dot => "dots",
+                    Glyph::Line => "lines",
+                    Glyph::Circle => "spheres",
+                    Glyph::Frustum => "frusta",
+                    Glyph::Rect => "rectangles",
+                    Glyph::Pixels | Glyph::Palette => "per-pixel maps",
+                };
+                let many = colors.len() > 1;
+                let text =
+                    format!("{n} {what}{}", if many { format!(", {} colours", colors.len()) } else { String::new() });
+                LegendEntry::new(if many && glyph != Glyph::Pixels { Glyph::Palette } else { glyph }, color, text)
+            })
+            .collect();
+        let spheres = self.primitives.iter().filter(|p| matches!(p, Overlay::Sphere { .. })).count();
+        if spheres > crate::renderer::overlay::MAX_SPHERES {
+            out.push(LegendEntry::new(
+                Glyph::Circle,
+                [1.0; 4],
+                format!("cheaper form: the first {} as one circle each", crate::renderer::overlay::MAX_SPHERES),
+            ));
+        } else if spheres > crate::renderer::overlay::MAX_FULL_SPHERES {
+            out.push(LegendEntry::new(
+                Glyph::Circle,
+                [1.0; 4],
+                format!(
+                    "cheaper form: over {} spheres, each is one horizontal circle",
+                    crate::renderer::overlay::MAX_FULL_SPHERES
+                ),
+            ));
+        }
+        out
+    }
+}
+
+/// What a technique knows of one light of the last frame, for the app's hover tooltip: lines of text, and the
+/// lights of the light's group (e.g. its cluster, the light itself included) to highlight when it is selected.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightDetails {
+    pub lines: Vec<String>,
+    pub group: Vec<usize>,
+}
+
+/// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
+/// overlay layers to switch on (the technique's others are switched off) and whether its shadow maps show it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExplainStep {
+    pub title: &'static str,
+    pub text: &'static str,
+    pub layers: &'static [&'static str],
+    pub shows_shadow_maps: bool,
+}
+
+/// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.
+pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
+    let white = [1.0, 1.0, 1.0, 1.0];
+    Some(match layer.name {
+        "lights" => vec![LegendEntry::new(Glyph::Dot, white, "a light, in its colour; size grows with √intensity")],
+        "light ranges" => vec![LegendEntry::new(Glyph::Circle, white, "L_att: where the light's falloff reaches 0")],
+        "spot cones" => vec![LegendEntry::new(Glyph::Line, white, "a spot light's axis and cone, ¼ of L_att long")],
+        _ => return None,
+    })
 }
 
 /// An overlay layer a technique offers; the app toggles layers individually.
@@ -389,6 +514,22 @@ pub trait Technique {
     /// True for indirect techniques that gather the frame's VPLs (the renderer generates them only then).
     fn uses_vpls(&self) -> bool {
         false
+    }
+    /// The legend of one of this technique's overlay layers (as returned by `overlays`): what its glyphs and
+    /// colours mean. The default describes the shared light layers and otherwise counts the layer's primitives.
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<LegendEntry> {
+        let mut legend = light_layer_legend(layer).unwrap_or_default();
+        legend.extend(layer.summary());
+        legend
+    }
+    /// The steps of the technique's paper, in order, with what shows each (empty: none described).
+    fn explain(&self) -> Vec<ExplainStep> {
+        Vec::new()
+    }
+    /// What the last frame made of light `index` (of the lights it was given): e.g. its cluster, with that
+    /// cluster's members. None: nothing beyond the light's own fields.
+    fn light_details(&self, _index: usize) -> Option<LightDetails> {
+        None
     }
     /// The shadow-map atlas of the last step (the last batch when the frame had several), with what its tiles
     /// are, for inspection; None for techniques without one.

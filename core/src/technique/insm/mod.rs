@@ -624,6 +624,72 @@ impl Technique for Insm {
         }
     }
 
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. Viewpoints",
+                text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom).",
+                layers: &["INSM viewpoints"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. Intermediate depth images",
+                text: "One depth image of the scene per viewpoint (insm_res²); each sample is a point on a surface.",
+                layers: &["INSM viewpoints", "INSM samples"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3. Their meshes",
+                text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge kept \
+                       only where the second difference of depth is below ε. Red: dropped edges.",
+                layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "4. Cube maps from the meshes",
+                text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
+                       light and face in tiles.",
+                layers: &["lights"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "5. Final image",
+                text: "Shaded as the reference; the only difference is the geometry in the cube maps (light leaks \
+                       where thin geometry eroded).",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let palette = super::index_color(0);
+        let mut legend = match layer.name {
+            "INSM viewpoints" => vec![
+                LegendEntry::new(Glyph::Dot, [1.0, 0.85, 0.2, 1.0], "a viewpoint of an intermediate depth image"),
+                LegendEntry::new(Glyph::Frustum, palette, "its frustum, one colour per viewpoint"),
+            ],
+            "INSM samples" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a depth sample, in its viewpoint's colour")]
+            }
+            "INSM mesh (wireframe)" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                "kept edges of the mesh triangulated from the samples (Algorithm 2)",
+            )],
+            "INSM dropped edges" => vec![LegendEntry::new(
+                Glyph::Line,
+                [1.0, 0.2, 0.2, 1.0],
+                "edges dropped by the ε test: depth discontinuities",
+            )],
+            _ => super::light_layer_legend(layer).unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
+
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let mut layers = super::light_overlays(lights);
         let frustum_color = [1.0, 0.85, 0.2, 1.0];

@@ -442,4 +442,96 @@ impl Technique for LightCluster {
             OverlayLayer { name: "C_att spheres", visible_by_default: false, primitives: c_att_spheres },
         ]
     }
+
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. Visible lights",
+                text: "Lights whose range sphere (L_att) misses the view frustum are culled; the visible ones are \
+                       sorted by L_att, largest first. Each dot is a visible light.",
+                layers: &["lights by cluster"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. Cluster centers",
+                text: "A light becomes a center when it is farther than d_min = d_init·(1 − |C_pos|/z_far) from \
+                       every center so far: clusters are smaller far from the camera. White dots: centers; circles: \
+                       d_min.",
+                layers: &["cluster centers", "d_min spheres"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3. Members joined to centers",
+                text: "Every other light joins its nearest center; the cluster's range grows to \
+                       C_att = max(C_att, d_C + L_att). Lines: member → center; large circles: C_att.",
+                layers: &["lights by cluster", "member -> center", "C_att spheres"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "4. One cube map per cluster",
+                text: "One cube shadow map per cluster, rendered from its center with far plane C_att (the \
+                       Shadow maps panel shows the last batch's).",
+                layers: &["cluster centers"],
+                shows_shadow_maps: true,
+            },
+            ExplainStep {
+                title: "5. Soft visibility per cluster",
+                text: "Per pixel and cluster within C_att: visibility of a disc light of radius d_min (PCF, or \
+                       PCSS: blocker search, penumbra w = d_min (d_r − d_b) / d_b), multiplied into the summed \
+                       light of the cluster's members.",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "6. Final image",
+                text: "The sum over clusters; compare it with the reference (View → Difference).",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
+    fn light_details(&self, index: usize) -> Option<super::LightDetails> {
+        let (ci, c) = self.clustering.clusters.iter().enumerate().find(|(_, c)| c.members.contains(&index))?;
+        let role = if c.center == index { "its center" } else { "a member" };
+        Some(super::LightDetails {
+            lines: vec![
+                format!("cluster {ci} ({role}): {} lights, center light {}", c.members.len(), c.center),
+                format!("d_min {:.3} · C_att {:.3} · radius d_C {:.3}", c.d_min, c.c_att, c.radius),
+            ],
+            group: c.members.clone(),
+        })
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let n = self.clustering.clusters.len();
+        let white = [1.0; 4];
+        let palette = cluster_color(0);
+        let mut legend = match layer.name {
+            "lights by cluster" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                format!("a visible light, in its cluster's colour ({n} clusters)"),
+            )],
+            "cluster centers" => {
+                vec![LegendEntry::new(Glyph::Dot, white, "a cluster's center: its cube map is rendered from here")]
+            }
+            "member -> center" => vec![LegendEntry::new(Glyph::Palette, palette, "joins a member light to its center")],
+            "d_min spheres" => vec![LegendEntry::new(
+                Glyph::Circle,
+                palette,
+                "d_min = d_init·(1 − |C_pos|/z_far): the cluster's disc-light radius",
+            )],
+            "C_att spheres" => vec![LegendEntry::new(
+                Glyph::Circle,
+                palette,
+                "C_att: the cluster's range; pixels beyond it skip the cluster",
+            )],
+            _ => super::light_layer_legend(layer).unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
 }

@@ -1,0 +1,170 @@
+//! Captures beyond screenshots: a paper-style figure (the technique, its comparison target and their
+//! difference side by side, with technique, parameters and metrics as captions) and an image sequence of an
+//! orbit around the camera's target. Both render every image completely, now, in a renderer of their own on the
+//! view's device at the view's render resolution (the window waits: seconds on a software rasterizer).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use anyhow::{anyhow, Context, Result};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::Renderer;
+
+use super::camera::CameraMode;
+use super::{technique_pair, ShadowLabApp};
+use crate::figure::{self, FigurePane};
+use crate::measure::{self, DiffKind, IndirectChoice};
+
+fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
+    params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
+}
+
+impl ShadowLabApp {
+    fn indirect_choice(&self) -> IndirectChoice {
+        match &self.indirect.technique {
+            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.indirect.params.get(k)) },
+            None => IndirectChoice::none(),
+        }
+    }
+
+    /// A renderer of its own at the view's full render resolution.
+    fn capture_renderer(&self) -> Result<Renderer> {
+        let settings = self.render_settings(self.last_view_pixels, false);
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        Ok(gpu.main.renderer.new_view(settings)?)
+    }
+
+    /// The figure as an image: three panes of the view's render size (see [`figure::figure_size`]).
+    pub fn figure_image(&mut self) -> Result<image::RgbaImage> {
+        let camera = self.camera.camera();
+        let lights = self.animated_lights();
+        let mut renderer = self.capture_renderer()?;
+        let indirect = self.indirect_choice();
+        let no_progress = &mut |_: &str| {};
+        let params = param_strings(self.params.get(&self.technique));
+        let tech = measure::render_technique(
+            &mut renderer,
+            &self.technique,
+            None,
+            &params,
+            &camera,
+            &lights,
+            &indirect,
+            0,
+            1,
+            no_progress,
+        )?;
+        let tech_image = renderer.read_output()?;
+        let against = self.view.compare_against.clone();
+        let against_params = param_strings(self.params.get(&against));
+        let target = measure::render_technique(
+            &mut renderer,
+            &against,
+            None,
+            &against_params,
+            &camera,
+            &lights,
+            &indirect,
+            0,
+            1,
+            no_progress,
+        )?;
+        let target_image = renderer.read_output()?;
+        let inputs = measure::compare_inputs(&mut renderer, &camera, &lights)?;
+        let gain = self.view.diff_gain;
+        let (metrics, diff) = measure::compare_images(
+            &tech.image,
+            &target.image,
+            &inputs,
+            DiffKind::Absolute,
+            gain,
+            true,
+            self.view.exposure,
+        )?;
+        let indirect_key = self.indirect.technique.as_deref();
+        let (w, h) = (renderer.settings().width, renderer.settings().height);
+        let title = format!(
+            "{} · {} lights · {w}x{h} · {}",
+            self.scene.name,
+            lights.len(),
+            renderer.gpu().adapter_description()
+        );
+        let metrics_lines = figure::metrics_caption(&metrics);
+        let shown = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
+        let panes = [
+            FigurePane {
+                image: tech_image,
+                caption: vec![
+                    technique_pair(&self.technique, indirect_key),
+                    shown(&params),
+                    format!("GPU {:.1} ms", tech.report.gpu_total_ms),
+                ],
+            },
+            FigurePane {
+                image: target_image,
+                caption: vec![
+                    technique_pair(&against, indirect_key),
+                    shown(&against_params),
+                    format!("GPU {:.1} ms", target.report.gpu_total_ms),
+                ],
+            },
+            FigurePane {
+                image: diff,
+                caption: vec![
+                    format!("|difference| ×{gain} (dark blue 0 → red {:.2})", 1.0 / gain),
+                    metrics_lines[0].clone(),
+                    metrics_lines[1].clone(),
+                ],
+            },
+        ];
+        figure::compose(&title, &panes)
+    }
+
+    /// Export the figure next to the screenshots. Returns the path.
+    pub fn save_figure(&mut self) -> Result<PathBuf> {
+        let image = self.figure_image()?;
+        let path = self.screenshot_name("figure");
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    /// Render `frames` images of a full orbit (yaw steps of 360°/frames around the orbit target, the current
+    /// technique fully converged in each) into a new folder next to the screenshots. Returns the files.
+    pub fn save_orbit_sequence(&mut self, frames: usize) -> Result<Vec<PathBuf>> {
+        if !(1..=3600).contains(&frames) {
+            return Err(anyhow!("an orbit has 1 to 3600 frames, not {frames}"));
+        }
+        let lights = self.animated_lights();
+        let mut renderer = self.capture_renderer()?;
+        let indirect = self.indirect_choice();
+        let params = param_strings(self.params.get(&self.technique));
+        let name = self.screenshot_name("orbit");
+        let dir = name.with_extension("");
+        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let mut orbit = self.camera.clone();
+        orbit.set_mode(CameraMode::Orbit);
+        let start_yaw = orbit.yaw;
+        let mut paths = Vec::with_capacity(frames);
+        for i in 0..frames {
+            orbit.yaw = start_yaw + std::f32::consts::TAU * i as f32 / frames as f32;
+            let camera = orbit.camera();
+            measure::render_technique(
+                &mut renderer,
+                &self.technique,
+                None,
+                &params,
+                &camera,
+                &lights,
+                &indirect,
+                0,
+                1,
+                &mut |_| {},
+            )?;
+            let path = dir.join(format!("frame-{i:04}.png"));
+            renderer.read_output()?.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+            paths.push(path);
+        }
+        Ok(paths)
+    }
+}
