@@ -623,6 +623,10 @@ impl Technique for Insm {
         }
     }
 
+    fn uses_light_tiles(&self) -> bool {
+        true
+    }
+
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let mut layers = super::light_overlays(lights);
         let frustum_color = [1.0, 0.85, 0.2, 1.0];

@@ -300,7 +300,7 @@ impl Technique for Raytraced {
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, group);
+        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, &[group]);
         Ok(())
     }
 
