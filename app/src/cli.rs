@@ -1316,6 +1316,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             vpl_seed: 0,
             component: "total".into(),
             indirect_gain: 1.0,
+            no_light_tiles: false,
         };
         eprintln!("{}: loading", s.name);
         let (gpu, mut renderer, _scene, lights, camera) = setup(&s.scene, &frame)?;

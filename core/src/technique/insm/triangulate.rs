@@ -17,7 +17,9 @@ pub const MAX_TRIANGLES_PER_TILE: u32 = 2 * TILE * TILE;
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTile {
     pub count: u32,
-    pub _pad: [u32; 3],
+    /// 1 when the adaptive mesh merged the tile.
+    pub merged: u32,
+    pub _pad: [u32; 2],
     pub bounds_min: [f32; 4],
     pub bounds_max: [f32; 4],
 }
