@@ -162,6 +162,11 @@ fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
         let d_receiver = max(d - texel_world, d_blocker);
         // The wider the filter, the sparser its samples: limit it to a few light radii (see the module notes).
         filter_radius = min(cluster.radius * (d_receiver - d_blocker) / d_blocker, 4.0 * cluster.radius);
+        // Every search sample blocked and the filter within the searched disc: the umbra, as production PCSS
+        // takes it (skips the filter's samples; the search already found them all in shadow).
+        if blockers == f32(count) && filter_radius <= cluster.radius {
+            return 0.0;
+        }
     }
     // PCF (PCSS step 3) over a disc of `filter_radius`.
     if filter_radius <= 0.0 {
