@@ -102,7 +102,9 @@ impl SampledImage<'_> {
             for i in 0..=TILE {
                 let fit = z00 + (z10 - z00) * (i as f32 / TILE as f32) + (z01 - z00) * (j as f32 / TILE as f32);
                 let zs = z(i, j);
-                if !((zs - fit).abs() < epsilon * zs) {
+                // Written so that NaN fails.
+                let on_plane = (zs - fit).abs() < epsilon * zs;
+                if !on_plane {
                     return false;
                 }
             }
@@ -139,7 +141,8 @@ impl SampledImage<'_> {
         };
         // Sides in fan order (top right to left, left down, bottom left to right, right up), each as its
         // boundary point k = 0..=TILE and its neighbour.
-        let sides: [(fn(u32) -> (u32, u32), (i64, i64)); 4] = [
+        type SidePoint = fn(u32) -> (u32, u32);
+        let sides: [(SidePoint, (i64, i64)); 4] = [
             (|k| (TILE - k, 0), (0, -1)),
             (|k| (0, k), (-1, 0)),
             (|k| (k, TILE), (0, 1)),
