@@ -13,8 +13,8 @@ struct TileGrid {
 }
 
 @group(2) @binding(0) var<uniform> tile_grid: TileGrid;
-@group(2) @binding(1) var<storage, read> tile_counts: array<u32>;
-@group(2) @binding(2) var<storage, read> tile_items: array<u32>;
+// per tile its count, then per tile `capacity` sorted indices (light_tiles_build.wgsl)
+@group(2) @binding(1) var<storage, read> tile_lists: array<u32>;
 
 const LIGHT_TILE_SIZE: i32 = 16;
 const LIGHT_TILE_OVERFLOW: u32 = 0xffffffffu;
@@ -22,17 +22,17 @@ const LIGHT_TILE_OVERFLOW: u32 = 0xffffffffu;
 struct TileSpan {
     start: u32,
     end: u32,
-    // true: positions index `tile_items`; false: positions are the indices themselves
+    // true: positions index `tile_lists`; false: positions are the indices themselves
     listed: bool,
 }
 
-// First position in [lo, hi) of `tile_items` whose index is >= `value` (the items are sorted).
+// First position in [lo, hi) of `tile_lists` whose index is >= `value` (the items are sorted).
 fn tile_lower_bound(lo_in: u32, hi_in: u32, value: u32) -> u32 {
     var lo = lo_in;
     var hi = hi_in;
     while lo < hi {
         let mid = lo + (hi - lo) / 2u;
-        if tile_items[mid] < value {
+        if tile_lists[mid] < value {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -48,11 +48,11 @@ fn tile_span(pixel: vec2<i32>, first: u32, count: u32) -> TileSpan {
     }
     let tile = vec2<u32>(pixel / LIGHT_TILE_SIZE);
     let t = min(tile.y, tile_grid.tiles_y - 1u) * tile_grid.tiles_x + min(tile.x, tile_grid.tiles_x - 1u);
-    let n = tile_counts[t];
+    let n = tile_lists[t];
     if n == LIGHT_TILE_OVERFLOW {
         return span;
     }
-    let base = t * tile_grid.capacity;
+    let base = tile_grid.tiles_x * tile_grid.tiles_y + t * tile_grid.capacity;
     span.start = tile_lower_bound(base, base + n, first);
     span.end = tile_lower_bound(span.start, base + n, first + count);
     span.listed = true;
@@ -61,7 +61,7 @@ fn tile_span(pixel: vec2<i32>, first: u32, count: u32) -> TileSpan {
 
 fn tile_item(span: TileSpan, position: u32) -> u32 {
     if span.listed {
-        return tile_items[position];
+        return tile_lists[position];
     }
     return position;
 }

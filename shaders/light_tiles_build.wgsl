@@ -23,8 +23,9 @@ const TILE_OVERFLOW: u32 = 0xffffffffu;
 @group(1) @binding(0) var<uniform> build: TileBuild;
 // xyz: centre (world), w: radius
 @group(1) @binding(1) var<storage, read> spheres: array<vec4<f32>>;
-@group(1) @binding(2) var<storage, read_write> tile_counts: array<u32>;
-@group(1) @binding(3) var<storage, read_write> tile_items: array<u32>;
+// Per tile its count (tiles_x * tiles_y of them), then per tile `capacity` item slots: one buffer, so a pass
+// that reads it needs one storage binding (the downlevel limit is four per stage).
+@group(1) @binding(2) var<storage, read_write> tile_lists: array<u32>;
 
 var<workgroup> box_lo: array<atomic<u32>, 3>;
 var<workgroup> box_hi: array<atomic<u32>, 3>;
@@ -83,7 +84,7 @@ fn build_main(
     let tile = group.y * build.tiles_x + group.x;
     if workgroupUniformLoad(&tile_has_geometry) == 0u {
         if lid == 0u {
-            tile_counts[tile] = 0u;
+            tile_lists[tile] = 0u;
         }
         return;
     }
@@ -100,7 +101,7 @@ fn build_main(
     let box_scale = max(max(abs(lo.x), abs(lo.y)), max(max(abs(lo.z), abs(hi.x)), max(abs(hi.y), abs(hi.z))));
 
     // Step 2: the spheres, 256 at a time, in order.
-    let base = tile * build.capacity;
+    let base = build.tiles_x * build.tiles_y + tile * build.capacity;
     var listed = 0u;
     for (var first = 0u; first < build.sphere_count; first += 256u) {
         let index = first + lid;
@@ -128,7 +129,7 @@ fn build_main(
             let word = atomicLoad(&hit_mask[lid / 32u]);
             let slot = listed + before + countOneBits(word & ((1u << (lid % 32u)) - 1u));
             if slot < build.capacity {
-                tile_items[base + slot] = index;
+                tile_lists[base + slot] = index;
             }
         }
         listed += chunk_hits;
@@ -141,6 +142,6 @@ fn build_main(
 
     // Step 3.
     if lid == 0u {
-        tile_counts[tile] = select(listed, TILE_OVERFLOW, listed > build.capacity);
+        tile_lists[tile] = select(listed, TILE_OVERFLOW, listed > build.capacity);
     }
 }

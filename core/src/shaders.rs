@@ -29,6 +29,7 @@ pub const LIGHT_TILES_BUILD: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/light_tiles_build.wgsl"));
 pub const RAYTRACE_SHADOW: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/light_tiles.wgsl"),
     include_str!("../../shaders/raytrace_bvh.wgsl"),
     include_str!("../../shaders/raytrace_shadow.wgsl")
 );
@@ -94,7 +95,11 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
         LIGHTCLUSTER_SHADE,
     ),
     ("light_tiles_build", &["common.wgsl", "light_tiles_build.wgsl"], LIGHT_TILES_BUILD),
-    ("raytrace_shadow", &["common.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"], RAYTRACE_SHADOW),
+    (
+        "raytrace_shadow",
+        &["common.wgsl", "light_tiles.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"],
+        RAYTRACE_SHADOW,
+    ),
     ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
     ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
     ("paraboloid_depth", &["vpl_basis.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),

@@ -29,6 +29,8 @@ fn render(renderer: &mut Renderer, scene: &Scene, lights: &[PointLight], techniq
     let params: &[(&str, ParamValue)] = match technique {
         "lightcluster" => &[("d_init", ParamValue::Float(0.6)), ("shadow_res", ParamValue::Int(64))],
         "insm" => &[("insm_res", ParamValue::Int(32)), ("k", ParamValue::Int(2)), ("shadow_res", ParamValue::Int(64))],
+        // Soft shadows: the per-light random rotation must follow the light's index, not its place in the list.
+        "raytraced" => &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(4))],
         _ => &[("shadow_res", ParamValue::Int(64))],
     };
     for (k, v) in params {
@@ -63,9 +65,9 @@ fn tiled_shading_gives_the_same_image_for_every_technique_and_batching() {
     for (name, scene, lights) in scenes_and_lights() {
         let mut renderer = Renderer::new(&gpu, &scene, settings(false, 0)).unwrap();
         let techniques: &[&str] = if name.ends_with("own") {
-            &["reference", "unshadowed", "lightcluster", "insm"]
+            &["reference", "unshadowed", "lightcluster", "insm", "raytraced"]
         } else {
-            &["reference", "unshadowed", "lightcluster"]
+            &["reference", "unshadowed", "lightcluster", "raytraced"]
         };
         for &technique in techniques {
             renderer.set_settings(settings(false, 0)).unwrap();

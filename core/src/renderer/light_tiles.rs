@@ -55,7 +55,7 @@ const _: () = assert!(std::mem::size_of::<TileBuildUniform>() == 16);
 pub fn read_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("light tiles (read)"),
-        entries: &[uniform_entry(0), storage_entry(1), storage_entry(2)],
+        entries: &[uniform_entry(0), storage_entry(1)],
     })
 }
 
@@ -89,8 +89,8 @@ pub struct TileLists {
     build_uniform: wgpu::Buffer,
     grid_uniform: wgpu::Buffer,
     spheres: GrowableBuffer,
-    counts: wgpu::Buffer,
-    items: wgpu::Buffer,
+    /// Per tile its count, then per tile `capacity` item slots (`tile_lists` in the WGSL files).
+    lists: wgpu::Buffer,
     build_group: wgpu::BindGroup,
     read_group: wgpu::BindGroup,
     /// (tiles_x, tiles_y, capacity) of the last build; capacity 0 when disabled.
@@ -103,7 +103,7 @@ impl TileLists {
         let device = &gpu.device;
         let build_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("light tiles (build)"),
-            entries: &[uniform_entry(0), storage_entry(1), storage_rw_entry(2), storage_rw_entry(3)],
+            entries: &[uniform_entry(0), storage_entry(1), storage_rw_entry(2)],
         });
         let module = shaders::create_module(device, "light_tiles_build", shaders::LIGHT_TILES_BUILD);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -130,19 +130,16 @@ impl TileLists {
         let build_uniform = uniform("light tiles build", &zero);
         let grid_uniform = uniform("light tiles grid", &zero);
         let spheres = GrowableBuffer::new(device, "light tile spheres", 16 * 64);
-        let counts = Self::list_buffer(device, "light tile counts", 16);
-        let items = Self::list_buffer(device, "light tile items", 16);
-        let build_group =
-            Self::make_build_group(device, &build_layout, &build_uniform, &spheres.buffer, &counts, &items);
-        let read_group = Self::make_read_group(device, read_layout, &grid_uniform, &counts, &items);
+        let lists = Self::list_buffer(device, "light tile lists", 16);
+        let build_group = Self::make_build_group(device, &build_layout, &build_uniform, &spheres.buffer, &lists);
+        let read_group = Self::make_read_group(device, read_layout, &grid_uniform, &lists);
         TileLists {
             pipeline,
             build_layout,
             build_uniform,
             grid_uniform,
             spheres,
-            counts,
-            items,
+            lists,
             build_group,
             read_group,
             grid: (1, 1, 0),
@@ -163,8 +160,7 @@ impl TileLists {
         layout: &wgpu::BindGroupLayout,
         uniform: &wgpu::Buffer,
         spheres: &wgpu::Buffer,
-        counts: &wgpu::Buffer,
-        items: &wgpu::Buffer,
+        lists: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("light tiles (build)"),
@@ -172,8 +168,7 @@ impl TileLists {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: spheres.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: items.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: lists.as_entire_binding() },
             ],
         })
     }
@@ -182,16 +177,14 @@ impl TileLists {
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,
         uniform: &wgpu::Buffer,
-        counts: &wgpu::Buffer,
-        items: &wgpu::Buffer,
+        lists: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("light tiles (read)"),
             layout,
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: counts.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: items.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: lists.as_entire_binding() },
             ],
         })
     }
@@ -225,13 +218,9 @@ impl TileLists {
         }
         let tiles = tiles_x as u64 * tiles_y as u64;
         let mut rebind = self.spheres.write(gpu, spheres);
-        if self.counts.size() < tiles * 4 {
-            self.counts = Self::list_buffer(&gpu.device, "light tile counts", (tiles * 4).next_power_of_two());
-            rebind = true;
-        }
-        let items_bytes = tiles * capacity as u64 * 4;
-        if self.items.size() < items_bytes {
-            self.items = Self::list_buffer(&gpu.device, "light tile items", items_bytes.next_power_of_two());
+        let bytes = tiles * (1 + capacity as u64) * 4;
+        if self.lists.size() < bytes {
+            self.lists = Self::list_buffer(&gpu.device, "light tile lists", bytes.next_power_of_two());
             rebind = true;
         }
         if rebind {
@@ -241,10 +230,9 @@ impl TileLists {
                 &self.build_layout,
                 &self.build_uniform,
                 &self.spheres.buffer,
-                &self.counts,
-                &self.items,
+                &self.lists,
             );
-            self.read_group = Self::make_read_group(device, read_layout, &self.grid_uniform, &self.counts, &self.items);
+            self.read_group = Self::make_read_group(device, read_layout, &self.grid_uniform, &self.lists);
         }
         self.grid = (tiles_x, tiles_y, capacity);
         let build = TileBuildUniform { tiles_x, tiles_y, capacity, sphere_count: spheres.len() as u32 };
@@ -272,16 +260,15 @@ impl TileLists {
         if capacity == 0 {
             return Ok(Vec::new());
         }
-        let counts = super::readback::read_buffer(gpu, &self.counts)?;
-        let items = super::readback::read_buffer(gpu, &self.items)?;
-        let counts: &[u32] = bytemuck::cast_slice(&counts);
-        let items: &[u32] = bytemuck::cast_slice(&items);
-        Ok((0..(tiles_x * tiles_y) as usize)
+        let bytes = super::readback::read_buffer(gpu, &self.lists)?;
+        let lists: &[u32] = bytemuck::cast_slice(&bytes);
+        let tiles = (tiles_x * tiles_y) as usize;
+        Ok((0..tiles)
             .map(|t| {
-                let n = counts[t];
+                let n = lists[t];
                 (n != TILE_OVERFLOW).then(|| {
-                    let base = t * capacity as usize;
-                    items[base..base + n as usize].to_vec()
+                    let base = tiles + t * capacity as usize;
+                    lists[base..base + n as usize].to_vec()
                 })
             })
             .collect())
