@@ -142,6 +142,26 @@ fn every_light_that_reaches_a_pixel_is_in_its_tile_list_in_order() {
 }
 
 #[test]
+fn tiles_whose_lists_overflow_loop_over_the_whole_batch_with_the_same_image() {
+    let gpu = gpu();
+    let scene = builtin::build("cornell").unwrap();
+    // 300 lights in a 2 m box: most reach most tiles, far more than 16 per tile.
+    let lights = layout::generate(&layout::parse("random:300:1.0:9").unwrap(), &scene).unwrap();
+    let mut renderer = Renderer::new(&gpu, &scene, settings(false, 0)).unwrap();
+    let untiled = render(&mut renderer, &scene, &lights, "unshadowed");
+    renderer.set_settings(settings(true, 0)).unwrap();
+    // The smallest capacity: 16 lights per tile.
+    renderer.set_light_tile_budget(0);
+    let tiled = render(&mut renderer, &scene, &lights, "unshadowed");
+    let tiles = renderer.read_light_tiles().unwrap();
+    let overflowed = tiles.iter().filter(|t| t.is_none()).count();
+    assert!(overflowed > 0 && overflowed < tiles.len(), "{overflowed} of {} tiles overflowed", tiles.len());
+    assert!(tiles.iter().flatten().all(|t| t.len() <= 16));
+    let diff = max_abs_difference(&tiled, &untiled);
+    assert!(diff <= 1e-5, "overflowed tiles changed the image by {diff:e}");
+}
+
+#[test]
 fn tiles_off_builds_no_lists() {
     let gpu = gpu();
     let scene = builtin::build("cornell").unwrap();

@@ -72,12 +72,13 @@ fn storage_rw_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Tiles and their capacity for a `width x height` screen and `spheres` spheres.
-pub fn grid(width: u32, height: u32, spheres: usize) -> (u32, u32, u32) {
+/// Tiles and their capacity for a `width x height` screen, `spheres` spheres and lists of at most
+/// `budget_bytes` in all (a tile holds at least 16).
+pub fn grid(width: u32, height: u32, spheres: usize, budget_bytes: u64) -> (u32, u32, u32) {
     let tiles_x = width.div_ceil(TILE_SIZE).max(1);
     let tiles_y = height.div_ceil(TILE_SIZE).max(1);
     let tiles = tiles_x as u64 * tiles_y as u64;
-    let by_budget = (ITEM_BUDGET_BYTES / 4 / tiles).max(16);
+    let by_budget = (budget_bytes / 4 / tiles).max(16);
     let capacity = (spheres as u64).clamp(1, by_budget) as u32;
     (tiles_x, tiles_y, capacity)
 }
@@ -95,6 +96,7 @@ pub struct TileLists {
     read_group: wgpu::BindGroup,
     /// (tiles_x, tiles_y, capacity) of the last build; capacity 0 when disabled.
     grid: (u32, u32, u32),
+    item_budget_bytes: u64,
 }
 
 impl TileLists {
@@ -143,6 +145,7 @@ impl TileLists {
             build_group,
             read_group,
             grid: (1, 1, 0),
+            item_budget_bytes: ITEM_BUDGET_BYTES,
         }
     }
 
@@ -209,7 +212,7 @@ impl TileLists {
         spheres: &[[f32; 4]],
         enabled: bool,
     ) {
-        let (tiles_x, tiles_y, capacity) = grid(size.0, size.1, spheres.len());
+        let (tiles_x, tiles_y, capacity) = grid(size.0, size.1, spheres.len(), self.item_budget_bytes);
         if !enabled || spheres.is_empty() {
             self.grid = (tiles_x, tiles_y, 0);
             let uniform = TileGridUniform { tiles_x, tiles_y, capacity: 0, enabled: 0 };
@@ -246,6 +249,12 @@ impl TileLists {
             pass.set_bind_group(1, group, &[]);
             pass.dispatch_workgroups(tiles_x, tiles_y, 1);
         });
+    }
+
+    /// Limit the memory of all lists (default [`ITEM_BUDGET_BYTES`]); a smaller budget makes more tiles
+    /// overflow (for tests of that path).
+    pub fn set_item_budget(&mut self, bytes: u64) {
+        self.item_budget_bytes = bytes;
     }
 
     /// (tiles_x, tiles_y, capacity) of the last build; capacity 0 when no lists were built.

@@ -973,6 +973,12 @@ impl Renderer {
         Ok(())
     }
 
+    /// Limit the memory of the renderer's tile lists (default [`light_tiles::ITEM_BUDGET_BYTES`]): tiles whose
+    /// lists do not fit loop over every light of a batch. For tests of that path.
+    pub fn set_light_tile_budget(&mut self, bytes: u64) {
+        self.light_tiles.set_item_budget(bytes);
+    }
+
     /// The renderer's tile lists of the last frame, read back (blocking): per tile the indices (into the
     /// visible lights) of the lights that may reach it, `None` where it overflowed; empty when none were built.
     pub fn read_light_tiles(&self) -> Result<Vec<Option<Vec<u32>>>, GpuError> {
