@@ -5,7 +5,8 @@
 //! whole batch.
 //!
 //! 1. Per tile, the world-space box of its geometry pixels, from the G-buffer depth (`light_tiles_build.wgsl`).
-//! 2. Per tile, the spheres that touch the box (with a margin for rounding), in sphere order, up to
+//! 2. Per tile, the spheres that touch the box (with a margin for rounding) and whose range of distances to the
+//!    camera meets one of the 32 distance bins the tile's pixels occupy (2.5D culling), in sphere order, up to
 //!    `capacity` (at most [`ITEM_BUDGET_BYTES`] for the whole screen); a tile with more loops over every sphere.
 //! 3. A shading pass binds [`TileLists::bind_group`] as its group 2 and calls `tile_span` / `tile_item`
 //!    (`light_tiles.wgsl`): a binary search for the batch's first and last index in the sorted list.
