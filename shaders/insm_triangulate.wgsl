@@ -13,6 +13,15 @@
 // value suits every scene scale (the paper's eps is in depth units and "depends on the scene"). A neighbour
 // outside the image gives no information and passes; a background neighbour (z = 0) fails, as in the paper.
 //
+// Adaptive meshes (a deviation beyond the paper, `adaptive` on; the CPU twin is
+// core/src/technique/insm/triangulate.rs): a first pass (`classify`) flags each whole tile whose 64
+// neighbourhoods all keep both triangles and whose samples' inverse depths are all within eps (relative) of the
+// affine function through its corners z(0,0), z(8,0), z(0,8) (the second-difference test taken across the
+// tile: affine on a plane). The second pass (`triangulate`) writes a flagged tile as two triangles when its four
+// neighbours are flagged too (or have no neighbourhoods), else as a fan from its centre sample over its
+// boundary, one segment per side facing a flagged (or absent) neighbour and every sample of the other sides,
+// so neighbours always share every vertex of a common side: no T-junctions, no cracks.
+//
 // Outputs: one vertex per sample (world position, inverse depth; inverse depth 0 = background), the kept
 // triangles of each tile compacted at the start of the tile's fixed slot of MAX_TRIS triangles, and per tile
 // its triangle count and the bounds of its triangles, which the CPU reads back to cull tiles per light.
@@ -24,6 +33,11 @@ struct Params {
     epsilon: f32,
     // tiles per row of the depth atlas (image j is atlas tile j)
     atlas_tiles_per_row: u32,
+    // 1: merge planar tiles (the adaptive mesh)
+    adaptive: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct View {
@@ -36,7 +50,8 @@ struct View {
 
 struct Tile {
     count: u32,
-    _pad0: u32,
+    // 1 when the adaptive mesh merged the tile (written by `classify`, kept by `triangulate`)
+    merged: u32,
     _pad1: u32,
     _pad2: u32,
     bounds_min: vec4<f32>,
@@ -61,6 +76,7 @@ var<workgroup> halo_p: array<vec3<f32>, 121>;
 var<private> tile_origin: vec2<i32>;
 
 var<workgroup> tri_count: atomic<u32>;
+var<workgroup> planar_count: atomic<u32>;
 var<workgroup> lo: array<atomic<u32>, 3>;
 var<workgroup> hi: array<atomic<u32>, 3>;
 
@@ -139,12 +155,7 @@ fn grow_bounds(p: vec3<f32>) {
     atomicMax(&hi[2], ordered(p.z));
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn triangulate(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(local_invocation_id) lid: vec3<u32>,
-    @builtin(local_invocation_index) li: u32,
-) {
+fn load_halo(wg: vec3<u32>, li: u32) {
     let image = wg.z;
     tile_origin = vec2<i32>(wg.xy * TILE);
     for (var i = li; i < HALO * HALO; i += TILE * TILE) {
@@ -155,11 +166,101 @@ fn triangulate(
     }
     if li == 0u {
         atomicStore(&tri_count, 0u);
+        atomicStore(&planar_count, 0u);
         for (var i = 0u; i < 3u; i++) {
             atomicStore(&lo[i], 0xffffffffu);
             atomicStore(&hi[i], 0u);
         }
     }
+}
+
+// Both triangles of neighbourhood p00 kept (Algorithm 2, lines 2-5).
+fn neighbourhood_triangles(p00: vec2<i32>) -> vec2<bool> {
+    let p01 = p00 + vec2<i32>(0, 1);
+    let p11 = p00 + vec2<i32>(1, 1);
+    let p10 = p00 + vec2<i32>(1, 0);
+    let diagonal = edge_connected(p00, p11);
+    let t1 = diagonal && edge_connected(p00, p01) && edge_connected(p01, p11);
+    let t2 = diagonal && edge_connected(p10, p11) && edge_connected(p00, p10);
+    return vec2<bool>(t1, t2);
+}
+
+// Sample p's inverse depth within eps of the affine function through the tile's corners.
+fn on_tile_plane(p: vec2<i32>) -> bool {
+    let z00 = z_at(tile_origin);
+    let z10 = z_at(tile_origin + vec2<i32>(i32(TILE), 0));
+    let z01 = z_at(tile_origin + vec2<i32>(0, i32(TILE)));
+    let f = vec2<f32>(p - tile_origin) / f32(TILE);
+    let fit = z00 + (z10 - z00) * f.x + (z01 - z00) * f.y;
+    let z = z_at(p);
+    return abs(z - fit) < params.epsilon * z;
+}
+
+fn tile_index(image: u32, t: vec2<u32>) -> u32 {
+    return (image * params.tiles_per_side + t.y) * params.tiles_per_side + t.x;
+}
+
+// Pass 1 of the adaptive mesh: flag the tiles to merge.
+@compute @workgroup_size(8, 8, 1)
+fn classify(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    load_halo(wg, li);
+    workgroupBarrier();
+    let r = params.resolution;
+    let whole = wg.x * TILE + TILE < r && wg.y * TILE + TILE < r;
+    if whole {
+        let p00 = vec2<i32>(wg.xy * TILE + lid.xy);
+        let kept = neighbourhood_triangles(p00);
+        let planar = on_tile_plane(p00) && on_tile_plane(p00 + vec2<i32>(0, 1)) && on_tile_plane(p00 + vec2<i32>(1, 1))
+            && on_tile_plane(p00 + vec2<i32>(1, 0));
+        if kept.x && kept.y && planar {
+            atomicAdd(&planar_count, 1u);
+        }
+    }
+    workgroupBarrier();
+    if li == 0u {
+        let flag = params.adaptive != 0u && atomicLoad(&planar_count) == TILE * TILE;
+        tiles[tile_index(wg.z, wg.xy)].merged = select(0u, 1u, flag);
+    }
+}
+
+// A side of a merged tile meets a merged neighbour, or one without neighbourhoods.
+fn side_is_coarse(image: u32, t: vec2<i32>) -> bool {
+    let neighbourhoods = i32(params.resolution) - 1;
+    if any(t < vec2<i32>(0)) || any(t * i32(TILE) >= vec2<i32>(neighbourhoods)) {
+        return true;
+    }
+    return tiles[tile_index(image, vec2<u32>(t))].merged != 0u;
+}
+
+// Boundary point k (0..=TILE) of side `side` in fan order: top right to left, left down, bottom left to right,
+// right up (tile coordinates).
+fn side_point(side: u32, k: u32) -> vec2<u32> {
+    switch side {
+        case 0u: { return vec2<u32>(TILE - k, 0u); }
+        case 1u: { return vec2<u32>(0u, k); }
+        case 2u: { return vec2<u32>(k, TILE); }
+        default: { return vec2<u32>(TILE, TILE - k); }
+    }
+}
+
+fn emit(o: u32, a: u32, b: u32, c: u32) {
+    indices[o] = a;
+    indices[o + 1u] = b;
+    indices[o + 2u] = c;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn triangulate(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
+    @builtin(local_invocation_index) li: u32,
+) {
+    let image = wg.z;
+    load_halo(wg, li);
     workgroupBarrier();
 
     let r = params.resolution;
@@ -174,14 +275,53 @@ fn triangulate(
         vertices[base + uv.y * r + uv.x] = select(vec4<f32>(0.0), vec4<f32>(p_at(p00), z), z > 0.0);
     }
 
+    let tile_merged = tiles[tile].merged != 0u;
+    if tile_merged && li < 4u {
+        // Invocation `li` writes side `li` of the merged tile's fan (or, with four coarse sides, invocation 0
+        // the two triangles).
+        let t = vec2<i32>(wg.xy);
+        let coarse = vec4<bool>(
+            side_is_coarse(image, t + vec2<i32>(0, -1)),
+            side_is_coarse(image, t + vec2<i32>(-1, 0)),
+            side_is_coarse(image, t + vec2<i32>(0, 1)),
+            side_is_coarse(image, t + vec2<i32>(1, 0)),
+        );
+        let origin = wg.xy * TILE;
+        let corner = base + origin.y * r + origin.x;
+        if all(coarse) {
+            if li == 0u {
+                let slot = atomicAdd(&tri_count, 2u);
+                let o = (tile * MAX_TRIS + slot) * 3u;
+                emit(o, corner, corner + TILE * r, corner + TILE * r + TILE);
+                emit(o + 3u, corner + TILE * r + TILE, corner + TILE, corner);
+            }
+        } else {
+            let step = select(1u, TILE, coarse[li]);
+            let slot = atomicAdd(&tri_count, TILE / step);
+            var o = (tile * MAX_TRIS + slot) * 3u;
+            let centre = corner + (TILE / 2u) * r + TILE / 2u;
+            for (var k = 0u; k < TILE; k += step) {
+                let a = side_point(li, k);
+                let b = side_point(li, k + step);
+                emit(o, centre, corner + a.y * r + a.x, corner + b.y * r + b.x);
+                o += 3u;
+            }
+        }
+        // Bounds: every sample of the side (a superset of the vertices used), and the centre.
+        for (var k = 0u; k <= TILE; k++) {
+            grow_bounds(p_at(vec2<i32>(side_point(li, k) + origin)));
+        }
+        grow_bounds(p_at(vec2<i32>(origin + vec2<u32>(TILE / 2u))));
+    }
+
     // The two triangles of the neighbourhood (Algorithm 2, lines 2-5).
-    if uv.x + 1u < r && uv.y + 1u < r {
+    if !tile_merged && uv.x + 1u < r && uv.y + 1u < r {
+        let kept = neighbourhood_triangles(p00);
+        let t1 = kept.x;
+        let t2 = kept.y;
         let p01 = p00 + vec2<i32>(0, 1);
         let p11 = p00 + vec2<i32>(1, 1);
         let p10 = p00 + vec2<i32>(1, 0);
-        let diagonal = edge_connected(p00, p11);
-        let t1 = diagonal && edge_connected(p00, p01) && edge_connected(p01, p11);
-        let t2 = diagonal && edge_connected(p10, p11) && edge_connected(p00, p10);
         let n = u32(t1) + u32(t2);
         if n > 0u {
             let slot = atomicAdd(&tri_count, n);
@@ -212,6 +352,8 @@ fn triangulate(
     if li == 0u {
         var t: Tile;
         t.count = atomicLoad(&tri_count);
+        // Neighbours may read this flag meanwhile: it is written with the value it had.
+        t.merged = select(0u, 1u, tile_merged);
         t.bounds_min = vec4<f32>(unordered(atomicLoad(&lo[0])), unordered(atomicLoad(&lo[1])), unordered(atomicLoad(&lo[2])), 0.0);
         t.bounds_max = vec4<f32>(unordered(atomicLoad(&hi[0])), unordered(atomicLoad(&hi[1])), unordered(atomicLoad(&hi[2])), 0.0);
         tiles[tile] = t;

@@ -1,7 +1,7 @@
 // LightCluster (Wiesenhuetter et al. 2013, section 3.2), shading of one batch of clusters. Each cluster is a
 // disc area light of radius d_min at its center light, with one cube shadow map (far plane C_att). For every
 // pixel, a cluster's visibility is computed once (PCF or PCSS over a Poisson disk) and modulates the summed
-// radiance of all its member lights. Composed after common.wgsl and cube_shadow.wgsl.
+// radiance of all its member lights. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl.
 // `Batch` and `Cluster` mirror `ClusterBatchUniform` and `GpuCluster` in core/src/technique/lightcluster/gpu.rs.
 
 struct Batch {
@@ -162,6 +162,11 @@ fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
         let d_receiver = max(d - texel_world, d_blocker);
         // The wider the filter, the sparser its samples: limit it to a few light radii (see the module notes).
         filter_radius = min(cluster.radius * (d_receiver - d_blocker) / d_blocker, 4.0 * cluster.radius);
+        // Every search sample blocked and the filter within the searched disc: the umbra, as production PCSS
+        // takes it (skips the filter's samples; the search already found them all in shadow).
+        if blockers == f32(count) && filter_radius <= cluster.radius {
+            return 0.0;
+        }
     }
     // PCF (PCSS step 3) over a disc of `filter_radius`.
     if filter_radius <= 0.0 {
@@ -177,13 +182,18 @@ fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let s = load_surface(vec2<i32>(in.position.xy));
+    let pixel = vec2<i32>(in.position.xy);
+    let s = load_surface(pixel);
     if !s.is_geometry {
         discard;
     }
     var sum = vec3<f32>(0.0);
-    for (var c = 0u; c < batch.cluster_count; c++) {
-        let cluster = clusters[batch.first_cluster + c];
+    // The batch's clusters whose C_att sphere reaches this pixel's tile (light_tiles.wgsl), in batch order.
+    let span = tile_span(pixel, batch.first_cluster, batch.cluster_count);
+    for (var j = span.start; j < span.end; j++) {
+        let index = tile_item(span, j);
+        let c = index - batch.first_cluster;
+        let cluster = clusters[index];
         // Pixels beyond C_att get nothing from the cluster (paper 3.2.2).
         if distance(s.position, cluster.position) > cluster.c_att {
             continue;

@@ -2,7 +2,7 @@
 // (raytrace_bvh.wgsl) give the visibility the cube-map techniques approximate. Hard: one ray to the light's
 // centre. Soft: `samples` rays to stratified points on a disc of `light_radius` centred at the light and facing
 // the receiver; visibility = the unoccluded fraction. Shading is the reference's (`shade_light`) times visibility.
-// Composed after common.wgsl and raytrace_bvh.wgsl. `RtBatch` mirrors `RtBatchUniform` in
+// Composed after common.wgsl, light_tiles.wgsl and raytrace_bvh.wgsl. `RtBatch` mirrors `RtBatchUniform` in
 // core/src/technique/raytraced/mod.rs.
 
 struct RtBatch {
@@ -86,15 +86,18 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let origin = s.position + s.normal * eps;
     let pixel_hash = rt_hash(u32(pixel.x) ^ rt_hash(u32(pixel.y) ^ rt_hash(batch.seed)));
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < batch.light_count; i++) {
-        let light = lights[batch.first_light + i];
+    // The batch's lights that reach this pixel's tile (light_tiles.wgsl), in batch order.
+    let span = tile_span(pixel, batch.first_light, batch.light_count);
+    for (var j = span.start; j < span.end; j++) {
+        let index = tile_item(span, j);
+        let light = lights[index];
         let unshadowed = shade_light(s, light);
         if !any(unshadowed > vec3<f32>(0.0)) {
             continue;
         }
         var visibility = 0.0;
         if batch.soft != 0u {
-            let h = rt_hash(pixel_hash ^ (batch.first_light + i));
+            let h = rt_hash(pixel_hash ^ index);
             let rotation = vec2<f32>(rt_unit(h), rt_unit(rt_hash(h)));
             visibility = rt_soft_visibility(origin, light.position, eps, rotation);
         } else {

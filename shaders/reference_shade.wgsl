@@ -1,5 +1,5 @@
 // Reference technique, shading of one batch of lights: every light has its own cube shadow map in the batch's atlas
-// and binary (hard) visibility. Composed after common.wgsl and cube_shadow.wgsl.
+// and binary (hard) visibility. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl.
 // `Batch` mirrors `ReferenceBatchUniform` in core/src/technique/reference/mod.rs.
 
 struct Batch {
@@ -36,16 +36,20 @@ fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let s = load_surface(vec2<i32>(in.position.xy));
+    let pixel = vec2<i32>(in.position.xy);
+    let s = load_surface(pixel);
     if !s.is_geometry {
         discard;
     }
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < batch.light_count; i++) {
-        let light = lights[batch.first_light + i];
+    // The batch's lights that reach this pixel's tile (light_tiles.wgsl), in batch order.
+    let span = tile_span(pixel, batch.first_light, batch.light_count);
+    for (var j = span.start; j < span.end; j++) {
+        let index = tile_item(span, j);
+        let light = lights[index];
         let unshadowed = shade_light(s, light);
         if any(unshadowed > vec3<f32>(0.0)) {
-            sum += unshadowed * reference_visibility(s, light, i);
+            sum += unshadowed * reference_visibility(s, light, index - batch.first_light);
         }
     }
     return vec4<f32>(sum, 0.0);

@@ -1,5 +1,5 @@
 // Unshadowed: every light with visibility 1. The cheap preview of the app, and the denominator of
-// visibility (shadow factor) comparisons. Composed after common.wgsl.
+// visibility (shadow factor) comparisons. Composed after common.wgsl and light_tiles.wgsl.
 // `Batch` mirrors `UnshadowedBatchUniform` in core/src/technique/unshadowed/mod.rs.
 
 struct Batch {
@@ -14,13 +14,15 @@ struct Batch {
 
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let s = load_surface(vec2<i32>(in.position.xy));
+    let pixel = vec2<i32>(in.position.xy);
+    let s = load_surface(pixel);
     if !s.is_geometry {
         discard;
     }
     var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < batch.light_count; i++) {
-        sum += shade_light(s, lights[batch.first_light + i]);
+    let span = tile_span(pixel, batch.first_light, batch.light_count);
+    for (var j = span.start; j < span.end; j++) {
+        sum += shade_light(s, lights[tile_item(span, j)]);
     }
     return vec4<f32>(sum, 0.0);
 }

@@ -194,6 +194,10 @@ pub struct FrameArgs {
     /// Display gain of the indirect component in saved images (metrics never use it).
     #[arg(long, default_value_t = 1.0)]
     pub indirect_gain: f32,
+    /// Loop every shading pass over all the lights of its batch instead of its 16x16 tile's list (the image
+    /// is the same; for measuring what the tiled light lists save).
+    #[arg(long)]
+    pub no_light_tiles: bool,
 }
 
 impl FrameArgs {
@@ -528,6 +532,7 @@ fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Rende
         },
         component,
         indirect_gain: frame.indirect_gain,
+        light_tiles: !frame.no_light_tiles,
         ..Default::default()
     };
     settings.validate()?;
@@ -1384,6 +1389,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             vpl_seed: 0,
             component: "total".into(),
             indirect_gain: 1.0,
+            no_light_tiles: false,
         };
         eprintln!("{}: loading", s.name);
         let (gpu, mut renderer, _scene, lights, camera) = setup(&s.scene, &frame)?;

@@ -10,18 +10,26 @@ pub const TONEMAP: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/tonemap.wgsl"));
 pub const REFERENCE_SHADE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/light_tiles.wgsl"),
     include_str!("../../shaders/cube_shadow.wgsl"),
     include_str!("../../shaders/reference_shade.wgsl")
 );
 pub const LIGHTCLUSTER_SHADE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/light_tiles.wgsl"),
     include_str!("../../shaders/cube_shadow.wgsl"),
     include_str!("../../shaders/lightcluster_shade.wgsl")
 );
-pub const UNSHADOWED_SHADE: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/unshadowed_shade.wgsl"));
+pub const UNSHADOWED_SHADE: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/light_tiles.wgsl"),
+    include_str!("../../shaders/unshadowed_shade.wgsl")
+);
+pub const LIGHT_TILES_BUILD: &str =
+    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/light_tiles_build.wgsl"));
 pub const RAYTRACE_SHADOW: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/light_tiles.wgsl"),
     include_str!("../../shaders/raytrace_bvh.wgsl"),
     include_str!("../../shaders/raytrace_shadow.wgsl")
 );
@@ -86,11 +94,24 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("shadow_depth", &["shadow_depth.wgsl"], SHADOW_DEPTH),
     ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
     ("tonemap", &["common.wgsl", "tonemap.wgsl"], TONEMAP),
-    ("reference_shade", &["common.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"], REFERENCE_SHADE),
+    (
+        "reference_shade",
+        &["common.wgsl", "light_tiles.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"],
+        REFERENCE_SHADE,
+    ),
     ("overlay", &["overlay.wgsl"], OVERLAY),
-    ("unshadowed_shade", &["common.wgsl", "unshadowed_shade.wgsl"], UNSHADOWED_SHADE),
-    ("lightcluster_shade", &["common.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"], LIGHTCLUSTER_SHADE),
-    ("raytrace_shadow", &["common.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"], RAYTRACE_SHADOW),
+    ("unshadowed_shade", &["common.wgsl", "light_tiles.wgsl", "unshadowed_shade.wgsl"], UNSHADOWED_SHADE),
+    (
+        "lightcluster_shade",
+        &["common.wgsl", "light_tiles.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"],
+        LIGHTCLUSTER_SHADE,
+    ),
+    ("light_tiles_build", &["common.wgsl", "light_tiles_build.wgsl"], LIGHT_TILES_BUILD),
+    (
+        "raytrace_shadow",
+        &["common.wgsl", "light_tiles.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"],
+        RAYTRACE_SHADOW,
+    ),
     ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
     ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
     ("paraboloid_depth", &["vpl_basis.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),

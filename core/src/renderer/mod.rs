@@ -10,6 +10,7 @@
 pub mod cube_shadows;
 pub mod gpu_data;
 pub mod gpu_scene;
+pub mod light_tiles;
 pub mod lights;
 pub mod overlay;
 pub mod readback;
@@ -69,6 +70,9 @@ pub struct RenderSettings {
     pub component: Component,
     /// Display gain of the indirect part when [`Component::Indirect`] is shown (not applied to `read_hdr`).
     pub indirect_gain: f32,
+    /// Tiled light lists ([`light_tiles`]): shading passes visit only the lights (clusters) that reach their
+    /// pixel's 16x16 tile. The image is the same either way; off loops over every light of a batch.
+    pub light_tiles: bool,
 }
 
 /// A part of the image: everything, the ambient + direct part, or the indirect part alone.
@@ -113,6 +117,7 @@ impl Default for RenderSettings {
             vpl: VplSettings::default(),
             component: Component::Total,
             indirect_gain: 1.0,
+            light_tiles: true,
         }
     }
 }
@@ -145,6 +150,8 @@ pub struct SharedLayouts {
     pub screen: wgpu::BindGroupLayout,
     pub material: wgpu::BindGroupLayout,
     pub camera: wgpu::BindGroupLayout,
+    /// Group 2 of shading passes that read tile lists (`light_tiles.wgsl`).
+    pub light_tiles: wgpu::BindGroupLayout,
 }
 
 impl SharedLayouts {
@@ -192,7 +199,12 @@ impl SharedLayouts {
             label: Some("camera"),
             entries: &[uniform(0, wgpu::ShaderStages::VERTEX)],
         });
-        SharedLayouts { screen, material: GpuScene::material_layout(device), camera }
+        SharedLayouts {
+            screen,
+            material: GpuScene::material_layout(device),
+            camera,
+            light_tiles: light_tiles::read_layout(device),
+        }
     }
 
     /// A full-screen pipeline: `common.wgsl`'s triangle, `fs_main` of `module`, groups `[screen, extra...]`,
@@ -351,6 +363,9 @@ pub struct Renderer {
     indirect_buffer: wgpu::Buffer,
     vpls: VplFrame,
     visible_lights: lights::VisibleLights,
+    /// Per screen tile, the visible lights that reach it; built in `begin_frame` for techniques that read it.
+    light_tiles: light_tiles::TileLists,
+    light_spheres: Vec<[f32; 4]>,
     /// True when [`Renderer::set_fixed_vpls`] gave the VPLs.
     fixed_vpls: bool,
 }
@@ -532,6 +547,7 @@ impl Renderer {
         let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
         let tonemap_bind_group = Self::tonemap_bind_group(device, &tonemap_layout, &targets, &indirect_buffer);
         let timer = PassTimer::new(gpu)?;
+        let light_tiles = light_tiles::TileLists::new(gpu, &layouts.screen, &layouts.light_tiles);
         Ok(Renderer {
             gpu: gpu.clone(),
             layouts,
@@ -560,6 +576,8 @@ impl Renderer {
             },
             fixed_vpls: false,
             visible_lights: lights::VisibleLights::new(gpu),
+            light_tiles,
+            light_spheres: Vec::new(),
         })
     }
 
@@ -743,6 +761,8 @@ impl Renderer {
             vpls: &self.vpls,
             vpl_settings: &self.settings.vpl,
             visible_lights: &self.visible_lights,
+            light_tiles: &self.light_tiles,
+            light_tiles_enabled: self.settings.light_tiles,
             max_lights_per_step: match self.settings.max_lights_per_step {
                 0 => usize::MAX,
                 n => n,
@@ -905,6 +925,7 @@ impl Renderer {
             let ctx = self.context(camera, lights);
             technique.prepare(&ctx)?
         };
+        self.build_light_tiles(technique.uses_light_tiles())?;
         let mut indirect_steps = 0;
         if let Some(mut indirect) = self.indirect.take() {
             let t0 = Instant::now();
@@ -926,6 +947,44 @@ impl Renderer {
             vpl_ms,
             vpls_reused,
         })
+    }
+
+    /// Bin the visible lights' range spheres into screen tiles (its own submission, timed "light tiles"), or,
+    /// when `used` is false or tiles are off, mark the lists absent so every span is the whole batch.
+    fn build_light_tiles(&mut self, used: bool) -> Result<(), GpuError> {
+        self.light_spheres.clear();
+        self.light_spheres.extend(self.visible_lights.gpu.iter().map(|l| {
+            let [x, y, z] = l.position;
+            [x, y, z, l.range]
+        }));
+        let enabled = used && self.settings.light_tiles;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.light_tiles.build(
+            &self.gpu,
+            &self.layouts.light_tiles,
+            &self.screen_bind_group,
+            &self.timer,
+            &mut encoder,
+            (self.settings.width, self.settings.height),
+            &self.light_spheres,
+            enabled,
+        );
+        if enabled && !self.light_spheres.is_empty() {
+            self.timer.submit(&self.gpu, encoder, "light tiles")?;
+        }
+        Ok(())
+    }
+
+    /// Limit the memory of the renderer's tile lists (default [`light_tiles::ITEM_BUDGET_BYTES`]): tiles whose
+    /// lists do not fit loop over every light of a batch. For tests of that path.
+    pub fn set_light_tile_budget(&mut self, bytes: u64) {
+        self.light_tiles.set_item_budget(bytes);
+    }
+
+    /// The renderer's tile lists of the last frame, read back (blocking): per tile the indices (into the
+    /// visible lights) of the lights that may reach it, `None` where it overflowed; empty when none were built.
+    pub fn read_light_tiles(&self) -> Result<Vec<Option<Vec<u32>>>, GpuError> {
+        self.light_tiles.read(&self.gpu)
     }
 
     /// Run up to `max_steps` steps of the technique. Returns true when all steps are done.

@@ -58,6 +58,11 @@ pub struct FrameContext<'a> {
     pub vpl_settings: &'a crate::vpl::VplSettings,
     /// The lights whose range touches the view frustum, uploaded once for every technique.
     pub visible_lights: &'a crate::renderer::lights::VisibleLights,
+    /// Per 16x16-pixel tile, the visible lights that reach it (group 2 of a shading pass, `light_tiles.wgsl`),
+    /// built after `prepare` when the technique [`Technique::uses_light_tiles`]; encode steps read it.
+    pub light_tiles: &'a crate::renderer::light_tiles::TileLists,
+    /// [`crate::renderer::RenderSettings::light_tiles`]: techniques that bin their own spheres follow it too.
+    pub light_tiles_enabled: bool,
 }
 
 /// What a technique did in a frame, for the frame report.
@@ -531,6 +536,11 @@ pub trait Technique {
     fn light_details(&self, _index: usize) -> Option<LightDetails> {
         None
     }
+    /// True when this frame's shading passes read the renderer's tile lists of the visible lights
+    /// ([`FrameContext::light_tiles`]); asked after `prepare`, so the renderer builds them only then.
+    fn uses_light_tiles(&self) -> bool {
+        false
+    }
     /// The shadow-map atlas of the last step (the last batch when the frame had several), with what its tiles
     /// are, for inspection; None for techniques without one.
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
@@ -544,13 +554,13 @@ pub trait Technique {
 pub const MAX_LIGHT_WORK_PER_PASS: usize = 4096;
 
 /// A full-screen pass that adds `pipeline`'s output into the HDR target: group 0 is the screen bind group,
-/// group 1 the technique's. The shading passes of all techniques go through here.
+/// groups 1.. are `groups` (the technique's, then the tile lists' when it reads them). The shading passes of all techniques go through here.
 pub fn accumulate_pass(
     ctx: &FrameContext,
     encoder: &mut wgpu::CommandEncoder,
     label: &str,
     pipeline: &wgpu::RenderPipeline,
-    group: &wgpu::BindGroup,
+    groups: &[&wgpu::BindGroup],
 ) {
     ctx.timer.render_pass(
         encoder,
@@ -571,7 +581,9 @@ pub fn accumulate_pass(
         |pass| {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, ctx.screen_bind_group, &[]);
-            pass.set_bind_group(1, group, &[]);
+            for (i, group) in groups.iter().enumerate() {
+                pass.set_bind_group(1 + i as u32, *group, &[]);
+            }
             pass.draw(0..3, 0..1);
         },
     );

@@ -10,12 +10,16 @@
 //!    `C_att`) into the shared atlas, then one shading pass: per pixel and cluster, skip the pixel beyond
 //!    `C_att`, compute the cluster's visibility once as a disc light of radius `d_min` (PCF, or PCSS: blocker
 //!    search, penumbra `w = d_min (d_r − d_b) / d_b`, PCF of width `w`) over a Poisson disk, and modulate the
-//!    summed radiance of the cluster's member lights with it (section 3.2).
+//!    summed radiance of the cluster's member lights with it (section 3.2). The clusters' `C_att` spheres are
+//!    binned into screen tiles first (the renderer's tile-list service), so a pixel visits only the batch's
+//!    clusters that reach its tile.
 //!
 //! Deviation from the paper: visibility is not stored in a screen-sized texture per cluster but computed and
 //! consumed cluster by cluster in the same pass (the issue allows either). That keeps memory bounded for
 //! hundreds of clusters and still samples each cube map once per pixel and cluster, as the paper intends.
-//! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise.
+//! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise. As production PCSS,
+//! it skips the filter where the blocker search's samples all agree: none blocked (lit), or all blocked with
+//! a filter no wider than the searched disc (umbra).
 
 pub mod clustering;
 
@@ -31,6 +35,7 @@ use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
+use crate::renderer::light_tiles::TileLists;
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
@@ -116,6 +121,9 @@ pub struct LightCluster {
     batch_size: usize,
     counts: TechniqueCounts,
     clustering_ms: f64,
+    /// Per screen tile, the clusters whose `C_att` sphere reaches it (the renderer's tile-list service).
+    cluster_tiles: TileLists,
+    cluster_spheres: Vec<[f32; 4]>,
     /// The reference path, for the worst case.
     reference: Reference,
     using_reference: bool,
@@ -133,7 +141,7 @@ impl LightCluster {
             device,
             "lightcluster shade",
             &module,
-            &[&group_layout],
+            &[&group_layout, &layouts.light_tiles],
             SharedLayouts::HDR_FORMAT,
             true,
         );
@@ -158,6 +166,8 @@ impl LightCluster {
             batch_size: 1,
             counts: TechniqueCounts::default(),
             clustering_ms: 0.0,
+            cluster_tiles: TileLists::new(gpu, &layouts.screen, &layouts.light_tiles),
+            cluster_spheres: Vec::new(),
             reference: Reference::new(gpu, layouts),
             using_reference: false,
         }
@@ -343,6 +353,24 @@ impl Technique for LightCluster {
             };
             return Ok(());
         }
+        if step == 0 {
+            // Bin the clusters' C_att spheres into screen tiles once per frame, for every batch's shading.
+            self.cluster_spheres.clear();
+            self.cluster_spheres.extend(self.gpu_clusters.iter().map(|c| {
+                let [x, y, z] = c.position;
+                [x, y, z, c.c_att]
+            }));
+            self.cluster_tiles.build(
+                ctx.gpu,
+                &ctx.layouts.light_tiles,
+                ctx.screen_bind_group,
+                ctx.timer,
+                encoder,
+                ctx.size,
+                &self.cluster_spheres,
+                ctx.light_tiles_enabled,
+            );
+        }
         // Step 3: this batch's cluster cube maps, then its shading.
         let first = step * self.batch_size;
         let last = (first + self.batch_size).min(self.gpu_clusters.len());
@@ -367,7 +395,7 @@ impl Technique for LightCluster {
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, &[group, self.cluster_tiles.bind_group()]);
         Ok(())
     }
 
@@ -377,6 +405,11 @@ impl Technique for LightCluster {
 
     fn counts(&self) -> TechniqueCounts {
         self.counts.clone()
+    }
+
+    fn uses_light_tiles(&self) -> bool {
+        // The reference path reads the renderer's lists of lights; the cluster path bins its own clusters.
+        self.using_reference
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {

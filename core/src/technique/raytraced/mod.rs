@@ -131,7 +131,7 @@ impl Raytraced {
             device,
             "raytraced shade",
             &module,
-            &[&group_layout],
+            &[&group_layout, &layouts.light_tiles],
             SharedLayouts::HDR_FORMAT,
             true,
         );
@@ -300,7 +300,7 @@ impl Technique for Raytraced {
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, group);
+        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, &[group, ctx.light_tiles.bind_group()]);
         Ok(())
     }
 
@@ -314,6 +314,10 @@ impl Technique for Raytraced {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 }).into_iter().collect()
+    }
+
+    fn uses_light_tiles(&self) -> bool {
+        true
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

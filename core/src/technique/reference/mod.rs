@@ -5,7 +5,8 @@
 //! 1. Cull each light's range sphere (radius `L_att`) against the view frustum; the others contribute nothing.
 //! 2. Split the visible lights into batches of as many cube maps as fit the atlas budget.
 //! 3. Per batch (one step): render the batch's cube maps into the reused atlas (chunk-culled per light and
-//!    per face), then shade every pixel with the batch's lights and add the result into the HDR target.
+//!    per face), then shade every pixel with the batch's lights that its tile's list holds (the renderer's
+//!    tiled light lists: the others cannot reach it) and add the result into the HDR target.
 //!
 //! Memory is the atlas of one batch plus the renderer's 64 bytes per visible light, whatever the number of lights.
 
@@ -69,7 +70,7 @@ impl PerLightShadows {
             device,
             "reference shade",
             &module,
-            &[&group_layout],
+            &[&group_layout, &layouts.light_tiles],
             SharedLayouts::HDR_FORMAT,
             true,
         );
@@ -160,7 +161,7 @@ impl PerLightShadows {
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, &[group, ctx.light_tiles.bind_group()]);
         stats
     }
 }
@@ -234,6 +235,10 @@ impl Technique for Reference {
 
     fn counts(&self) -> TechniqueCounts {
         self.counts.clone()
+    }
+
+    fn uses_light_tiles(&self) -> bool {
+        true
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

@@ -3,7 +3,8 @@
 //!
 //! 1. Cull range spheres against the view frustum.
 //! 2. Per step, shade a batch of lights in one full-screen pass (the batch is bounded only by
-//!    `max_lights_per_step`; the whole frame is one step when unlimited).
+//!    `max_lights_per_step`; the whole frame is one step when unlimited); a pixel loops over the batch's lights
+//!    in its tile's list (the renderer's tiled light lists).
 
 use wgpu::util::DeviceExt;
 
@@ -51,7 +52,7 @@ impl Unshadowed {
             device,
             "unshadowed shade",
             &module,
-            &[&group_layout],
+            &[&group_layout, &layouts.light_tiles],
             SharedLayouts::HDR_FORMAT,
             true,
         );
@@ -126,7 +127,7 @@ impl Technique for Unshadowed {
             UnshadowedBatchUniform { first_light: first as u32, light_count: (last - first) as u32, _pad: [0; 2] };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, group);
+        accumulate_pass(ctx, encoder, "shading", &self.pipeline, &[group, ctx.light_tiles.bind_group()]);
         Ok(())
     }
 
@@ -136,6 +137,10 @@ impl Technique for Unshadowed {
 
     fn counts(&self) -> TechniqueCounts {
         self.counts.clone()
+    }
+
+    fn uses_light_tiles(&self) -> bool {
+        true
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
