@@ -524,8 +524,9 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 3, "{text}");
     assert!(lines[0].starts_with("indirect.shadow_res,") && lines[0].contains(",vpls,"), "{}", lines[0]);
-    // The technique's named figures are columns too.
-    assert!(lines[0].ends_with(",indirect.figure.vpls"), "{}", lines[0]);
+    // The technique's named figures are columns too, and its own passes.
+    assert!(lines[0].contains(",indirect.figure.vpls"), "{}", lines[0]);
+    assert!(lines[0].contains(",indirect.pass.vpl gather_ms"), "{}", lines[0]);
 }
 
 #[test]
