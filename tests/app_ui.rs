@@ -778,3 +778,20 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     assert!(lines[2].starts_with("looking at"), "{lines:?}");
     assert!(h.state_mut().camera_tooltip(&p, egui::pos2(-100.0, -100.0)).is_empty());
 }
+
+#[test]
+fn the_difference_is_computed_off_the_ui_thread_when_not_synchronous() {
+    // Metrics with FLIP run on a worker: UI frames keep coming while it works, and its result arrives.
+    use shadowlab::gui::document::ViewMode;
+    let mut h =
+        harness(Startup { data_dir: Some(data_dir("difference-async")), synchronous: false, ..Default::default() });
+    h.state_mut().load_builtin("cornell");
+    h.state_mut().view.mode = ViewMode::Difference;
+    let start = std::time::Instant::now();
+    while h.state().difference.is_none() && start.elapsed() < std::time::Duration::from_secs(120) {
+        h.step();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let d = h.state().difference.as_ref().expect("the worker's difference arrived");
+    assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
+}

@@ -142,6 +142,13 @@ pub struct Difference {
     key: (u64, u64, bool, bool, u32),
 }
 
+/// A difference image and its metrics on their way from a worker thread.
+struct PendingDifference {
+    key: (u64, u64, bool, bool, u32),
+    size: (u32, u32),
+    result: std::sync::mpsc::Receiver<Result<(shadowlab_core::compare::Metrics, image::RgbaImage)>>,
+}
+
 pub struct Gpu {
     pub ctx: GpuContext,
     pub render_state: egui_wgpu::RenderState,
@@ -206,6 +213,10 @@ pub struct ShadowLabApp {
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub ui_frame_ms: VecDeque<f64>,
     pub difference: Option<Difference>,
+    /// The difference being computed on a worker thread (metrics with FLIP cost seconds on large images).
+    pending_difference: Option<PendingDifference>,
+    /// False in tests (`Startup::synchronous`): the difference is then computed on the UI thread.
+    background_work: bool,
     pub sweep: Option<sweep::Sweep>,
     /// Last complete frame time (GPU ms) of every technique seen this session, with its parameters, for the
     /// comparison table (technique vs reference, same session).
@@ -276,6 +287,8 @@ impl ShadowLabApp {
             window_shot: Default::default(),
             ui_frame_ms: VecDeque::new(),
             difference: None,
+            pending_difference: None,
+            background_work: !startup.synchronous,
             sweep: None,
             pixel_ids: None,
             session_times: BTreeMap::new(),
@@ -976,6 +989,27 @@ impl ShadowLabApp {
         if self.difference.as_ref().is_some_and(|d| d.key == key) {
             return Ok(());
         }
+        // A worker is on it: show its result when it arrives (an older key's result is dropped).
+        if let Some(p) = &self.pending_difference {
+            match p.result.try_recv() {
+                Ok(result) => {
+                    let (pkey, (w, h)) = (p.key, p.size);
+                    self.pending_difference = None;
+                    let (metrics, image) = result?;
+                    let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
+                    let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
+                    self.difference = Some(Difference { texture, metrics, key: pkey });
+                    if pkey == key {
+                        return Ok(());
+                    }
+                }
+                Err(std::sync::mpsc::TryRecvError::Empty) if p.key == key => {
+                    ctx.request_repaint_after(std::time::Duration::from_millis(50));
+                    return Ok(());
+                }
+                Err(_) => self.pending_difference = None,
+            }
+        }
         use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Visibility};
         let (w, h) = gpu.main.size;
         // Shadow factors are those of the direct light, whatever component the views show; otherwise the
@@ -992,8 +1026,9 @@ impl ShadowLabApp {
         let mask = gpu.main.renderer.read_geometry_mask()?;
         let mode = if self.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
         let gain = self.view.diff_gain;
-        let (metrics, image) = if self.view.diff_visibility {
-            // Shadow factors need the unshadowed and ambient-only images of the same view.
+        // The GPU part (readbacks, and for shadow factors the unshadowed and ambient-only images of the same
+        // view) here; the CPU part (metrics with FLIP, the colour map) on a worker thread unless synchronous.
+        let lit_ambient = if self.view.diff_visibility {
             let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
             let mut aux = gpu.main.renderer.new_view(settings)?;
             let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
@@ -1001,18 +1036,39 @@ impl ShadowLabApp {
             let lit = Image::new(w, h, aux.read_hdr()?)?;
             aux.render_frame(unshadowed.as_mut(), &camera, &[], &mut |_, _| {})?;
             let ambient = Image::new(w, h, aux.read_hdr()?)?;
-            let v_t = compare::visibility_image(&technique, &lit, Some(&ambient))?;
-            let v_r = compare::visibility_image(&reference, &lit, Some(&ambient))?;
-            let options = CompareOptions {
-                visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
-                ..Default::default()
-            };
-            let m = compare::compare(&technique, &reference, Some(&mask), &options)?;
-            (m, compare::visibility_difference_image(&v_t, &v_r, w, h, Some(&mask), mode, gain)?)
+            Some((lit, ambient))
         } else {
-            let m = compare::compare(&technique, &reference, Some(&mask), &CompareOptions::default())?;
-            (m, compare::difference_image(&technique, &reference, Some(&mask), mode, gain)?)
+            None
         };
+        let work = move || -> Result<(shadowlab_core::compare::Metrics, image::RgbaImage)> {
+            Ok(match &lit_ambient {
+                Some((lit, ambient)) => {
+                    let v_t = compare::visibility_image(&technique, lit, Some(ambient))?;
+                    let v_r = compare::visibility_image(&reference, lit, Some(ambient))?;
+                    let options = CompareOptions {
+                        visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
+                        ..Default::default()
+                    };
+                    let m = compare::compare(&technique, &reference, Some(&mask), &options)?;
+                    (m, compare::visibility_difference_image(&v_t, &v_r, w, h, Some(&mask), mode, gain)?)
+                }
+                None => {
+                    let m = compare::compare(&technique, &reference, Some(&mask), &CompareOptions::default())?;
+                    (m, compare::difference_image(&technique, &reference, Some(&mask), mode, gain)?)
+                }
+            })
+        };
+        if self.background_work {
+            let (tx, rx) = std::sync::mpsc::channel();
+            let repaint = ctx.clone();
+            std::thread::Builder::new().name("difference".into()).spawn(move || {
+                let _ = tx.send(work());
+                repaint.request_repaint();
+            })?;
+            self.pending_difference = Some(PendingDifference { key, size: (w, h), result: rx });
+            return Ok(());
+        }
+        let (metrics, image) = work()?;
         let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
         let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
         self.difference = Some(Difference { texture, metrics, key });
