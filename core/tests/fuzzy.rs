@@ -283,3 +283,36 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         assert_eq!(clusters.iter().filter(|c| c.exists()).count(), cpu.non_empty(), "K = {k}");
     }
 }
+
+#[test]
+fn the_explain_steps_of_fuzzy_and_val_name_layers_they_have() {
+    // Every step that shows layers names at least one layer the technique offers after a frame, and every
+    // layer has a legend line of its own beyond the primitive counts.
+    let scene = room();
+    for key in ["fuzzy", "val"] {
+        let gpu = gpu();
+        let mut renderer = Renderer::new(&gpu, &scene, settings(64)).unwrap();
+        let t = renderer.create_indirect_technique(key).unwrap();
+        renderer.set_indirect(Some(t)).unwrap();
+        let mut direct = renderer.create_technique("unshadowed").unwrap();
+        renderer.render_frame(direct.as_mut(), &scene.camera, &lights(), &mut |_, _| {}).unwrap();
+        let technique = renderer.indirect().unwrap();
+        let layers = technique.overlays(&lights());
+        let names: Vec<&str> = layers.iter().map(|l| l.name).collect();
+        let steps = technique.explain();
+        assert!(steps.len() >= 4, "{key}: {} steps", steps.len());
+        for step in steps.iter().filter(|s| !s.layers.is_empty()) {
+            assert!(
+                step.layers.iter().any(|l| names.contains(l)),
+                "{key} '{}': none of {:?} in {names:?}",
+                step.title,
+                step.layers
+            );
+        }
+        for layer in &layers {
+            let legend = technique.overlay_legend(layer);
+            let summary = layer.summary().len();
+            assert!(legend.len() > summary, "{key}: layer '{}' has no legend of its own", layer.name);
+        }
+    }
+}

@@ -877,28 +877,44 @@ pub fn pane_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui, pane: Pane) {
 /// overlay layers (and the shadow-map panel) that show it.
 fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Explain");
-    let key = app.technique.clone();
-    let Some(gpu) = &mut app.gpu else { return };
-    let Ok(technique) = gpu.main.technique(&key) else { return };
-    let (label, steps) = (technique.label(), technique.explain());
-    if steps.is_empty() {
-        ui.label(format!("{label} describes no steps."));
-        return;
-    }
-    ui.label(format!("The steps of {label}, as in its paper; choose one to see it in the view."));
-    let mut chosen = None;
-    for (i, step) in steps.iter().enumerate() {
-        let selected = app.explain_step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
-        if ui.selectable_label(selected, step.title).clicked() {
-            chosen = Some(i);
+    // The direct technique's steps, then the indirect technique's (when one is chosen and describes any).
+    let mut sections: Vec<(String, &'static str, Vec<shadowlab_core::technique::ExplainStep>)> = Vec::new();
+    {
+        let Some(gpu) = &mut app.gpu else { return };
+        if let Ok(technique) = gpu.main.technique(&app.technique) {
+            sections.push((app.technique.clone(), technique.label(), technique.explain()));
+        }
+        if let Some(key) = app.indirect.technique.clone() {
+            if let Ok(shared) = gpu.main.indirect_technique(&key) {
+                let technique = shared.borrow();
+                let steps = technique.explain();
+                if !steps.is_empty() {
+                    sections.push((key, technique.label(), steps));
+                }
+            }
         }
     }
-    if let Some(i) = chosen {
-        app.show_explain_step(&steps[i]);
-        app.explain_step = Some((key.clone(), i));
-    }
-    if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {
+    for (key, label, steps) in sections {
+        if steps.is_empty() {
+            ui.label(format!("{label} describes no steps."));
+            continue;
+        }
+        ui.label(format!("The steps of {label}, as in its paper; choose one to see it in the view."));
+        let mut chosen = None;
+        for (i, step) in steps.iter().enumerate() {
+            let selected = app.explain_step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
+            if ui.selectable_label(selected, step.title).clicked() {
+                chosen = Some(i);
+            }
+        }
+        if let Some(i) = chosen {
+            app.show_explain_step(&steps[i]);
+            app.explain_step = Some((key.clone(), i));
+        }
+        if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {
+            ui.separator();
+            ui.label(step.text);
+        }
         ui.separator();
-        ui.label(step.text);
     }
 }

@@ -285,6 +285,35 @@ pub fn vpl_overlays(set: &VplSet, scene_size: f32, path_light: u32) -> Vec<Overl
     ]
 }
 
+/// The legend of the layers of [`vpl_overlays`]; None for other layers.
+pub fn vpl_layer_legend(layer: &OverlayLayer) -> Option<Vec<crate::technique::LegendEntry>> {
+    use crate::technique::{Glyph, LegendEntry};
+    let thinned = if layer.name.contains("every n-th") { " (every n-th VPL, past 4,096)" } else { "" };
+    let name = layer.name;
+    let entry = match () {
+        _ if name.starts_with("vpls (flux") => LegendEntry::new(
+            Glyph::Rect,
+            [1.0, 0.9, 0.6, 1.0],
+            format!("a VPL in its surface's plane, hue of its flux, brighter with more flux{thinned}"),
+        ),
+        _ if name.starts_with("vpls (by light") => LegendEntry::new(
+            Glyph::Palette,
+            crate::technique::index_color(0),
+            format!("a VPL in the colour of the light it came from{thinned}"),
+        ),
+        _ if name.starts_with("vpl normals") => {
+            LegendEntry::new(Glyph::Line, [0.4, 0.9, 1.0, 1.0], format!("a VPL's normal{thinned}"))
+        }
+        _ if name.starts_with("vpl paths") => LegendEntry::new(
+            Glyph::Line,
+            [1.0, 0.85, 0.3, 0.8],
+            "where the light reaching a VPL left from (the light, or the previous bounce)",
+        ),
+        _ => return None,
+    };
+    Some(vec![entry])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -570,6 +570,91 @@ impl Technique for FuzzyClustering {
         Some(("probe_x", "probe_y"))
     }
 
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. VPLs",
+                text:
+                    "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
+                layers: &["vpls (flux)", "vpls (flux, every n-th)"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. VPL clusters",
+                text: "K_vpl clusters by k-means over position and normal (equation 7: no two normals more than 30 \
+                       degrees apart); each becomes one light at its representative with its members' flux.",
+                layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3-4. Shading-point clusters",
+                text: "The pixels' positions and normals clustered the same way (every gamma-th pixel in the \
+                       iterations), then every pixel assigned to its F nearest clusters.",
+                layers: &["shading-point clusters", "shading-point centroids"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "5. Visibility between representatives",
+                text: "One shadow ray from each shading-point cluster's representative to each light: K_sp x K_vpl \
+                       rays instead of one per pixel and VPL. Alt+click a pixel to see its clusters' rays (green \
+                       visible, red blocked).",
+                layers: &[
+                    "probe: clusters and visibility rays (green visible, red blocked)",
+                    "vpl cluster representatives",
+                ],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "6. Weighted visibility",
+                text: "Each pixel shades every light with its own BRDF and geometry term and the visibility of its F \
+                       clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
+                layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let palette = index_color(0);
+        let mut legend = match layer.name {
+            "vpls by cluster" | "vpls by cluster (every n-th)" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a VPL, in its cluster's colour")]
+            }
+            "vpl cluster representatives" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                "a VPL cluster's representative: the light it becomes (members' flux, mean normal)",
+            )],
+            "shading-point clusters" => {
+                vec![LegendEntry::new(
+                    Glyph::Pixels,
+                    palette,
+                    "each pixel in its nearest shading-point cluster's colour",
+                )]
+            }
+            "shading-point clusters (blended as the visibility mode weighs them)" => vec![LegendEntry::new(
+                Glyph::Pixels,
+                palette,
+                "each pixel: its F clusters' colours blended by the visibility weights",
+            )],
+            "shading-point centroids" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a shading-point cluster's centroid")]
+            }
+            "probe: clusters and visibility rays (green visible, red blocked)" => vec![
+                LegendEntry::new(Glyph::Dot, palette, "the probed pixel's F clusters' representatives"),
+                LegendEntry::new(Glyph::Line, [0.2, 1.0, 0.3, 0.8], "a shadow ray that reaches its light"),
+                LegendEntry::new(Glyph::Line, [1.0, 0.2, 0.2, 0.8], "a shadow ray that is blocked"),
+            ],
+            _ => crate::renderer::vpl_gather::vpl_layer_legend(layer)
+                .or_else(|| super::light_layer_legend(layer))
+                .unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
+
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
         self.scene_size = ctx.scene.bounds.size().length().max(1e-6);

@@ -568,6 +568,56 @@ impl Technique for VirtualAreaLights {
         "val"
     }
 
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        use super::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. VPLs",
+                text: "The lights' reflective shadow maps leave virtual point lights on the surfaces they light.",
+                layers: &["vpls by val"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "2. Clustering into VALs",
+                text: "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
+                       VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle.",
+                layers: &["vpls by val", "val rectangles", "val normals", "val centres"],
+                shows_shadow_maps: false,
+            },
+            ExplainStep {
+                title: "3. A paraboloid map per VAL",
+                text: "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps).",
+                layers: &["val centres", "val normals"],
+                shows_shadow_maps: true,
+            },
+            ExplainStep {
+                title: "4-5. Soft visibility and shading",
+                text:
+                    "Each pixel computes every VAL's soft visibility once (CSSM, PCSS or hard) and sums all VPLs, each \
+                       with its VAL's visibility; set 'Show one VAL' to see one VAL's contribution alone.",
+                layers: &[],
+                shows_shadow_maps: false,
+            },
+        ]
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        use super::{Glyph, LegendEntry};
+        let palette = index_color(0);
+        let mut legend = match layer.name {
+            "vpls by val" => vec![LegendEntry::new(Glyph::Palette, palette, "a VPL, in its VAL's colour")],
+            "val rectangles" => {
+                vec![LegendEntry::new(Glyph::Rect, palette, "a VAL's area: its VPLs' bounding rectangle")]
+            }
+            "val normals" => vec![LegendEntry::new(Glyph::Line, palette, "a VAL's mean normal")],
+            "val centres" => vec![LegendEntry::new(Glyph::Dot, palette, "a VAL's centre: its VPLs' mean position")],
+            "vpl -> val" => vec![LegendEntry::new(Glyph::Line, palette, "a VPL joined to its VAL's centre")],
+            _ => super::light_layer_legend(layer).unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
+
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
         self.shadows.atlas().map(|a| (a, "one paraboloid map per VAL, facing its normal"))
     }

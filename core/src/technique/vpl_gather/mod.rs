@@ -405,4 +405,12 @@ impl Technique for VplGather {
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
         vpl_overlays(&self.vpls, self.scene_size, self.params.path_light)
     }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        let mut legend = crate::renderer::vpl_gather::vpl_layer_legend(layer)
+            .or_else(|| super::light_layer_legend(layer))
+            .unwrap_or_default();
+        legend.extend(layer.summary());
+        legend
+    }
 }
