@@ -3,7 +3,8 @@
 //! interpolates it from its `F` nearest SP clusters.
 //!
 //! Per frame (the paper's Fig. 2):
-//! 1. VPLs: the renderer's shared set (the paper traces particles: `--vpl-source traced`; both sources work).
+//! 1. VPLs: the renderer's shared set; the paper traces particles, which `--vpl-source auto` (the default)
+//!    picks for this technique (`TechniqueEntry::vpl_source`); both sources work.
 //! 2. VPL clustering: `K_vpl` clusters by Algorithm 1 over position and normal ([`kmeans`], on the GPU in
 //!    [`gpu`]); each cluster becomes one light at its representative (the member nearest the centroid) with
 //!    its members' mean normal and summed flux (`I_c` of equation 6).
