@@ -1,25 +1,12 @@
 // G-buffer pass: albedo, normal + shininess, emissive + specular, hardware depth.
-// Vertex layout: `Vertex` in core/src/scene/chunks.rs. `Material` mirrors `MaterialUniform` in gpu_data.rs.
+// Vertex layout: `Vertex` in core/src/scene/chunks.rs. Composed after material.wgsl (group 1).
 
 struct Camera {
     clip_from_world: mat4x4<f32>,
 }
 
-struct Material {
-    base_color: vec4<f32>,
-    // rgb emissive, w: 1 when the base colour texture is used
-    emissive: vec4<f32>,
-    // x: specular intensity, y: shininess, z: 1 when the emissive texture is used, w: occlusion strength (0: no
-    // occlusion texture)
-    specular: vec4<f32>,
-    // x: alpha cutoff (0: opaque, alpha ignored)
-    alpha: vec4<f32>,
-}
 
 @group(0) @binding(0) var<uniform> camera: Camera;
-@group(1) @binding(0) var<uniform> material: Material;
-@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
-@group(1) @binding(2) var material_sampler: sampler;
 @group(1) @binding(3) var emissive_texture: texture_2d<f32>;
 @group(1) @binding(4) var occlusion_texture: texture_2d<f32>;
 

@@ -47,19 +47,7 @@ fn fs_main(in: ParaboloidOut) {
     }
 }
 
-// Alpha-tested casters (cut-out materials), as in shadow_depth.wgsl: keep `Material` in sync with gbuffer.wgsl.
-struct Material {
-    base_color: vec4<f32>,
-    // w: 1 when the base colour texture is used
-    emissive: vec4<f32>,
-    specular: vec4<f32>,
-    // x: alpha cutoff
-    alpha: vec4<f32>,
-}
-
-@group(1) @binding(0) var<uniform> material: Material;
-@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
-@group(1) @binding(2) var material_sampler: sampler;
+// Alpha-tested casters (cut-out materials), as in shadow_depth.wgsl (material.wgsl's cutoff test).
 
 struct ParaboloidMaskedOut {
     @builtin(position) clip: vec4<f32>,
@@ -79,11 +67,7 @@ fn vs_masked(@location(0) position: vec3<f32>, @location(2) uv: vec2<f32>) -> Pa
 
 @fragment
 fn fs_masked(in: ParaboloidMaskedOut) {
-    var alpha = material.base_color.a;
-    if material.emissive.w > 0.5 {
-        alpha *= textureSampleLevel(base_color_texture, material_sampler, in.uv, 0.0).a;
-    }
-    if in.height < 0.0 || alpha < material.alpha.x {
+    if in.height < 0.0 || material_cut_out(in.uv) {
         discard;
     }
 }

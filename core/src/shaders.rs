@@ -2,8 +2,10 @@
 //! shared files it uses (plain concatenation, no preprocessor). `MODULES` lists every composed module; a test
 //! validates each with naga and checks that every `.wgsl` file in `shaders/` is used.
 
-pub const GBUFFER: &str = include_str!("../../shaders/gbuffer.wgsl");
-pub const SHADOW_DEPTH: &str = include_str!("../../shaders/shadow_depth.wgsl");
+pub const GBUFFER: &str =
+    concat!(include_str!("../../shaders/material.wgsl"), include_str!("../../shaders/gbuffer.wgsl"));
+pub const SHADOW_DEPTH: &str =
+    concat!(include_str!("../../shaders/material.wgsl"), include_str!("../../shaders/shadow_depth.wgsl"));
 pub const AMBIENT: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/ambient.wgsl"));
 pub const TONEMAP: &str =
@@ -37,8 +39,11 @@ pub const RAYTRACE_TEST: &str =
     concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/raytrace_test.wgsl"));
 pub const INSM_TRIANGULATE: &str = include_str!("../../shaders/insm_triangulate.wgsl");
 pub const OVERLAY: &str = include_str!("../../shaders/overlay.wgsl");
-pub const PARABOLOID_DEPTH: &str =
-    concat!(include_str!("../../shaders/vpl_basis.wgsl"), include_str!("../../shaders/paraboloid_depth.wgsl"));
+pub const PARABOLOID_DEPTH: &str = concat!(
+    include_str!("../../shaders/vpl_basis.wgsl"),
+    include_str!("../../shaders/material.wgsl"),
+    include_str!("../../shaders/paraboloid_depth.wgsl")
+);
 pub const VPL_GATHER_UNSHADOWED: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/vpl_common.wgsl"),
@@ -90,8 +95,8 @@ pub const FUZZY_SHADE: &str = concat!(
 
 /// Every composed shader module: (name, the files it is made of, source).
 pub const MODULES: &[(&str, &[&str], &str)] = &[
-    ("gbuffer", &["gbuffer.wgsl"], GBUFFER),
-    ("shadow_depth", &["shadow_depth.wgsl"], SHADOW_DEPTH),
+    ("gbuffer", &["material.wgsl", "gbuffer.wgsl"], GBUFFER),
+    ("shadow_depth", &["material.wgsl", "shadow_depth.wgsl"], SHADOW_DEPTH),
     ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
     ("tonemap", &["common.wgsl", "tonemap.wgsl"], TONEMAP),
     (
@@ -114,7 +119,7 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ),
     ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
     ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
-    ("paraboloid_depth", &["vpl_basis.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),
+    ("paraboloid_depth", &["vpl_basis.wgsl", "material.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),
     (
         "vpl_gather_unshadowed",
         &["common.wgsl", "vpl_common.wgsl", "vpl_vis_none.wgsl", "vpl_gather.wgsl"],

@@ -5,9 +5,9 @@
 mod common;
 
 use common::*;
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{Mesh, PointLight, Scene};
+use shadowlab_core::scene::{PointLight, Scene};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::VplSettings;
 use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
@@ -26,27 +26,6 @@ fn settings(vpls: u32) -> RenderSettings {
         vpl: VplSettings { count: vpls, ..Default::default() },
         ..Default::default()
     }
-}
-
-/// The plane-and-occluder scene with a back wall: the ground's VPLs light the wall, the plate shadows it.
-fn room() -> Scene {
-    let mut scene = plane_and_occluder();
-    let h = 4.0;
-    scene.meshes.push(Mesh {
-        name: "wall".into(),
-        positions: vec![
-            Vec3::new(-h, 0.0, -3.0),
-            Vec3::new(h, 0.0, -3.0),
-            Vec3::new(h, 2.0 * h, -3.0),
-            Vec3::new(-h, 2.0 * h, -3.0),
-        ],
-        normals: vec![Vec3::Z; 4],
-        uvs: vec![Vec2::ZERO; 4],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material: 0,
-    });
-    scene.finalize(std::path::Path::new("test")).unwrap();
-    scene
 }
 
 fn lights() -> Vec<PointLight> {

@@ -213,29 +213,6 @@ fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error(
         .is_err());
 }
 
-/// The ground and occluder of `plane_and_occluder` with a back wall (z = -3, facing +z) that the ground's
-/// VPLs light, seen by the default camera.
-fn room() -> Scene {
-    let mut scene = plane_and_occluder();
-    let h = 4.0;
-    let wall = Mesh {
-        name: "wall".into(),
-        positions: vec![
-            Vec3::new(-h, 0.0, -3.0),
-            Vec3::new(h, 0.0, -3.0),
-            Vec3::new(h, 2.0 * h, -3.0),
-            Vec3::new(-h, 2.0 * h, -3.0),
-        ],
-        normals: vec![Vec3::Z; 4],
-        uvs: vec![Vec2::ZERO; 4],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material: 0,
-    };
-    scene.meshes.push(wall);
-    scene.finalize(std::path::Path::new("test")).unwrap();
-    scene
-}
-
 // --- Gathers --------------------------------------------------------------------------------------------------
 
 #[test]

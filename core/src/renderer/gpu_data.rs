@@ -80,7 +80,7 @@ pub fn shadow_near(range: f32) -> f32 {
     (range * 0.002).clamp(1e-4, 0.05)
 }
 
-/// Mirrors `Material` in `gbuffer.wgsl`.
+/// Mirrors `Material` in `material.wgsl` (the G-buffer and the alpha-tested depth passes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MaterialUniform {

@@ -105,3 +105,25 @@ pub fn write_failure_images(
         bad.iter().map(|&b| if b { [1.0, 0.0, 0.0, 1.0] } else { [0.0, 0.0, 0.1, 1.0] }).collect();
     save_hdr(&format!("{name}-difference.png"), w, h, &diff, 1.0)
 }
+
+/// The ground and occluder of [`plane_and_occluder`] with a back wall (z = -3, facing +z, 8 x 8) that the
+/// ground's VPLs light and the plate shadows, seen by the default camera: the indirect-light test scene.
+pub fn room() -> Scene {
+    let mut scene = plane_and_occluder();
+    let h = 4.0;
+    scene.meshes.push(Mesh {
+        name: "wall".into(),
+        positions: vec![
+            Vec3::new(-h, 0.0, -3.0),
+            Vec3::new(h, 0.0, -3.0),
+            Vec3::new(h, 2.0 * h, -3.0),
+            Vec3::new(-h, 2.0 * h, -3.0),
+        ],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+    });
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    scene
+}

@@ -94,13 +94,19 @@ pub struct GpuKMeans {
     pub shape: RunShape,
 }
 
-fn storage(gpu: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
-    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+/// Grow `slot` to a storage buffer (copyable both ways) of at least `size` bytes, rounded up to a power of two
+/// so a frame that grows a little does not reallocate; true when it was (re)created.
+pub(super) fn ensure_storage(slot: &mut Option<wgpu::Buffer>, gpu: &GpuContext, label: &str, size: u64) -> bool {
+    if slot.as_ref().is_some_and(|b| b.size() >= size) {
+        return false;
+    }
+    *slot = Some(gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
-        size: size.max(64),
+        size: size.max(64).next_power_of_two(),
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
-    })
+    }));
+    true
 }
 
 /// Workgroups of 64 for `n` invocations, as `(x, y)` (x at most 32,768: `global_index` in the shader).
@@ -219,14 +225,9 @@ impl GpuKMeans {
                 limit >> 20
             )));
         }
-        let grow = |slot: &mut Option<wgpu::Buffer>, label: &str, size: u64| {
-            if slot.as_ref().is_none_or(|b| b.size() < size) {
-                *slot = Some(storage(gpu, label, size.next_power_of_two()));
-            }
-        };
-        grow(&mut self.clusters, "fuzzy clusters", (2 * k.max(1) * 48) as u64);
-        grow(&mut self.work, "fuzzy kmeans work", (k as u64 * ACC + 2 * cells + 1 + k as u64) * 4);
-        grow(&mut self.assignment, "fuzzy assignment", assignment_bytes);
+        ensure_storage(&mut self.clusters, gpu, "fuzzy clusters", (2 * k.max(1) * 48) as u64);
+        ensure_storage(&mut self.work, gpu, "fuzzy kmeans work", (k as u64 * ACC + 2 * cells + 1 + k as u64) * 4);
+        ensure_storage(&mut self.assignment, gpu, "fuzzy assignment", assignment_bytes);
         self.shape = RunShape { points: m, clusters: k, fuzziness: f };
         let (clusters, work, assignment) = (
             self.clusters.as_ref().expect("grown"),

@@ -192,6 +192,10 @@ struct Inspection {
     /// Per VPL, its cluster (inspect only).
     vpl_assignment: Vec<u32>,
     probe: Vec<Overlay>,
+    /// The per-pixel maps of the shading-point clusters (inspect only), made once per frame: the app asks for
+    /// the overlays every UI frame.
+    hard_map: Option<Arc<Vec<u32>>>,
+    blend_map: Option<Arc<Vec<[u8; 4]>>>,
 }
 
 pub struct FuzzyClustering {
@@ -230,23 +234,6 @@ pub struct FuzzyClustering {
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
     last_step: &'static str,
-}
-
-fn storage_buffer(gpu: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
-    gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(64).next_power_of_two(),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    })
-}
-
-fn ensure(slot: &mut Option<wgpu::Buffer>, gpu: &GpuContext, label: &str, size: u64) -> bool {
-    if slot.as_ref().is_none_or(|b| b.size() < size) {
-        *slot = Some(storage_buffer(gpu, label, size));
-        return true;
-    }
-    false
 }
 
 impl FuzzyClustering {
@@ -370,6 +357,40 @@ impl FuzzyClustering {
             ClusterMode::ShadingPoints => &ctx.vpls.buffer.buffer,
             _ => self.vpl_kmeans.clusters.as_ref().expect("prepare clustered the VPLs"),
         }
+    }
+
+    /// The per-pixel maps of the read-back shading-point clusters: the nearest cluster's ID, and the F clusters'
+    /// colours blended by the visibility mode's weights.
+    fn build_pixel_maps(&mut self) {
+        let ins = &mut self.inspection;
+        let (w, h) = ins.size;
+        let f = self.sp_kmeans.shape.fuzziness.max(1);
+        let pixels = w as usize * h as usize;
+        if ins.sp_assignment.is_empty() || ins.sp_assignment.len() != pixels * f {
+            return;
+        }
+        ins.hard_map = Some(Arc::new(ins.sp_assignment.iter().step_by(f).copied().collect()));
+        let mode = self.params.shade_mode();
+        let blend: Vec<[u8; 4]> = (0..pixels)
+            .map(|m| {
+                let e = &ins.sp_assignment[m * f..m * f + f];
+                if e[0] == u32::MAX {
+                    return [0, 0, 0, 0];
+                }
+                let weights = kmeans::weights(mode, e, &ins.sp_inverse[m * f..m * f + f]);
+                let mut c = [0.0f32; 3];
+                for (&k, &wt) in e.iter().zip(&weights) {
+                    if k != u32::MAX && wt > 0.0 {
+                        let col = index_color(k as usize);
+                        for i in 0..3 {
+                            c[i] += wt * col[i];
+                        }
+                    }
+                }
+                [(c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8, 140]
+            })
+            .collect();
+        ins.blend_map = Some(Arc::new(blend));
     }
 
     /// The probe overlay: the chosen pixel's F clusters (their representatives) and a shadow ray from each to
@@ -695,7 +716,7 @@ impl Technique for FuzzyClustering {
         }
         if sp_clustered {
             let f = (self.params.fuzziness as usize).clamp(1, MAX_F);
-            ensure(&mut self.sp_points, ctx.gpu, "fuzzy shading points", pixels as u64 * 48);
+            gpu::ensure_storage(&mut self.sp_points, ctx.gpu, "fuzzy shading points", pixels as u64 * 48);
             let points = self.sp_points.as_ref().expect("ensured");
             let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("fuzzy shading points"),
@@ -764,8 +785,13 @@ impl Technique for FuzzyClustering {
                     limit >> 20
                 )));
             }
-            ensure(&mut self.bits, ctx.gpu, "fuzzy visibility bits", bits_bytes);
-            ensure(&mut self.endpoints, ctx.gpu, "fuzzy ray ends", ((self.sp_count + self.light_count) * 48) as u64);
+            gpu::ensure_storage(&mut self.bits, ctx.gpu, "fuzzy visibility bits", bits_bytes);
+            gpu::ensure_storage(
+                &mut self.endpoints,
+                ctx.gpu,
+                "fuzzy ray ends",
+                ((self.sp_count + self.light_count) * 48) as u64,
+            );
             let rays_per_row = self.words_per_row * 32;
             self.rows_per_step = ((self.params.rays_per_step as usize) / rays_per_row).max(1);
             self.vis_steps = self.sp_count.div_ceil(self.rows_per_step);
@@ -789,20 +815,23 @@ impl Technique for FuzzyClustering {
         }
         self.counts.batches = self.shade_steps;
         if inspect && sp_clustered {
-            let lights: Vec<GpuPoint> = match self.mode {
-                ClusterMode::ShadingPoints => self
-                    .vpls
-                    .vpls
-                    .iter()
-                    .map(|v| GpuPoint {
-                        position: v.position.extend(1.0).to_array(),
-                        normal: v.normal.extend(1.0).to_array(),
-                        flux: v.flux.extend(0.0).to_array(),
-                    })
-                    .collect(),
-                _ => self.inspection.vpl_clusters.clone(),
-            };
-            self.inspection.probe = self.probe_overlay(ctx, &lights);
+            self.build_pixel_maps();
+            if self.params.probe_x >= 0 && self.params.probe_y >= 0 {
+                let lights: Vec<GpuPoint> = match self.mode {
+                    ClusterMode::ShadingPoints => self
+                        .vpls
+                        .vpls
+                        .iter()
+                        .map(|v| GpuPoint {
+                            position: v.position.extend(1.0).to_array(),
+                            normal: v.normal.extend(1.0).to_array(),
+                            flux: v.flux.extend(0.0).to_array(),
+                        })
+                        .collect(),
+                    _ => self.inspection.vpl_clusters.clone(),
+                };
+                self.inspection.probe = self.probe_overlay(ctx, &lights);
+            }
         }
         Ok(self.vis_steps + self.shade_steps)
     }
@@ -954,39 +983,18 @@ impl Technique for FuzzyClustering {
             });
         }
         let (w, h) = ins.size;
-        let f = self.sp_kmeans.shape.fuzziness.max(1);
-        if !ins.sp_assignment.is_empty() && ins.sp_assignment.len() == w as usize * h as usize * f {
-            let hard: Vec<u32> = ins.sp_assignment.iter().step_by(f).copied().collect();
+        if let Some(ids) = &ins.hard_map {
             layers.push(OverlayLayer {
                 name: "shading-point clusters",
                 visible_by_default: false,
-                primitives: vec![Overlay::IdMap { width: w, height: h, ids: Arc::new(hard), alpha: 0.5 }],
+                primitives: vec![Overlay::IdMap { width: w, height: h, ids: ids.clone(), alpha: 0.5 }],
             });
-            let mode = self.params.shade_mode();
-            let blend: Vec<[u8; 4]> = (0..(w as usize * h as usize))
-                .map(|m| {
-                    let e = &ins.sp_assignment[m * f..m * f + f];
-                    let weights = kmeans::weights(mode, e, &ins.sp_inverse[m * f..m * f + f]);
-                    let mut c = [0.0f32; 3];
-                    for (&k, &wt) in e.iter().zip(&weights) {
-                        if k != u32::MAX && wt > 0.0 {
-                            let col = index_color(k as usize);
-                            for i in 0..3 {
-                                c[i] += wt * col[i];
-                            }
-                        }
-                    }
-                    if e[0] == u32::MAX {
-                        [0, 0, 0, 0]
-                    } else {
-                        [(c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8, 140]
-                    }
-                })
-                .collect();
+        }
+        if let Some(rgba) = &ins.blend_map {
             layers.push(OverlayLayer {
                 name: "shading-point clusters (blended as the visibility mode weighs them)",
                 visible_by_default: false,
-                primitives: vec![Overlay::ColorMap { width: w, height: h, rgba: Arc::new(blend) }],
+                primitives: vec![Overlay::ColorMap { width: w, height: h, rgba: rgba.clone() }],
             });
         }
         if !ins.sp_centroids.is_empty() {
