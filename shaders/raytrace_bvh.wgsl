@@ -20,6 +20,15 @@ struct BvhTriangle {
 @group(1) @binding(0) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(1) @binding(1) var<storage, read> bvh_triangles: array<BvhTriangle>;
 
+// Cut-out casters (core/src/renderer/scene_bvh.rs, `BvhCutouts` and `CutoutTextures`): per BVH triangle 0
+// (opaque) or 1 + its record; records as two texels (uv0, uv1), (uv2, mask layer, cutoff); the masks (alpha,
+// factor times texture) one layer per cut-out material. Textures, not storage buffers: downlevel devices allow
+// four of those per stage and the tracers already bind up to four.
+@group(1) @binding(10) var bvh_cutout_ids: texture_2d<u32>;
+@group(1) @binding(11) var bvh_cutout_records: texture_2d<f32>;
+@group(1) @binding(12) var bvh_cutout_masks: texture_2d_array<f32>;
+@group(1) @binding(13) var bvh_cutout_sampler: sampler;
+
 // = MAX_DEPTH in bvh.rs: the builder caps the depth so a ray never pushes more.
 const BVH_STACK_SIZE: u32 = 32u;
 // = MIN_DIR in bvh.rs.
@@ -51,6 +60,31 @@ fn bvh_ray_triangle(origin: vec3<f32>, dir: vec3<f32>, tri: BvhTriangle, t_max: 
     return bvh_ray_triangle_hit(origin, dir, tri, t_max).x < BVH_MISS;
 }
 
+fn bvh_texel(width: u32, i: u32) -> vec2<u32> {
+    return vec2<u32>(i % width, i / width);
+}
+
+// True when the hit at barycentrics (u, v) of v1, v2 of BVH triangle `tri` lands on a cut-out texel (the
+// twin of `BvhCutouts::cut_out`): such a hit is no hit.
+fn bvh_cut_out(tri: u32, u: f32, v: f32) -> bool {
+    let dims = textureDimensions(bvh_cutout_ids);
+    let at = bvh_texel(dims.x, tri);
+    if at.y >= dims.y {
+        return false;
+    }
+    let id = textureLoad(bvh_cutout_ids, at, 0).x;
+    if id == 0u {
+        return false;
+    }
+    let width = textureDimensions(bvh_cutout_records).x;
+    let r = (id - 1u) * 2u;
+    let a = textureLoad(bvh_cutout_records, bvh_texel(width, r), 0);
+    let b = textureLoad(bvh_cutout_records, bvh_texel(width, r + 1u), 0);
+    let uv = a.xy * (1.0 - u - v) + a.zw * u + b.xy * v;
+    let alpha = textureSampleLevel(bvh_cutout_masks, bvh_cutout_sampler, uv, i32(b.z), 0.0).r;
+    return alpha < b.w;
+}
+
 // Any-hit: true when a triangle lies on origin + t * dir for 0 < t < t_max. Stack-based, near child first.
 // (Carrying the near child's record instead of reloading it measured no faster on lavapipe.)
 fn bvh_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
@@ -66,7 +100,8 @@ fn bvh_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
         let n = bvh_nodes[node];
         if n.count > 0u {
             for (var i = n.first; i < n.first + n.count; i++) {
-                if bvh_ray_triangle(origin, dir, bvh_triangles[i], t_max) {
+                let h = bvh_ray_triangle_hit(origin, dir, bvh_triangles[i], t_max);
+                if h.x < BVH_MISS && !bvh_cut_out(i, h.y, h.z) {
                     return true;
                 }
             }
@@ -163,7 +198,7 @@ fn bvh_closest_hit(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> BvhHit {
         if n.count > 0u {
             for (var i = n.first; i < n.first + n.count; i++) {
                 let h = bvh_ray_triangle_hit(origin, dir, bvh_triangles[i], t_best);
-                if h.x < BVH_MISS {
+                if h.x < BVH_MISS && !bvh_cut_out(i, h.y, h.z) {
                     t_best = h.x;
                     best.t = h.x;
                     best.triangle = i;

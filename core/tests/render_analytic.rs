@@ -335,46 +335,77 @@ fn gltf_alpha_modes_cut_out_only_masked_materials() {
     assert!(scene.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", scene.warnings);
 }
 
+/// The plane-and-occluder scene with the plate's material cut out on one half (a texture whose left two
+/// columns are transparent) when `cutoff` > 0.
+fn half_cut_plate(cutoff: f32) -> Scene {
+    let mut scene = plane_and_occluder();
+    let texture = shadowlab_core::scene::TextureImage {
+        name: "half".into(),
+        width: 4,
+        height: 1,
+        rgba8: [[255, 255, 255, 0], [255, 255, 255, 0], [255, 255, 255, 255], [255, 255, 255, 255]].concat(),
+    };
+    scene.textures.push(texture);
+    let mut cut = scene.materials[0].clone();
+    cut.name = "cut".into();
+    cut.base_color_texture = Some(scene.textures.len() - 1);
+    cut.alpha_cutoff = cutoff;
+    scene.materials.push(cut);
+    let plate = scene.meshes.iter_mut().find(|m| m.name == "plate").unwrap();
+    plate.material = 1;
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    scene
+}
+
 #[test]
 fn cut_out_casters_cast_cut_out_shadows() {
-    // The plate's material cut out on one half (a texture whose left column is transparent): the reference's
-    // cube maps alpha-test it, so the ground under the cut half is lit; with the cutoff off it is shadowed.
-    let render = |cutoff: f32| -> (Vec<[f32; 4]>, Scene) {
-        let mut scene = plane_and_occluder();
-        let texture = shadowlab_core::scene::TextureImage {
-            name: "half".into(),
-            width: 4,
-            height: 1,
-            rgba8: [[255, 255, 255, 0], [255, 255, 255, 0], [255, 255, 255, 255], [255, 255, 255, 255]].concat(),
+    // The reference's cube maps and the ray tracer both alpha-test the plate, so the ground under its cut half
+    // is lit; with the cutoff off it is shadowed.
+    for technique in ["reference", "raytraced"] {
+        let render = |cutoff: f32| -> (Vec<[f32; 4]>, Scene) {
+            let scene = half_cut_plate(cutoff);
+            let gpu = gpu();
+            let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
+            let mut t = renderer.create_technique(technique).unwrap();
+            let light = [white_light(Vec3::new(0.0, 4.0, 0.0), 10.0, 20.0)];
+            renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
+            (renderer.read_hdr().unwrap(), scene)
         };
-        scene.textures.push(texture);
-        let mut cut = scene.materials[0].clone();
-        cut.name = "cut".into();
-        cut.base_color_texture = Some(scene.textures.len() - 1);
-        cut.alpha_cutoff = cutoff;
-        scene.materials.push(cut);
-        let plate = scene.meshes.iter_mut().find(|m| m.name == "plate").unwrap();
-        plate.material = 1;
-        scene.finalize(std::path::Path::new("test")).unwrap();
-        let gpu = gpu();
-        let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
-        let mut t = renderer.create_technique("reference").unwrap();
-        let light = [white_light(Vec3::new(0.0, 4.0, 0.0), 10.0, 20.0)];
-        renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
-        (renderer.read_hdr().unwrap(), scene)
-    };
-    let (opaque, _) = render(0.0);
-    let (cut, scene) = render(0.5);
-    // The ground under the plate's transparent half: lit only when the shadow map cuts the plate out.
-    let probe = Vec3::new(-0.35, 0.0, 0.0) * 4.0 / 3.0; // under x = -0.26 of the plate (its cut half)
-    let (px, py) = project(&scene.camera, probe);
-    let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
-    assert!(c > o * 1.5 + 1e-3, "under the cut half: {c} (cut out) vs {o} (opaque caster)");
-    // Under the opaque half both shadow.
-    let probe = Vec3::new(0.3, 0.0, 0.0) * 4.0 / 3.0;
-    let (px, py) = project(&scene.camera, probe);
-    let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
-    assert!((c - o).abs() <= 0.05 * o.max(1e-3) + 1e-4, "under the opaque half: {c} vs {o}");
+        let (opaque, _) = render(0.0);
+        let (cut, scene) = render(0.5);
+        // The ground under the plate's transparent half: lit only when the caster is cut out.
+        let probe = Vec3::new(-0.35, 0.0, 0.0) * 4.0 / 3.0; // under x = -0.26 of the plate (its cut half)
+        let (px, py) = project(&scene.camera, probe);
+        let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
+        assert!(c > o * 1.5 + 1e-3, "{technique}, under the cut half: {c} (cut out) vs {o} (opaque caster)");
+        // Under the opaque half both shadow.
+        let probe = Vec3::new(0.3, 0.0, 0.0) * 4.0 / 3.0;
+        let (px, py) = project(&scene.camera, probe);
+        let (o, c) = (opaque[py * W as usize + px][1], cut[py * W as usize + px][1]);
+        assert!((c - o).abs() <= 0.05 * o.max(1e-3) + 1e-4, "{technique}, under the opaque half: {c} vs {o}");
+    }
+}
+
+#[test]
+fn the_cpu_traversal_alpha_tests_cut_outs() {
+    // The CPU twin of the tracers' alpha test (what VPL tracing and fuzzy's probe use): a ray down through the
+    // plate's cut half passes, through its opaque half it stops; with the cutoff off both stop.
+    use shadowlab_core::renderer::scene_bvh::{cutout_alpha, BvhCutouts};
+    use shadowlab_core::scene::chunks::ChunkedGeometry;
+    use shadowlab_core::technique::raytraced::{occluded_cpu_filtered, Bvh};
+    for (cutoff, cut_half_blocks) in [(0.5, false), (0.0, true)] {
+        let scene = half_cut_plate(cutoff);
+        let geometry = ChunkedGeometry::build(&scene);
+        let bvh = Bvh::from_geometry(&geometry);
+        let alpha = cutout_alpha(&scene);
+        assert_eq!(alpha.iter().filter(|a| a.is_some()).count(), usize::from(cutoff > 0.0));
+        let cutouts = BvhCutouts::build(&bvh, &geometry, &alpha, 256);
+        let down = |x: f32| {
+            occluded_cpu_filtered(&bvh, Vec3::new(x, 4.0, 0.0), Vec3::NEG_Y, 3.9, &|t, u, v| !cutouts.cut_out(t, u, v))
+        };
+        assert_eq!(down(-0.3), cut_half_blocks, "cutoff {cutoff}: through the cut half");
+        assert!(down(0.3), "cutoff {cutoff}: through the opaque half");
+    }
 }
 
 /// The pixel a world point lands on.

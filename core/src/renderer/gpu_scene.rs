@@ -23,6 +23,8 @@ pub struct GpuScene {
     /// Per material, true when it cuts out some of its surface (a cutoff above 0 and alpha below it in its
     /// factor or texture): the depth passes alpha-test its chunks.
     pub material_cutout: Vec<bool>,
+    /// Per material, its alpha for the ray tracers' alpha test when it cuts out (`material_cutout`).
+    pub cutout_alpha: Vec<Option<super::scene_bvh::CutoutAlpha>>,
     /// Per material, the mean linear albedo (factor times the texture's mean): what a ray hit reflects.
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
@@ -136,20 +138,10 @@ impl GpuScene {
             })
             .collect();
         let material_albedo = scene.materials.iter().map(|m| mean_albedo(scene, m)).collect();
-        let material_cutout = scene
-            .materials
-            .iter()
-            .map(|m| {
-                let cutoff = m.alpha_cutoff;
-                let texture = m.base_color_texture.and_then(|i| scene.textures.get(i));
-                cutoff > 0.0
-                    && (m.base_color.w < cutoff
-                        || texture.is_some_and(|t| {
-                            t.rgba8.chunks_exact(4).any(|p| (p[3] as f32 / 255.0) * m.base_color.w < cutoff)
-                        }))
-            })
-            .collect();
+        let cutout_alpha = super::scene_bvh::cutout_alpha(scene);
+        let material_cutout = cutout_alpha.iter().map(Option::is_some).collect();
         GpuScene {
+            cutout_alpha,
             material_cutout,
             bounds: geometry.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             material_albedo,

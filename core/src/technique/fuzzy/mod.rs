@@ -247,7 +247,7 @@ impl FuzzyClustering {
             compute_pipeline(gpu, layouts, "fuzzy_points", shaders::FUZZY_POINTS, "sp_points_main", &[&points_layout]);
         let bvh_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("fuzzy bvh"),
-            entries: &[storage_entry(0), storage_entry(1)],
+            entries: &crate::renderer::scene_bvh::SceneBvh::layout_entries(),
         });
         let vis_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("fuzzy visibility"),
@@ -699,10 +699,7 @@ impl Technique for FuzzyClustering {
             self.bvh_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("fuzzy bvh"),
                 layout: &self.bvh_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                ],
+                entries: &bvh.bind_entries(),
             }));
         }
         self.bvh = Some(bvh);

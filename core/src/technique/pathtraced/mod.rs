@@ -80,7 +80,7 @@ impl PathTraced {
         let device = &gpu.device;
         let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("pathtrace"),
-            entries: &[storage_entry(0), storage_entry(1), storage_entry(2), uniform_entry(3)],
+            entries: &[SceneBvh::layout_entries(), vec![storage_entry(2), uniform_entry(3)]].concat(),
         });
         let output_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("pathtrace output"),
@@ -226,11 +226,13 @@ impl Technique for PathTraced {
             label: Some("pathtrace"),
             layout: &self.group_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: self.lights.buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: self.step_uniform.as_entire_binding() },
-            ],
+                bvh.bind_entries(),
+                vec![
+                    wgpu::BindGroupEntry { binding: 2, resource: self.lights.buffer.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 3, resource: self.step_uniform.as_entire_binding() },
+                ],
+            ]
+            .concat(),
         });
         let output = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("pathtrace output"),

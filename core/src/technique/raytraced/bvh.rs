@@ -395,6 +395,18 @@ pub fn ray_triangle(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) -> b
 /// Any-hit traversal, the CPU twin of `bvh_occluded` in `raytrace_bvh.wgsl`: same layout, same order, same
 /// stack bound. True when a triangle lies on `origin + t * dir` for `0 < t < t_max`.
 pub fn occluded_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+    occluded_cpu_filtered(bvh, origin, dir, t_max, &|_, _, _| true)
+}
+
+/// [`occluded_cpu`] counting only the hits `accept(triangle, u, v)` keeps (the alpha test of cut-outs,
+/// `bvh_cut_out` on the GPU).
+pub fn occluded_cpu_filtered(
+    bvh: &Bvh,
+    origin: Vec3,
+    dir: Vec3,
+    t_max: f32,
+    accept: &dyn Fn(u32, f32, f32) -> bool,
+) -> bool {
     let inv = safe_inverse(dir);
     let nodes = &bvh.nodes;
     if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
@@ -407,9 +419,11 @@ pub fn occluded_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
         let n = &nodes[node];
         if n.count > 0 {
             let first = n.first as usize;
-            for tri in &bvh.triangles[first..first + n.count as usize] {
-                if ray_triangle(origin, dir, tri, t_max) {
-                    return true;
+            for (k, tri) in bvh.triangles[first..first + n.count as usize].iter().enumerate() {
+                if let Some((_, u, v)) = ray_triangle_hit(origin, dir, tri, t_max) {
+                    if accept((first + k) as u32, u, v) {
+                        return true;
+                    }
                 }
             }
             if sp == 0 {
@@ -478,6 +492,17 @@ pub fn ray_triangle_hit(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) 
 /// `origin + t * dir` for `0 < t < t_max`. Children are visited near first and a subtree is skipped when its
 /// box starts beyond the nearest hit so far.
 pub fn closest_hit_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+    closest_hit_cpu_filtered(bvh, origin, dir, t_max, &|_, _, _| true)
+}
+
+/// [`closest_hit_cpu`] over the hits `accept(triangle, u, v)` keeps (the alpha test of cut-outs).
+pub fn closest_hit_cpu_filtered(
+    bvh: &Bvh,
+    origin: Vec3,
+    dir: Vec3,
+    t_max: f32,
+    accept: &dyn Fn(u32, f32, f32) -> bool,
+) -> Option<Hit> {
     let inv = safe_inverse(dir);
     let nodes = &bvh.nodes;
     if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
@@ -494,8 +519,10 @@ pub fn closest_hit_cpu(bvh: &Bvh, origin: Vec3, dir: Vec3, t_max: f32) -> Option
             let first = n.first as usize;
             for (k, tri) in bvh.triangles[first..first + n.count as usize].iter().enumerate() {
                 if let Some((t, u, v)) = ray_triangle_hit(origin, dir, tri, t_best) {
-                    t_best = t;
-                    best = Some(Hit { t, triangle: (first + k) as u32, u, v });
+                    if accept((first + k) as u32, u, v) {
+                        t_best = t;
+                        best = Some(Hit { t, triangle: (first + k) as u32, u, v });
+                    }
                 }
             }
         } else {

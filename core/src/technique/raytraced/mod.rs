@@ -24,8 +24,8 @@ use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 pub use bvh::{
-    closest_hit_brute_force, closest_hit_cpu, occluded_brute_force, occluded_cpu, Bvh, BvhNode, BvhStats, BvhTriangle,
-    Hit, Ray,
+    closest_hit_brute_force, closest_hit_cpu, closest_hit_cpu_filtered, occluded_brute_force, occluded_cpu,
+    occluded_cpu_filtered, Bvh, BvhNode, BvhStats, BvhTriangle, Hit, Ray,
 };
 
 use super::{
@@ -34,7 +34,7 @@ use super::{
 };
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::scene_bvh::SceneBvh;
+use crate::renderer::scene_bvh::{BvhCutouts, CutoutTextures, SceneBvh};
 use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
@@ -82,6 +82,8 @@ impl Default for RaytracedParams {
 struct GpuBvh {
     nodes: wgpu::Buffer,
     triangles: wgpu::Buffer,
+    /// No cut-outs (a bare BVH has no materials), bound because the traversal reads them.
+    cutouts: CutoutTextures,
 }
 
 impl GpuBvh {
@@ -97,6 +99,7 @@ impl GpuBvh {
         GpuBvh {
             nodes: storage("bvh nodes", bytemuck::cast_slice(&nodes)),
             triangles: storage("bvh triangles", bytemuck::cast_slice(&triangles)),
+            cutouts: CutoutTextures::new(gpu, &BvhCutouts::default()),
         }
     }
 }
@@ -124,7 +127,7 @@ impl Raytraced {
         let device = &gpu.device;
         let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("raytraced shade"),
-            entries: &[storage_entry(0), storage_entry(1), storage_entry(2), uniform_entry(3)],
+            entries: &[SceneBvh::layout_entries(), vec![storage_entry(2), uniform_entry(3)]].concat(),
         });
         let module = shaders::create_module(device, "raytrace_shadow", shaders::RAYTRACE_SHADOW);
         let pipeline = layouts.fullscreen_pipeline(
@@ -264,16 +267,23 @@ impl Technique for Raytraced {
         self.lights_generation = Some(ctx.visible_lights.generation);
         if rebind {
             let bvh = self.bvh.as_ref().expect("set above");
-            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("raytraced shade"),
-                layout: &self.group_layout,
-                entries: &[
-                    wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: ctx.visible_lights.buffer.buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 3, resource: self.batch_uniform.as_entire_binding() },
-                ],
-            }));
+            self.bind_group = Some(
+                ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("raytraced shade"),
+                    layout: &self.group_layout,
+                    entries: &[
+                        bvh.bind_entries(),
+                        vec![
+                            wgpu::BindGroupEntry {
+                                binding: 2,
+                                resource: ctx.visible_lights.buffer.buffer.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry { binding: 3, resource: self.batch_uniform.as_entire_binding() },
+                        ],
+                    ]
+                    .concat(),
+                }),
+            );
         }
         Ok(batches)
     }
@@ -360,7 +370,11 @@ pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<boo
     let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("raytrace test"),
-        entries: &[compute_entry(0, true), compute_entry(1, true), compute_entry(2, true), compute_entry(3, false)],
+        entries: &[
+            vec![compute_entry(0, true), compute_entry(1, true), compute_entry(2, true), compute_entry(3, false)],
+            CutoutTextures::layout_entries().to_vec(),
+        ]
+        .concat(),
     });
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("raytrace test"),
@@ -401,11 +415,15 @@ pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<boo
         label: Some("raytrace test"),
         layout: &layout,
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: bvh_gpu.nodes.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: bvh_gpu.triangles.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: ray_buffer.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 3, resource: hits.as_entire_binding() },
-        ],
+            vec![
+                wgpu::BindGroupEntry { binding: 0, resource: bvh_gpu.nodes.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: bvh_gpu.triangles.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: ray_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: hits.as_entire_binding() },
+            ],
+            bvh_gpu.cutouts.bind_entries().to_vec(),
+        ]
+        .concat(),
     });
     let groups = (rays.len() as u32).div_ceil(64);
     let (x, y) = if groups <= 65_535 { (groups, 1) } else { (65_535, groups.div_ceil(65_535)) };

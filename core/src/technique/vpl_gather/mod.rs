@@ -111,7 +111,7 @@ impl VplGather {
         let device = &gpu.device;
         let entries: Vec<wgpu::BindGroupLayoutEntry> = match visibility {
             Visibility::ShadowMaps => vec![depth_texture_entry(0)],
-            Visibility::RayTraced => vec![super::storage_entry(0), super::storage_entry(1)],
+            Visibility::RayTraced => crate::renderer::scene_bvh::SceneBvh::layout_entries(),
             Visibility::None => vec![],
         };
         let visibility_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -305,10 +305,7 @@ impl Technique for VplGather {
                 self.visibility_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("vpl ray-traced visibility"),
                     layout: &self.visibility_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: bvh.nodes.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 1, resource: bvh.triangles.as_entire_binding() },
-                    ],
+                    entries: &bvh.bind_entries(),
                 }));
             }
             self.bvh = Some(bvh);
