@@ -12,7 +12,7 @@ struct Frame {
     ambient: vec4<f32>,
     // rgb: background radiance
     background: vec4<f32>,
-    // x: exposure, y: tone-map operator (0 ACES, 1 Reinhard, 2 linear)
+    // x: exposure, y: tone-map operator (0 ACES, 1 Reinhard, 2 linear), z: 1 when auto-exposure scales x
     tonemap: vec4<f32>,
     // x: component shown (0 total, 1 direct, 2 indirect), y: indirect display gain, z: 1 when an indirect
     // technique runs (the indirect buffer is real)

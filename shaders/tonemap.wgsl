@@ -1,10 +1,8 @@
-// HDR radiance to display: exposure, a tone-map operator, then the sRGB target encodes.
-// Composed after common.wgsl (for `frame` and the full-screen triangle).
+// HDR radiance to display: exposure (times the metered auto-exposure when frame.tonemap.z is 1), a tone-map
+// operator, then the sRGB target encodes. Composed after common.wgsl and display.wgsl.
 
-@group(1) @binding(0) var hdr: texture_2d<f32>;
-// Indirect radiance per pixel (f32 RGBA, row-major), written by the indirect technique; a placeholder when
-// frame.indirect.z is 0.
-@group(1) @binding(1) var<storage, read> indirect_radiance: array<vec4<f32>>;
+// x: the auto-exposure scale the meter (exposure.wgsl) found, y: the log-average luminance it metered.
+@group(1) @binding(2) var<storage, read> auto_exposure: array<vec4<f32>>;
 
 // Narkowicz's fit of the ACES filmic curve.
 fn aces(x: vec3<f32>) -> vec3<f32> {
@@ -19,18 +17,8 @@ fn aces(x: vec3<f32>) -> vec3<f32> {
 @fragment
 fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.position.xy);
-    var radiance = textureLoad(hdr, pixel, 0).rgb;
-    if frame.indirect.z > 0.5 {
-        let indirect = indirect_radiance[u32(pixel.y) * u32(frame.viewport.x) + u32(pixel.x)].rgb;
-        switch u32(frame.indirect.x) {
-            case 0u: { radiance += indirect; }
-            case 1u: { }
-            default: { radiance = indirect * frame.indirect.y; }
-        }
-    } else if u32(frame.indirect.x) == 2u {
-        radiance = vec3<f32>(0.0);
-    }
-    radiance *= frame.tonemap.x;
+    var radiance = displayed_radiance(pixel);
+    radiance *= frame.tonemap.x * select(1.0, auto_exposure[0].x, frame.tonemap.z > 0.5);
     var mapped: vec3<f32>;
     switch u32(frame.tonemap.y) {
         case 0u: { mapped = aces(radiance); }

@@ -728,3 +728,30 @@ fn fuzzy_clustering_traces_particles_by_default_and_sweeps_its_time_split() {
         assert!(ms > 0.0, "{row}");
     }
 }
+
+#[test]
+fn auto_exposure_scales_the_image_by_what_it_metered() {
+    // lit_quad.gltf (an emissive quad and a 20 cd light, 0.03 W/sr): --auto-exposure meters the image, says
+    // what it found, and the image is darker or brighter than at the fixed exposure as its scale says.
+    let gltf = fixtures().join("lit_quad.gltf");
+    let base = ["--width", "64", "--height", "48", "--scene", gltf.to_str().unwrap(), "--lights", "scene"];
+    let (fixed, _) = render_ok("exposure-fixed", &base);
+    let dir = out_dir("exposure-auto");
+    let png = dir.join("out.png");
+    let args = [&["render", "--warmup", "0", "--out", png.to_str().unwrap()][..], &base, &["--auto-exposure"]].concat();
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let line =
+        stderr.lines().find(|l| l.contains("auto exposure: log-average luminance")).expect("says what it metered");
+    let scale: f32 = line.split("scale x").nth(1).and_then(|s| s.split_whitespace().next()).unwrap().parse().unwrap();
+    assert!(scale.is_finite() && scale > 0.0 && (scale - 1.0).abs() > 0.2, "{line}");
+    let auto = image::open(&png).unwrap().to_rgba8();
+    let (_, fixed_mean) = image_stats(&fixed);
+    let (_, auto_mean) = image_stats(&auto);
+    if scale < 1.0 {
+        assert!(auto_mean < fixed_mean - 5.0, "scale {scale}: mean grey auto {auto_mean}, fixed {fixed_mean}");
+    } else {
+        assert!(auto_mean > fixed_mean + 5.0, "scale {scale}: mean grey auto {auto_mean}, fixed {fixed_mean}");
+    }
+}

@@ -13,7 +13,7 @@ use shadowlab_core::scene::layout::{self, LightLayout};
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::{self, Technique};
 use shadowlab_core::vpl::{VplSettings, VplSource};
-use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::{AutoExposure, FrameReport, GpuContext, RenderSettings, Renderer, ToneMap};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -148,8 +148,13 @@ pub struct FrameArgs {
     /// Far plane (`z_far`).
     #[arg(long)]
     pub z_far: Option<f32>,
+    /// Exposure (a compensation with --auto-exposure).
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
+    /// Scale the exposure so the image's log-average luminance lands on middle grey (the app's default; off
+    /// here so renders of one scene stay comparable).
+    #[arg(long)]
+    pub auto_exposure: bool,
     /// Tone mapping: aces, reinhard or linear.
     #[arg(long, default_value = "aces")]
     pub tonemap: String,
@@ -521,6 +526,7 @@ fn setup(scene_args: &SceneArgs, frame: &FrameArgs) -> Result<(GpuContext, Rende
         width: frame.width,
         height: frame.height,
         exposure: frame.exposure,
+        auto_exposure: if frame.auto_exposure { AutoExposure::Meter } else { AutoExposure::Off },
         tonemap,
         specular: frame.specular,
         vpl: VplSettings {
@@ -692,6 +698,12 @@ fn render(args: RenderArgs) -> Result<()> {
         }
         for p in &report.cpu_stages {
             eprintln!("  {:<14} {:>10.3} ms  (CPU)", p.name, p.ms);
+        }
+        if let Some((scale, average)) = renderer.auto_exposure()? {
+            eprintln!(
+                "  auto exposure: log-average luminance {average:.4}, scale x{scale:.3} (times --exposure {})",
+                frame.exposure
+            );
         }
         if timing.frames > 1 {
             eprintln!(
@@ -1375,6 +1387,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             fov: None,
             z_far: s.z_far,
             exposure: 1.0,
+            auto_exposure: false,
             tonemap: "aces".into(),
             specular: false,
             warmup: args.warmup,

@@ -15,4 +15,4 @@ pub mod timing;
 pub mod vpl;
 
 pub use gpu::GpuContext;
-pub use renderer::{FrameReport, RenderSettings, Renderer, ToneMap};
+pub use renderer::{AutoExposure, FrameReport, RenderSettings, Renderer, ToneMap};

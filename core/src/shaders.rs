@@ -8,8 +8,16 @@ pub const SHADOW_DEPTH: &str =
     concat!(include_str!("../../shaders/material.wgsl"), include_str!("../../shaders/shadow_depth.wgsl"));
 pub const AMBIENT: &str =
     concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/ambient.wgsl"));
-pub const TONEMAP: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/tonemap.wgsl"));
+pub const TONEMAP: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/display.wgsl"),
+    include_str!("../../shaders/tonemap.wgsl")
+);
+pub const EXPOSURE: &str = concat!(
+    include_str!("../../shaders/common.wgsl"),
+    include_str!("../../shaders/display.wgsl"),
+    include_str!("../../shaders/exposure.wgsl")
+);
 pub const REFERENCE_SHADE: &str = concat!(
     include_str!("../../shaders/common.wgsl"),
     include_str!("../../shaders/light_tiles.wgsl"),
@@ -98,7 +106,8 @@ pub const MODULES: &[(&str, &[&str], &str)] = &[
     ("gbuffer", &["material.wgsl", "gbuffer.wgsl"], GBUFFER),
     ("shadow_depth", &["material.wgsl", "shadow_depth.wgsl"], SHADOW_DEPTH),
     ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
-    ("tonemap", &["common.wgsl", "tonemap.wgsl"], TONEMAP),
+    ("tonemap", &["common.wgsl", "display.wgsl", "tonemap.wgsl"], TONEMAP),
+    ("exposure", &["common.wgsl", "display.wgsl", "exposure.wgsl"], EXPOSURE),
     (
         "reference_shade",
         &["common.wgsl", "light_tiles.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"],

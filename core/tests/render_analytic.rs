@@ -8,7 +8,7 @@ use common::*;
 use glam::Vec3;
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::ParamValue;
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::{AutoExposure, FrameReport, RenderSettings, Renderer, ToneMap};
 
 fn settings() -> RenderSettings {
     RenderSettings {
@@ -413,4 +413,73 @@ fn project(camera: &shadowlab_core::scene::Camera, p: Vec3) -> (usize, usize) {
     let clip = camera.clip_from_world(W as f32 / H as f32) * p.extend(1.0);
     let ndc = clip.truncate() / clip.w;
     (((ndc.x * 0.5 + 0.5) * W as f32) as usize, ((0.5 - ndc.y * 0.5) * H as f32) as usize)
+}
+
+#[test]
+fn auto_exposure_meters_the_log_average_and_cancels_light_scale() {
+    // Auto-exposure maps the log-average luminance of the geometry pixels to 0.18: the scale it meters equals
+    // the CPU's log-average of the same HDR image, and a scene ten times brighter (light and ambient) gives
+    // (nearly) the same displayed geometry, where a fixed exposure does not.
+    let scene = plane_and_occluder();
+    let render = |k: f32, auto: bool| {
+        let gpu = gpu();
+        let s = RenderSettings {
+            auto_exposure: if auto { AutoExposure::Meter } else { AutoExposure::Off },
+            tonemap: ToneMap::Aces,
+            ambient: Vec3::splat(AMBIENT * k),
+            ..settings()
+        };
+        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
+        let mut t = renderer.create_technique("reference").unwrap();
+        let light = [white_light(Vec3::new(0.5, 3.0, 0.5), 2.0 * k, 20.0)];
+        renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
+        let hdr = renderer.read_hdr().unwrap();
+        let mask = renderer.read_geometry_mask().unwrap();
+        let metered = renderer.auto_exposure().unwrap();
+        (renderer.read_output().unwrap(), hdr, mask, metered)
+    };
+    let (dim, hdr, mask, metered) = render(1.0, true);
+    let (scale, average) = metered.expect("auto exposure is on");
+    let (sum, n) = hdr.iter().zip(&mask).filter(|(_, &g)| g).fold((0.0f64, 0usize), |(s, n), (c, _)| {
+        let y = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        (s + (1e-4 + y.max(0.0) as f64).ln(), n + 1)
+    });
+    assert!(n > 100, "the view shows geometry");
+    let expected = (sum / n as f64).exp() as f32;
+    assert!((average - expected).abs() <= 1e-3 * expected, "metered {average}, CPU {expected}");
+    assert!((scale - 0.18 / expected).abs() <= 1e-3 * scale, "scale {scale}");
+    // Mean difference of the green channel over the geometry pixels, in 8-bit steps.
+    let diff = |a: &image::RgbaImage, b: &image::RgbaImage| {
+        let d: i32 = a
+            .pixels()
+            .zip(b.pixels())
+            .zip(&mask)
+            .filter(|(_, &g)| g)
+            .map(|((p, q), _)| (p[1] as i32 - q[1] as i32).abs())
+            .sum();
+        d as f32 / n as f32
+    };
+    let (bright, ..) = render(10.0, true);
+    let auto_difference = diff(&dim, &bright);
+    let (fixed_dim, ..) = render(1.0, false);
+    let (fixed_bright, _, _, none) = render(10.0, false);
+    assert_eq!(none, None, "off: nothing metered");
+    let fixed_difference = diff(&fixed_dim, &fixed_bright);
+    assert!(auto_difference < 1.0, "x10 brighter with auto-exposure: mean difference {auto_difference} steps");
+    assert!(fixed_difference > 20.0, "x10 brighter with a fixed exposure: {fixed_difference} steps");
+}
+
+#[test]
+fn auto_exposure_of_an_empty_view_stays_one() {
+    // No geometry pixel: nothing to meter, the scale stays 1 (no division by zero, no NaN exposure).
+    let scene = plane_and_occluder();
+    let gpu = gpu();
+    let mut renderer =
+        Renderer::new(&gpu, &scene, RenderSettings { auto_exposure: AutoExposure::Meter, ..settings() }).unwrap();
+    let mut t = renderer.create_technique("reference").unwrap();
+    let c = scene.camera;
+    let camera = shadowlab_core::scene::Camera::look_at(c.position, c.position + Vec3::Y, c.fov_y, c.near, c.z_far);
+    renderer.render_frame(t.as_mut(), &camera, &[], &mut |_, _| {}).unwrap();
+    assert!(renderer.read_geometry_mask().unwrap().iter().all(|g| !g), "the view shows no geometry");
+    assert_eq!(renderer.auto_exposure().unwrap().map(|e| e.0), Some(1.0));
 }

@@ -90,6 +90,8 @@ pub struct ViewSettings {
     /// Render resolution relative to the viewport size.
     pub resolution_scale: f32,
     pub exposure: f32,
+    /// Exposure scaled so the image's log-average luminance is middle grey (then `exposure` compensates).
+    pub auto_exposure: bool,
     pub specular: bool,
     /// Difference view: signed (red too bright, green too dark) instead of absolute.
     pub diff_signed: bool,
@@ -132,6 +134,7 @@ impl Default for ViewSettings {
             overlays: BTreeMap::new(),
             resolution_scale: 1.0,
             exposure: 1.0,
+            auto_exposure: true,
             specular: false,
             diff_signed: false,
             diff_visibility: false,

@@ -29,7 +29,7 @@ use shadowlab_core::scene::layout::{self as light_layout, LightLayout};
 use shadowlab_core::scene::{PointLight, Scene, SceneSource};
 use shadowlab_core::technique::{CameraPose, LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
 use shadowlab_core::timing::PassTime;
-use shadowlab_core::{GpuContext, RenderSettings, ToneMap};
+use shadowlab_core::{AutoExposure, GpuContext, RenderSettings, ToneMap};
 
 use camera::{CameraController, CameraInput, CameraMode};
 use document::{History, IndirectSettings, SceneFile, ViewMode, ViewSettings, FILE_VERSION};
@@ -634,6 +634,12 @@ impl ShadowLabApp {
             width: ((size.x * scale) as u32).clamp(16, 4096),
             height: ((size.y * scale) as u32).clamp(16, 4096),
             exposure: self.view.exposure,
+            // The preview holds the full image's metered exposure, so dragging does not change the brightness.
+            auto_exposure: match (self.view.auto_exposure, preview) {
+                (false, _) => AutoExposure::Off,
+                (true, false) => AutoExposure::Meter,
+                (true, true) => AutoExposure::Hold,
+            },
             tonemap: ToneMap::Aces,
             specular: self.view.specular,
             vpl: self.indirect.vpl,

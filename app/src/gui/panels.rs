@@ -412,7 +412,15 @@ fn vpl_ui(indirect: &mut IndirectSettings, ui: &mut egui::Ui) {
 fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Render");
     ui.add(egui::Slider::new(&mut app.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
-    ui.add(egui::Slider::new(&mut app.view.exposure, 0.05..=8.0).logarithmic(true).text("exposure"));
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut app.view.auto_exposure, "auto exposure").on_hover_text(
+            "Scale the exposure so the image's log-average luminance (over the geometry) is middle grey; the \
+             slider then compensates. Each view meters its own complete image; the preview while dragging keeps \
+             the last one.",
+        );
+    });
+    let label = if app.view.auto_exposure { "compensation" } else { "exposure" };
+    ui.add(egui::Slider::new(&mut app.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
     ui.checkbox(&mut app.view.specular, "Blinn-Phong specular");
     ui.horizontal(|ui| {
         ui.label("Animate lights");

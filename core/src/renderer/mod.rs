@@ -8,6 +8,7 @@
 //! so an interactive app stays responsive while a slow technique accumulates.
 
 pub mod cube_shadows;
+pub mod exposure;
 pub mod gpu_data;
 pub mod gpu_scene;
 pub mod light_tiles;
@@ -55,6 +56,10 @@ pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub exposure: f32,
+    /// Multiply `exposure` by the scale that maps the image's log-average luminance to middle grey (metered on
+    /// the GPU each complete frame, [`exposure`]); `exposure` is then a compensation. On in the app, off in
+    /// the CLI (`--auto-exposure`), so renders of the same scene stay comparable.
+    pub auto_exposure: AutoExposure,
     pub tonemap: ToneMap,
     /// Ambient radiance factor: ambient term = `ambient * albedo`.
     pub ambient: Vec3,
@@ -73,6 +78,20 @@ pub struct RenderSettings {
     /// Tiled light lists ([`light_tiles`]): shading passes visit only the lights (clusters) that reach their
     /// pixel's 16x16 tile. The image is the same either way; off loops over every light of a batch.
     pub light_tiles: bool,
+}
+
+/// Whether the tone mapping scales the exposure by a metered one ([`exposure`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum AutoExposure {
+    /// The exposure as set.
+    #[default]
+    Off,
+    /// Meter every complete frame (and a preview before the first), and scale by it.
+    Meter,
+    /// Scale by the last metered value without metering (the app's fast preview while the user drags, so the
+    /// brightness does not jump between the preview and the full image).
+    Hold,
 }
 
 /// A part of the image: everything, the ambient + direct part, or the indirect part alone.
@@ -109,6 +128,7 @@ impl Default for RenderSettings {
             width: 640,
             height: 360,
             exposure: 1.0,
+            auto_exposure: AutoExposure::Off,
             tonemap: ToneMap::Aces,
             ambient: Vec3::splat(0.03),
             background: Vec3::new(0.05, 0.06, 0.08),
@@ -353,6 +373,7 @@ pub struct Renderer {
     tonemap_pipeline: wgpu::RenderPipeline,
     tonemap_layout: wgpu::BindGroupLayout,
     tonemap_bind_group: wgpu::BindGroup,
+    exposure: exposure::ExposureMeter,
     timer: PassTimer,
     draw_ranges: Vec<(u32, u32)>,
     overlay: Option<overlay::OverlayRenderer>,
@@ -532,6 +553,7 @@ impl Renderer {
                     count: None,
                 },
                 crate::technique::storage_entry(1),
+                crate::technique::storage_entry(2),
             ],
         });
         let tonemap_module = shaders::create_module(device, "tonemap", shaders::TONEMAP);
@@ -545,7 +567,9 @@ impl Renderer {
         );
         let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets);
         let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
-        let tonemap_bind_group = Self::tonemap_bind_group(device, &tonemap_layout, &targets, &indirect_buffer);
+        let exposure = exposure::ExposureMeter::new(gpu, &layouts, &targets, &indirect_buffer);
+        let tonemap_bind_group =
+            Self::tonemap_bind_group(device, &tonemap_layout, &targets, &indirect_buffer, &exposure.result);
         let timer = PassTimer::new(gpu)?;
         let light_tiles = light_tiles::TileLists::new(gpu, &layouts.screen, &layouts.light_tiles);
         Ok(Renderer {
@@ -563,6 +587,7 @@ impl Renderer {
             tonemap_pipeline,
             tonemap_layout,
             tonemap_bind_group,
+            exposure,
             timer,
             draw_ranges: Vec::new(),
             overlay: None,
@@ -605,6 +630,7 @@ impl Renderer {
         layout: &wgpu::BindGroupLayout,
         t: &FrameTargets,
         indirect: &wgpu::Buffer,
+        exposure: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("tonemap"),
@@ -612,6 +638,7 @@ impl Renderer {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&t.hdr) },
                 wgpu::BindGroupEntry { binding: 1, resource: indirect.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: exposure.as_entire_binding() },
             ],
         })
     }
@@ -651,8 +678,24 @@ impl Renderer {
     }
 
     fn rebind_tonemap(&mut self) {
-        self.tonemap_bind_group =
-            Self::tonemap_bind_group(&self.gpu.device, &self.tonemap_layout, &self.targets, &self.indirect_buffer);
+        self.exposure.rebind(&self.gpu, &self.targets, &self.indirect_buffer);
+        self.tonemap_bind_group = Self::tonemap_bind_group(
+            &self.gpu.device,
+            &self.tonemap_layout,
+            &self.targets,
+            &self.indirect_buffer,
+            &self.exposure.result,
+        );
+    }
+
+    /// The auto-exposure scale and the log-average luminance it was metered from, as of the last complete
+    /// frame (`None` while [`RenderSettings::auto_exposure`] is off). A small blocking readback.
+    pub fn auto_exposure(&self) -> Result<Option<(f32, f32)>, GpuError> {
+        if self.settings.auto_exposure == AutoExposure::Off {
+            return Ok(None);
+        }
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.exposure.read(&self.gpu).map(Some))
     }
 
     /// Choose the indirect technique (None: direct light only, the default). Its steps run after the direct
@@ -808,7 +851,7 @@ impl Renderer {
                     ToneMap::Reinhard => 1.0,
                     ToneMap::Linear => 2.0,
                 },
-                0.0,
+                if s.auto_exposure == AutoExposure::Off { 0.0 } else { 1.0 },
                 0.0,
             ],
             indirect: [
@@ -1103,6 +1146,15 @@ impl Renderer {
 
     fn encode_tonemap(&mut self, timed: bool) -> Result<(), GpuError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        // A complete frame is metered; a progressive preview keeps the last scale unless none was metered yet.
+        let meter = match self.settings.auto_exposure {
+            AutoExposure::Off => false,
+            AutoExposure::Meter => timed || !self.exposure.metered,
+            AutoExposure::Hold => !self.exposure.metered,
+        };
+        if meter {
+            self.exposure.encode(&mut encoder, &self.screen_bind_group, self.settings.width, self.settings.height);
+        }
         let desc = wgpu::RenderPassDescriptor {
             label: Some("tonemap"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {

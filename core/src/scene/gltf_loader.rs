@@ -12,10 +12,16 @@
 //! - `unit_scale` multiplies world positions, light positions and ranges, and the camera's clip planes.
 //! - Base colour factor and emissive are linear; the base colour texture is sRGB. Materials are Lambertian
 //!   (metallic/roughness are ignored).
-//! - `KHR_lights_punctual` point and spot lights (cone angles as given, direction down the node's -Z) keep their colour and intensity (candela) as given; a light without a
-//!   `range` gets the diagonal of the scene bounds as its range, so it reaches the whole scene while the
-//!   renderer's windowed falloff still ends at a finite distance. Spot and directional lights are skipped
-//!   with a warning.
+//! - `KHR_lights_punctual` point and spot lights (cone angles as given, direction down the node's -Z) keep their
+//!   colour; their intensity is photometric (candela, lm/sr) and becomes the renderer's radiometric intensity
+//!   (W/sr, what `PointLight::intensity` is: radiance = albedo/pi x intensity x falloff x cos) through the
+//!   luminous efficacy of 683 lm/W ([`LUMENS_PER_WATT`]). A light without a `range` gets the diagonal of the
+//!   scene bounds as its range, so it reaches the whole scene while the renderer's windowed falloff still ends
+//!   at a finite distance. Directional lights are skipped with a warning.
+
+/// Luminous efficacy (lm/W) of the glTF lights' photometric units: the peak of the photopic curve at 555 nm,
+/// the conversion the glTF exporters (Blender's among them) use between watts and candela.
+pub const LUMENS_PER_WATT: f32 = 683.0;
 
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -350,6 +356,14 @@ impl Loader<'_> {
             }
             return;
         }
+        // Candela to W/sr; a NaN, infinite or negative intensity (the renderer refuses those) becomes 0.
+        let intensity = light.intensity() / LUMENS_PER_WATT;
+        let intensity = if intensity.is_finite() && intensity >= 0.0 {
+            intensity
+        } else {
+            self.warn(format!("light '{name}': intensity {} is not a finite value >= 0; 0 used", light.intensity()));
+            0.0
+        };
         match light.kind() {
             gltf::khr_lights_punctual::Kind::Point => {
                 let position = world.transform_point3(Vec3::ZERO) * self.unit_scale;
@@ -357,8 +371,7 @@ impl Loader<'_> {
                 if range.is_none() {
                     self.lights_without_range.push(self.scene.lights.len());
                 }
-                let light =
-                    PointLight::new(position, Vec3::from(light.color()), light.intensity(), range.unwrap_or(0.0));
+                let light = PointLight::new(position, Vec3::from(light.color()), intensity, range.unwrap_or(0.0));
                 self.scene.lights.push(light);
             }
             gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => {
@@ -381,9 +394,8 @@ impl Loader<'_> {
                     self.lights_without_range.push(self.scene.lights.len());
                 }
                 let spot = crate::scene::Spot { direction, inner_angle: inner, outer_angle: outer };
-                let light =
-                    PointLight::new(position, Vec3::from(light.color()), light.intensity(), range.unwrap_or(0.0))
-                        .with_spot(spot);
+                let light = PointLight::new(position, Vec3::from(light.color()), intensity, range.unwrap_or(0.0))
+                    .with_spot(spot);
                 self.scene.lights.push(light);
             }
             gltf::khr_lights_punctual::Kind::Directional => {
