@@ -1,5 +1,6 @@
 // G-buffer pass: albedo, normal + shininess, emissive + specular, hardware depth.
-// Vertex layout: `Vertex` in core/src/scene/chunks.rs. Composed after material.wgsl (group 1).
+// Vertex layout: `Vertex` in core/src/scene/chunks.rs (buffer 0) and the second UV channel (buffer 1,
+// `ChunkedGeometry::uv1`). Composed after material.wgsl (group 1).
 
 struct Camera {
     clip_from_world: mat4x4<f32>,
@@ -14,6 +15,7 @@ struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) uv1: vec2<f32>,
 }
 
 struct VertexOut {
@@ -21,6 +23,7 @@ struct VertexOut {
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) world: vec3<f32>,
+    @location(3) uv1: vec2<f32>,
 }
 
 @vertex
@@ -29,6 +32,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.clip = camera.clip_from_world * vec4<f32>(v.position, 1.0);
     out.normal = v.normal;
     out.uv = v.uv;
+    out.uv1 = v.uv1;
     out.world = v.position;
     return out;
 }
@@ -59,7 +63,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var occlusion = 1.0;
     if material.specular.w > 0.0 {
         // Textures are uploaded as sRGB; occlusion is stored linear, so undo the decode for the raw value.
-        let x = textureSample(occlusion_texture, material_sampler, in.uv).r;
+        let x = textureSample(occlusion_texture, material_sampler, select(in.uv, in.uv1, material.alpha.z > 0.5)).r;
         let raw = select(1.055 * pow(x, 1.0 / 2.4) - 0.055, 12.92 * x, x <= 0.0031308);
         occlusion = 1.0 + material.specular.w * (clamp(raw, 0.0, 1.0) - 1.0);
     }
@@ -67,7 +71,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     out.normal = vec4<f32>(n, material.specular.y);
     var emission = material.emissive.rgb;
     if material.specular.z > 0.5 {
-        emission *= textureSample(emissive_texture, material_sampler, in.uv).rgb;
+        emission *= textureSample(emissive_texture, material_sampler, select(in.uv, in.uv1, material.alpha.y > 0.5)).rgb;
     }
     out.emissive = vec4<f32>(emission, material.specular.x);
     return out;

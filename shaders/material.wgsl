@@ -9,7 +9,8 @@ struct Material {
     // x: specular intensity, y: shininess, z: 1 when the emissive texture is used, w: occlusion strength (0: no
     // occlusion texture)
     specular: vec4<f32>,
-    // x: alpha cutoff (0: opaque, alpha ignored)
+    // x: alpha cutoff (0: opaque, alpha ignored), y / z: 1 when the emissive / occlusion texture is mapped
+    // with the second UV channel
     alpha: vec4<f32>,
 }
 

@@ -68,7 +68,7 @@ fn inward_sphere(r: f32, stacks: u32, slices: u32) -> Mesh {
         }
     }
     let uvs = vec![Vec2::ZERO; positions.len()];
-    Mesh { name: "sphere".into(), positions, normals, uvs, indices, material: 0 }
+    Mesh { name: "sphere".into(), positions, normals, uvs, uvs1: Vec::new(), indices, material: 0 }
 }
 
 /// Render `direct` + `indirect` with the given settings; returns the chosen component's HDR image.

@@ -665,22 +665,50 @@ fn khr_texture_transform_is_baked_into_the_uvs() {
 }
 
 #[test]
-fn a_texture_on_another_texcoord_set_is_mapped_with_the_base_colours_and_said_so() {
+fn a_texture_on_another_texcoord_set_gets_the_second_uv_channel() {
     let fixture = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/lit_quad.gltf"));
     let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(fixture).unwrap()).unwrap();
+    // A TEXCOORD_1 of its own: (0.25 + i, 0.75) for the quad's four vertices.
+    let uv1: Vec<f32> = (0..4).flat_map(|i| [0.25 + i as f32, 0.75]).collect();
+    let bytes: Vec<u8> = uv1.iter().flat_map(|f| f.to_le_bytes()).collect();
+    std::fs::write(std::env::temp_dir().join("shadowlab-texcoord1.bin"), &bytes).unwrap();
+    let uri = "shadowlab-texcoord1.bin";
+    doc["buffers"].as_array_mut().unwrap().push(serde_json::json!({"byteLength": 32, "uri": uri}));
+    let buffer = doc["buffers"].as_array().unwrap().len() - 1;
+    doc["bufferViews"].as_array_mut().unwrap().push(serde_json::json!({"buffer": buffer, "byteLength": 32}));
+    let view = doc["bufferViews"].as_array().unwrap().len() - 1;
+    doc["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"bufferView": view, "componentType": 5126, "count": 4, "type": "VEC2"}));
+    let accessor = doc["accessors"].as_array().unwrap().len() - 1;
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = serde_json::json!(accessor);
     doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0, "texCoord": 1});
     let path = std::env::temp_dir().join("shadowlab-texcoord1.gltf");
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
-    assert_eq!(scene.materials[0].emissive_texture, Some(0), "the texture is still used");
-    assert!(
-        scene.warnings.iter().any(|w| w.contains("emissive texture uses TEXCOORD_1")),
-        "no warning: {:?}",
-        scene.warnings
-    );
-    // On the base colour's own set: no warning.
+    let m = &scene.materials[0];
+    assert_eq!(m.emissive_texture, Some(0), "the texture is used");
+    assert!(m.emissive_uv1 && !m.occlusion_uv1, "the emissive texture reads the second channel");
+    let quad = scene.meshes.iter().find(|m| !m.uvs1.is_empty()).expect("a mesh with a second UV channel");
+    let read: Vec<f32> = quad.uvs1.iter().flat_map(|v| [v.x, v.y]).collect();
+    assert_eq!(read, uv1, "TEXCOORD_1 as the file gives it");
+    assert!(!scene.warnings.iter().any(|w| w.contains("TEXCOORD_")), "{:?}", scene.warnings);
+    // On the base colour's own set: one channel, no second set read.
     doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0});
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
-    assert!(!scene.warnings.iter().any(|w| w.contains("TEXCOORD_")), "{:?}", scene.warnings);
+    assert!(!scene.materials[0].emissive_uv1);
+    assert!(scene.meshes.iter().all(|m| m.uvs1.is_empty()));
+    // Emissive on set 1 and occlusion on set 2: the third mapping falls back to the base colour's, said so.
+    doc["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0, "texCoord": 1});
+    doc["materials"][0]["occlusionTexture"] = serde_json::json!({"index": 0, "texCoord": 2});
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
+    assert!(scene.materials[0].emissive_uv1 && !scene.materials[0].occlusion_uv1);
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("occlusion texture's mapping (TEXCOORD_2) is a third one")),
+        "{:?}",
+        scene.warnings
+    );
 }

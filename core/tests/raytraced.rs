@@ -373,6 +373,7 @@ fn rect(name: &str, y: f32, x0: f32, x1: f32, z0: f32, z1: f32) -> Mesh {
         positions: vec![Vec3::new(x0, y, z0), Vec3::new(x1, y, z0), Vec3::new(x1, y, z1), Vec3::new(x0, y, z1)],
         normals: vec![Vec3::Y; 4],
         uvs: vec![Vec2::ZERO; 4],
+        uvs1: Vec::new(),
         indices: vec![0, 2, 1, 0, 3, 2],
         material: 0,
     }

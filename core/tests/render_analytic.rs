@@ -483,3 +483,41 @@ fn auto_exposure_of_an_empty_view_stays_one() {
     assert!(renderer.read_geometry_mask().unwrap().iter().all(|g| !g), "the view shows no geometry");
     assert_eq!(renderer.auto_exposure().unwrap().map(|e| e.0), Some(1.0));
 }
+
+#[test]
+fn an_emissive_texture_on_the_second_uv_channel_is_sampled_with_it() {
+    // The plate's emissive texture is [black, white]; its first UV channel points at the black texel's centre
+    // and its second at the white one's. The emission follows the channel the material names.
+    let render = |uv1: bool| -> (Vec<[f32; 4]>, Scene) {
+        let mut scene = plane_and_occluder();
+        scene.textures.push(shadowlab_core::scene::TextureImage {
+            name: "black-white".into(),
+            width: 2,
+            height: 1,
+            rgba8: [[0, 0, 0, 255], [255, 255, 255, 255]].concat(),
+        });
+        let mut glow = scene.materials[0].clone();
+        glow.name = "glow".into();
+        glow.emissive = Vec3::ONE;
+        glow.emissive_texture = Some(scene.textures.len() - 1);
+        glow.emissive_uv1 = uv1;
+        scene.materials.push(glow);
+        let plate = scene.meshes.iter_mut().find(|m| m.name == "plate").unwrap();
+        plate.material = 1;
+        let n = plate.positions.len();
+        plate.uvs = vec![glam::Vec2::new(0.25, 0.5); n];
+        plate.uvs1 = vec![glam::Vec2::new(0.75, 0.5); n];
+        scene.finalize(std::path::Path::new("test")).unwrap();
+        let gpu = gpu();
+        let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
+        let mut t = renderer.create_technique("reference").unwrap();
+        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
+        (renderer.read_hdr().unwrap(), scene)
+    };
+    for (uv1, lo, hi) in [(false, 0.0, 0.1), (true, 0.9, 1.2)] {
+        let (hdr, scene) = render(uv1);
+        let (px, py) = project(&scene.camera, PLATE_CENTER);
+        let g = hdr[py * W as usize + px][1];
+        assert!((lo..=hi).contains(&g), "second channel {uv1}: emission {g} at the plate's centre");
+    }
+}

@@ -104,7 +104,12 @@ impl MaterialUniform {
                 if has_emissive_texture { 1.0 } else { 0.0 },
                 occlusion_strength,
             ],
-            alpha: [if m.alpha_cutoff.is_finite() { m.alpha_cutoff.clamp(0.0, 1.0) } else { 0.0 }, 0.0, 0.0, 0.0],
+            alpha: [
+                if m.alpha_cutoff.is_finite() { m.alpha_cutoff.clamp(0.0, 1.0) } else { 0.0 },
+                if m.emissive_uv1 { 1.0 } else { 0.0 },
+                if m.occlusion_uv1 { 1.0 } else { 0.0 },
+                0.0,
+            ],
         }
     }
 }

@@ -10,6 +10,8 @@ use crate::scene::{Scene, TextureImage};
 
 pub struct GpuScene {
     pub vertex_buffer: wgpu::Buffer,
+    /// The second UV channel per vertex (`[f32; 2]`), for the G-buffer pass.
+    pub uv1_buffer: wgpu::Buffer,
     pub index_buffer: wgpu::Buffer,
     /// CPU copy of the chunks for culling.
     pub chunks: Vec<Chunk>,
@@ -77,6 +79,12 @@ impl GpuScene {
         let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("scene vertices"),
             contents: bytemuck::cast_slice(&geometry.vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uv1_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene uv1"),
+            // Never empty: a scene without vertices still binds a valid buffer.
+            contents: if geometry.uv1.is_empty() { &[0u8; 8] } else { bytemuck::cast_slice(&geometry.uv1) },
             usage: wgpu::BufferUsages::VERTEX,
         });
         let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -147,6 +155,7 @@ impl GpuScene {
             material_albedo,
             bvh_cell: std::sync::OnceLock::new(),
             vertex_buffer,
+            uv1_buffer,
             index_buffer,
             triangle_count: geometry.triangle_count() as u64,
             chunks: geometry.chunks.clone(),

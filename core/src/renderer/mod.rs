@@ -508,11 +508,19 @@ impl Renderer {
                 module: &gbuffer_module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
-                })],
+                buffers: &[
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
+                    }),
+                    // The second UV channel, a stream of its own (the depth passes never read it).
+                    Some(wgpu::VertexBufferLayout {
+                        array_stride: 8,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![3 => Float32x2],
+                    }),
+                ],
             },
             primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
             depth_stencil: Some(wgpu::DepthStencilState {
@@ -922,6 +930,7 @@ impl Renderer {
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, camera_bg, &[]);
                     pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
+                    pass.set_vertex_buffer(1, scene.uv1_buffer.slice(..));
                     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
                     for (material, ranges) in &per_material {
                         pass.set_bind_group(1, &scene.material_bind_groups[*material as usize], &[]);

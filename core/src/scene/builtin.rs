@@ -76,6 +76,7 @@ impl SceneBuilder {
             specular: Vec3::splat(specular),
             shininess,
             alpha_cutoff: 0.0,
+            ..Material::default()
         });
         self.materials.len() - 1
     }

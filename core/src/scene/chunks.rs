@@ -43,6 +43,9 @@ impl Chunk {
 #[derive(Clone, Debug, Default)]
 pub struct ChunkedGeometry {
     pub vertices: Vec<Vertex>,
+    /// Per vertex, the second UV channel ([`crate::scene::Mesh::uvs1`], zeros when a mesh has none): a
+    /// vertex stream of its own, read by the G-buffer pass only.
+    pub uv1: Vec<[f32; 2]>,
     pub indices: Vec<u32>,
     pub chunks: Vec<Chunk>,
 }
@@ -65,6 +68,8 @@ impl ChunkedGeometry {
                 normal: mesh.normals.get(i).copied().unwrap_or(Vec3::Y).to_array(),
                 uv: mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO).to_array(),
             }));
+            out.uv1
+                .extend((0..mesh.positions.len()).map(|i| mesh.uvs1.get(i).copied().unwrap_or(Vec2::ZERO).to_array()));
             let tris: Vec<[u32; 3]> = mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
             if tris.is_empty() {
                 continue;

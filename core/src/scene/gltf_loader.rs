@@ -19,6 +19,69 @@
 //!   scene bounds as its range, so it reaches the whole scene while the renderer's windowed falloff still ends
 //!   at a finite distance. Directional lights are skipped with a warning.
 
+/// A texture's mapping: its `TEXCOORD_n` set and its `KHR_texture_transform` (offset, rotation, scale).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct UvMapping {
+    set: u32,
+    transform: Option<([f32; 2], f32, [f32; 2])>,
+}
+
+impl UvMapping {
+    fn of(info: &gltf::texture::Info<'_>) -> UvMapping {
+        let t = info.texture_transform();
+        UvMapping {
+            set: t.as_ref().and_then(|t| t.tex_coord()).unwrap_or_else(|| info.tex_coord()),
+            transform: t.map(|t| (t.offset(), t.rotation(), t.scale())),
+        }
+    }
+}
+
+/// The two UV channels a material's primitives get: channel 0 maps the base colour texture (set 0 when it has
+/// none), channel 1 the first emissive or occlusion texture mapped differently (another set or another
+/// transform); a third mapping falls back to channel 0 with a warning. Decided per material, so every
+/// primitive of it agrees.
+#[derive(Clone, Debug, PartialEq)]
+struct UvChannels {
+    base: UvMapping,
+    second: Option<UvMapping>,
+    emissive_uv1: bool,
+    occlusion_uv1: bool,
+    /// Textures that fit neither channel: (name, set).
+    unmapped: Vec<(&'static str, u32)>,
+}
+
+impl UvChannels {
+    fn of(material: &gltf::Material<'_>) -> UvChannels {
+        let base = material
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .map_or(UvMapping { set: 0, transform: None }, |i| UvMapping::of(&i));
+        let mut c = UvChannels { base, second: None, emissive_uv1: false, occlusion_uv1: false, unmapped: Vec::new() };
+        let others = [
+            ("emissive", material.emissive_texture().map(|i| UvMapping::of(&i))),
+            // The gltf crate reads no KHR_texture_transform on occlusion textures: their set alone.
+            ("occlusion", material.occlusion_texture().map(|i| UvMapping { set: i.tex_coord(), transform: None })),
+        ];
+        for (name, mapping) in others {
+            let Some(m) = mapping else { continue };
+            let on_second = if m == c.base {
+                false
+            } else if c.second.is_none_or(|s| s == m) {
+                c.second = Some(m);
+                true
+            } else {
+                c.unmapped.push((name, m.set));
+                false
+            };
+            match name {
+                "emissive" => c.emissive_uv1 = on_second,
+                _ => c.occlusion_uv1 = on_second,
+            }
+        }
+        c
+    }
+}
+
 /// Luminous efficacy (lm/W) of the glTF lights' photometric units: the peak of the photopic curve at 555 nm,
 /// the conversion the glTF exporters (Blender's among them) use between watts and candela.
 pub const LUMENS_PER_WATT: f32 = 683.0;
@@ -255,6 +318,7 @@ impl Loader<'_> {
                     .map(|&t| (t, if strength.is_finite() { strength.clamp(0.0, 1.0) } else { 1.0 }))
             });
             let name_for_warning = material.name().unwrap_or("(unnamed)").to_string();
+            let channels = UvChannels::of(&material);
             let alpha_cutoff = match material.alpha_mode() {
                 gltf::material::AlphaMode::Opaque => 0.0,
                 gltf::material::AlphaMode::Mask => {
@@ -278,6 +342,8 @@ impl Loader<'_> {
                 emissive: (Vec3::from(material.emissive_factor()) * strength).max(Vec3::ZERO),
                 emissive_texture: emissive_texture.copied(),
                 occlusion_texture,
+                emissive_uv1: channels.emissive_uv1,
+                occlusion_uv1: channels.occlusion_uv1,
                 specular: Vec3::ZERO,
                 shininess: Material::default().shininess,
             });
@@ -404,6 +470,31 @@ impl Loader<'_> {
         }
     }
 
+    /// One texture mapping's UVs of a primitive: its `TEXCOORD_n` with its transform applied (empty when the
+    /// primitive has no such set).
+    fn read_uvs(&mut self, primitive: &gltf::Primitive, mapping: UvMapping, label: &str) -> Result<Vec<Vec2>, String> {
+        let set = mapping.set;
+        let mut uvs = match primitive.get(&Semantic::TexCoords(set)) {
+            Some(accessor) => {
+                read_vec2(&accessor, self.buffers).map_err(|e| format!("{label}, TEXCOORD_{set}: {e}"))?
+            }
+            None => Vec::new(),
+        };
+        if let Some(([ox, oy], r, [sx, sy])) = mapping.transform {
+            // uv' = T(offset) R(rotation) S(scale) uv, as the extension defines it.
+            let (sin, cos) = r.sin_cos();
+            if [ox, oy, r, sx, sy].iter().all(|v| v.is_finite()) {
+                for uv in &mut uvs {
+                    let (u, v) = (uv.x * sx, uv.y * sy);
+                    *uv = Vec2::new(cos * u + sin * v + ox, -sin * u + cos * v + oy);
+                }
+            } else {
+                self.warn(format!("{label}: a non-finite KHR_texture_transform is ignored"));
+            }
+        }
+        Ok(uvs)
+    }
+
     fn add_mesh(&mut self, node: &gltf::Node, mesh: &gltf::Mesh, world: Mat4) -> Result<(), String> {
         let mesh_name =
             mesh.name().or(node.name()).map(str::to_string).unwrap_or_else(|| format!("mesh_{}", mesh.index()));
@@ -434,45 +525,24 @@ impl Loader<'_> {
             }
 
             let material = primitive.material();
-            let base_info = material.pbr_metallic_roughness().base_color_texture();
             // KHR_texture_transform: it may override the texcoord set, and its affine map is baked into the UVs.
-            let transform = base_info.as_ref().and_then(|info| info.texture_transform());
-            let uv_set = transform
-                .as_ref()
-                .and_then(|t| t.tex_coord())
-                .unwrap_or_else(|| base_info.as_ref().map_or(0, |info| info.tex_coord()));
-            // One UV set per vertex: the base colour's. A texture on another set is mapped with it, and said so.
-            let other_sets = [
-                material.emissive_texture().map(|i| ("emissive", i.tex_coord())),
-                material.occlusion_texture().map(|i| ("occlusion", i.tex_coord())),
-            ];
-            for (name, set) in other_sets.into_iter().flatten() {
-                if set != uv_set {
-                    self.warn(format!(
-                        "{label}: the {name} texture uses TEXCOORD_{set}; ShadowLab reads one set per vertex and maps \
-                         it with TEXCOORD_{uv_set} (the base colour's)"
-                    ));
-                }
+            let channels = UvChannels::of(&material);
+            for (name, set) in &channels.unmapped {
+                self.warn(format!(
+                    "{label}: the {name} texture's mapping (TEXCOORD_{set}) is a third one; ShadowLab keeps two UV \
+                     channels and maps it with the base colour's (TEXCOORD_{})",
+                    channels.base.set
+                ));
             }
-            let mut uvs = match primitive.get(&Semantic::TexCoords(uv_set)) {
-                Some(accessor) => {
-                    read_vec2(&accessor, self.buffers).map_err(|e| format!("{label}, TEXCOORD_{uv_set}: {e}"))?
-                }
+            let uv_set = channels.base.set;
+            let mut uvs = self.read_uvs(&primitive, channels.base, &label)?;
+            let mut uvs1 = match channels.second {
+                Some(m) => self.read_uvs(&primitive, m, &label)?,
                 None => Vec::new(),
             };
-            if let Some(t) = &transform {
-                // uv' = T(offset) R(rotation) S(scale) uv, as the extension defines it.
-                let ([ox, oy], r, [sx, sy]) = (t.offset(), t.rotation(), t.scale());
-                let (sin, cos) = r.sin_cos();
-                let ok = [ox, oy, r, sx, sy].iter().all(|v| v.is_finite());
-                if ok {
-                    for uv in &mut uvs {
-                        let (u, v) = (uv.x * sx, uv.y * sy);
-                        *uv = Vec2::new(cos * u + sin * v + ox, -sin * u + cos * v + oy);
-                    }
-                } else {
-                    self.warn(format!("{label}: a non-finite KHR_texture_transform is ignored"));
-                }
+            if !uvs1.is_empty() && uvs1.len() != vertex_count {
+                self.warn(format!("{label}: the second UV set's count differs from POSITION count; ignored"));
+                uvs1.clear();
             }
             if !uvs.is_empty() && uvs.len() != vertex_count {
                 self.warn(format!("{label}: TEXCOORD_{uv_set} count differs from POSITION count; ignored"));
@@ -511,6 +581,7 @@ impl Loader<'_> {
                 // A singular transform gives NaN normals, which `Scene::finalize` regenerates from the geometry.
                 normals: normals.into_iter().map(|n| (normal_matrix * n).normalize()).collect(),
                 uvs,
+                uvs1,
                 indices,
                 material,
             });

@@ -74,6 +74,9 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
+    /// A second UV channel, for a material's textures on another set than the base colour's (empty: none,
+    /// read as zeros).
+    pub uvs1: Vec<Vec2>,
     /// Triangle list.
     pub indices: Vec<u32>,
     /// Index into [`Scene::materials`].
@@ -113,6 +116,10 @@ pub struct Material {
     /// Index into [`Scene::textures`] of an ambient-occlusion texture (glTF `occlusionTexture`, red channel,
     /// linear) and its strength: the ambient term is multiplied by `1 + strength * (ao - 1)`.
     pub occlusion_texture: Option<(usize, f32)>,
+    /// The emissive / occlusion texture is mapped with the mesh's second UV channel ([`Mesh::uvs1`]) instead
+    /// of the base colour's (glTF: it names another `texCoord` set or another `KHR_texture_transform`).
+    pub emissive_uv1: bool,
+    pub occlusion_uv1: bool,
     /// Blinn-Phong specular colour (linear) and exponent; zero specular means pure Lambert.
     pub specular: Vec3,
     pub shininess: f32,
@@ -132,6 +139,8 @@ impl Default for Material {
             emissive: Vec3::ZERO,
             emissive_texture: None,
             occlusion_texture: None,
+            emissive_uv1: false,
+            occlusion_uv1: false,
             specular: Vec3::ZERO,
             shininess: 32.0,
             alpha_cutoff: 0.5,
@@ -417,6 +426,14 @@ impl Scene {
             mesh.indices = kept;
             if mesh.uvs.len() != n {
                 mesh.uvs = vec![Vec2::ZERO; n];
+            }
+            if !mesh.uvs1.is_empty() && mesh.uvs1.len() != n {
+                mesh.uvs1.clear();
+            }
+            for uv in &mut mesh.uvs1 {
+                if !uv.is_finite() {
+                    *uv = Vec2::ZERO;
+                }
             }
             let normals_ok = mesh.normals.len() == n && mesh.normals.iter().all(|v| v.is_finite());
             if !normals_ok {

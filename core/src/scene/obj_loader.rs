@@ -79,7 +79,7 @@ pub fn load_obj(path: &Path, unit_scale: f32) -> Result<Scene, LoadError> {
                 scene.materials.len() - 1
             }),
         };
-        scene.meshes.push(Mesh { name, positions, normals, uvs, indices: mesh.indices, material });
+        scene.meshes.push(Mesh { name, positions, normals, uvs, uvs1: Vec::new(), indices: mesh.indices, material });
     }
 
     scene.finalize(path)?;
@@ -366,6 +366,7 @@ fn convert_materials(mtl: &[tobj::Material], dir: &Path, scene: &mut Scene) {
             shininess: m.shininess.filter(|s| *s > 0.0).unwrap_or(Material::default().shininess),
             // Sponza's MTL expects its leaves' texture alpha to cut them out.
             alpha_cutoff: 0.5,
+            ..Material::default()
         });
     }
 }

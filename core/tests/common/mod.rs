@@ -36,6 +36,7 @@ pub fn quad(name: &str, center: Vec3, size: f32, material: usize) -> Mesh {
         positions,
         normals: vec![Vec3::Y; 4],
         uvs: vec![Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y],
+        uvs1: Vec::new(),
         indices: vec![0, 2, 1, 0, 3, 2],
         material,
     }
@@ -121,6 +122,7 @@ pub fn room() -> Scene {
         ],
         normals: vec![Vec3::Z; 4],
         uvs: vec![Vec2::ZERO; 4],
+        uvs1: Vec::new(),
         indices: vec![0, 1, 2, 0, 2, 3],
         material: 0,
     });
