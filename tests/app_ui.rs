@@ -795,3 +795,39 @@ fn the_difference_is_computed_off_the_ui_thread_when_not_synchronous() {
     let d = h.state().difference.as_ref().expect("the worker's difference arrived");
     assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
 }
+
+#[test]
+fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
+    // Destroying the device is what a driver reset does to it: the app stops rendering, saves the whole state
+    // to recovery.ron, says so in the view, and (the binary; here only recorded) restarts on that file.
+    let dir = data_dir("device-lost");
+    let mut h = harness(Startup { data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
+    h.state_mut().load_builtin("cornell");
+    h.state_mut().technique = "lightcluster".into();
+    h.run_steps(3);
+    let lights = h.state().lights.clone();
+    let device = h.state().gpu.as_ref().unwrap().ctx.device.clone();
+    device.destroy();
+    // wgpu reports a destroyed device at the next poll once its queue is empty (a real loss at once).
+    let _ = device.poll(wgpu::PollType::wait_indefinitely());
+    h.run_steps(3);
+    let app = h.state();
+    let recovery = app.recovery.clone().expect("the loss was handled");
+    assert!(recovery.reason.contains("Destroyed"), "{}", recovery.reason);
+    assert!(app.gpu.is_none(), "nothing renders with the lost device");
+    let file = recovery.file.expect("the state was saved");
+    assert_eq!(file, dir.join("recovery.ron"));
+    let (program, args) = recovery.relaunch.expect("the command that goes on");
+    assert!(program.file_name().is_some() && args == [file.display().to_string()], "{program:?} {args:?}");
+    assert!(h.query_all_by_label_contains("The GPU device was lost").count() >= 1, "the window says so");
+    // The recovery file brings everything back in a fresh app.
+    let mut fresh = harness(Startup {
+        data_dir: Some(data_dir("device-lost-fresh")),
+        synchronous: true,
+        path: Some(file),
+        ..Default::default()
+    });
+    fresh.run_steps(3);
+    assert_eq!(fresh.state().technique, "lightcluster");
+    assert_eq!(fresh.state().lights, lights);
+}

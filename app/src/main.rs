@@ -41,6 +41,7 @@ fn main() -> ExitCode {
             view: args.app_view,
             builtin: args.app_scene,
             indirect: args.app_indirect,
+            relaunch_on_device_loss: true,
         }),
     };
     match result {

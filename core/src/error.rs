@@ -53,4 +53,6 @@ pub enum GpuError {
     Readback(String),
     #[error("invalid render settings: {0}")]
     InvalidSettings(String),
+    #[error("the GPU device was lost ({0}): nothing more can be drawn with it")]
+    DeviceLost(String),
 }

@@ -11,6 +11,8 @@ pub struct GpuContext {
     pub adapter_info: wgpu::AdapterInfo,
     /// True when `TIMESTAMP_QUERY` is enabled on the device: per-pass GPU times come from timestamps.
     pub timestamps: bool,
+    /// Why the device was lost, once wgpu says it was (its device-lost callback, on any thread).
+    lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 /// The timer features ShadowLab uses when an adapter offers them.
@@ -76,7 +78,31 @@ impl GpuContext {
         // 0.2 ms around a dispatch that held the queue for 1.7 s), so wall-clock figures are the honest ones there.
         let cpu_timing = std::env::var("SHADOWLAB_TIMING").is_ok_and(|v| v.eq_ignore_ascii_case("cpu"));
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !cpu_timing;
-        GpuContext { device, queue, adapter_info, timestamps }
+        // After a loss every call on the device is void and wgpu's buffer helpers panic: `guarded` refuses work
+        // from then on. wgpu calls this at once for a real loss, and at the next poll after `destroy`.
+        let lost = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let flag = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            let text = if message.is_empty() { format!("{reason:?}") } else { format!("{reason:?}: {message}") };
+            if let Ok(mut l) = flag.lock() {
+                *l = Some(text);
+            }
+        });
+        GpuContext { device, queue, adapter_info, timestamps, lost }
+    }
+
+    /// Why the device was lost, or None while it works.
+    pub fn lost(&self) -> Option<String> {
+        self.lost.lock().ok().and_then(|l| l.clone())
+    }
+
+    /// `Err(DeviceLost)` once the device is lost (readbacks check it: mapping a buffer of a lost device is an
+    /// uncaptured error, which wgpu's default handler turns into a panic).
+    pub fn check_lost(&self) -> Result<(), GpuError> {
+        match self.lost() {
+            Some(reason) => Err(GpuError::DeviceLost(reason)),
+            None => Ok(()),
+        }
     }
 
     /// "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
@@ -88,6 +114,9 @@ impl GpuContext {
     /// [`GpuError`] (the last good state is the caller's to keep) instead of the default handler's panic.
     /// Scopes are per thread; `f` must not leave work for another thread.
     pub fn guarded<T>(&self, f: impl FnOnce() -> Result<T, GpuError>) -> Result<T, GpuError> {
+        if let Some(reason) = self.lost() {
+            return Err(GpuError::DeviceLost(reason));
+        }
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let result = f();
@@ -95,6 +124,9 @@ impl GpuContext {
         let oom = pollster::block_on(oom.pop());
         if let Some(e) = oom {
             return Err(GpuError::OutOfMemory(e.to_string()));
+        }
+        if let Some(reason) = self.lost() {
+            return Err(GpuError::DeviceLost(reason));
         }
         if let Some(e) = validation {
             return Err(GpuError::Validation(e.to_string()));

@@ -65,3 +65,25 @@ fn no_single_pass_shades_more_than_the_bounded_work() {
     let report = renderer.render_frame(rt.as_mut(), &scene.camera, few, &mut |_, _| {}).unwrap();
     assert_eq!(report.counts.technique.batches, 64 * 256 / max, "64 lights x 256 rays in passes of {max}");
 }
+
+#[test]
+fn after_the_device_is_lost_every_renderer_call_is_a_device_lost_error() {
+    // What a driver reset does, by `destroy`: the renderer refuses work with `DeviceLost` instead of running
+    // calls that wgpu would void (or panic in, as its buffer helpers do on a lost device).
+    let gpu = common::gpu();
+    let scene = common::plane_and_occluder();
+    let settings = shadowlab_core::RenderSettings { width: 32, height: 24, ..Default::default() };
+    let mut renderer = shadowlab_core::Renderer::new(&gpu, &scene, settings).unwrap();
+    let mut t = renderer.create_technique("reference").unwrap();
+    let lights = [common::white_light(glam::Vec3::new(0.0, 3.0, 0.0), 5.0, 20.0)];
+    renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    assert_eq!(gpu.lost(), None);
+    gpu.device.destroy();
+    let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+    assert!(gpu.lost().is_some_and(|r| r.contains("Destroyed")), "{:?}", gpu.lost());
+    match renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}) {
+        Err(GpuError::DeviceLost(reason)) => assert!(reason.contains("Destroyed")),
+        other => panic!("expected DeviceLost, got {:?}", other.map(|_| ())),
+    }
+    assert!(matches!(renderer.read_hdr(), Err(GpuError::DeviceLost(_))));
+}

@@ -61,7 +61,26 @@ pub struct Startup {
     pub indirect: Option<String>,
     /// Window size in points.
     pub window_size: Option<(f32, f32)>,
+    /// When the GPU device is lost, start a new ShadowLab on the saved recovery file and close this one
+    /// (the binary does; tests only record the command).
+    pub relaunch_on_device_loss: bool,
 }
+
+/// What the app did when its GPU device was lost.
+#[derive(Clone, Debug)]
+pub struct Recovery {
+    /// Why wgpu says the device was lost.
+    pub reason: String,
+    /// The scene file the current state was saved to (None when saving failed, with the error in `message`).
+    pub file: Option<PathBuf>,
+    /// The command that starts a new ShadowLab on it (program, arguments), when it is relaunched.
+    pub relaunch: Option<(PathBuf, Vec<String>)>,
+    /// What the window says.
+    pub message: String,
+}
+
+/// Set by a recovered process, so a device lost again is not relaunched in a loop.
+const RECOVERED_ENV: &str = "SHADOWLAB_RECOVERED";
 
 /// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
 /// texture and buffer limits (cube-map atlases are large).
@@ -245,6 +264,11 @@ pub struct ShadowLabApp {
     pub inspector: inspector::Inspector,
     /// The Explain panel's chosen step: (technique key, step index).
     pub explain_step: Option<(String, usize)>,
+    /// wgpu errors outside any error scope (egui's own painting, say), shown instead of panicking.
+    uncaptured_errors: Arc<std::sync::Mutex<Vec<String>>>,
+    relaunch_on_device_loss: bool,
+    /// Set once the device was lost: the state was saved and the window says what happens next.
+    pub recovery: Option<Recovery>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -306,6 +330,9 @@ impl ShadowLabApp {
             orbit_frames: 36,
             inspector: inspector::Inspector::default(),
             explain_step: None,
+            uncaptured_errors: Default::default(),
+            relaunch_on_device_loss: startup.relaunch_on_device_loss,
+            recovery: None,
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -352,6 +379,17 @@ impl ShadowLabApp {
     }
 
     fn init_gpu(&mut self, rs: egui_wgpu::RenderState) -> Result<()> {
+        // wgpu's default handler panics; core's calls run in error scopes, so what reaches this is egui's
+        // painting or a bug: shown as an error instead of killing the window.
+        let errors = self.uncaptured_errors.clone();
+        rs.device.on_uncaptured_error(Arc::new(move |e| {
+            log::error!("wgpu: {e}");
+            if let Ok(mut v) = errors.lock() {
+                if v.len() < 16 {
+                    v.push(e.to_string());
+                }
+            }
+        }));
         let ctx = GpuContext::from_device(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
         let main = View::new(&ctx, &rs, &self.scene)?;
         let reference = View::sharing(&ctx, &rs, &main)?;
@@ -368,6 +406,72 @@ impl ShadowLabApp {
         }
         self.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });
         Ok(())
+    }
+
+    /// The GPU device is gone (a driver reset, a shader that ran too long, an unplugged GPU): eframe's device
+    /// is the one egui paints with, so neither the renderers nor the window can be recreated in this process.
+    /// Save everything to a recovery scene file, stop rendering, say so, and (in the binary) start a new
+    /// ShadowLab on that file and close this window. A process that was itself started this way does not
+    /// relaunch again; it only saves and says so.
+    pub fn handle_device_lost(&mut self, ctx: &egui::Context, reason: String) {
+        if self.recovery.is_some() {
+            return;
+        }
+        log::error!("GPU device lost: {reason}");
+        self.gpu = None;
+        self.sweep = None;
+        let file = self.data_dir.join("recovery.ron");
+        let saved = std::fs::create_dir_all(&self.data_dir)
+            .map_err(anyhow::Error::from)
+            .and_then(|_| self.scene_file_data().save(&file));
+        let relaunch_allowed = self.relaunch_on_device_loss && std::env::var_os(RECOVERED_ENV).is_none();
+        let mut recovery = Recovery { reason: reason.clone(), file: None, relaunch: None, message: String::new() };
+        recovery.message = match saved {
+            Err(e) => format!(
+                "The GPU device was lost ({reason}). ShadowLab could not save a recovery file ({e:#}); save your \
+                 scene with File → Save scene file if the menu still responds, then restart ShadowLab."
+            ),
+            Ok(()) => {
+                recovery.file = Some(file.clone());
+                let program = std::env::current_exe().unwrap_or_else(|_| PathBuf::from("shadowlab"));
+                let args = vec![file.display().to_string()];
+                if relaunch_allowed {
+                    let spawned = std::process::Command::new(&program).args(&args).env(RECOVERED_ENV, "1").spawn();
+                    match spawned {
+                        Ok(_) => {
+                            recovery.relaunch = Some((program, args));
+                            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                            format!(
+                                "The GPU device was lost ({reason}). Your scene, lights, camera and settings were \
+                                 saved to {}; a new ShadowLab window opens on them.",
+                                file.display()
+                            )
+                        }
+                        Err(e) => format!(
+                            "The GPU device was lost ({reason}). Your scene was saved to {}, but a new ShadowLab \
+                             could not be started ({e}); start it with that file.",
+                            file.display()
+                        ),
+                    }
+                } else {
+                    if self.relaunch_on_device_loss {
+                        recovery.relaunch = None;
+                    } else {
+                        // Tests: the command a binary would run.
+                        recovery.relaunch = Some((program, args));
+                    }
+                    format!(
+                        "The GPU device was lost ({reason}). Your scene, lights, camera and settings were saved to {}; \
+                         restart ShadowLab with that file (`shadowlab {}`) to go on.",
+                        file.display(),
+                        file.display()
+                    )
+                }
+            }
+        };
+        self.error(recovery.message.clone());
+        self.status = recovery.message.clone();
+        self.recovery = Some(recovery);
     }
 
     pub fn toast(&mut self, text: impl Into<String>) {
@@ -1334,6 +1438,14 @@ impl ShadowLabApp {
 
     /// The central 3D view: image(s), gizmo, picking, camera.
     fn viewport_ui(&mut self, ui: &mut egui::Ui) {
+        if let Some(recovery) = &self.recovery {
+            // No device to render with: the view says why and where the state went, until the window closes.
+            let message = recovery.message.clone();
+            ui.centered_and_justified(|ui| {
+                ui.label(egui::RichText::new(message).color(ui.visuals().error_fg_color).size(16.0));
+            });
+            return;
+        }
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
         self.last_viewport_rect = Some(rect);
@@ -1674,6 +1786,21 @@ impl eframe::App for ShadowLabApp {
         }
         if self.animation != Animation::Off {
             self.animation_time += ctx.input(|i| i.stable_dt).min(0.1);
+        }
+        // wgpu reports a lost device from its poll: poll (without waiting) before touching the device this
+        // frame, so a loss is handled before anything is created on it (wgpu's buffer helpers panic then).
+        // (GpuContext's device-lost callback records the loss; every renderer call refuses work after it.)
+        let lost = self.gpu.as_ref().and_then(|gpu| {
+            let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
+            gpu.ctx.lost()
+        });
+        if let Some(reason) = lost {
+            self.handle_device_lost(&ctx, reason);
+        }
+        let uncaptured: Vec<String> =
+            self.uncaptured_errors.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default();
+        for e in uncaptured {
+            self.error(format!("GPU error: {e}"));
         }
         self.receive_screenshots(&ctx);
         if let Some(secs) = self.quit_after_secs {

@@ -11,6 +11,7 @@ pub fn read_texture(
     height: u32,
     bytes_per_pixel: u32,
 ) -> Result<Vec<u8>, GpuError> {
+    gpu.check_lost()?;
     let row = width * bytes_per_pixel;
     let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -49,6 +50,7 @@ pub fn read_texture(
 
 /// Map the first `bytes` of a `MAP_READ` buffer (after the submitted work that fills it), copy them out, unmap.
 pub fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
+    gpu.check_lost()?;
     let slice = buffer.slice(..bytes.max(4));
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -65,6 +67,7 @@ pub fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<V
 
 /// Copy a whole `COPY_SRC` buffer back to the CPU.
 pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    gpu.check_lost()?;
     let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("buffer readback"),
         size: buffer.size(),
