@@ -711,4 +711,18 @@ fn a_texture_on_another_texcoord_set_gets_the_second_uv_channel() {
         "{:?}",
         scene.warnings
     );
+    // An occlusion texture on the base colour's set with a KHR_texture_transform of its own: the second
+    // channel, transformed (uv + (0.5, 0.25)).
+    doc["materials"][0].as_object_mut().unwrap().remove("emissiveTexture");
+    doc["materials"][0]["occlusionTexture"] = serde_json::json!({
+        "index": 0,
+        "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.25]}}
+    });
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = shadowlab_core::scene::Scene::load(&path, 1.0).unwrap();
+    assert!(scene.materials[0].occlusion_uv1, "{:?}", scene.warnings);
+    let quad = scene.meshes.iter().find(|m| !m.uvs1.is_empty()).expect("the transformed channel");
+    for (a, b) in quad.uvs.iter().zip(&quad.uvs1) {
+        assert!((*b - *a - glam::Vec2::new(0.5, 0.25)).length() < 1e-6, "{a} -> {b}");
+    }
 }

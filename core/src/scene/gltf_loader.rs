@@ -27,6 +27,24 @@ struct UvMapping {
 }
 
 impl UvMapping {
+    /// The gltf crate parses KHR_texture_transform only on `textureInfo`s; an occlusion texture's is read from
+    /// its raw extension JSON, with the extension's defaults.
+    fn of_occlusion(info: &gltf::material::OcclusionTexture<'_>) -> UvMapping {
+        let Some(t) = info.extension_value("KHR_texture_transform") else {
+            return UvMapping { set: info.tex_coord(), transform: None };
+        };
+        let pair = |key: &str, default: [f32; 2]| {
+            t.get(key)
+                .and_then(|v| v.as_array())
+                .and_then(|a| Some([a.first()?.as_f64()? as f32, a.get(1)?.as_f64()? as f32]))
+                .unwrap_or(default)
+        };
+        let rotation = t.get("rotation").and_then(|v| v.as_f64()).unwrap_or(0.0) as f32;
+        let set =
+            t.get("texCoord").and_then(|v| v.as_u64()).map_or(info.tex_coord(), |s| s.min(u32::MAX as u64) as u32);
+        UvMapping { set, transform: Some((pair("offset", [0.0, 0.0]), rotation, pair("scale", [1.0, 1.0]))) }
+    }
+
     fn of(info: &gltf::texture::Info<'_>) -> UvMapping {
         let t = info.texture_transform();
         UvMapping {
@@ -59,8 +77,7 @@ impl UvChannels {
         let mut c = UvChannels { base, second: None, emissive_uv1: false, occlusion_uv1: false, unmapped: Vec::new() };
         let others = [
             ("emissive", material.emissive_texture().map(|i| UvMapping::of(&i))),
-            // The gltf crate reads no KHR_texture_transform on occlusion textures: their set alone.
-            ("occlusion", material.occlusion_texture().map(|i| UvMapping { set: i.tex_coord(), transform: None })),
+            ("occlusion", material.occlusion_texture().map(|i| UvMapping::of_occlusion(&i))),
         ];
         for (name, mapping) in others {
             let Some(m) = mapping else { continue };
