@@ -10,6 +10,7 @@ use egui_kittest::Harness;
 use shadowlab::gui::gizmo::{self, Projection};
 use shadowlab::gui::layout::Pane;
 use shadowlab::gui::{ShadowLabApp, Startup};
+use shadowlab::sequence::Motion;
 
 fn data_dir(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/app").join(name);
@@ -671,7 +672,7 @@ fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
 }
 
 #[test]
-fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
+fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs() {
     use shadowlab::figure::{figure_size, GAP, TITLE_HEIGHT};
     use shadowlab_core::technique::ParamValue;
     let mut h = start("figure", "cornell");
@@ -700,17 +701,34 @@ fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
     assert!(t != r, "LightCluster differs from the reference: {t:?} {r:?}");
     assert!(d[2] > d[0] && d[0] < 100.0, "the difference is mostly dark blue: {d:?}");
     assert!(t.iter().all(|c| *c < 250.0), "the panes are not the white background: {t:?}");
-    // An orbit of 3 frames: 3 PNGs at the render size, not all the same.
-    let frames = h.state_mut().save_orbit_sequence(3).unwrap();
-    assert_eq!(frames.len(), 3);
-    let images: Vec<_> = frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    // An orbit of 3 frames: 3 PNGs at the render size, not all the same, and a GIF of the 3.
+    let orbit = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
+    assert_eq!(orbit.frames.len(), 3);
+    let images: Vec<_> = orbit.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
     assert!(images.iter().all(|i| i.dimensions() == (w, hgt)));
     assert!(images[0] != images[1], "the camera moved between frames");
-    assert!(h.state_mut().save_orbit_sequence(0).is_err(), "no frames is an error, not a panic");
+    let gif = gif_frames(&orbit.gif);
+    assert_eq!(gif.len(), 3, "one GIF frame per PNG");
+    assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
+    assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
+    // The light animation: an error while it is off, then one period in 2 frames that differ.
+    assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
+    h.state_mut().animation = shadowlab::gui::Animation::Bob;
+    let lights = h.state_mut().save_sequence(Motion::Lights, 2).unwrap();
+    let images: Vec<_> = lights.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    assert!(images[0] != images[1], "the lights moved between frames");
+    assert_eq!(gif_frames(&lights.gif).len(), 2);
+    assert!(lights.gif.parent() != orbit.gif.parent(), "each sequence in a folder of its own");
+}
+
+fn gif_frames(path: &std::path::Path) -> Vec<image::Frame> {
+    use image::AnimationDecoder;
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    image::codecs::gif::GifDecoder::new(file).unwrap().into_frames().collect_frames().unwrap()
 }
 
 #[test]
-fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
+fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_selected_light() {
     let mut h = start("inspector-maps", "cornell");
     h.state_mut().layout.focus(Pane::Maps);
     h.run_steps(3);
@@ -726,6 +744,34 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
     let centre = cross.readout(2 * atlas.resolution - atlas.resolution / 2, atlas.resolution * 3 / 2).unwrap();
     assert!(centre.contains("cube 0 face +z") && centre.contains("depth "), "{centre}");
     h.get_by_label_contains("tiles of 256² texels");
+    // Selecting a light shows its cube map; the centre of its +y face sees the ceiling (the room's inside is
+    // y in [0, 2]) straight above the light, and reads the distance to it.
+    let lights = h.state().lights.clone();
+    let (index, light) = lights
+        .iter()
+        .enumerate()
+        .rfind(|(_, l)| 2.0 - l.position.y < 0.9 * l.range)
+        .expect("a light whose range reaches the ceiling");
+    h.state_mut().selected = Some(index);
+    h.run_steps(2);
+    let app = h.state();
+    let cube = app.inspector.cube.expect("a cube map is shown");
+    let atlas = app.inspector.atlas.as_ref().unwrap();
+    assert_eq!(atlas.cube_at(light.position, 1e-4), Some(cube), "the selected light's cube map is shown");
+    assert_eq!(app.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
+    let r = atlas.resolution;
+    let cross = app.inspector.shown.as_ref().unwrap();
+    let (x, y) = (r + r / 2, r / 2);
+    let readout = cross.readout(x, y).unwrap();
+    assert!(readout.contains(&format!("cube {cube} face +y")), "{readout}");
+    let distance = cross.distance(x, y).expect("the ceiling is within the light's range");
+    let expected = 2.0 - light.position.y;
+    assert!((distance - expected).abs() < 2e-3 * expected.max(1.0), "read {distance}, the ceiling is {expected} above");
+    assert!(readout.contains(&format!("distance {distance:.3}")), "{readout}");
+    // Linearised grey: the same texels drawn by distance.
+    h.get_by_label("linearised grey").click();
+    h.run_steps(2);
+    assert!(h.state().inspector.linear && h.state().inspector.shown.is_some());
 }
 
 #[test]

@@ -133,6 +133,20 @@ pub enum Animation {
     Bob,
 }
 
+impl Animation {
+    const ORBIT_RAD_PER_SEC: f32 = 0.8;
+    const BOB_RAD_PER_SEC: f32 = 1.5;
+
+    /// Seconds after which every light is back where it started (none when off).
+    pub fn period_secs(self) -> Option<f32> {
+        match self {
+            Animation::Off => None,
+            Animation::Orbit => Some(std::f32::consts::TAU / Self::ORBIT_RAD_PER_SEC),
+            Animation::Bob => Some(std::f32::consts::TAU / Self::BOB_RAD_PER_SEC),
+        }
+    }
+}
+
 /// GPU state, created from eframe's render state.
 /// The difference view's image and metrics, for one pair of converged frames.
 pub struct Difference {
@@ -601,7 +615,12 @@ impl ShadowLabApp {
 
     /// Lights as rendered this frame (animated when animation is on).
     pub fn animated_lights(&self) -> Vec<PointLight> {
-        let t = self.animation_time;
+        self.lights_at(self.animation_time)
+    }
+
+    /// Lights at time `t_secs` of the light animation (as they are when it is off).
+    pub fn lights_at(&self, t_secs: f32) -> Vec<PointLight> {
+        let t = t_secs;
         match self.animation {
             Animation::Off => self.lights.clone(),
             Animation::Orbit => self
@@ -610,7 +629,7 @@ impl ShadowLabApp {
                 .enumerate()
                 .map(|(i, l)| {
                     let r = (l.range * 0.1).min(1.0);
-                    let a = t * 0.8 + i as f32 * 0.7;
+                    let a = t * Animation::ORBIT_RAD_PER_SEC + i as f32 * 0.7;
                     PointLight { position: l.position + Vec3::new(a.cos() * r, 0.0, a.sin() * r), ..*l }
                 })
                 .collect(),
@@ -620,7 +639,10 @@ impl ShadowLabApp {
                 .enumerate()
                 .map(|(i, l)| {
                     let h = (l.range * 0.05).min(0.5);
-                    PointLight { position: l.position + Vec3::Y * (t * 1.5 + i as f32).sin() * h, ..*l }
+                    PointLight {
+                        position: l.position + Vec3::Y * (t * Animation::BOB_RAD_PER_SEC + i as f32).sin() * h,
+                        ..*l
+                    }
                 })
                 .collect(),
         }
@@ -755,34 +777,82 @@ impl ShadowLabApp {
         }
     }
 
-    /// The shadow-map inspector: reads the chosen technique's atlas back once per completed frame (not for the
-    /// preview while the camera moves), then shows it.
+    /// The shadow-map inspector: reads the chosen maps back once per completed frame (not for the preview while
+    /// the camera moves), then shows them; a selected light shows its cube map.
     pub fn maps_ui(&mut self, ui: &mut egui::Ui) {
         use inspector::{AtlasDepths, MapSource};
-        let has_indirect = self.indirect.technique.is_some();
-        if !has_indirect {
-            self.inspector.source = MapSource::Direct;
+        use shadowlab_core::technique::Technique;
+        // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
+        fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {
+            t.shadow_atlas().into_iter().chain(t.depth_images()).collect()
+        }
+        fn labelled(t: &dyn Technique, indirect: bool) -> Vec<(MapSource, String)> {
+            let shadow = usize::from(t.shadow_atlas().is_none());
+            let images = t.depth_images().into_iter().map(|(_, what)| what);
+            let names = t.shadow_atlas().map(|_| "shadow maps").into_iter().chain(images);
+            let who = if indirect { "indirect" } else { "direct" };
+            names
+                .enumerate()
+                .map(|(i, name)| (MapSource { indirect, set: i + shadow }, format!("{} ({who}): {name}", t.label())))
+                .collect()
         }
         let key = self.technique.clone();
+        let indirect_key = self.indirect.technique.clone();
+        let selected = self.selected;
+        let mut sources = Vec::new();
+        let mut follow: Option<(usize, Vec<Vec3>)> = None;
         if let Some(gpu) = &mut self.gpu {
+            if let Ok(t) = gpu.main.technique(&key) {
+                sources.extend(labelled(t.as_ref(), false));
+            }
+            if let Some(k) = &indirect_key {
+                if let Ok(t) = gpu.main.indirect_technique(k) {
+                    sources.extend(labelled(t.borrow().as_ref(), true));
+                }
+            }
+            if !sources.iter().any(|(s, _)| *s == self.inspector.source) {
+                self.inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
+            }
             let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
-            let from = (gpu.main.frame_key(), self.inspector.source);
+            let source = self.inspector.source;
+            let from = (gpu.main.frame_key(), source);
             if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
                 let ctx = gpu.ctx.clone();
-                let read = |t: &dyn shadowlab_core::technique::Technique| {
-                    t.shadow_atlas().map(|(a, what)| AtlasDepths::read(&ctx, a, what)).transpose()
+                // Set `set` 0 is the shadow atlas when there is one, so count from the technique's own list.
+                let read = |t: &dyn Technique| {
+                    let offset = usize::from(t.shadow_atlas().is_none());
+                    let all = sets(t);
+                    source
+                        .set
+                        .checked_sub(offset)
+                        .and_then(|i| all.get(i))
+                        .map(|(a, what)| AtlasDepths::read(&ctx, a, what))
+                        .transpose()
                 };
-                let result = match self.inspector.source {
-                    MapSource::Direct => gpu.main.technique(&key).and_then(|t| read(t.as_ref())),
-                    MapSource::Indirect => match self.indirect.technique.clone() {
-                        Some(k) => gpu.main.indirect_technique(&k).and_then(|t| read(t.borrow().as_ref())),
+                let result = if source.indirect {
+                    match &indirect_key {
+                        Some(k) => gpu.main.indirect_technique(k).and_then(|t| read(t.borrow().as_ref())),
                         None => Ok(None),
-                    },
+                    }
+                } else {
+                    gpu.main.technique(&key).and_then(|t| read(t.as_ref()))
                 };
                 self.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
             }
         }
-        self.inspector.ui(ui, has_indirect);
+        if let Some(i) = selected {
+            let lights = self.animated_lights();
+            if let Some(light) = lights.get(i) {
+                let mut positions = vec![light.position];
+                let group = self.light_details(i).map(|d| d.group).unwrap_or_default();
+                positions.extend(group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position));
+                follow = Some((i, positions));
+            }
+        }
+        if let Some((i, positions)) = follow {
+            self.inspector.follow_light(i, &positions);
+        }
+        self.inspector.ui(ui, &sources);
     }
 
     /// What the current technique made of light `index` in its last frame (its cluster, say).

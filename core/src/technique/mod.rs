@@ -546,6 +546,11 @@ pub trait Technique {
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
         None
     }
+    /// Depth images the last frame rendered besides its shadow maps (INSM's intermediate images), each with
+    /// what its tiles are, for inspection; empty for most techniques.
+    fn depth_images(&self) -> Vec<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        Vec::new()
+    }
 }
 
 /// Most light evaluations (lights x shadow rays) one full-screen pass may do per pixel: a single pass over

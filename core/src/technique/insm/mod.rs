@@ -735,6 +735,15 @@ impl Technique for Insm {
         true
     }
 
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        let what = "cube maps of the last batch, drawn from the meshes, six faces per light (+x -x +y -y +z -z)";
+        self.shadows.atlas().map(|a| (a, what))
+    }
+
+    fn depth_images(&self) -> Vec<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect()
+    }
+
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let mut layers = super::light_overlays(lights);
         let frustum_color = [1.0, 0.85, 0.2, 1.0];

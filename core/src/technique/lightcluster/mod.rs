@@ -525,6 +525,13 @@ impl Technique for LightCluster {
         ]
     }
 
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        if self.using_reference {
+            return self.reference.shadow_atlas();
+        }
+        self.cubes.atlas().map(|a| (a, "cube maps of the last batch, six faces per cluster (+x -x +y -y +z -z)"))
+    }
+
     fn light_details(&self, index: usize) -> Option<super::LightDetails> {
         let (ci, c) = self.clustering.clusters.iter().enumerate().find(|(_, c)| c.members.contains(&index))?;
         let role = if c.center == index { "its center" } else { "a member" };
