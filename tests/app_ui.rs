@@ -775,6 +775,55 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_s
 }
 
 #[test]
+fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps() {
+    use shadowlab::gui::inspector::MapSource;
+    let mut h = start("inspector-insm", "cornell");
+    h.state_mut().technique = "insm".into();
+    h.state_mut().layout.focus(Pane::Maps);
+    h.run_steps(4);
+    let images = MapSource { indirect: false, set: 1 };
+    let sources = h.state().inspector.sources.clone();
+    assert!(
+        sources.iter().any(|(s, l)| *s == images && l.contains("intermediate depth images")),
+        "INSM offers its intermediate images: {sources:?}"
+    );
+    assert!(sources.iter().any(|(s, l)| *s == MapSource::DIRECT && l.contains("shadow maps")), "{sources:?}");
+    h.state_mut().inspector.source = images;
+    h.run_steps(3);
+    let viewpoints = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let app = h.state();
+    let atlas = app.inspector.atlas.as_ref().expect("the intermediate images were read back");
+    assert_eq!(atlas.cubes(), 0, "views, not cube maps");
+    // Each viewpoint's image is a tile seen from that viewpoint, its texels read as distances from it.
+    let eyes: Vec<glam::Vec3> = atlas.projections.iter().flatten().map(|p| p.eye()).collect();
+    assert_eq!(eyes.len(), viewpoints.len(), "one image per viewpoint");
+    for v in &viewpoints {
+        assert!(eyes.iter().any(|e| e.distance(v.position) < 1e-3), "no image from {:?}: {eyes:?}", v.position);
+    }
+    let shown = app.inspector.shown.as_ref().expect("the whole atlas is shown");
+    let r = atlas.resolution;
+    let readout = shown.readout(r / 2, r / 2).unwrap();
+    let distance = shown.distance(r / 2, r / 2).expect("the first viewpoint sees the room");
+    // Inside the 2 m room every surface is less than its diagonal (3.5 m) away, from a viewpoint at most ~2 m outside.
+    assert!(readout.contains("tile 0 · view") && distance > 0.05 && distance < 6.0, "{readout}");
+    // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
+    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().inspector.source = MapSource::DIRECT;
+    h.run_steps(4);
+    let atlas = h.state().inspector.atlas.as_ref().expect("LightCluster's cube maps");
+    assert!(atlas.cubes() > 0 && atlas.what.contains("per cluster"), "{}", atlas.what);
+    h.state_mut().selected = Some(5);
+    h.run_steps(2);
+    let note = h.state().inspector.note.clone().unwrap_or_default();
+    assert!(note.starts_with("light 5: cube "), "{note}");
+    // The cube shown is rendered from a member of light 5's cluster (its center).
+    let group = h.state_mut().light_details(5).expect("LightCluster knows light 5's cluster").group;
+    let app = h.state();
+    let (atlas, cube) = (app.inspector.atlas.as_ref().unwrap(), app.inspector.cube.unwrap());
+    assert!(group.iter().any(|&m| atlas.cube_at(app.lights[m].position, 1e-4) == Some(cube)), "{group:?}");
+}
+
+#[test]
 fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     let mut h = start("explain", "cornell");
     h.state_mut().technique = "lightcluster".into();

@@ -852,7 +852,7 @@ impl ShadowLabApp {
         if let Some((i, positions)) = follow {
             self.inspector.follow_light(i, &positions);
         }
-        self.inspector.ui(ui, &sources);
+        self.inspector.ui(ui, sources);
     }
 
     /// What the current technique made of light `index` in its last frame (its cluster, say).
