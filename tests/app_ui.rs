@@ -874,6 +874,46 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     assert!(h.state_mut().camera_tooltip(&p, egui::pos2(-100.0, -100.0)).is_empty());
 }
 
+/// Where a hover point of `layer` of the indirect technique `key` is on screen, inside the view, with its index.
+fn indirect_point_on_screen(h: &mut Harness<'static, ShadowLabApp>, key: &str, layer: &str) -> (egui::Pos2, usize) {
+    let p = projection(h);
+    let rect = h.state().last_viewport_rect.unwrap().shrink(20.0);
+    let technique = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
+    let points = technique.borrow().hover_points();
+    points
+        .iter()
+        .filter(|q| q.layer == layer)
+        .find_map(|q| p.to_screen(q.position).filter(|s| rect.contains(*s)).map(|s| (s, q.index)))
+        .unwrap_or_else(|| panic!("no point of '{layer}' on screen"))
+}
+
+#[test]
+fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
+    let mut h = start("overlay-tooltips", "cornell");
+    h.state_mut().technique = "unshadowed".into();
+    h.state_mut().indirect.vpl.count = 64;
+    h.state_mut().indirect.technique = Some("val".into());
+    h.run_steps(6);
+    let p = projection(&h);
+    // A VAL's centre: its number, VPL count, rectangle.
+    let (at, k) = indirect_point_on_screen(&mut h, "val", "val centres");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VAL {k} (")) && lines[1].contains("VPLs"), "{lines:?}");
+    // With the centres hidden, a VPL: its light and its VAL; with its layer hidden too, nothing.
+    h.state_mut().view.overlays.insert("val centres".into(), false);
+    let (at, i) = indirect_point_on_screen(&mut h, "val", "vpls by val");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VPL {i} of ")) && lines.last().unwrap().starts_with("in VAL "), "{lines:?}");
+    h.state_mut().view.overlays.insert("vpls by val".into(), false);
+    assert!(h.state_mut().overlay_tooltip(&p, at).is_empty(), "a hidden layer has no tooltips");
+    // Fuzzy clustering: a VPL cluster's representative.
+    h.state_mut().indirect.technique = Some("fuzzy".into());
+    h.run_steps(6);
+    let (at, k) = indirect_point_on_screen(&mut h, "fuzzy", "vpl cluster representatives");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
+}
+
 #[test]
 fn the_difference_is_computed_off_the_ui_thread_when_not_synchronous() {
     // Metrics with FLIP run on a worker: UI frames keep coming while it works, and its result arrives.

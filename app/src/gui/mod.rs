@@ -898,6 +898,27 @@ impl ShadowLabApp {
         Vec::new()
     }
 
+    /// The tooltip of what a visible overlay layer draws under `pos` (a VAL, a VPL, a cluster's
+    /// representative), from the direct or the indirect technique's hover points
+    /// ([`Technique::hover_points`](shadowlab_core::technique::Technique::hover_points)).
+    pub fn overlay_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
+        use shadowlab_core::technique::Technique;
+        let visible: Vec<String> = self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(n, _)| n).collect();
+        let indirect_key = self.indirect.technique.clone();
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let pick = |t: &dyn Technique| {
+            let points: Vec<_> =
+                t.hover_points().into_iter().filter(|p| visible.iter().any(|v| v == p.layer)).collect();
+            let i = gizmo::pick_point(projection, points.iter().map(|p| p.position), pos, 8.0)?;
+            Some(points[i]).map(|p| t.hover_details(p.layer, p.index)).filter(|lines| !lines.is_empty())
+        };
+        if let Some(lines) = gpu.main.technique(&self.technique).ok().and_then(|t| pick(t.as_ref())) {
+            return lines;
+        }
+        let indirect = indirect_key.and_then(|k| gpu.main.indirect_technique(&k).ok());
+        indirect.and_then(|t| pick(t.borrow().as_ref())).unwrap_or_default()
+    }
+
     /// Names of the overlay layers the current technique offers, with their state.
     pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
@@ -1596,7 +1617,14 @@ impl ShadowLabApp {
             if let Some(pos) = response.hover_pos() {
                 let lines = match gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
                     Some(i) => self.light_tooltip(i),
-                    None => self.camera_tooltip(&projection, pos),
+                    None => {
+                        let camera = self.camera_tooltip(&projection, pos);
+                        if camera.is_empty() {
+                            self.overlay_tooltip(&projection, pos)
+                        } else {
+                            camera
+                        }
+                    }
                 };
                 if !lines.is_empty() {
                     response.clone().on_hover_ui_at_pointer(|ui| {

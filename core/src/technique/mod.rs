@@ -446,6 +446,16 @@ pub struct LightDetails {
     pub group: Vec<usize>,
 }
 
+/// Something a technique's overlays draw that the app's view gives a hover tooltip (a VAL, a VPL, a cluster's
+/// representative): where it is, the overlay layer that draws it (the app offers only those of visible
+/// layers), and an index the technique understands in [`Technique::hover_details`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoverPoint {
+    pub layer: &'static str,
+    pub position: Vec3,
+    pub index: usize,
+}
+
 /// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
 /// overlay layers to switch on (the technique's others are switched off) and whether its shadow maps show it.
 #[derive(Clone, Debug, PartialEq)]
@@ -535,6 +545,15 @@ pub trait Technique {
     /// cluster's members. None: nothing beyond the light's own fields.
     fn light_details(&self, _index: usize) -> Option<LightDetails> {
         None
+    }
+    /// The points of the last frame's overlays that have a hover tooltip (beyond the lights, which every
+    /// technique has through [`Self::light_details`]); empty: none.
+    fn hover_points(&self) -> Vec<HoverPoint> {
+        Vec::new()
+    }
+    /// The tooltip of hover point `index` of `layer` (as [`Self::hover_points`] gave it): lines of text.
+    fn hover_details(&self, _layer: &str, _index: usize) -> Vec<String> {
+        Vec::new()
     }
     /// True when this frame's shading passes read the renderer's tile lists of the visible lights
     /// ([`FrameContext::light_tiles`]); asked after `prepare`, so the renderer builds them only then.
