@@ -824,6 +824,38 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
 }
 
 #[test]
+fn every_explain_step_of_every_technique_draws_without_a_panic() {
+    // A glyph egui's fonts lack (an arrow, say) in a step's text panics the app when the step is chosen.
+    let mut h = start("explain-all", "cornell");
+    h.state_mut().indirect.vpl.count = 16;
+    let mut clicked = 0;
+    let mut click_all = |h: &mut Harness<'static, ShadowLabApp>, titles: Vec<&'static str>| {
+        h.state_mut().layout.focus(Pane::Explain);
+        h.run_steps(1);
+        for title in titles {
+            h.get_by_label(title).click();
+            h.run_steps(1);
+            clicked += 1;
+        }
+    };
+    for entry in shadowlab_core::technique::REGISTRY {
+        h.state_mut().technique = entry.key.to_string();
+        h.run_steps(1);
+        let steps = h.state_mut().gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
+        click_all(&mut h, steps.iter().map(|s| s.title).collect());
+    }
+    h.state_mut().technique = "unshadowed".into();
+    for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
+        h.state_mut().indirect.technique = Some(entry.key.to_string());
+        h.run_steps(1);
+        let t = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
+        let titles: Vec<&'static str> = t.borrow().explain().iter().map(|s| s.title).collect();
+        click_all(&mut h, titles);
+    }
+    assert!(clicked >= 20, "{clicked} steps");
+}
+
+#[test]
 fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     let mut h = start("explain", "cornell");
     h.state_mut().technique = "lightcluster".into();
@@ -842,10 +874,24 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     h.get_by_label("4. One cube map per cluster").click();
     h.run_steps(2);
     assert!(h.state().layout.is_on_screen(Pane::Maps));
+    // The visibility step draws one cluster's visibility alone; the next step restores the parameter.
+    use shadowlab_core::technique::ParamValue;
+    let visibility_of =
+        |h: &Harness<'static, ShadowLabApp>| h.state().params["lightcluster"].get("visibility_of").cloned();
+    h.get_by_label("5. Soft visibility per cluster").click();
+    h.run_steps(2);
+    assert_eq!(visibility_of(&h), Some(ParamValue::Int(0)));
+    h.get_by_label("6. Final image").click();
+    h.run_steps(2);
+    assert_eq!(visibility_of(&h), Some(ParamValue::Int(-1)), "back to every cluster");
     // INSM: the mesh step shows the wireframe and the dropped edges.
     h.state_mut().technique = "insm".into();
     h.state_mut().layout.focus(Pane::Explain);
     h.run_steps(3);
+    h.get_by_label("2. Intermediate depth images").click();
+    h.run_steps(2);
+    let images = shadowlab::gui::inspector::MapSource { indirect: false, set: 1 };
+    assert!(h.state().layout.is_on_screen(Pane::Maps) && h.state().inspector.source == images);
     h.get_by_label("3. Their meshes").click();
     h.run_steps(2);
     assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));

@@ -259,6 +259,9 @@ pub struct ShadowLabApp {
     pub inspector: inspector::Inspector,
     /// The Explain panel's chosen step: (technique key, step index).
     pub explain_step: Option<(String, usize)>,
+    /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
+    /// that does not set them is chosen.
+    explain_saved: BTreeMap<(String, String), shadowlab_core::technique::ParamValue>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -320,6 +323,7 @@ impl ShadowLabApp {
             orbit_frames: 36,
             inspector: inspector::Inspector::default(),
             explain_step: None,
+            explain_saved: BTreeMap::new(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -765,15 +769,57 @@ impl ShadowLabApp {
         (out, legends)
     }
 
-    /// Show what an Explain step shows: its overlay layers on, the technique's others off, and the shadow-map
-    /// panel in front when the step is about the shadow maps.
-    pub fn show_explain_step(&mut self, step: &shadowlab_core::technique::ExplainStep) {
+    /// Show what step `index` of technique `key`'s Explain `steps` shows: its overlay layers on, the
+    /// technique's others off; the shadow-map panel in front with the step's maps when it is about them; the
+    /// parameter values it sets, and the values from before for parameters that only other steps set.
+    pub fn show_explain_step(&mut self, key: &str, steps: &[shadowlab_core::technique::ExplainStep], index: usize) {
+        let Some(step) = steps.get(index) else { return };
         for (name, _) in self.overlay_layers() {
             let on = step.layers.contains(&name.as_str());
             self.view.overlays.insert(name, on);
         }
+        let indirect = key != self.technique;
         if step.shows_shadow_maps {
+            self.inspector.source = inspector::MapSource { indirect, set: step.maps };
             self.layout.request_focus(layout::Pane::Maps);
+        }
+        let named: std::collections::BTreeSet<&str> =
+            steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
+        if named.is_empty() {
+            return;
+        }
+        let Some(gpu) = &mut self.gpu else { return };
+        let specs = if indirect {
+            gpu.main.indirect_technique(key).map(|t| t.borrow().params())
+        } else {
+            gpu.main.technique(key).map(|t| t.params())
+        };
+        let Ok(specs) = specs else { return };
+        let mut errors = Vec::new();
+        for name in named {
+            let Some(spec) = specs.iter().find(|p| p.key == name) else { continue };
+            let saved = (key.to_string(), name.to_string());
+            let value = match step.params.iter().find(|(k, _)| *k == name) {
+                Some((_, text)) => match spec.kind.parse(name, text) {
+                    Ok(v) => {
+                        self.explain_saved.entry(saved).or_insert_with(|| spec.value.clone());
+                        v
+                    }
+                    Err(e) => {
+                        errors.push(e.to_string());
+                        continue;
+                    }
+                },
+                None => match self.explain_saved.remove(&saved) {
+                    Some(v) => v,
+                    None => continue,
+                },
+            };
+            let params = if indirect { &mut self.indirect.params } else { &mut self.params };
+            params.entry(key.to_string()).or_default().insert(name.to_string(), value);
+        }
+        for e in errors {
+            self.error(e);
         }
     }
 

@@ -923,7 +923,7 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
         if let Some(i) = chosen {
-            app.show_explain_step(&steps[i]);
+            app.show_explain_step(&key, &steps, i);
             app.explain_step = Some((key.clone(), i));
         }
         if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {

@@ -457,13 +457,18 @@ pub struct HoverPoint {
 }
 
 /// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
-/// overlay layers to switch on (the technique's others are switched off) and whether its shadow maps show it.
-#[derive(Clone, Debug, PartialEq)]
+/// overlay layers to switch on (the technique's others are switched off), whether its maps show it (and which:
+/// `maps` 0 is [`Technique::shadow_atlas`], `i` ≥ 1 the i-th of [`Technique::depth_images`]), and parameter
+/// values that make the image show the step (e.g. one cluster's visibility alone), as text the parameter's kind
+/// parses; the app sets them while the step is chosen and restores the user's values for the other steps.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ExplainStep {
     pub title: &'static str,
     pub text: &'static str,
     pub layers: &'static [&'static str],
     pub shows_shadow_maps: bool,
+    pub maps: usize,
+    pub params: &'static [(&'static str, &'static str)],
 }
 
 /// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.

@@ -601,6 +601,7 @@ impl Technique for FuzzyClustering {
                     "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
                 layers: &["vpls (flux)", "vpls (flux, every n-th)"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. VPL clusters",
@@ -608,6 +609,7 @@ impl Technique for FuzzyClustering {
                        degrees apart); each becomes one light at its representative with its members' flux.",
                 layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3-4. Shading-point clusters",
@@ -615,6 +617,7 @@ impl Technique for FuzzyClustering {
                        iterations), then every pixel assigned to its F nearest clusters.",
                 layers: &["shading-point clusters", "shading-point centroids"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "5. Visibility between representatives",
@@ -626,6 +629,7 @@ impl Technique for FuzzyClustering {
                     "vpl cluster representatives",
                 ],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "6. Weighted visibility",
@@ -633,6 +637,7 @@ impl Technique for FuzzyClustering {
                        clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
                 layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
     }

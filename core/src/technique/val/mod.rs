@@ -576,6 +576,7 @@ impl Technique for VirtualAreaLights {
                 text: "The lights' reflective shadow maps leave virtual point lights on the surfaces they light.",
                 layers: &["vpls by val"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. Clustering into VALs",
@@ -583,12 +584,14 @@ impl Technique for VirtualAreaLights {
                        VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle.",
                 layers: &["vpls by val", "val rectangles", "val normals", "val centres"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3. A paraboloid map per VAL",
                 text: "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps).",
                 layers: &["val centres", "val normals"],
                 shows_shadow_maps: true,
+                ..Default::default()
             },
             ExplainStep {
                 title: "4-5. Soft visibility and shading",
@@ -597,6 +600,7 @@ impl Technique for VirtualAreaLights {
                        with its VAL's visibility; set 'Show one VAL' to see one VAL's contribution alone.",
                 layers: &[],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
     }
