@@ -1316,13 +1316,19 @@ fn sequence(args: SequenceArgs) -> Result<()> {
         }
         progress.update(i + 1, frames);
     }
-    if let Some(g) = &args.gif {
-        crate::sequence::write_gif(g, &images, args.frame_ms)?;
-    }
+    let gif_secs = match &args.gif {
+        Some(g) => {
+            let start = Instant::now();
+            crate::sequence::write_gif(g, &images, args.frame_ms)?;
+            Some(start.elapsed().as_secs_f32())
+        }
+        None => None,
+    };
     if !f.quiet {
         eprintln!("wrote {frames} frames in {}", args.out_dir.display());
-        if let Some(g) = &args.gif {
-            eprintln!("wrote {}", g.display());
+        if let (Some(g), Some(secs)) = (&args.gif, gif_secs) {
+            let kib = std::fs::metadata(g).map(|m| m.len() / 1024).unwrap_or(0);
+            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {secs:.2} s)", g.display());
         }
     }
     Ok(())
