@@ -15,6 +15,11 @@ struct Batch {
     samples: u32,
     // 0: PCF, 1: PCSS
     pcss: u32,
+    // the one cluster whose visibility alone is drawn (grey), or 0xffffffff: every cluster shaded
+    only_cluster: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct Cluster {
@@ -193,6 +198,10 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     for (var j = span.start; j < span.end; j++) {
         let index = tile_item(span, j);
         let c = index - batch.first_cluster;
+        let only = batch.only_cluster != 0xffffffffu;
+        if only && index != batch.only_cluster {
+            continue;
+        }
         let cluster = clusters[index];
         // Pixels beyond C_att get nothing from the cluster (paper 3.2.2).
         if distance(s.position, cluster.position) > cluster.c_att {
@@ -203,7 +212,8 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
             unshadowed += shade_light(s, lights[cluster.first_light + i]);
         }
         if any(unshadowed > vec3<f32>(0.0)) {
-            sum += unshadowed * cluster_visibility(s, cluster, c);
+            let visibility = cluster_visibility(s, cluster, c);
+            sum += select(unshadowed * visibility, vec3<f32>(visibility), only);
         }
     }
     return vec4<f32>(sum, 0.0);

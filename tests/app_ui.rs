@@ -10,6 +10,7 @@ use egui_kittest::Harness;
 use shadowlab::gui::gizmo::{self, Projection};
 use shadowlab::gui::layout::Pane;
 use shadowlab::gui::{ShadowLabApp, Startup};
+use shadowlab::sequence::Motion;
 
 fn data_dir(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/app").join(name);
@@ -671,7 +672,7 @@ fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
 }
 
 #[test]
-fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
+fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs() {
     use shadowlab::figure::{figure_size, GAP, TITLE_HEIGHT};
     use shadowlab_core::technique::ParamValue;
     let mut h = start("figure", "cornell");
@@ -700,17 +701,34 @@ fn figure_export_writes_three_captioned_panes_and_an_orbit_its_frames() {
     assert!(t != r, "LightCluster differs from the reference: {t:?} {r:?}");
     assert!(d[2] > d[0] && d[0] < 100.0, "the difference is mostly dark blue: {d:?}");
     assert!(t.iter().all(|c| *c < 250.0), "the panes are not the white background: {t:?}");
-    // An orbit of 3 frames: 3 PNGs at the render size, not all the same.
-    let frames = h.state_mut().save_orbit_sequence(3).unwrap();
-    assert_eq!(frames.len(), 3);
-    let images: Vec<_> = frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    // An orbit of 3 frames: 3 PNGs at the render size, not all the same, and a GIF of the 3.
+    let orbit = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
+    assert_eq!(orbit.frames.len(), 3);
+    let images: Vec<_> = orbit.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
     assert!(images.iter().all(|i| i.dimensions() == (w, hgt)));
     assert!(images[0] != images[1], "the camera moved between frames");
-    assert!(h.state_mut().save_orbit_sequence(0).is_err(), "no frames is an error, not a panic");
+    let gif = gif_frames(&orbit.gif);
+    assert_eq!(gif.len(), 3, "one GIF frame per PNG");
+    assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
+    assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
+    // The light animation: an error while it is off, then one period in 2 frames that differ.
+    assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
+    h.state_mut().animation = shadowlab::gui::Animation::Bob;
+    let lights = h.state_mut().save_sequence(Motion::Lights, 2).unwrap();
+    let images: Vec<_> = lights.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    assert!(images[0] != images[1], "the lights moved between frames");
+    assert_eq!(gif_frames(&lights.gif).len(), 2);
+    assert!(lights.gif.parent() != orbit.gif.parent(), "each sequence in a folder of its own");
+}
+
+fn gif_frames(path: &std::path::Path) -> Vec<image::Frame> {
+    use image::AnimationDecoder;
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    image::codecs::gif::GifDecoder::new(file).unwrap().into_frames().collect_frames().unwrap()
 }
 
 #[test]
-fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
+fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_selected_light() {
     let mut h = start("inspector-maps", "cornell");
     h.state_mut().layout.focus(Pane::Maps);
     h.run_steps(3);
@@ -726,6 +744,115 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_and_reads_its_texels() {
     let centre = cross.readout(2 * atlas.resolution - atlas.resolution / 2, atlas.resolution * 3 / 2).unwrap();
     assert!(centre.contains("cube 0 face +z") && centre.contains("depth "), "{centre}");
     h.get_by_label_contains("tiles of 256² texels");
+    // Selecting a light shows its cube map; the centre of its +y face sees the ceiling (the room's inside is
+    // y in [0, 2]) straight above the light, and reads the distance to it.
+    let lights = h.state().lights.clone();
+    let (index, light) = lights
+        .iter()
+        .enumerate()
+        .rfind(|(_, l)| 2.0 - l.position.y < 0.9 * l.range)
+        .expect("a light whose range reaches the ceiling");
+    h.state_mut().selected = Some(index);
+    h.run_steps(2);
+    let app = h.state();
+    let cube = app.inspector.cube.expect("a cube map is shown");
+    let atlas = app.inspector.atlas.as_ref().unwrap();
+    assert_eq!(atlas.cube_at(light.position, 1e-4), Some(cube), "the selected light's cube map is shown");
+    assert_eq!(app.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
+    let r = atlas.resolution;
+    let cross = app.inspector.shown.as_ref().unwrap();
+    let (x, y) = (r + r / 2, r / 2);
+    let readout = cross.readout(x, y).unwrap();
+    assert!(readout.contains(&format!("cube {cube} face +y")), "{readout}");
+    let distance = cross.distance(x, y).expect("the ceiling is within the light's range");
+    let expected = 2.0 - light.position.y;
+    assert!((distance - expected).abs() < 2e-3 * expected.max(1.0), "read {distance}, the ceiling is {expected} above");
+    assert!(readout.contains(&format!("distance {distance:.3}")), "{readout}");
+    // Linearised grey: the same texels drawn by distance.
+    h.get_by_label("linearised grey").click();
+    h.run_steps(2);
+    assert!(h.state().inspector.linear && h.state().inspector.shown.is_some());
+}
+
+#[test]
+fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps() {
+    use shadowlab::gui::inspector::MapSource;
+    let mut h = start("inspector-insm", "cornell");
+    h.state_mut().technique = "insm".into();
+    h.state_mut().layout.focus(Pane::Maps);
+    h.run_steps(4);
+    let images = MapSource { indirect: false, set: 1 };
+    let sources = h.state().inspector.sources.clone();
+    assert!(
+        sources.iter().any(|(s, l)| *s == images && l.contains("intermediate depth images")),
+        "INSM offers its intermediate images: {sources:?}"
+    );
+    assert!(sources.iter().any(|(s, l)| *s == MapSource::DIRECT && l.contains("shadow maps")), "{sources:?}");
+    h.state_mut().inspector.source = images;
+    h.run_steps(3);
+    let viewpoints = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let app = h.state();
+    let atlas = app.inspector.atlas.as_ref().expect("the intermediate images were read back");
+    assert_eq!(atlas.cubes(), 0, "views, not cube maps");
+    // Each viewpoint's image is a tile seen from that viewpoint, its texels read as distances from it.
+    let eyes: Vec<glam::Vec3> = atlas.projections.iter().flatten().map(|p| p.eye()).collect();
+    assert_eq!(eyes.len(), viewpoints.len(), "one image per viewpoint");
+    for v in &viewpoints {
+        assert!(eyes.iter().any(|e| e.distance(v.position) < 1e-3), "no image from {:?}: {eyes:?}", v.position);
+    }
+    let shown = app.inspector.shown.as_ref().expect("the whole atlas is shown");
+    let r = atlas.resolution;
+    let readout = shown.readout(r / 2, r / 2).unwrap();
+    let distance = shown.distance(r / 2, r / 2).expect("the first viewpoint sees the room");
+    // Inside the 2 m room every surface is less than its diagonal (3.5 m) away, from a viewpoint at most ~2 m outside.
+    assert!(readout.contains("tile 0 · view") && distance > 0.05 && distance < 6.0, "{readout}");
+    // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
+    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().inspector.source = MapSource::DIRECT;
+    h.run_steps(4);
+    let atlas = h.state().inspector.atlas.as_ref().expect("LightCluster's cube maps");
+    assert!(atlas.cubes() > 0 && atlas.what.contains("per cluster"), "{}", atlas.what);
+    h.state_mut().selected = Some(5);
+    h.run_steps(2);
+    let note = h.state().inspector.note.clone().unwrap_or_default();
+    assert!(note.starts_with("light 5: cube "), "{note}");
+    // The cube shown is rendered from a member of light 5's cluster (its center).
+    let group = h.state_mut().light_details(5).expect("LightCluster knows light 5's cluster").group;
+    let app = h.state();
+    let (atlas, cube) = (app.inspector.atlas.as_ref().unwrap(), app.inspector.cube.unwrap());
+    assert!(group.iter().any(|&m| atlas.cube_at(app.lights[m].position, 1e-4) == Some(cube)), "{group:?}");
+}
+
+#[test]
+fn every_explain_step_of_every_technique_draws_without_a_panic() {
+    // A glyph egui's fonts lack (an arrow, say) in a step's text panics the app when the step is chosen.
+    let mut h = start("explain-all", "cornell");
+    h.state_mut().indirect.vpl.count = 16;
+    let mut clicked = 0;
+    let mut click_all = |h: &mut Harness<'static, ShadowLabApp>, titles: Vec<&'static str>| {
+        h.state_mut().layout.focus(Pane::Explain);
+        h.run_steps(1);
+        for title in titles {
+            h.get_by_label(title).click();
+            h.run_steps(1);
+            clicked += 1;
+        }
+    };
+    for entry in shadowlab_core::technique::REGISTRY {
+        h.state_mut().technique = entry.key.to_string();
+        h.run_steps(1);
+        let steps = h.state_mut().gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
+        click_all(&mut h, steps.iter().map(|s| s.title).collect());
+    }
+    h.state_mut().technique = "unshadowed".into();
+    for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
+        h.state_mut().indirect.technique = Some(entry.key.to_string());
+        h.run_steps(1);
+        let t = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
+        let titles: Vec<&'static str> = t.borrow().explain().iter().map(|s| s.title).collect();
+        click_all(&mut h, titles);
+    }
+    assert!(clicked >= 20, "{clicked} steps");
 }
 
 #[test]
@@ -747,10 +874,24 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     h.get_by_label("4. One cube map per cluster").click();
     h.run_steps(2);
     assert!(h.state().layout.is_on_screen(Pane::Maps));
+    // The visibility step draws one cluster's visibility alone; the next step restores the parameter.
+    use shadowlab_core::technique::ParamValue;
+    let visibility_of =
+        |h: &Harness<'static, ShadowLabApp>| h.state().params["lightcluster"].get("visibility_of").cloned();
+    h.get_by_label("5. Soft visibility per cluster").click();
+    h.run_steps(2);
+    assert_eq!(visibility_of(&h), Some(ParamValue::Int(0)));
+    h.get_by_label("6. Final image").click();
+    h.run_steps(2);
+    assert_eq!(visibility_of(&h), Some(ParamValue::Int(-1)), "back to every cluster");
     // INSM: the mesh step shows the wireframe and the dropped edges.
     h.state_mut().technique = "insm".into();
     h.state_mut().layout.focus(Pane::Explain);
     h.run_steps(3);
+    h.get_by_label("2. Intermediate depth images").click();
+    h.run_steps(2);
+    let images = shadowlab::gui::inspector::MapSource { indirect: false, set: 1 };
+    assert!(h.state().layout.is_on_screen(Pane::Maps) && h.state().inspector.source == images);
     h.get_by_label("3. Their meshes").click();
     h.run_steps(2);
     assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));
@@ -777,6 +918,46 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     assert!(lines.len() == 3 && lines[0].contains(&format!("of {}", cameras.len())), "{lines:?}");
     assert!(lines[2].starts_with("looking at"), "{lines:?}");
     assert!(h.state_mut().camera_tooltip(&p, egui::pos2(-100.0, -100.0)).is_empty());
+}
+
+/// Where a hover point of `layer` of the indirect technique `key` is on screen, inside the view, with its index.
+fn indirect_point_on_screen(h: &mut Harness<'static, ShadowLabApp>, key: &str, layer: &str) -> (egui::Pos2, usize) {
+    let p = projection(h);
+    let rect = h.state().last_viewport_rect.unwrap().shrink(20.0);
+    let technique = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
+    let points = technique.borrow().hover_points();
+    points
+        .iter()
+        .filter(|q| q.layer == layer)
+        .find_map(|q| p.to_screen(q.position).filter(|s| rect.contains(*s)).map(|s| (s, q.index)))
+        .unwrap_or_else(|| panic!("no point of '{layer}' on screen"))
+}
+
+#[test]
+fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
+    let mut h = start("overlay-tooltips", "cornell");
+    h.state_mut().technique = "unshadowed".into();
+    h.state_mut().indirect.vpl.count = 64;
+    h.state_mut().indirect.technique = Some("val".into());
+    h.run_steps(6);
+    let p = projection(&h);
+    // A VAL's centre: its number, VPL count, rectangle.
+    let (at, k) = indirect_point_on_screen(&mut h, "val", "val centres");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VAL {k} (")) && lines[1].contains("VPLs"), "{lines:?}");
+    // With the centres hidden, a VPL: its light and its VAL; with its layer hidden too, nothing.
+    h.state_mut().view.overlays.insert("val centres".into(), false);
+    let (at, i) = indirect_point_on_screen(&mut h, "val", "vpls by val");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VPL {i} of ")) && lines.last().unwrap().starts_with("in VAL "), "{lines:?}");
+    h.state_mut().view.overlays.insert("vpls by val".into(), false);
+    assert!(h.state_mut().overlay_tooltip(&p, at).is_empty(), "a hidden layer has no tooltips");
+    // Fuzzy clustering: a VPL cluster's representative.
+    h.state_mut().indirect.technique = Some("fuzzy".into());
+    h.run_steps(6);
+    let (at, k) = indirect_point_on_screen(&mut h, "fuzzy", "vpl cluster representatives");
+    let lines = h.state_mut().overlay_tooltip(&p, at);
+    assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
 }
 
 #[test]

@@ -593,6 +593,57 @@ fn animate_measures_frame_to_frame_change_and_figures() {
 }
 
 #[test]
+fn sequence_writes_an_orbits_pngs_and_a_gif_of_them() {
+    use image::AnimationDecoder;
+    let dir = out_dir("sequence");
+    let frames_dir = dir.join("orbit");
+    let gif = dir.join("orbit.gif");
+    let _ = std::fs::remove_dir_all(&frames_dir);
+    let _ = std::fs::remove_file(&gif);
+    let size = ["--width", "40", "--height", "30", "--shadow-res", "32"];
+    let mut args = vec!["sequence", "--quiet", "--scene", "cornell", "--frames", "4", "--frame-ms", "120"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--out-dir", frames_dir.to_str().unwrap(), "--gif", gif.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let pngs: Vec<image::RgbaImage> =
+        (0..4).map(|i| image::open(frames_dir.join(format!("frame-{i:04}.png"))).unwrap().to_rgba8()).collect();
+    assert!(!frames_dir.join("frame-0004.png").exists(), "exactly four frames");
+    assert!(pngs.iter().all(|p| p.dimensions() == (40, 30)));
+    assert!(pngs[0] != pngs[1] && pngs[1] != pngs[2], "the camera moved between frames");
+    let file = std::io::BufReader::new(std::fs::File::open(&gif).unwrap());
+    let decoded = image::codecs::gif::GifDecoder::new(file).unwrap().into_frames().collect_frames().unwrap();
+    assert_eq!(decoded.len(), 4, "one GIF frame per PNG");
+    for (g, p) in decoded.iter().zip(&pngs) {
+        assert_eq!(g.buffer().dimensions(), (40, 30));
+        assert_eq!(g.delay().numer_denom_ms(), (120, 1));
+        // The GIF frame is the PNG frame through a 256-colour palette.
+        let diff: f64 = g
+            .buffer()
+            .pixels()
+            .zip(p.pixels())
+            .map(|(a, b)| (0..3).map(|c| (a[c] as f64 - b[c] as f64).abs()).sum::<f64>())
+            .sum::<f64>()
+            / (40.0 * 30.0 * 3.0);
+        assert!(diff < 6.0, "mean difference {diff} between the GIF frame and its PNG");
+    }
+    // The lights moving instead: frames differ, the camera stays.
+    let lights_dir = dir.join("lights");
+    let mut args = vec!["sequence", "--quiet", "--scene", "cornell", "--frames", "2", "--motion", "lights"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--step", "0.3,0,0", "--out-dir", lights_dir.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let a = image::open(lights_dir.join("frame-0000.png")).unwrap();
+    let b = image::open(lights_dir.join("frame-0001.png")).unwrap();
+    assert!(a != b, "the lights moved");
+    let no_dir = ["--out-dir", "/tmp/shadowlab-seq"];
+    assert_fails_with(&[&["sequence", "--frames", "0"][..], &no_dir].concat(), "--frames 0");
+    assert_fails_with(&[&["sequence", "--gif", "x.png"][..], &no_dir].concat(), "must end in .gif");
+    assert_fails_with(&[&["sequence", "--motion", "lights", "--step", "1"][..], &no_dir].concat(), "--step '1'");
+}
+
+#[test]
 fn maps_out_saves_the_shadow_atlases() {
     let dir = out_dir("maps");
     let maps = dir.join("maps.png");

@@ -69,6 +69,38 @@ pub enum Command {
     /// Move the lights in small steps over a number of frames and measure the flicker: the mean
     /// frame-to-frame change of the chosen component (and the technique's figures per frame); CSV rows.
     Animate(AnimateArgs),
+    /// Render an image sequence, every frame complete: the camera orbiting its target once, or the lights
+    /// moving by a step a frame; numbered PNGs in a folder and, with `--gif`, one looping animated GIF.
+    Sequence(SequenceArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SequenceArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    #[arg(long, default_value = "reference")]
+    pub technique: String,
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// Frames of the sequence.
+    #[arg(long, default_value_t = 36)]
+    pub frames: u32,
+    #[arg(long, value_enum, default_value = "orbit")]
+    pub motion: crate::sequence::Motion,
+    /// With `--motion lights`: the move of every light per frame, `DX,DY,DZ` in world units.
+    #[arg(long, value_name = "DX,DY,DZ", default_value = "0.02,0,0")]
+    pub step: String,
+    /// Folder for `frame-0000.png`, `frame-0001.png`, ... (created when missing).
+    #[arg(long)]
+    pub out_dir: PathBuf,
+    /// Also write the frames as one looping animated GIF.
+    #[arg(long)]
+    pub gif: Option<PathBuf>,
+    /// How long the GIF shows each frame, in milliseconds (GIF counts hundredths of a second).
+    #[arg(long, default_value_t = 80)]
+    pub frame_ms: u32,
 }
 
 #[derive(Args, Debug)]
@@ -333,6 +365,7 @@ pub fn run(command: Command) -> Result<()> {
         Command::Bench(args) => bench(args),
         Command::Info(args) => info(args),
         Command::Animate(args) => animate(args),
+        Command::Sequence(args) => sequence(args),
     }
 }
 
@@ -1239,22 +1272,87 @@ fn sweep(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// `--step DX,DY,DZ`.
+fn parse_step(text: &str) -> Result<Vec3> {
+    let step: Vec<f32> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow!("--step '{text}': expected DX,DY,DZ"))?;
+    match step.as_slice() {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(*x, *y, *z)),
+        _ => bail!("--step '{text}': expected three finite numbers DX,DY,DZ"),
+    }
+}
+
+fn sequence(args: SequenceArgs) -> Result<()> {
+    let frames = args.frames as usize;
+    crate::sequence::check_frames(frames).map_err(|e| anyhow!("--frames {frames}: {e}"))?;
+    if let Some(g) = &args.gif {
+        check_output_path(g, "gif")?;
+    }
+    check_technique(&args.technique)?;
+    let step = parse_step(&args.step)?;
+    if args.out_dir.exists() && !args.out_dir.is_dir() {
+        bail!("--out-dir {}: not a folder", args.out_dir.display());
+    }
+    let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let f = &args.frame;
+    let mut technique =
+        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
+    apply_params(technique.as_mut(), f.shadow_res, &args.params)?;
+    crate::measure::apply_indirect(&mut renderer, &f.indirect_choice())?;
+    std::fs::create_dir_all(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    let target = match &f.camera {
+        Some(text) => parse_vec3s(text)?.1,
+        None => crate::sequence::orbit_target(&camera, &scene.bounds),
+    };
+    let mut images = Vec::with_capacity(if args.gif.is_some() { frames } else { 0 });
+    let mut progress = Progress::new(&format!("sequence {}", args.technique), f.quiet).with_unit("frame");
+    for i in 0..frames {
+        let (camera, moved) = match args.motion {
+            crate::sequence::Motion::Orbit => {
+                let angle = std::f32::consts::TAU * i as f32 / frames as f32;
+                (crate::sequence::orbit_camera(&camera, target, angle), lights.clone())
+            }
+            crate::sequence::Motion::Lights => {
+                let moved = lights.iter().map(|l| PointLight { position: l.position + step * i as f32, ..*l });
+                (camera, moved.collect())
+            }
+        };
+        renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
+        let image = renderer.read_output()?;
+        write_atomic(&crate::sequence::frame_path(&args.out_dir, i), &encode_png(&image)?)?;
+        if args.gif.is_some() {
+            images.push(image);
+        }
+        progress.update(i + 1, frames);
+    }
+    let gif_secs = match &args.gif {
+        Some(g) => {
+            let start = Instant::now();
+            crate::sequence::write_gif(g, &images, args.frame_ms)?;
+            Some(start.elapsed().as_secs_f32())
+        }
+        None => None,
+    };
+    if !f.quiet {
+        eprintln!("wrote {frames} frames in {}", args.out_dir.display());
+        if let (Some(g), Some(secs)) = (&args.gif, gif_secs) {
+            let kib = std::fs::metadata(g).map(|m| m.len() / 1024).unwrap_or(0);
+            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {secs:.2} s)", g.display());
+        }
+    }
+    Ok(())
+}
+
 fn animate(args: AnimateArgs) -> Result<()> {
     check_output_path(&args.out, "csv")?;
     check_technique(&args.technique)?;
     if args.frames < 2 || args.frames > 1000 {
         bail!("--frames {}: between 2 and 1000", args.frames);
     }
-    let step: Vec<f32> = args
-        .step
-        .split(',')
-        .map(|x| x.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| anyhow!("--step '{}': expected DX,DY,DZ", args.step))?;
-    let step = match step.as_slice() {
-        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Vec3::new(*x, *y, *z),
-        _ => bail!("--step '{}': expected three finite numbers DX,DY,DZ", args.step),
-    };
+    let step = parse_step(&args.step)?;
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
     let mut technique =

@@ -5,3 +5,4 @@ pub mod figure;
 pub mod gui;
 pub mod measure;
 pub mod plot;
+pub mod sequence;

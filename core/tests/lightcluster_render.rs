@@ -137,6 +137,33 @@ fn clustering_reduces_shadow_maps_and_softens_shadows_with_a_bounded_error() {
 }
 
 #[test]
+fn visibility_of_one_cluster_draws_its_visibility_alone_in_grey() {
+    // Three clusters over a plate with an occluder: cluster 0's visibility, then no cluster's (the ambient term).
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let base = [("d_init", ParamValue::Float(0.5)), ("filter", ParamValue::Choice("pcf".into()))];
+    let with = |k: i64| [base[0].clone(), base[1].clone(), ("visibility_of", ParamValue::Int(k))];
+    let (one, report) = render(&scene, &lights, "lightcluster", &with(0));
+    assert_eq!(report.counts.technique.clusters, Some(3));
+    let (ambient, _) = render(&scene, &lights, "lightcluster", &with(1000));
+    let (all, _) = render(&scene, &lights, "lightcluster", &base);
+    let mut lit = 0;
+    let mut penumbra = 0;
+    for (p, a) in one.iter().zip(&ambient) {
+        let v = [p[0] - a[0], p[1] - a[1], p[2] - a[2]];
+        // Grey (white lights on a grey plate would be grey anyway: the check is that it is in [0, 1]).
+        assert!(v.iter().all(|c| (-1e-3..=1.0 + 1e-3).contains(c)), "a visibility, not radiance: {v:?}");
+        assert!((v[0] - v[1]).abs() < 1e-3 && (v[1] - v[2]).abs() < 1e-3, "grey: {v:?}");
+        lit += usize::from(v[0] > 0.99);
+        penumbra += usize::from(v[0] > 0.05 && v[0] < 0.95);
+    }
+    let n = one.len();
+    assert!(lit > n / 20, "cluster 0 lights part of the plate: {lit} of {n}");
+    assert!(penumbra > 0, "and the occluder's soft shadow (PCF over the disc light d_min) has a penumbra");
+    assert!(one != all, "not the shaded image");
+}
+
+#[test]
 fn zero_and_out_of_view_lights_give_no_clusters() {
     let scene = plane_and_occluder();
     let (img, report) = render(&scene, &[], "lightcluster", &[]);

@@ -1,7 +1,8 @@
 //! Captures beyond screenshots: a paper-style figure (the technique, its comparison target and their
-//! difference side by side, with technique, parameters and metrics as captions) and an image sequence of an
-//! orbit around the camera's target. Both render every image completely, now, in a renderer of their own on the
-//! view's device at the view's render resolution (the window waits: seconds on a software rasterizer).
+//! difference side by side, with technique, parameters and metrics as captions) and image sequences (an orbit
+//! around the camera's target, or one period of the light animation) as PNGs and a GIF. Both render every
+//! image completely, now, in a renderer of their own on the view's device at the view's render resolution (the
+//! window waits: seconds on a software rasterizer).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -14,6 +15,7 @@ use super::camera::CameraMode;
 use super::{technique_pair, ShadowLabApp};
 use crate::figure::{self, FigurePane};
 use crate::measure::{self, DiffKind, IndirectChoice};
+use crate::sequence::{self, Motion};
 
 fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
     params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
@@ -129,25 +131,42 @@ impl ShadowLabApp {
         Ok(path)
     }
 
-    /// Render `frames` images of a full orbit (yaw steps of 360°/frames around the orbit target, the current
-    /// technique fully converged in each) into a new folder next to the screenshots. Returns the files.
-    pub fn save_orbit_sequence(&mut self, frames: usize) -> Result<Vec<PathBuf>> {
-        if !(1..=3600).contains(&frames) {
-            return Err(anyhow!("an orbit has 1 to 3600 frames, not {frames}"));
-        }
-        let lights = self.animated_lights();
+    /// Render `frames` images, each complete, into a new folder next to the screenshots, and a looping GIF of
+    /// them (`sequence.gif` in the same folder): a full orbit (yaw steps of 360°/frames around the orbit
+    /// target, 80 ms a frame), or one period of the light animation (played in real time).
+    pub fn save_sequence(&mut self, motion: Motion, frames: usize) -> Result<SavedSequence> {
+        sequence::check_frames(frames)?;
+        let period_secs = match motion {
+            Motion::Orbit => None,
+            Motion::Lights => Some(
+                self.animation
+                    .period_secs()
+                    .ok_or_else(|| anyhow!("the light animation is off: choose one in the Lights panel"))?,
+            ),
+        };
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
         let params = param_strings(self.params.get(&self.technique));
-        let name = self.screenshot_name("orbit");
+        let name = self.screenshot_name(match motion {
+            Motion::Orbit => "orbit",
+            Motion::Lights => "lights",
+        });
         let dir = name.with_extension("");
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let mut orbit = self.camera.clone();
         orbit.set_mode(CameraMode::Orbit);
         let start_yaw = orbit.yaw;
         let mut paths = Vec::with_capacity(frames);
+        let mut images = Vec::with_capacity(frames);
         for i in 0..frames {
-            orbit.yaw = start_yaw + std::f32::consts::TAU * i as f32 / frames as f32;
+            let share = i as f32 / frames as f32;
+            let lights = match period_secs {
+                Some(p) => self.lights_at(self.animation_time + p * share),
+                None => {
+                    orbit.yaw = start_yaw + std::f32::consts::TAU * share;
+                    self.animated_lights()
+                }
+            };
             let camera = orbit.camera();
             measure::render_technique(
                 &mut renderer,
@@ -161,10 +180,22 @@ impl ShadowLabApp {
                 1,
                 &mut |_| {},
             )?;
-            let path = dir.join(format!("frame-{i:04}.png"));
-            renderer.read_output()?.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+            let path = sequence::frame_path(&dir, i);
+            let image = renderer.read_output()?;
+            image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
             paths.push(path);
+            images.push(image);
         }
-        Ok(paths)
+        let frame_ms = period_secs.map_or(80, |p| (p * 1000.0 / frames as f32).round() as u32);
+        let gif = dir.join("sequence.gif");
+        sequence::write_gif(&gif, &images, frame_ms)?;
+        Ok(SavedSequence { frames: paths, gif })
     }
+}
+
+/// An image sequence the app saved.
+pub struct SavedSequence {
+    pub frames: Vec<PathBuf>,
+    /// The frames as one looping animated GIF.
+    pub gif: PathBuf,
 }

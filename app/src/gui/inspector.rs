@@ -1,23 +1,31 @@
-//! The shadow-map inspector: the depth atlas the current technique (or the indirect technique) rendered in its
-//! last step ([`Technique::shadow_atlas`]), read back once per completed frame while the panel is on screen, as
-//! grey (near white, far dark, empty black); the whole atlas, or one cube map unfolded as a cross (faces
-//! +x −x +y −y +z −z as the atlas stores them, each as rendered). Scroll to zoom, drag to pan; under the pointer
-//! the tile, its cube and face, and the stored depth.
-//!
-//! Not yet: world distances in the readout (the atlas does not say which light a tile belongs to, nor its near
-//! and far planes), linearised grey, INSM's intermediate maps, and selecting a light's map from the view.
+//! The shadow-map inspector: a depth atlas the current technique (or the indirect technique) rendered in its
+//! last frame, read back once per completed frame while the panel is on screen: its shadow maps
+//! ([`Technique::shadow_atlas`]: the last batch of cube maps, VAL or VPL paraboloid maps) or another set of
+//! depth images it declares ([`Technique::depth_images`]: INSM's intermediate images). Shown as grey (near
+//! white, far dark, empty black), by stored depth or linearised (by world distance); the whole atlas, or one
+//! cube map unfolded as a cross (faces +x −x +y −y +z −z as the atlas stores them, each as rendered). Scroll to
+//! zoom, drag to pan; under the pointer the tile, its cube and face, the stored depth and the world distance
+//! from the map's light (or camera) to what the texel saw, from the tile's projection the atlas records
+//! ([`TileProjection`]). Selecting a light in the view shows its cube map (or its cluster's).
 //!
 //! [`Technique::shadow_atlas`]: shadowlab_core::technique::Technique::shadow_atlas
+//! [`Technique::depth_images`]: shadowlab_core::technique::Technique::depth_images
 
 use eframe::egui;
-use shadowlab_core::renderer::cube_shadows::CubeAtlas;
+use glam::Vec3;
+use shadowlab_core::renderer::cube_shadows::{CubeAtlas, TileProjection};
 use shadowlab_core::GpuContext;
 
-/// Which technique's maps are shown.
+/// Which maps are shown: the direct or the indirect technique's, its shadow maps (`set` 0) or its depth
+/// image set `set - 1` ([`Technique::depth_images`](shadowlab_core::technique::Technique::depth_images)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MapSource {
-    Direct,
-    Indirect,
+pub struct MapSource {
+    pub indirect: bool,
+    pub set: usize,
+}
+
+impl MapSource {
+    pub const DIRECT: MapSource = MapSource { indirect: false, set: 0 };
 }
 
 /// A read-back depth atlas.
@@ -29,6 +37,10 @@ pub struct AtlasDepths {
     pub tiles_per_row: u32,
     pub tiles: usize,
     pub what: &'static str,
+    /// Per tile, how it was rendered (None: not this frame).
+    pub projections: Vec<Option<TileProjection>>,
+    /// Cube maps at the start of the atlas: groups of six perspective tiles seen from one point.
+    cube_count: usize,
 }
 
 impl AtlasDepths {
@@ -36,15 +48,47 @@ impl AtlasDepths {
         let size = atlas.texture.size();
         let bytes = shadowlab_core::renderer::readback::read_texture(gpu, &atlas.texture, size.width, size.height, 4)?;
         let depths = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
-        Ok(AtlasDepths {
+        Ok(AtlasDepths::new(
             depths,
-            width: size.width,
-            height: size.height,
-            resolution: atlas.resolution.max(1),
-            tiles_per_row: atlas.tiles_per_row.max(1),
-            tiles: atlas.tiles,
+            (size.width, size.height),
+            atlas.resolution,
+            atlas.tiles_per_row,
+            atlas.projections.clone(),
             what,
-        })
+        ))
+    }
+
+    pub fn new(
+        depths: Vec<f32>,
+        (width, height): (u32, u32),
+        resolution: u32,
+        tiles_per_row: u32,
+        mut projections: Vec<Option<TileProjection>>,
+        what: &'static str,
+    ) -> AtlasDepths {
+        let (resolution, tiles_per_row) = (resolution.max(1), tiles_per_row.max(1));
+        let tiles = ((width / resolution) * (height / resolution)) as usize;
+        projections.resize(tiles, None);
+        let eyes: Vec<Option<Vec3>> = projections
+            .iter()
+            .map(|p| p.filter(|p| matches!(p, TileProjection::Perspective { .. })).map(|p| p.eye()))
+            .collect();
+        let cube_count = eyes
+            .chunks_exact(6)
+            .take_while(|faces| {
+                let first = faces[0];
+                first.is_some_and(|e| {
+                    faces.iter().all(|f| f.is_some_and(|f| f.distance(e) <= 1e-3 * (1.0 + e.length())))
+                })
+            })
+            .count();
+        AtlasDepths { depths, width, height, resolution, tiles_per_row, tiles, what, projections, cube_count }
+    }
+
+    /// The cube map whose centre is within `tolerance_world` of `position` (a light's), if the atlas has one.
+    pub fn cube_at(&self, position: Vec3, tolerance_world: f32) -> Option<usize> {
+        (0..self.cube_count)
+            .find(|&c| self.projections[c * 6].is_some_and(|p| p.eye().distance(position) <= tolerance_world))
     }
 
     /// The depth at atlas texel (x, y).
@@ -58,14 +102,10 @@ impl AtlasDepths {
         ((t % self.tiles_per_row) * self.resolution + u, (t / self.tiles_per_row) * self.resolution + v)
     }
 
-    /// Cube maps in the atlas; 0 for paraboloid atlases (VPLs, VALs), whose tiles are single maps. The trait
-    /// describes an atlas only in words, so this goes by its description.
+    /// Cube maps in the atlas (groups of six perspective tiles seen from one point: not paraboloid maps, nor
+    /// INSM's views).
     pub fn cubes(&self) -> usize {
-        if self.what.contains("cube") {
-            self.tiles / 6
-        } else {
-            0
-        }
+        self.cube_count
     }
 }
 
@@ -74,17 +114,22 @@ const CROSS: [(u32, u32); 6] = [(2, 1), (0, 1), (1, 0), (1, 2), (1, 1), (3, 1)];
 const FACES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
 /// What the inspector shows: an image of depths (NaN where nothing is, outside the cross) and, per pixel, the
-/// tile it came from.
+/// tile it came from (tiles are `resolution`-aligned in both layouts, so a pixel's texel in its tile is its
+/// position modulo `resolution`).
 pub struct Shown {
     pub width: u32,
     pub height: u32,
     pub depths: Vec<f32>,
     pub tiles: Vec<u32>,
+    resolution: u32,
+    cubes: usize,
+    projections: Vec<Option<TileProjection>>,
 }
 
 impl Shown {
     /// The whole atlas, or cube `cube` unfolded as a cross (4 x 3 tiles).
     pub fn new(atlas: &AtlasDepths, cube: Option<usize>) -> Shown {
+        let (resolution, cubes, projections) = (atlas.resolution, atlas.cubes(), atlas.projections.clone());
         match cube.filter(|&c| c < atlas.cubes()) {
             None => {
                 let tiles = (0..atlas.height)
@@ -93,7 +138,8 @@ impl Shown {
                             .map(move |x| (y / atlas.resolution) * atlas.tiles_per_row + x / atlas.resolution)
                     })
                     .collect();
-                Shown { width: atlas.width, height: atlas.height, depths: atlas.depths.clone(), tiles }
+                let (width, height, depths) = (atlas.width, atlas.height, atlas.depths.clone());
+                Shown { width, height, depths, tiles, resolution, cubes, projections }
             }
             Some(c) => {
                 let r = atlas.resolution;
@@ -111,34 +157,75 @@ impl Shown {
                         }
                     }
                 }
-                Shown { width: w, height: h, depths, tiles }
+                Shown { width: w, height: h, depths, tiles, resolution, cubes, projections }
             }
         }
     }
 
-    /// Grey: the drawn depths stretched from white (nearest) to dark grey (farthest); empty texels (depth 1)
-    /// black, outside the cross a dark blue.
-    pub fn image(&self) -> egui::ColorImage {
-        let drawn = self.depths.iter().copied().filter(|d| *d < 1.0);
+    /// The world distance from the map's eye (light, camera) to what pixel `i` shows; None where the tile's
+    /// projection is not known or the texel is empty.
+    fn distance_at(
+        &self,
+        i: usize,
+        reader: Option<&shadowlab_core::renderer::cube_shadows::DistanceReader>,
+    ) -> Option<f32> {
+        let (x, y) = (i as u32 % self.width, i as u32 / self.width);
+        reader?.distance(x % self.resolution, y % self.resolution, self.depths[i])
+    }
+
+    /// The world distance at pixel (x, y) (see [`Self::distance_at`]).
+    pub fn distance(&self, x: u32, y: u32) -> Option<f32> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let i = (y * self.width + x) as usize;
+        let projection = self.projections.get(self.tiles[i] as usize).copied().flatten()?;
+        self.distance_at(i, Some(&projection.reader(self.resolution)))
+    }
+
+    /// Per pixel, the world distance (NaN where there is none).
+    fn distances(&self) -> Vec<f32> {
+        let readers: Vec<_> = self.projections.iter().map(|p| p.map(|p| p.reader(self.resolution))).collect();
+        (0..self.depths.len())
+            .map(|i| {
+                let reader = readers.get(self.tiles[i] as usize).and_then(|r| r.as_ref());
+                self.distance_at(i, reader).unwrap_or(f32::NAN)
+            })
+            .collect()
+    }
+
+    /// Grey: the drawn texels stretched from white (nearest) to dark grey (farthest), by stored depth or, with
+    /// `linear`, by world distance (hardware depth crowds everything but the nearest texels near 1: linearised,
+    /// equal steps of grey are equal steps of distance); empty texels (depth 1) black, outside the cross a dark
+    /// blue. Texels whose distance is unknown (a tile not rendered this frame) are drawn by depth.
+    pub fn image(&self, linear: bool) -> egui::ColorImage {
+        let values = if linear {
+            self.distances()
+        } else {
+            self.depths.iter().map(|&d| if d < 1.0 { d } else { f32::NAN }).collect()
+        };
+        let drawn = values.iter().copied().filter(|v| v.is_finite());
         let (lo, hi) = drawn.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
         let span = (hi - lo).max(1e-6);
         let pixels = self
             .depths
             .iter()
-            .map(|&d| {
+            .zip(&values)
+            .map(|(&d, &v)| {
                 if d.is_nan() {
                     egui::Color32::from_rgb(20, 24, 40)
                 } else if d >= 1.0 {
                     egui::Color32::BLACK
                 } else {
-                    egui::Color32::from_gray((255.0 * (1.0 - 0.85 * (d - lo) / span)) as u8)
+                    let t = if v.is_finite() { (v - lo) / span } else { d };
+                    egui::Color32::from_gray((255.0 * (1.0 - 0.85 * t.clamp(0.0, 1.0))) as u8)
                 }
             })
             .collect();
         egui::ColorImage::new([self.width as usize, self.height as usize], pixels)
     }
 
-    /// The readout of texel (x, y): tile, cube, face, stored depth.
+    /// The readout of texel (x, y): tile, cube and face (of a cube map), stored depth, world distance.
     pub fn readout(&self, x: u32, y: u32) -> Option<String> {
         if x >= self.width || y >= self.height {
             return None;
@@ -149,12 +236,43 @@ impl Shown {
             return None;
         }
         let depth = if d >= 1.0 { "empty (1.0)".to_string() } else { format!("{d:.5}") };
-        Some(format!(
-            "texel ({x}, {y}) · tile {tile} · cube {} face {} · depth {depth}",
-            tile / 6,
-            FACES[(tile % 6) as usize]
-        ))
+        let map = if (tile as usize) < self.cubes * 6 {
+            format!("cube {} face {}", tile / 6, FACES[(tile % 6) as usize])
+        } else {
+            match self.projections.get(tile as usize).copied().flatten() {
+                Some(TileProjection::Paraboloid { .. }) => "paraboloid map".to_string(),
+                Some(TileProjection::Perspective { .. }) => "view".to_string(),
+                None => "not rendered this frame".to_string(),
+            }
+        };
+        let distance = match self.distance(x, y) {
+            Some(dist) => format!(" · distance {dist:.3}"),
+            None => String::new(),
+        };
+        Some(format!("texel ({x}, {y}) · tile {tile} · {map} · depth {depth}{distance}"))
     }
+}
+
+/// An image no larger than `max_side` on either side (the GPU's texture limit; a large atlas exceeds it):
+/// shrunk by a whole factor, each pixel the brightest of its block, so thin near geometry stays visible. The
+/// readout still reads the full-resolution depths.
+pub fn fit_texture(image: egui::ColorImage, max_side: usize) -> egui::ColorImage {
+    let [w, h] = image.size;
+    let factor = w.max(h).div_ceil(max_side.max(1));
+    if factor <= 1 {
+        return image;
+    }
+    let (sw, sh) = (w.div_ceil(factor), h.div_ceil(factor));
+    let brightness = |c: egui::Color32| c.r() as u32 + c.g() as u32 + c.b() as u32;
+    let pixels = (0..sh)
+        .flat_map(|y| (0..sw).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let block = (y * factor..((y + 1) * factor).min(h))
+                .flat_map(|py| (x * factor..((x + 1) * factor).min(w)).map(move |px| py * w + px));
+            block.map(|i| image.pixels[i]).max_by_key(|c| brightness(*c)).unwrap_or_default()
+        })
+        .collect();
+    egui::ColorImage::new([sw, sh], pixels)
 }
 
 /// The panel's state.
@@ -173,12 +291,21 @@ pub struct Inspector {
     pub error: Option<String>,
     /// The readout of the texel under the pointer in the last frame.
     pub readout: Option<String>,
+    /// Grey by world distance instead of stored depth.
+    pub linear: bool,
+    /// The selected light and the read the cube was last chosen for, so a new selection (or a new frame's
+    /// atlas) shows the selected light's cube once, and the user may choose another afterwards.
+    pub followed: Option<(usize, (u64, MapSource))>,
+    /// What following the selected light found (its cube, or why none).
+    pub note: Option<String>,
+    /// The map sets the techniques offered in the last UI frame, with their labels.
+    pub sources: Vec<(MapSource, String)>,
 }
 
 impl Default for Inspector {
     fn default() -> Self {
         Inspector {
-            source: MapSource::Direct,
+            source: MapSource::DIRECT,
             cube: Some(0),
             atlas: None,
             shown: None,
@@ -188,6 +315,10 @@ impl Default for Inspector {
             offset: egui::Vec2::ZERO,
             error: None,
             readout: None,
+            linear: false,
+            followed: None,
+            note: None,
+            sources: Vec::new(),
         }
     }
 }
@@ -210,23 +341,52 @@ impl Inspector {
         }
     }
 
+    /// Show the cube map of light `light`, found among `positions` (the light's, then its group's: a cluster's
+    /// cube map is rendered from one of its members), once per selection and read atlas.
+    pub fn follow_light(&mut self, light: usize, positions: &[Vec3]) {
+        let Some(read) = self.read_from else { return };
+        if self.followed == Some((light, read)) {
+            return;
+        }
+        let Some(atlas) = &self.atlas else { return };
+        if atlas.cubes() == 0 {
+            return;
+        }
+        self.followed = Some((light, read));
+        match positions.iter().find_map(|p| atlas.cube_at(*p, 1e-4 * (1.0 + p.length()))) {
+            Some(c) => {
+                self.note = Some(format!("light {light}: cube {c}"));
+                if self.cube != Some(c) {
+                    self.cube = Some(c);
+                    self.shown = None;
+                    self.zoom = 1.0;
+                    self.offset = egui::Vec2::ZERO;
+                }
+            }
+            None => self.note = Some(format!("light {light} has no cube map in the last batch")),
+        }
+    }
+
     fn refresh(&mut self, ctx: &egui::Context) {
         if self.shown.is_none() {
             if let Some(a) = &self.atlas {
                 let shown = Shown::new(a, self.cube);
-                self.texture = Some(ctx.load_texture("shadow map", shown.image(), egui::TextureOptions::NEAREST));
+                let image = fit_texture(shown.image(self.linear), ctx.input(|i| i.max_texture_side));
+                self.texture = Some(ctx.load_texture("shadow map", image, egui::TextureOptions::NEAREST));
                 self.shown = Some(shown);
             }
         }
     }
 
-    /// The panel's controls and image.
-    pub fn ui(&mut self, ui: &mut egui::Ui, has_indirect: bool) {
-        ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.source, MapSource::Direct, "direct technique");
-            ui.add_enabled_ui(has_indirect, |ui| {
-                ui.selectable_value(&mut self.source, MapSource::Indirect, "indirect")
-            });
+    /// The panel's controls and image; `sources` are the map sets the techniques offer this frame.
+    pub fn ui(&mut self, ui: &mut egui::Ui, sources: Vec<(MapSource, String)>) {
+        self.sources = sources;
+        let sources = &self.sources;
+        let current = sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none");
+        egui::ComboBox::from_label("maps").selected_text(current).show_ui(ui, |ui| {
+            for (source, label) in sources {
+                ui.selectable_value(&mut self.source, *source, label);
+            }
         });
         if let Some(e) = &self.error {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
@@ -253,6 +413,17 @@ impl Inspector {
         if cubes == 0 && cube.is_some() {
             cube = None;
         }
+        ui.horizontal(|ui| {
+            let linear = ui
+                .checkbox(&mut self.linear, "linearised grey")
+                .on_hover_text("Grey by world distance from the light (or camera), not by stored depth");
+            if linear.changed() {
+                self.shown = None;
+            }
+            if let Some(note) = &self.note {
+                ui.label(note);
+            }
+        });
         if cube != self.cube {
             self.cube = cube;
             self.shown = None;
@@ -302,23 +473,28 @@ impl Inspector {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use shadowlab_core::math::CUBE_FACES;
 
     #[test]
     fn a_cube_unfolds_into_a_cross_of_its_six_tiles() {
         // Two cubes of 2x2 tiles, 4 tiles per row: each texel's depth encodes its tile.
-        let (r, per_row, tiles) = (2u32, 4u32, 12usize);
+        let (r, per_row) = (2u32, 4u32);
         let (w, h) = (r * per_row, r * 3);
-        let depths = (0..h).flat_map(|y| (0..w).map(move |x| ((y / r) * per_row + x / r) as f32 / 100.0)).collect();
-        let atlas = AtlasDepths {
-            depths,
-            width: w,
-            height: h,
-            resolution: r,
-            tiles_per_row: per_row,
-            tiles,
-            what: "cube maps",
+        let depths: Vec<f32> =
+            (0..h).flat_map(|y| (0..w).map(move |x| ((y / r) * per_row + x / r) as f32 / 100.0)).collect();
+        let cube_faces = |at: Vec3| {
+            CUBE_FACES
+                .iter()
+                .map(move |f| Some(TileProjection::Perspective { clip_from_world: f.clip_from_world(at, 0.1, 5.0) }))
         };
+        let (a, b) = (Vec3::new(1.0, 2.0, 3.0), Vec3::new(-1.0, 0.5, 0.0));
+        let projections: Vec<_> = cube_faces(a).chain(cube_faces(b)).collect();
+        let atlas = AtlasDepths::new(depths.clone(), (w, h), r, per_row, projections, "cube maps");
         assert_eq!(atlas.cubes(), 2);
+        assert_eq!(
+            (atlas.cube_at(b, 1e-4), atlas.cube_at(a, 1e-4), atlas.cube_at(Vec3::ZERO, 1e-4)),
+            (Some(1), Some(0), None)
+        );
         let cross = Shown::new(&atlas, Some(1));
         assert_eq!((cross.width, cross.height), (4 * r, 3 * r));
         // +y (tile 8) on top in the second column, -z (tile 11) at the right end of the middle row.
@@ -326,13 +502,67 @@ mod tests {
         assert_eq!(cross.tiles[((r + 1) * cross.width + 3 * r) as usize], 11);
         assert!(cross.depths[0].is_nan(), "outside the cross");
         assert!(cross.readout(0, 0).is_none());
-        assert!(cross.readout(3 * r, r).unwrap().contains("cube 1 face -z"));
-        let paraboloids = AtlasDepths { what: "paraboloid maps", depths: atlas.depths.clone(), ..atlas };
-        assert_eq!(paraboloids.cubes(), 0);
-        assert_eq!(Shown::new(&paraboloids, Some(1)).width, w, "no cross of paraboloid maps: the whole atlas");
-        let atlas = paraboloids;
+        let readout = cross.readout(3 * r, r).unwrap();
+        assert!(readout.contains("cube 1 face -z") && readout.contains("distance "), "{readout}");
+        // Paraboloid maps are no cubes: no cross, the whole atlas; their distance is linear in depth.
+        let paraboloids = vec![Some(TileProjection::Paraboloid { centre: a, near: 0.0, far: 10.0 }); 12];
+        let atlas = AtlasDepths::new(depths.clone(), (w, h), r, per_row, paraboloids, "paraboloid maps");
+        assert_eq!(atlas.cubes(), 0);
+        let whole = Shown::new(&atlas, Some(1));
+        assert_eq!((whole.width, whole.height), (w, h), "no cross of paraboloid maps: the whole atlas");
+        assert_eq!(whole.image(false).size, [w as usize, h as usize]);
+        let readout = whole.readout(3 * r, r).unwrap();
+        // Tile 7 (second row, fourth column) stores depth 0.07: 0.7 of the 10 from its centre.
+        assert!(readout.contains("tile 7 · paraboloid map") && readout.contains("distance 0.700"), "{readout}");
+        // Tiles without a projection (not rendered this frame) have no distance.
+        let unknown = AtlasDepths::new(depths, (w, h), r, per_row, Vec::new(), "images");
+        assert!(!Shown::new(&unknown, None).readout(0, 0).unwrap().contains("distance"));
+    }
+
+    #[test]
+    fn an_image_over_the_texture_limit_is_shrunk_keeping_its_bright_texels() {
+        let (w, h) = (10usize, 5usize);
+        let mut pixels = vec![egui::Color32::BLACK; w * h];
+        pixels[3 * w + 7] = egui::Color32::WHITE;
+        let image = egui::ColorImage::new([w, h], pixels);
+        assert_eq!(fit_texture(image.clone(), 10).size, [10, 5], "within the limit: unchanged");
+        let small = fit_texture(image, 4);
+        assert_eq!(small.size, [4, 2], "shrunk by 3, rounded up");
+        assert_eq!(small.pixels[4 + 2], egui::Color32::WHITE, "the white texel's block stays white");
+        assert_eq!(small.pixels.iter().filter(|c| **c == egui::Color32::WHITE).count(), 1);
+    }
+
+    #[test]
+    fn linearised_grey_steps_evenly_with_distance_and_depth_grey_does_not() {
+        // One cube face; texels along its centre row at distances 1, 2, 3, 4 from the light.
+        let r = 4u32;
+        let face = CUBE_FACES[0];
+        let clip_from_world = face.clip_from_world(Vec3::ZERO, 0.1, 10.0);
+        // The depth the face stores at texel (u, 1) for a point at distance `d` along the texel's ray.
+        let world_from_clip = clip_from_world.inverse();
+        let depth_at = |u: u32, d: f32| {
+            let ndc = glam::Vec2::new((u as f32 + 0.5) / r as f32 * 2.0 - 1.0, 1.0 - 1.5 / r as f32 * 2.0);
+            let on_ray = world_from_clip.project_point3(ndc.extend(0.5));
+            let c = clip_from_world * (on_ray.normalize() * d).extend(1.0);
+            c.z / c.w
+        };
+        let mut depths = vec![1.0; (r * r * 6) as usize];
+        for (u, d) in [1.0, 2.0, 3.0, 4.0].into_iter().enumerate() {
+            depths[(r * 6) as usize + u] = depth_at(u as u32, d);
+        }
+        let projections = vec![Some(TileProjection::Perspective { clip_from_world }); 6];
+        let atlas = AtlasDepths::new(depths, (r * 6, r), r, 6, projections, "cube maps");
         let whole = Shown::new(&atlas, None);
-        assert_eq!((whole.width, whole.height), (w, h));
-        assert_eq!(whole.image().size, [w as usize, h as usize]);
+        let grey = |img: &egui::ColorImage, u: usize| img.pixels[r as usize * 6 + u].r() as i32;
+        let (linear, by_depth) = (whole.image(true), whole.image(false));
+        let steps = |img: &egui::ColorImage| {
+            [grey(img, 0) - grey(img, 1), grey(img, 1) - grey(img, 2), grey(img, 2) - grey(img, 3)]
+        };
+        let l = steps(&linear);
+        assert!(l.iter().all(|s| (s - l[0]).abs() <= 1 && *s > 50), "linear steps {l:?}");
+        let d = steps(&by_depth);
+        assert!(d[0] > 2 * d[2], "hardware depth crowds the far texels: {d:?}");
+        let dist = whole.distance(1, 1).unwrap();
+        assert!((dist - 2.0).abs() < 1e-3, "texel (1, 1) sees a point 2 from the light, not {dist}");
     }
 }

@@ -152,6 +152,20 @@ pub enum Animation {
     Bob,
 }
 
+impl Animation {
+    const ORBIT_RAD_PER_SEC: f32 = 0.8;
+    const BOB_RAD_PER_SEC: f32 = 1.5;
+
+    /// Seconds after which every light is back where it started (none when off).
+    pub fn period_secs(self) -> Option<f32> {
+        match self {
+            Animation::Off => None,
+            Animation::Orbit => Some(std::f32::consts::TAU / Self::ORBIT_RAD_PER_SEC),
+            Animation::Bob => Some(std::f32::consts::TAU / Self::BOB_RAD_PER_SEC),
+        }
+    }
+}
+
 /// GPU state, created from eframe's render state.
 /// The difference view's image and metrics, for one pair of converged frames.
 pub struct Difference {
@@ -269,6 +283,9 @@ pub struct ShadowLabApp {
     relaunch_on_device_loss: bool,
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
+    /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
+    /// that does not set them is chosen.
+    explain_saved: BTreeMap<(String, String), shadowlab_core::technique::ParamValue>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -333,6 +350,7 @@ impl ShadowLabApp {
             uncaptured_errors: Default::default(),
             relaunch_on_device_loss: startup.relaunch_on_device_loss,
             recovery: None,
+            explain_saved: BTreeMap::new(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -705,7 +723,12 @@ impl ShadowLabApp {
 
     /// Lights as rendered this frame (animated when animation is on).
     pub fn animated_lights(&self) -> Vec<PointLight> {
-        let t = self.animation_time;
+        self.lights_at(self.animation_time)
+    }
+
+    /// Lights at time `t_secs` of the light animation (as they are when it is off).
+    pub fn lights_at(&self, t_secs: f32) -> Vec<PointLight> {
+        let t = t_secs;
         match self.animation {
             Animation::Off => self.lights.clone(),
             Animation::Orbit => self
@@ -714,7 +737,7 @@ impl ShadowLabApp {
                 .enumerate()
                 .map(|(i, l)| {
                     let r = (l.range * 0.1).min(1.0);
-                    let a = t * 0.8 + i as f32 * 0.7;
+                    let a = t * Animation::ORBIT_RAD_PER_SEC + i as f32 * 0.7;
                     PointLight { position: l.position + Vec3::new(a.cos() * r, 0.0, a.sin() * r), ..*l }
                 })
                 .collect(),
@@ -724,7 +747,10 @@ impl ShadowLabApp {
                 .enumerate()
                 .map(|(i, l)| {
                     let h = (l.range * 0.05).min(0.5);
-                    PointLight { position: l.position + Vec3::Y * (t * 1.5 + i as f32).sin() * h, ..*l }
+                    PointLight {
+                        position: l.position + Vec3::Y * (t * Animation::BOB_RAD_PER_SEC + i as f32).sin() * h,
+                        ..*l
+                    }
                 })
                 .collect(),
         }
@@ -853,46 +879,136 @@ impl ShadowLabApp {
         (out, legends)
     }
 
-    /// Show what an Explain step shows: its overlay layers on, the technique's others off, and the shadow-map
-    /// panel in front when the step is about the shadow maps.
-    pub fn show_explain_step(&mut self, step: &shadowlab_core::technique::ExplainStep) {
+    /// Show what step `index` of technique `key`'s Explain `steps` shows: its overlay layers on, the
+    /// technique's others off; the shadow-map panel in front with the step's maps when it is about them; the
+    /// parameter values it sets, and the values from before for parameters that only other steps set.
+    pub fn show_explain_step(&mut self, key: &str, steps: &[shadowlab_core::technique::ExplainStep], index: usize) {
+        let Some(step) = steps.get(index) else { return };
         for (name, _) in self.overlay_layers() {
             let on = step.layers.contains(&name.as_str());
             self.view.overlays.insert(name, on);
         }
+        let indirect = key != self.technique;
         if step.shows_shadow_maps {
+            self.inspector.source = inspector::MapSource { indirect, set: step.maps };
             self.layout.request_focus(layout::Pane::Maps);
+        }
+        let named: std::collections::BTreeSet<&str> =
+            steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
+        if named.is_empty() {
+            return;
+        }
+        let Some(gpu) = &mut self.gpu else { return };
+        let specs = if indirect {
+            gpu.main.indirect_technique(key).map(|t| t.borrow().params())
+        } else {
+            gpu.main.technique(key).map(|t| t.params())
+        };
+        let Ok(specs) = specs else { return };
+        let mut errors = Vec::new();
+        for name in named {
+            let Some(spec) = specs.iter().find(|p| p.key == name) else { continue };
+            let saved = (key.to_string(), name.to_string());
+            let value = match step.params.iter().find(|(k, _)| *k == name) {
+                Some((_, text)) => match spec.kind.parse(name, text) {
+                    Ok(v) => {
+                        self.explain_saved.entry(saved).or_insert_with(|| spec.value.clone());
+                        v
+                    }
+                    Err(e) => {
+                        errors.push(e.to_string());
+                        continue;
+                    }
+                },
+                None => match self.explain_saved.remove(&saved) {
+                    Some(v) => v,
+                    None => continue,
+                },
+            };
+            let params = if indirect { &mut self.indirect.params } else { &mut self.params };
+            params.entry(key.to_string()).or_default().insert(name.to_string(), value);
+        }
+        for e in errors {
+            self.error(e);
         }
     }
 
-    /// The shadow-map inspector: reads the chosen technique's atlas back once per completed frame (not for the
-    /// preview while the camera moves), then shows it.
+    /// The shadow-map inspector: reads the chosen maps back once per completed frame (not for the preview while
+    /// the camera moves), then shows them; a selected light shows its cube map.
     pub fn maps_ui(&mut self, ui: &mut egui::Ui) {
         use inspector::{AtlasDepths, MapSource};
-        let has_indirect = self.indirect.technique.is_some();
-        if !has_indirect {
-            self.inspector.source = MapSource::Direct;
+        use shadowlab_core::technique::Technique;
+        // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
+        fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {
+            t.shadow_atlas().into_iter().chain(t.depth_images()).collect()
+        }
+        fn labelled(t: &dyn Technique, indirect: bool) -> Vec<(MapSource, String)> {
+            let shadow = usize::from(t.shadow_atlas().is_none());
+            let images = t.depth_images().into_iter().map(|(_, what)| what);
+            let names = t.shadow_atlas().map(|_| "shadow maps").into_iter().chain(images);
+            let who = if indirect { "indirect" } else { "direct" };
+            names
+                .enumerate()
+                .map(|(i, name)| (MapSource { indirect, set: i + shadow }, format!("{} ({who}): {name}", t.label())))
+                .collect()
         }
         let key = self.technique.clone();
+        let indirect_key = self.indirect.technique.clone();
+        let selected = self.selected;
+        let mut sources = Vec::new();
+        let mut follow: Option<(usize, Vec<Vec3>)> = None;
         if let Some(gpu) = &mut self.gpu {
+            if let Ok(t) = gpu.main.technique(&key) {
+                sources.extend(labelled(t.as_ref(), false));
+            }
+            if let Some(k) = &indirect_key {
+                if let Ok(t) = gpu.main.indirect_technique(k) {
+                    sources.extend(labelled(t.borrow().as_ref(), true));
+                }
+            }
+            if !sources.iter().any(|(s, _)| *s == self.inspector.source) {
+                self.inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
+            }
             let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
-            let from = (gpu.main.frame_key(), self.inspector.source);
+            let source = self.inspector.source;
+            let from = (gpu.main.frame_key(), source);
             if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
                 let ctx = gpu.ctx.clone();
-                let read = |t: &dyn shadowlab_core::technique::Technique| {
-                    t.shadow_atlas().map(|(a, what)| AtlasDepths::read(&ctx, a, what)).transpose()
+                // Set `set` 0 is the shadow atlas when there is one, so count from the technique's own list.
+                let read = |t: &dyn Technique| {
+                    let offset = usize::from(t.shadow_atlas().is_none());
+                    let all = sets(t);
+                    source
+                        .set
+                        .checked_sub(offset)
+                        .and_then(|i| all.get(i))
+                        .map(|(a, what)| AtlasDepths::read(&ctx, a, what))
+                        .transpose()
                 };
-                let result = match self.inspector.source {
-                    MapSource::Direct => gpu.main.technique(&key).and_then(|t| read(t.as_ref())),
-                    MapSource::Indirect => match self.indirect.technique.clone() {
-                        Some(k) => gpu.main.indirect_technique(&k).and_then(|t| read(t.borrow().as_ref())),
+                let result = if source.indirect {
+                    match &indirect_key {
+                        Some(k) => gpu.main.indirect_technique(k).and_then(|t| read(t.borrow().as_ref())),
                         None => Ok(None),
-                    },
+                    }
+                } else {
+                    gpu.main.technique(&key).and_then(|t| read(t.as_ref()))
                 };
                 self.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
             }
         }
-        self.inspector.ui(ui, has_indirect);
+        if let Some(i) = selected {
+            let lights = self.animated_lights();
+            if let Some(light) = lights.get(i) {
+                let mut positions = vec![light.position];
+                let group = self.light_details(i).map(|d| d.group).unwrap_or_default();
+                positions.extend(group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position));
+                follow = Some((i, positions));
+            }
+        }
+        if let Some((i, positions)) = follow {
+            self.inspector.follow_light(i, &positions);
+        }
+        self.inspector.ui(ui, sources);
     }
 
     /// What the current technique made of light `index` in its last frame (its cluster, say).
@@ -936,6 +1052,27 @@ impl ShadowLabApp {
             }
         }
         Vec::new()
+    }
+
+    /// The tooltip of what a visible overlay layer draws under `pos` (a VAL, a VPL, a cluster's
+    /// representative), from the direct or the indirect technique's hover points
+    /// ([`Technique::hover_points`](shadowlab_core::technique::Technique::hover_points)).
+    pub fn overlay_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
+        use shadowlab_core::technique::Technique;
+        let visible: Vec<String> = self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(n, _)| n).collect();
+        let indirect_key = self.indirect.technique.clone();
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let pick = |t: &dyn Technique| {
+            let points: Vec<_> =
+                t.hover_points().into_iter().filter(|p| visible.iter().any(|v| v == p.layer)).collect();
+            let i = gizmo::pick_point(projection, points.iter().map(|p| p.position), pos, 8.0)?;
+            Some(points[i]).map(|p| t.hover_details(p.layer, p.index)).filter(|lines| !lines.is_empty())
+        };
+        if let Some(lines) = gpu.main.technique(&self.technique).ok().and_then(|t| pick(t.as_ref())) {
+            return lines;
+        }
+        let indirect = indirect_key.and_then(|k| gpu.main.indirect_technique(&k).ok());
+        indirect.and_then(|t| pick(t.borrow().as_ref())).unwrap_or_default()
     }
 
     /// Names of the overlay layers the current technique offers, with their state.
@@ -1644,7 +1781,14 @@ impl ShadowLabApp {
             if let Some(pos) = response.hover_pos() {
                 let lines = match gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
                     Some(i) => self.light_tooltip(i),
-                    None => self.camera_tooltip(&projection, pos),
+                    None => {
+                        let camera = self.camera_tooltip(&projection, pos);
+                        if camera.is_empty() {
+                            self.overlay_tooltip(&projection, pos)
+                        } else {
+                            camera
+                        }
+                    }
                 };
                 if !lines.is_empty() {
                     response.clone().on_hover_ui_at_pointer(|ui| {

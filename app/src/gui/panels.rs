@@ -15,6 +15,7 @@ use super::camera::CameraMode;
 use super::document::{IndirectSettings, ViewMode};
 use super::layout::Pane;
 use super::{Animation, ShadowLabApp};
+use crate::sequence::Motion;
 
 pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     egui::Panel::top("menu").show(ui, |ui| {
@@ -82,22 +83,36 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     app.export_figure();
                     ui.close();
                 }
-                ui.horizontal(|ui| {
-                    if ui
-                        .button("Orbit image sequence")
-                        .on_hover_text("PNGs of a full orbit, each frame complete")
-                        .clicked()
-                    {
-                        match app.save_orbit_sequence(app.orbit_frames) {
-                            Ok(p) => {
-                                let dir = p.first().and_then(|f| f.parent()).map(|d| d.display().to_string());
-                                app.toast(format!("saved {} frames in {}", p.len(), dir.unwrap_or_default()));
-                            }
-                            Err(e) => app.error(format!("orbit sequence failed: {e:#}")),
+                let animated = app.animation.period_secs().is_some();
+                let sequences = [
+                    (
+                        Motion::Orbit,
+                        "Orbit sequence (PNGs + GIF)",
+                        "A full orbit around the target, each frame complete",
+                        true,
+                    ),
+                    (
+                        Motion::Lights,
+                        "Light animation sequence (PNGs + GIF)",
+                        "One period of the light animation (Lights panel), each frame complete",
+                        animated,
+                    ),
+                ];
+                for (motion, text, hover, enabled) in sequences {
+                    let button = ui
+                        .add_enabled(enabled, egui::Button::new(text))
+                        .on_hover_text(hover)
+                        .on_disabled_hover_text("Switch a light animation on in the Lights panel first");
+                    if button.clicked() {
+                        match app.save_sequence(motion, app.orbit_frames) {
+                            Ok(s) => app.toast(format!("saved {} frames and {}", s.frames.len(), s.gif.display())),
+                            Err(e) => app.error(format!("image sequence failed: {e:#}")),
                         }
                         ui.close();
                     }
-                    let label = ui.label("frames");
+                }
+                ui.horizontal(|ui| {
+                    let label = ui.label("frames per sequence");
                     ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720)).labelled_by(label.id);
                 });
             });
@@ -916,7 +931,7 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
         if let Some(i) = chosen {
-            app.show_explain_step(&steps[i]);
+            app.show_explain_step(&key, &steps, i);
             app.explain_step = Some((key.clone(), i));
         }
         if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {

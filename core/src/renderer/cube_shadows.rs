@@ -112,6 +112,98 @@ pub struct CubeAtlas {
     pub capacity: usize,
     /// Square tiles it holds (6 per cube map).
     pub tiles: usize,
+    /// How each tile was last rendered (None: not rendered since the atlas was cleared), so that its stored
+    /// depths can be read back as world distances (the app's shadow-map inspector).
+    pub projections: Vec<Option<TileProjection>>,
+}
+
+impl CubeAtlas {
+    /// Forget every tile's projection when a pass clears the atlas; then record `projections` from `first_tile`.
+    fn record_projections(
+        &mut self,
+        clear: bool,
+        first_tile: usize,
+        projections: impl Iterator<Item = TileProjection>,
+    ) {
+        if clear {
+            self.projections.clear();
+        }
+        self.projections.resize(self.tiles, None);
+        for (i, p) in projections.enumerate() {
+            if let Some(slot) = self.projections.get_mut(first_tile + i) {
+                *slot = Some(p);
+            }
+        }
+    }
+}
+
+/// How a tile of an atlas maps world points to stored depth, and back.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TileProjection {
+    /// A perspective view, `clip_from_world` (a cube map's face: 90°, near..far; INSM's intermediate images):
+    /// hardware depth (`cube_depth_to_distance` in cube_shadow.wgsl inverts it along a cube face's axis).
+    Perspective { clip_from_world: glam::Mat4 },
+    /// A paraboloid map (paraboloid_depth.wgsl): depth `(d - near) / (far - near)` of the distance d from `centre`.
+    Paraboloid { centre: Vec3, near: f32, far: f32 },
+}
+
+impl TileProjection {
+    /// The point the map looks from (a cube map's light, a view's camera, a paraboloid's centre).
+    pub fn eye(&self) -> Vec3 {
+        match *self {
+            // The eye is where clip x, y and w vanish: world_from_clip · (0, 0, 1, 0), dehomogenised.
+            TileProjection::Perspective { clip_from_world } => {
+                let e = clip_from_world.as_dmat4().inverse() * glam::DVec4::Z;
+                (e.truncate() / e.w).as_vec3()
+            }
+            TileProjection::Paraboloid { centre, .. } => centre,
+        }
+    }
+
+    /// The world distance from [`Self::eye`] to what texel (u, v) of a `resolution`-texel square tile saw,
+    /// given the depth stored there; None for an empty texel (depth 1: nothing within the far plane).
+    pub fn distance(&self, u: u32, v: u32, resolution: u32, depth: f32) -> Option<f32> {
+        self.reader(resolution).distance(u, v, depth)
+    }
+
+    /// [`Self::distance`] for many texels of one tile (the inverse matrix computed once).
+    pub fn reader(&self, resolution: u32) -> DistanceReader {
+        let world_from_clip = match *self {
+            TileProjection::Perspective { clip_from_world } => Some(clip_from_world.as_dmat4().inverse()),
+            TileProjection::Paraboloid { .. } => None,
+        };
+        let eye = world_from_clip.map(|m| {
+            let e = m * glam::DVec4::Z;
+            e.truncate() / e.w
+        });
+        DistanceReader { projection: *self, world_from_clip, eye, resolution: resolution.max(1) as f64 }
+    }
+}
+
+/// Reads one tile's depths as distances ([`TileProjection::reader`]).
+pub struct DistanceReader {
+    projection: TileProjection,
+    world_from_clip: Option<glam::DMat4>,
+    eye: Option<glam::DVec3>,
+    resolution: f64,
+}
+
+impl DistanceReader {
+    pub fn distance(&self, u: u32, v: u32, depth: f32) -> Option<f32> {
+        if !(0.0..1.0).contains(&depth) {
+            return None;
+        }
+        match (self.projection, self.world_from_clip, self.eye) {
+            (TileProjection::Paraboloid { near, far, .. }, _, _) => Some(near + depth * (far - near)),
+            (TileProjection::Perspective { .. }, Some(world_from_clip), Some(eye)) => {
+                let ndc_x = (u as f64 + 0.5) / self.resolution * 2.0 - 1.0;
+                let ndc_y = 1.0 - (v as f64 + 0.5) / self.resolution * 2.0;
+                let p = world_from_clip * glam::DVec4::new(ndc_x, ndc_y, depth as f64, 1.0);
+                Some((p.truncate() / p.w).distance(eye) as f32)
+            }
+            _ => None,
+        }
+    }
 }
 
 /// Triangles drawn and culled by one `render` call.
@@ -364,6 +456,10 @@ impl CubeShadowRenderer {
             .collect();
         let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&views));
+        let projections =
+            casters.iter().map(|c| TileProjection::Paraboloid { centre: c.centre, near: c.near, far: c.far });
+        // The paraboloid pass clears the atlas (`record(.., true)` below).
+        self.atlas.as_mut().expect("checked above").record_projections(true, first_tile, projections);
         self.ensure_masked(gpu, &geometry, true);
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
         let mut draws: Vec<TileDraw> = Vec::new();
@@ -453,7 +549,9 @@ impl CubeShadowRenderer {
         });
         let view = texture.create_view(&Default::default());
         let tiles = tiles as usize;
-        self.atlas = Some(CubeAtlas { texture, view, resolution, tiles_per_row, capacity: tiles / 6, tiles });
+        let projections = vec![None; tiles];
+        self.atlas =
+            Some(CubeAtlas { texture, view, resolution, tiles_per_row, capacity: tiles / 6, tiles, projections });
         true
     }
 
@@ -476,6 +574,8 @@ impl CubeShadowRenderer {
         let atlas = self.atlas.as_ref().expect("ensure_tiles before render_views");
         assert!(first_tile + views.len() <= atlas.tiles && first_tile + views.len() <= MAX_CUBES_PER_BATCH * 6);
         let matrices: Vec<MatrixUniform> = views.iter().map(|m| MatrixUniform::new(*m)).collect();
+        let projections = views.iter().map(|&clip_from_world| TileProjection::Perspective { clip_from_world });
+        self.atlas.as_mut().expect("checked above").record_projections(clear, first_tile, projections);
         let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&matrices));
         self.ensure_masked(gpu, &geometry, false);
@@ -526,11 +626,15 @@ impl CubeShadowRenderer {
         let cull = geometry.cull;
         let atlas = self.atlas.as_ref().expect("ensure_atlas before render");
         assert!(casters.len() <= atlas.capacity && casters.len() <= MAX_CUBES_PER_BATCH);
-        let matrices: Vec<MatrixUniform> = casters
+        let clip_from_world: Vec<glam::Mat4> = casters
             .iter()
-            .flat_map(|c| CUBE_FACES.iter().map(|f| MatrixUniform::new(f.clip_from_world(c.position, c.near, c.far))))
+            .flat_map(|c| CUBE_FACES.iter().map(|f| f.clip_from_world(c.position, c.near, c.far)))
             .collect();
+        let matrices: Vec<MatrixUniform> = clip_from_world.iter().map(|m| MatrixUniform::new(*m)).collect();
         gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
+        let projections =
+            clip_from_world.iter().map(|&clip_from_world| TileProjection::Perspective { clip_from_world });
+        self.atlas.as_mut().expect("checked above").record_projections(true, 0, projections);
 
         // Culling on the CPU, draw lists per face.
         let total_triangles = geometry.triangle_count;
@@ -658,4 +762,40 @@ fn in_front_of(b: &crate::scene::Aabb, p: Vec3, n: Vec3) -> bool {
     // The corner furthest along n.
     let corner = Vec3::select(n.cmpge(Vec3::ZERO), b.max, b.min);
     (corner - p).dot(n) > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Project a world point through a tile's projection into its texel and depth, as the depth pass does.
+    fn texel_and_depth(clip_from_world: glam::Mat4, p: Vec3, resolution: u32) -> (u32, u32, f32) {
+        let clip = clip_from_world * p.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        let u = ((ndc.x * 0.5 + 0.5) * resolution as f32) as u32;
+        let v = ((0.5 - ndc.y * 0.5) * resolution as f32) as u32;
+        (u, v, ndc.z)
+    }
+
+    #[test]
+    fn a_cube_faces_depth_reads_back_as_the_distance_from_the_light() {
+        let light = Vec3::new(0.3, 1.2, -0.4);
+        let (near, far, r) = (0.05, 6.0, 256);
+        // A point seen by each face, off the face's axis (the distance is radial, not along the axis).
+        for (fi, face) in CUBE_FACES.iter().enumerate() {
+            let right = face.forward.cross(face.up);
+            let p = light + face.forward * 2.5 + right * 0.9 - face.up * 0.6;
+            let m = face.clip_from_world(light, near, far);
+            let (u, v, depth) = texel_and_depth(m, p, r);
+            let projection = TileProjection::Perspective { clip_from_world: m };
+            let d = projection.distance(u, v, r, depth).unwrap();
+            // The texel's centre is up to half a texel off the point: 2.5 / 128 * 1.4 of the distance at most.
+            assert!((d - p.distance(light)).abs() < 0.02, "face {fi}: {d} vs {}", p.distance(light));
+            assert!(projection.eye().distance(light) < 1e-4, "face {fi}: eye {}", projection.eye());
+            assert_eq!(projection.distance(u, v, r, 1.0), None, "an empty texel has no distance");
+        }
+        let paraboloid = TileProjection::Paraboloid { centre: light, near: 0.1, far: 4.1 };
+        assert_eq!(paraboloid.distance(3, 4, r, 0.25), Some(1.1));
+        assert_eq!(paraboloid.eye(), light);
+    }
 }

@@ -244,14 +244,15 @@ pub fn vpl_overlays(set: &VplSet, scene_size: f32, path_light: u32) -> Vec<Overl
     };
     let thin = if stride > 1 { " (every n-th)" } else { "" };
     let name = |base: &'static str, thinned: &'static str| if thin.is_empty() { base } else { thinned };
+    let [by_flux, by_light] = vpl_layer_names(vpls.len());
     vec![
         OverlayLayer {
-            name: name("vpls (flux)", "vpls (flux, every n-th)"),
+            name: by_flux,
             visible_by_default: true,
             primitives: vpls.iter().step_by(stride).map(|v| disc(v, flux_color(v.flux))).collect(),
         },
         OverlayLayer {
-            name: name("vpls (by light)", "vpls (by light, every n-th)"),
+            name: by_light,
             visible_by_default: false,
             primitives: vpls
                 .iter()
@@ -283,6 +284,42 @@ pub fn vpl_overlays(set: &VplSet, scene_size: f32, path_light: u32) -> Vec<Overl
                 .collect(),
         },
     ]
+}
+
+/// The names of [`vpl_overlays`]' layers that draw each VPL (by flux, by light), for a set of `count` VPLs.
+fn vpl_layer_names(count: usize) -> [&'static str; 2] {
+    if count.div_ceil(OVERLAY_MAX_VPLS) > 1 {
+        ["vpls (flux, every n-th)", "vpls (by light, every n-th)"]
+    } else {
+        ["vpls (flux)", "vpls (by light)"]
+    }
+}
+
+/// The hover points of [`vpl_overlays`]: the VPLs its layers draw, indexed by VPL.
+pub fn vpl_hover_points(set: &VplSet) -> Vec<crate::technique::HoverPoint> {
+    let stride = set.vpls.len().div_ceil(OVERLAY_MAX_VPLS).max(1);
+    let layers = vpl_layer_names(set.vpls.len());
+    let points = set.vpls.iter().enumerate().step_by(stride);
+    points
+        .flat_map(|(index, v)| layers.map(|layer| crate::technique::HoverPoint { layer, position: v.position, index }))
+        .collect()
+}
+
+/// The tooltip of VPL `index` of the set: where its light came from, its flux and normal.
+pub fn vpl_details(set: &VplSet, index: usize) -> Vec<String> {
+    let Some(v) = set.vpls.get(index) else { return Vec::new() };
+    let f = v.flux;
+    vec![
+        format!("VPL {index} of {}", set.vpls.len()),
+        format!("from light {}", v.light),
+        format!("flux ({:.3}, {:.3}, {:.3})", f.x, f.y, f.z),
+        format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
+    ]
+}
+
+/// True for the names of [`vpl_overlays`]' layers that draw VPLs.
+pub fn is_vpl_layer(set: &VplSet, layer: &str) -> bool {
+    vpl_layer_names(set.vpls.len()).contains(&layer)
 }
 
 /// The legend of the layers of [`vpl_overlays`]; None for other layers.

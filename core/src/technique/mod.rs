@@ -446,14 +446,29 @@ pub struct LightDetails {
     pub group: Vec<usize>,
 }
 
+/// Something a technique's overlays draw that the app's view gives a hover tooltip (a VAL, a VPL, a cluster's
+/// representative): where it is, the overlay layer that draws it (the app offers only those of visible
+/// layers), and an index the technique understands in [`Technique::hover_details`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoverPoint {
+    pub layer: &'static str,
+    pub position: Vec3,
+    pub index: usize,
+}
+
 /// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
-/// overlay layers to switch on (the technique's others are switched off) and whether its shadow maps show it.
-#[derive(Clone, Debug, PartialEq)]
+/// overlay layers to switch on (the technique's others are switched off), whether its maps show it (and which:
+/// `maps` 0 is [`Technique::shadow_atlas`], `i` ≥ 1 the i-th of [`Technique::depth_images`]), and parameter
+/// values that make the image show the step (e.g. one cluster's visibility alone), as text the parameter's kind
+/// parses; the app sets them while the step is chosen and restores the user's values for the other steps.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct ExplainStep {
     pub title: &'static str,
     pub text: &'static str,
     pub layers: &'static [&'static str],
     pub shows_shadow_maps: bool,
+    pub maps: usize,
+    pub params: &'static [(&'static str, &'static str)],
 }
 
 /// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.
@@ -536,6 +551,15 @@ pub trait Technique {
     fn light_details(&self, _index: usize) -> Option<LightDetails> {
         None
     }
+    /// The points of the last frame's overlays that have a hover tooltip (beyond the lights, which every
+    /// technique has through [`Self::light_details`]); empty: none.
+    fn hover_points(&self) -> Vec<HoverPoint> {
+        Vec::new()
+    }
+    /// The tooltip of hover point `index` of `layer` (as [`Self::hover_points`] gave it): lines of text.
+    fn hover_details(&self, _layer: &str, _index: usize) -> Vec<String> {
+        Vec::new()
+    }
     /// True when this frame's shading passes read the renderer's tile lists of the visible lights
     /// ([`FrameContext::light_tiles`]); asked after `prepare`, so the renderer builds them only then.
     fn uses_light_tiles(&self) -> bool {
@@ -545,6 +569,11 @@ pub trait Technique {
     /// are, for inspection; None for techniques without one.
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
         None
+    }
+    /// Depth images the last frame rendered besides its shadow maps (INSM's intermediate images), each with
+    /// what its tiles are, for inspection; empty for most techniques.
+    fn depth_images(&self) -> Vec<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        Vec::new()
     }
 }
 

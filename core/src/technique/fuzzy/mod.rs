@@ -601,6 +601,7 @@ impl Technique for FuzzyClustering {
                     "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
                 layers: &["vpls (flux)", "vpls (flux, every n-th)"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. VPL clusters",
@@ -608,6 +609,7 @@ impl Technique for FuzzyClustering {
                        degrees apart); each becomes one light at its representative with its members' flux.",
                 layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3-4. Shading-point clusters",
@@ -615,6 +617,7 @@ impl Technique for FuzzyClustering {
                        iterations), then every pixel assigned to its F nearest clusters.",
                 layers: &["shading-point clusters", "shading-point centroids"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "5. Visibility between representatives",
@@ -626,6 +629,7 @@ impl Technique for FuzzyClustering {
                     "vpl cluster representatives",
                 ],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "6. Weighted visibility",
@@ -633,6 +637,7 @@ impl Technique for FuzzyClustering {
                        clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
                 layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
     }
@@ -937,6 +942,51 @@ impl Technique for FuzzyClustering {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         vec![PassTime { name: "fuzzy clustering + readback".into(), ms: self.readback_ms, count: 1 }]
+    }
+
+    fn hover_points(&self) -> Vec<super::HoverPoint> {
+        let ins = &self.inspection;
+        let clusters = |layer: &'static str, points: &[GpuPoint]| -> Vec<super::HoverPoint> {
+            let live = points.iter().enumerate().filter(|(_, c)| c.exists());
+            live.map(|(index, c)| super::HoverPoint { layer, position: c.position(), index }).collect()
+        };
+        let mut points = clusters("vpl cluster representatives", &ins.vpl_clusters);
+        points.extend(clusters("shading-point centroids", &ins.sp_centroids));
+        // The VPLs of the "vpls by cluster" layer (every n-th past 4,096, as it draws them), then the shared layers'.
+        let vpls = &self.vpls.vpls;
+        let stride = vpls.len().div_ceil(4096).max(1);
+        let layer = if stride > 1 { "vpls by cluster (every n-th)" } else { "vpls by cluster" };
+        let assigned =
+            vpls.iter().zip(&ins.vpl_assignment).enumerate().step_by(stride).filter(|(_, (_, &k))| k != u32::MAX);
+        points.extend(assigned.map(|(index, (v, _))| super::HoverPoint { layer, position: v.position, index }));
+        points.extend(crate::renderer::vpl_gather::vpl_hover_points(&self.vpls));
+        points
+    }
+
+    fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {
+        let ins = &self.inspection;
+        let cluster = |what: &str, points: &[GpuPoint]| -> Vec<String> {
+            let Some(c) = points.get(index).filter(|c| c.exists()) else { return Vec::new() };
+            let live = points.iter().filter(|c| c.exists()).count();
+            let n = c.normal();
+            vec![
+                format!("{what} {index} ({live} with members)"),
+                format!("{} members", c.members()),
+                format!("normal ({:.2}, {:.2}, {:.2})", n.x, n.y, n.z),
+            ]
+        };
+        match layer {
+            "vpl cluster representatives" => cluster("VPL cluster", &ins.vpl_clusters),
+            "shading-point centroids" => cluster("shading-point cluster", &ins.sp_centroids),
+            l if l.starts_with("vpls by cluster") || crate::renderer::vpl_gather::is_vpl_layer(&self.vpls, l) => {
+                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
+                if let Some(k) = ins.vpl_assignment.get(index).filter(|k| **k != u32::MAX) {
+                    lines.push(format!("in VPL cluster {k}"));
+                }
+                lines
+            }
+            _ => Vec::new(),
+        }
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {

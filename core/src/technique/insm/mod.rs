@@ -673,12 +673,16 @@ impl Technique for Insm {
                 text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom).",
                 layers: &["INSM viewpoints"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. Intermediate depth images",
-                text: "One depth image of the scene per viewpoint (insm_res²); each sample is a point on a surface.",
+                text: "One depth image of the scene per viewpoint (insm_res²); each sample is a point on a surface. \
+                       The Shadow maps panel shows the images.",
                 layers: &["INSM viewpoints", "INSM samples"],
-                shows_shadow_maps: false,
+                shows_shadow_maps: true,
+                maps: 1,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3. Their meshes",
@@ -686,13 +690,15 @@ impl Technique for Insm {
                        only where the second difference of depth is below ε. Red: dropped edges.",
                 layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "4. Cube maps from the meshes",
                 text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
-                       light and face in tiles.",
+                       light and face in tiles (the Shadow maps panel shows the last batch's).",
                 layers: &["lights"],
-                shows_shadow_maps: false,
+                shows_shadow_maps: true,
+                ..Default::default()
             },
             ExplainStep {
                 title: "5. Final image",
@@ -700,6 +706,7 @@ impl Technique for Insm {
                        where thin geometry eroded).",
                 layers: &[],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
     }
@@ -733,6 +740,15 @@ impl Technique for Insm {
 
     fn uses_light_tiles(&self) -> bool {
         true
+    }
+
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        let what = "cube maps of the last batch, drawn from the meshes, six faces per light (+x -x +y -y +z -z)";
+        self.shadows.atlas().map(|a| (a, what))
+    }
+
+    fn depth_images(&self) -> Vec<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect()
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

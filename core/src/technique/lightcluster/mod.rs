@@ -54,8 +54,11 @@ struct ClusterBatchUniform {
     tiles_per_row: u32,
     samples: u32,
     pcss: u32,
+    /// The one cluster whose visibility alone is drawn (grey), or `u32::MAX`: every cluster shaded.
+    only_cluster: u32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<ClusterBatchUniform>() == 32);
+const _: () = assert!(std::mem::size_of::<ClusterBatchUniform>() == 48);
 
 /// Mirrors `Cluster` in `lightcluster_shade.wgsl`.
 #[repr(C)]
@@ -89,6 +92,8 @@ pub struct LightClusterParams {
     pub cube: CubeMapParams,
     /// Render the reference path when clustering merges nothing (the paper's worst case).
     pub fallback: bool,
+    /// Draw only this cluster's soft visibility, as grey (the Explain panel's step 5); None: shade them all.
+    pub visibility_of: Option<u32>,
 }
 
 impl Default for LightClusterParams {
@@ -101,6 +106,7 @@ impl Default for LightClusterParams {
             samples: 8,
             cube: CubeMapParams::default(),
             fallback: true,
+            visibility_of: None,
         }
     }
 }
@@ -242,6 +248,14 @@ impl Technique for LightCluster {
                 kind: ParamKind::Bool,
                 value: ParamValue::Bool(p.fallback),
             },
+            Param {
+                key: "visibility_of",
+                label: "Visibility of one cluster",
+                help: "-1: shade every cluster; k: draw only cluster k's soft visibility, in grey over the ambient \
+                       light (white: lit, black: in its shadow; nothing beyond its C_att)",
+                kind: ParamKind::Int { min: -1, max: 1 << 20 },
+                value: ParamValue::Int(p.visibility_of.map_or(-1, i64::from)),
+            },
         ];
         params.extend(p.cube.params());
         params
@@ -257,6 +271,7 @@ impl Technique for LightCluster {
             ("filter", ParamValue::Choice(v)) => p.filter = if v == "pcf" { Filter::Pcf } else { Filter::Pcss },
             ("samples", ParamValue::Int(v)) => p.samples = *v as u32,
             ("fallback", ParamValue::Bool(v)) => p.fallback = *v,
+            ("visibility_of", ParamValue::Int(v)) => p.visibility_of = u32::try_from(*v).ok(),
             _ => {
                 let known = p.cube.set(key, value);
                 debug_assert!(known, "check_param accepted an unknown key");
@@ -392,6 +407,8 @@ impl Technique for LightCluster {
             tiles_per_row: atlas.tiles_per_row,
             samples: self.params.samples,
             pcss: u32::from(self.params.filter == Filter::Pcss),
+            only_cluster: self.params.visibility_of.unwrap_or(u32::MAX),
+            _pad: [0; 3],
         };
         ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
@@ -485,6 +502,7 @@ impl Technique for LightCluster {
                        sorted by L_att, largest first. Each dot is a visible light.",
                 layers: &["lights by cluster"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. Cluster centers",
@@ -493,13 +511,15 @@ impl Technique for LightCluster {
                        d_min.",
                 layers: &["cluster centers", "d_min spheres"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3. Members joined to centers",
                 text: "Every other light joins its nearest center; the cluster's range grows to \
-                       C_att = max(C_att, d_C + L_att). Lines: member → center; large circles: C_att.",
+                       C_att = max(C_att, d_C + L_att). Lines: member -> center; large circles: C_att.",
                 layers: &["lights by cluster", "member -> center", "C_att spheres"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "4. One cube map per cluster",
@@ -507,22 +527,34 @@ impl Technique for LightCluster {
                        Shadow maps panel shows the last batch's).",
                 layers: &["cluster centers"],
                 shows_shadow_maps: true,
+                ..Default::default()
             },
             ExplainStep {
                 title: "5. Soft visibility per cluster",
                 text: "Per pixel and cluster within C_att: visibility of a disc light of radius d_min (PCF, or \
                        PCSS: blocker search, penumbra w = d_min (d_r − d_b) / d_b), multiplied into the summed \
-                       light of the cluster's members.",
-                layers: &[],
+                       light of the cluster's members. Shown: cluster 0's visibility alone, in grey (white lit, \
+                       black shadowed; the parameter visibility_of picks another cluster).",
+                layers: &["cluster centers"],
                 shows_shadow_maps: false,
+                params: &[("visibility_of", "0")],
+                ..Default::default()
             },
             ExplainStep {
                 title: "6. Final image",
-                text: "The sum over clusters; compare it with the reference (View → Difference).",
+                text: "The sum over clusters; compare it with the reference (View, Difference).",
                 layers: &[],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
+    }
+
+    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        if self.using_reference {
+            return self.reference.shadow_atlas();
+        }
+        self.cubes.atlas().map(|a| (a, "cube maps of the last batch, six faces per cluster (+x -x +y -y +z -z)"))
     }
 
     fn light_details(&self, index: usize) -> Option<super::LightDetails> {

@@ -576,6 +576,7 @@ impl Technique for VirtualAreaLights {
                 text: "The lights' reflective shadow maps leave virtual point lights on the surfaces they light.",
                 layers: &["vpls by val"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "2. Clustering into VALs",
@@ -583,12 +584,14 @@ impl Technique for VirtualAreaLights {
                        VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle.",
                 layers: &["vpls by val", "val rectangles", "val normals", "val centres"],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
             ExplainStep {
                 title: "3. A paraboloid map per VAL",
                 text: "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps).",
                 layers: &["val centres", "val normals"],
                 shows_shadow_maps: true,
+                ..Default::default()
             },
             ExplainStep {
                 title: "4-5. Soft visibility and shading",
@@ -597,6 +600,7 @@ impl Technique for VirtualAreaLights {
                        with its VAL's visibility; set 'Show one VAL' to see one VAL's contribution alone.",
                 layers: &[],
                 shows_shadow_maps: false,
+                ..Default::default()
             },
         ]
     }
@@ -628,6 +632,41 @@ impl Technique for VirtualAreaLights {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         vec![PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 }]
+    }
+
+    fn hover_points(&self) -> Vec<super::HoverPoint> {
+        let c = &self.clustering;
+        let vals = c.vals.iter().enumerate().filter(|(_, v)| v.count > 0);
+        let centres = vals.map(|(index, v)| super::HoverPoint { layer: "val centres", position: v.position, index });
+        // The VPLs the "vpls by val" layer draws (every n-th past 4,096, as it does).
+        let stride = self.vpls.vpls.len().div_ceil(4096).max(1);
+        let vpls = self.vpls.vpls.iter().enumerate().step_by(stride);
+        centres
+            .chain(vpls.map(|(index, v)| super::HoverPoint { layer: "vpls by val", position: v.position, index }))
+            .collect()
+    }
+
+    fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {
+        let c = &self.clustering;
+        match layer {
+            "val centres" => {
+                let Some(v) = c.vals.get(index) else { return Vec::new() };
+                vec![
+                    format!("VAL {index} ({} with VPLs)", c.non_empty),
+                    format!("{} VPLs, flux ({:.3}, {:.3}, {:.3})", v.count, v.flux.x, v.flux.y, v.flux.z),
+                    format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
+                    format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
+                ]
+            }
+            "vpls by val" => {
+                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
+                if let Some(k) = c.assignment.get(index) {
+                    lines.push(format!("in VAL {k}"));
+                }
+                lines
+            }
+            _ => Vec::new(),
+        }
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {

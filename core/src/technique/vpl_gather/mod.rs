@@ -403,6 +403,14 @@ impl Technique for VplGather {
         vpl_overlays(&self.vpls, self.scene_size, self.params.path_light)
     }
 
+    fn hover_points(&self) -> Vec<super::HoverPoint> {
+        crate::renderer::vpl_gather::vpl_hover_points(&self.vpls)
+    }
+
+    fn hover_details(&self, _layer: &str, index: usize) -> Vec<String> {
+        crate::renderer::vpl_gather::vpl_details(&self.vpls, index)
+    }
+
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
         let mut legend = crate::renderer::vpl_gather::vpl_layer_legend(layer)
             .or_else(|| super::light_layer_legend(layer))
