@@ -240,3 +240,30 @@ fn culling_changes_the_triangles_drawn_but_not_the_image() {
         assert_eq!(share_over(&culled, &all, 1e-4), 0.0, "{key}: culling changed the image");
     }
 }
+
+#[test]
+fn mesh_overlays_are_built_only_when_shown() {
+    // The app asks for every technique's layers every UI frame; INSM's mesh layers (samples read back from the
+    // GPU) are built only for a layer that is shown, and otherwise only named for the layer list.
+    let scene = plane_and_occluder();
+    let mut r = renderer(&scene);
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
+    insm.set_param("shadow_res", &ParamValue::Int(64)).unwrap();
+    let lights = lights_above();
+    render(&mut r, &mut insm, &scene, &lights);
+    let names = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
+    let hidden = insm.overlays_shown(&lights, &|_, _| false);
+    for name in names {
+        let layer = hidden.iter().find(|l| l.name == name).unwrap_or_else(|| panic!("{name} is listed"));
+        assert!(layer.primitives.is_empty() && !layer.visible_by_default, "{name} is not built when hidden");
+    }
+    let viewpoints = hidden.iter().find(|l| l.name == "INSM viewpoints").unwrap();
+    assert!(viewpoints.primitives.is_empty(), "the default empties other hidden layers too");
+    let shown = insm.overlays_shown(&lights, &|name, _| name == "INSM samples");
+    let samples = shown.iter().find(|l| l.name == "INSM samples").unwrap();
+    assert!(!samples.primitives.is_empty(), "shown: the samples are read back and drawn");
+    // overlays() is everything, as before.
+    let all = insm.overlays(&lights);
+    assert!(all.iter().filter(|l| names.contains(&l.name)).all(|l| !l.primitives.is_empty()));
+}

@@ -833,9 +833,11 @@ impl ShadowLabApp {
                 out.extend(layer.primitives);
             }
         };
+        let shown = |name: &str, default: bool| *overlays.get(name).unwrap_or(&default);
         let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
         if let Ok(technique) = gpu.main.technique(&self.technique) {
-            let layers = technique.overlays(lights);
+            // Only the shown layers are built (INSM's meshes cost a readback).
+            let layers = technique.overlays_shown(lights, &shown);
             take(technique.as_ref(), layers, &mut out);
         }
         if self.technique != "reference" {
@@ -847,7 +849,7 @@ impl ShadowLabApp {
         if let Some(key) = self.indirect.technique.clone() {
             if let Ok(t) = gpu.main.indirect_technique(&key) {
                 let t = t.borrow();
-                let layers = t.overlays(lights);
+                let layers = t.overlays_shown(lights, &shown);
                 take(t.as_ref(), layers, &mut out);
             }
         }
@@ -1083,7 +1085,8 @@ impl ShadowLabApp {
         // light, when the scene has one, brings the layers that only spot lights have.
         let probe: Vec<PointLight> = self.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
         if let Ok(t) = gpu.main.technique(&self.technique) {
-            names.extend(t.overlays(&probe).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
+            let layers = t.overlays_shown(&probe, &|_, _| false);
+            names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         }
         if self.technique != "reference" {
             names.push(("light ranges".into(), false));

@@ -515,6 +515,19 @@ pub trait Technique {
         Vec::new()
     }
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
+    /// [`Technique::overlays`] with primitives only in the layers `shown(name, visible_by_default)` accepts; the
+    /// others keep their name and default and no primitives (the layer list needs them). The app asks this every
+    /// UI frame, so a technique whose layers cost a readback (INSM's meshes) overrides it to build only those
+    /// shown; the default builds everything and empties the hidden layers.
+    fn overlays_shown(&self, lights: &[PointLight], shown: &dyn Fn(&str, bool) -> bool) -> Vec<OverlayLayer> {
+        let mut layers = self.overlays(lights);
+        for layer in &mut layers {
+            if !shown(layer.name, layer.visible_by_default) {
+                layer.primitives.clear();
+            }
+        }
+        layers
+    }
     /// A per-pixel ID map of the last frame, from the world position of each pixel (None: background), with
     /// the name of its overlay layer; None when the technique has none.
     fn pixel_ids(&self, _positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {

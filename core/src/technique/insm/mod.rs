@@ -142,11 +142,25 @@ struct MeshSnapshot {
     resolution: u32,
     epsilon: f32,
     adaptive: bool,
-    /// `k * resolution²` samples, or empty when too large to read back.
-    samples: Arc<Vec<Vec4>>,
+    /// Where the samples are read from, when an overlay asks for them (None: too large to read back).
+    source: Option<SampleSource>,
+    /// `k * resolution²` samples, read back on first use: a frame whose mesh overlays nobody shows (every CLI
+    /// frame, most of the app's) copies nothing back.
+    samples: std::sync::OnceLock<Arc<Vec<Vec4>>>,
     /// The mesh overlay layers, built on first use (the app asks for overlays every UI frame).
     layers: std::sync::OnceLock<Vec<OverlayLayer>>,
 }
+
+/// The GPU samples of a frame's meshes and the buffer they are copied to for reading.
+struct SampleSource {
+    gpu: GpuContext,
+    vertices: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    bytes: u64,
+}
+
+/// The mesh overlay layers: built only when one of them is shown.
+const MESH_LAYERS: [&str; 3] = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
 
 pub struct Insm {
     pub params: InsmParams,
@@ -381,15 +395,11 @@ impl Insm {
         });
         let tile_bytes = (k * tps * tps) as u64 * std::mem::size_of::<GpuTile>() as u64;
         encoder.copy_buffer_to_buffer(&mesh.tiles, 0, &mesh.tiles_readback, 0, tile_bytes);
-        if let Some(rb) = &mesh.vertices_readback {
-            let bytes = k as u64 * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES;
-            encoder.copy_buffer_to_buffer(&mesh.vertices, 0, rb, 0, bytes);
-        }
         self.tiles_ready = false;
     }
 
-    /// Before the first light batch: read the tiles (and the samples for the overlays) back, and make the tile
-    /// list the lights cull against.
+    /// Before the first light batch: read the tiles back and make the tile list the lights cull against (the
+    /// samples stay on the GPU until an overlay asks for them).
     fn read_tiles(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
         let start = std::time::Instant::now();
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
@@ -424,14 +434,15 @@ impl Insm {
             resolution: mesh.resolution,
             epsilon: self.params.epsilon,
             adaptive: self.params.adaptive,
-            samples: Arc::default(),
+            source: mesh.vertices_readback.as_ref().map(|rb| SampleSource {
+                gpu: gpu.clone(),
+                vertices: mesh.vertices.clone(),
+                readback: rb.clone(),
+                bytes: k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES,
+            }),
+            samples: Default::default(),
             layers: Default::default(),
         };
-        if let Some(rb) = &mesh.vertices_readback {
-            let bytes = k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES;
-            let samples: Vec<Vec4> = bytemuck::cast_slice(&map_read(gpu, rb, bytes)?).to_vec();
-            self.snapshot.samples = Arc::new(samples);
-        }
         self.tiles_ready = true;
         self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
         self.cpu_times.push(PassTime {
@@ -752,6 +763,10 @@ impl Technique for Insm {
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        self.overlays_shown(lights, &|_, _| true)
+    }
+
+    fn overlays_shown(&self, lights: &[PointLight], shown: &dyn Fn(&str, bool) -> bool) -> Vec<OverlayLayer> {
         let mut layers = super::light_overlays(lights);
         let frustum_color = [1.0, 0.85, 0.2, 1.0];
         layers.push(OverlayLayer {
@@ -779,28 +794,63 @@ impl Technique for Insm {
                 }))
                 .collect(),
         });
-        layers.extend(self.snapshot.layers.get_or_init(|| self.snapshot.build_layers()).iter().cloned());
+        if MESH_LAYERS.iter().any(|name| shown(name, false)) {
+            layers.extend(self.snapshot.layers.get_or_init(|| self.snapshot.build_layers()).iter().cloned());
+        } else if self.snapshot.source.is_some() {
+            // Named for the layer list, not built: nothing is read back.
+            layers.extend(MESH_LAYERS.iter().map(|&name| OverlayLayer {
+                name,
+                visible_by_default: false,
+                primitives: Vec::new(),
+            }));
+        }
+        for layer in &mut layers {
+            if !shown(layer.name, layer.visible_by_default) {
+                layer.primitives.clear();
+            }
+        }
         layers
     }
 }
 
 impl MeshSnapshot {
     /// Overlay layers of the reconstructed meshes: samples, wireframe and dropped edges, each capped.
+    /// The samples, read back the first time they are asked for (empty when they cannot be).
+    fn samples(&self) -> &[Vec4] {
+        self.samples.get_or_init(|| {
+            let Some(s) = &self.source else { return Arc::default() };
+            let read = || -> Result<Vec<Vec4>, GpuError> {
+                s.gpu.check_lost()?;
+                let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
+                encoder.copy_buffer_to_buffer(&s.vertices, 0, &s.readback, 0, s.bytes);
+                s.gpu.queue.submit([encoder.finish()]);
+                Ok(bytemuck::cast_slice(&map_read(&s.gpu, &s.readback, s.bytes)?).to_vec())
+            };
+            match read() {
+                Ok(samples) => Arc::new(samples),
+                Err(e) => {
+                    log::warn!("INSM overlays: the samples could not be read back: {e}");
+                    Arc::default()
+                }
+            }
+        })
+    }
+
     fn build_layers(&self) -> Vec<OverlayLayer> {
         let snap = self;
         let mut layers = Vec::new();
-        if snap.samples.is_empty() || snap.resolution == 0 {
+        let samples = snap.samples();
+        if samples.is_empty() || snap.resolution == 0 {
             return layers;
         }
         let r = snap.resolution as usize;
         let images: Vec<SampledImage> =
-            snap.samples.chunks(r * r).map(|s| SampledImage { resolution: snap.resolution, samples: s }).collect();
+            samples.chunks(r * r).map(|s| SampledImage { resolution: snap.resolution, samples: s }).collect();
 
         // Point cloud of the valid samples, every `stride`-th.
         let valid: usize = images.iter().map(|i| i.valid_samples()).sum();
         let stride = valid.div_ceil(MAX_OVERLAY_POINTS).max(1);
-        let points = snap
-            .samples
+        let points = samples
             .iter()
             .enumerate()
             .filter(|(_, s)| s.w > 0.0)
