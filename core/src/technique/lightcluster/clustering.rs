@@ -59,8 +59,8 @@
 //!   radius `<= d_min` spans at most 3 cells per axis of its level, and a cell holds few centers (they are more
 //!   than `d_min` apart). Levels stop at a floor cell size, twice the estimated spacing of the visible lights
 //!   (from the share of cells of their bounding box that a strided sample of at most 512 of them occupies, so
-//!   flat, linear and clumped layouts are estimated well); all smaller `d_min` (and 0) share the floor level, whose cells hold a few lights. Without
-//!   view-adaptive scaling there is one level.
+//!   flat, linear and clumped layouts are estimated well); all smaller `d_min` (and 0) share the floor level,
+//!   whose cells hold a few lights. Without view-adaptive scaling there is one level.
 //! - **Slots laid out up front.** A light's `d_min`, so its level and cell (its "slot"), are known before step
 //!   3, from its distance to the camera alone. A counting sort gives every slot a contiguous run with room for
 //!   all its lights; a new center is appended to its slot's run. So a cell's centers are read sequentially, in
