@@ -1,8 +1,9 @@
 // LightCluster (Wiesenhuetter et al. 2013, section 3.2), shading of one batch of clusters. Each cluster is a
 // disc area light of radius d_min at its center light, with one cube shadow map (far plane C_att). For every
 // pixel, a cluster's visibility is computed once (PCF or PCSS over a Poisson disk) and modulates the summed
-// radiance of all its member lights. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl.
-// `Batch` and `Cluster` mirror `ClusterBatchUniform` and `GpuCluster` in core/src/technique/lightcluster/gpu.rs.
+// radiance of all its member lights. With PCSS's early out, the first half of a loop's samples decide where
+// they agree. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl.
+// `Batch` and `Cluster` mirror `ClusterBatchUniform` and `GpuCluster` in core/src/technique/lightcluster/mod.rs.
 
 struct Batch {
     first_cluster: u32,
@@ -13,14 +14,17 @@ struct Batch {
     tiles_per_row: u32,
     // Poisson-disk samples, 1..=64
     samples: u32,
-    // 0: PCF, 1: PCSS
-    pcss: u32,
+    // bit 0: PCSS (else PCF); bit 1: PCSS's early out when the first half of a loop's samples agree
+    flags: u32,
     // the one cluster whose visibility alone is drawn (grey), or 0xffffffff: every cluster shaded
     only_cluster: u32,
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,
 }
+
+const FLAG_PCSS: u32 = 1u;
+const FLAG_EARLY_OUT: u32 = 2u;
 
 struct Cluster {
     position: vec3<f32>,
@@ -144,14 +148,24 @@ fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
     let b = cross(l, t);
     let n = s.normal;
     let count = clamp(batch.samples, 1u, 64u);
+    // PCSS's early out (`early_out=on`): in the blocker search and in the filter, the first `probe` samples
+    // (a well-spread prefix of the Poisson disk) decide where they all agree, as in a lit or umbra region; only
+    // where they disagree (penumbrae) are all taken. PCF keeps the paper's fixed samples.
+    var probe = count;
+    if (batch.flags & (FLAG_PCSS | FLAG_EARLY_OUT)) == (FLAG_PCSS | FLAG_EARLY_OUT) && count >= 4u {
+        probe = count / 2u;
+    }
 
     // Filter radius in world units at the receiver.
     var filter_radius = cluster.radius;
-    if batch.pcss == 1u {
+    if (batch.flags & FLAG_PCSS) != 0u {
         // PCSS step 1: blocker search over the region the disc light can see through.
         var blocker_sum = 0.0;
         var blockers = 0.0;
         for (var i = 0u; i < count; i++) {
+            if i == probe && blockers == 0.0 {
+                return 1.0; // the probe found no blocker: lit
+            }
             let o = POISSON[i] * cluster.radius;
             let smp = shadow_sample(on_receiver_plane(p, n, l, t * o.x + b * o.y), cluster, cube_index);
             if smp.lit < 0.5 {
@@ -179,6 +193,9 @@ fn cluster_visibility(s: Surface, cluster: Cluster, cube_index: u32) -> f32 {
     }
     var lit = 0.0;
     for (var i = 0u; i < count; i++) {
+        if i == probe && (lit == 0.0 || lit == f32(probe)) {
+            return lit / f32(probe); // the probe agrees: fully lit or fully shadowed
+        }
         let o = POISSON[i] * filter_radius;
         lit += shadow_sample(on_receiver_plane(p, n, l, t * o.x + b * o.y), cluster, cube_index).lit;
     }

@@ -164,6 +164,31 @@ fn visibility_of_one_cluster_draws_its_visibility_alone_in_grey() {
 }
 
 #[test]
+fn pcss_early_out_changes_only_penumbrae_and_pcf_not_at_all() {
+    let scene = plane_and_occluder();
+    let lights = lights_around_occluder();
+    let image = |filter: &str, early_out: bool| {
+        let params = [
+            ("d_init", ParamValue::Float(0.5)),
+            ("filter", ParamValue::Choice(filter.into())),
+            ("early_out", ParamValue::Bool(early_out)),
+        ];
+        render(&scene, &lights, "lightcluster", &params).0
+    };
+    // PCF keeps the paper's fixed samples whatever the switch.
+    assert_eq!(image("pcf", true), image("pcf", false), "early_out must not change PCF");
+    // PCSS: lit and umbra pixels are decided by the first half of the samples as by all of them; only pixels
+    // whose samples disagree (penumbrae, a thin band here) may change.
+    let (on, off) = (image("pcss", true), image("pcss", false));
+    let (_, share) = compare(&on, &off, 0.01);
+    assert!(share < 0.02, "{:.2}% of pixels changed by more than 1% with the early out", share * 100.0);
+    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (_, share_on) = compare(&on, &reference, 0.05);
+    let (_, share_off) = compare(&off, &reference, 0.05);
+    assert!(share_on <= share_off * 1.1 + 1e-3, "early out moved away from the reference: {share_on} vs {share_off}");
+}
+
+#[test]
 fn zero_and_out_of_view_lights_give_no_clusters() {
     let scene = plane_and_occluder();
     let (img, report) = render(&scene, &[], "lightcluster", &[]);

@@ -58,13 +58,15 @@
 //!   `d_init / 2^l` and holds the centers with `d_min` in `(d_init / 2^(l+1), d_init / 2^l]`, so a search of
 //!   radius `<= d_min` spans at most 3 cells per axis of its level, and a cell holds few centers (they are more
 //!   than `d_min` apart). Levels stop at a floor cell size, twice the estimated spacing of the visible lights
-//!   (from the share of cells of their bounding box they occupy, so flat, linear and clumped layouts are
-//!   estimated well); all smaller `d_min` (and 0) share the floor level, whose cells hold a few lights. Without
-//!   view-adaptive scaling there is one level.
+//!   (from the share of cells of their bounding box that a strided sample of at most 512 of them occupies, so
+//!   flat, linear and clumped layouts are estimated well); all smaller `d_min` (and 0) share the floor level,
+//!   whose cells hold a few lights. Without view-adaptive scaling there is one level.
 //! - **Slots laid out up front.** A light's `d_min`, so its level and cell (its "slot"), are known before step
 //!   3, from its distance to the camera alone. A counting sort gives every slot a contiguous run with room for
 //!   all its lights; a new center is appended to its slot's run. So a cell's centers are read sequentially, in
-//!   selection order, without linked lists.
+//!   selection order, without linked lists. In a dense level the runs of a row of cells along x are adjacent
+//!   and the entries not (yet) used by a center are NaN, which no distance test accepts, so a search reads a
+//!   row of cells as one slice.
 //! - **Dense or hash.** A level is a dense array of slots over the visible lights' bounding box when that has
 //!   at most `4 * lights + 4096` cells; otherwise its cells live in a hash table (open addressing, keyed by
 //!   level and cell coordinates), so a tiny `d_init` or a few far-away lights cost memory proportional to the
@@ -73,21 +75,26 @@
 //!   `D` from the camera searches a level with radius `h` only when that range meets `[D - h, D + h]` (a center
 //!   within `h` of the light is within `h` of `D`, by the triangle inequality), so most searches visit one level.
 //! - **Step 3** searches each level with the smaller of the largest `d_min` of its centers and a bound from the
-//!   light's own distance to the camera (`CoverBound`), starting with the light's own cell.
+//!   light's own distance to the camera (`CoverBound`). A center's entry holds `cover_limit(d_min)`, the largest
+//!   squared distance whose square root is at most `d_min`, so `distance <= d_min` is tested without a square
+//!   root.
 //! - **Step 4 is exact**: a light reached step 4 because some center `c` covered it at distance
 //!   `r = distance(light, c) <= d_min(c) <= d_init` (recorded per light in step 3). The nearest center is at
-//!   most `r` away, so searching every level with radius `r` finds it and every tie. With many such lights
+//!   most `r` away, so searching every level with radius `r` finds it and every tie; the nearest center in the
+//!   light's own cell is searched first and shrinks `r` further. With many such lights
 //!   they are visited slot by slot, so neighbours share cached cells; the results do not depend on the order.
 //! - **Rounding.** Boxes are computed in `f64` and widened by a relative `1e-4` plus `1e-6` cells, and level
 //!   pruning by a relative `1e-4`, far more than `f32` distance rounding, so no candidate is ever missed: the
 //!   result is exactly that of the brute-force `O(lights * centers)` algorithm (the tests compare the two).
 //!
-//! The sort is a stable LSD radix sort on the range's bits for many lights. [`Clusterer`] keeps every buffer
+//! Step 1 is branch-free (four frustum planes per SIMD lane group) and copies each visible light's position and
+//! range into a compact array, which steps 2 and 3 read in sorted order instead of the whole lights. The sort is
+//! a stable LSD radix sort on the range's bits for many lights. [`Clusterer`] keeps every buffer
 //! between calls and reuses the output's clusters (and their member vectors) through
 //! [`Clusterer::cluster_into`], so a frame allocates nothing once buffers have grown. [`cluster_lights`] is the
 //! allocating convenience wrapper.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::math::Frustum;
 use crate::scene::PointLight;
@@ -265,8 +272,15 @@ pub fn cluster_lights(
 /// The clustering with its scratch buffers, kept between frames so that clustering does not allocate.
 #[derive(Debug, Default)]
 pub struct Clusterer {
-    /// Step 1/2: per visible light `(!range_bits) << 32 | input index`; sorted ascending = step 2's order.
+    /// Step 1/2: per visible light `(!range_bits) << 32 | visible index`; sorted ascending = step 2's order
+    /// (visible lights are numbered in input order, so ties keep input order).
     keys: Vec<u64>,
+    /// Step 1: per visible light in input order, its input index and `[x, y, z, L_att]`: step 2's gather reads
+    /// these (compact, 16 bytes a light) instead of the whole lights.
+    visible_ids: Vec<u32>,
+    visible_lights: Vec<[f32; 4]>,
+    /// Scratch for an unsorted `visible` list handed to `cluster_visible_into`.
+    visible_sorted: Vec<usize>,
     keys_tmp: Vec<u64>,
     radix_counts: Vec<[u32; RADIX_BUCKETS]>,
     /// Per visible light in sorted order: input index, position, range, distance to the camera.
@@ -360,7 +374,7 @@ impl Clusterer {
     ) {
         assert!(lights.len() < MAX_LIGHTS, "at most {} lights can be clustered", MAX_LIGHTS - 1);
         self.cull(lights, frustum);
-        self.cluster_culled(lights, camera_position, params, out);
+        self.cluster_culled(camera_position, params, lights.len(), out);
     }
 
     /// [`Clusterer::cluster_into`] with step 1 already done: `visible` are the indices (ascending) of the valid
@@ -375,30 +389,38 @@ impl Clusterer {
         out: &mut Clustering,
     ) {
         assert!(lights.len() < MAX_LIGHTS, "at most {} lights can be clustered", MAX_LIGHTS - 1);
-        self.keys.clear();
-        self.keys.extend(
+        // Visible lights are numbered in input order, so that equal ranges keep it (step 2).
+        let mut sorted = std::mem::take(&mut self.visible_sorted);
+        let visible = if visible.is_sorted() {
             visible
-                .iter()
-                .filter(|&&i| i < lights.len())
-                .map(|&i| ((!lights[i].range.to_bits()) as u64) << 32 | i as u64),
-        );
-        self.cluster_culled(lights, camera_position, params, out);
+        } else {
+            sorted.clear();
+            sorted.extend_from_slice(visible);
+            sorted.sort_unstable();
+            &sorted[..]
+        };
+        self.keys.clear();
+        self.visible_ids.clear();
+        self.visible_lights.clear();
+        for &i in visible.iter().filter(|&&i| i < lights.len()) {
+            let light = &lights[i];
+            self.keys.push(((!light.range.to_bits()) as u64) << 32 | self.visible_ids.len() as u64);
+            self.visible_ids.push(i as u32);
+            let p = light.position;
+            self.visible_lights.push([p.x, p.y, p.z, light.range]);
+        }
+        self.visible_sorted = sorted;
+        self.cluster_culled(camera_position, params, lights.len(), out);
     }
 
     /// Steps 2 onwards, from the culled keys.
-    fn cluster_culled(
-        &mut self,
-        lights: &[PointLight],
-        camera_position: Vec3,
-        params: &ClusterParams,
-        out: &mut Clustering,
-    ) {
+    fn cluster_culled(&mut self, camera_position: Vec3, params: &ClusterParams, lights: usize, out: &mut Clustering) {
         sort_by_range(&mut self.keys, &mut self.keys_tmp, &mut self.radix_counts);
-        let (min, max) = self.gather(lights, camera_position, params);
+        let (min, max) = self.gather(camera_position, params);
 
         let d_init = params.effective_d_init();
         out.cluster_of.clear();
-        out.cluster_of.resize(lights.len(), None);
+        out.cluster_of.resize(lights, None);
         if d_init > 0.0 && self.ids.len() > 1 {
             self.grid.build(&self.pos, &self.d_min, min, max, d_init, params.is_view_adaptive());
         } else {
@@ -422,19 +444,27 @@ impl Clusterer {
     fn cull(&mut self, lights: &[PointLight], frustum: &Frustum) {
         // Branch-free compaction: write every key, keep it by advancing only past visible ones.
         self.keys.resize(lights.len(), 0);
+        self.visible_ids.resize(lights.len(), 0);
+        self.visible_lights.resize(lights.len(), [0.0; 4]);
+        let planes = FrustumLanes::new(frustum);
         let mut visible = 0;
         for (i, light) in lights.iter().enumerate() {
             // A valid range is positive and finite, so its bits order like its value; `!` makes the ascending
             // key order the descending range order.
-            self.keys[visible] = ((!light.range.to_bits()) as u64) << 32 | i as u64;
-            visible += (light.is_valid() & frustum.intersects_sphere(light.position, light.range)) as usize;
+            self.keys[visible] = ((!light.range.to_bits()) as u64) << 32 | visible as u64;
+            self.visible_ids[visible] = i as u32;
+            let p = light.position;
+            self.visible_lights[visible] = [p.x, p.y, p.z, light.range];
+            visible += is_visible(light, &planes) as usize;
         }
         self.keys.truncate(visible);
+        self.visible_ids.truncate(visible);
+        self.visible_lights.truncate(visible);
     }
 
     /// Lay out the visible lights in sorted order for steps 3 and 4, with their distance to the camera and
     /// `d_min`; returns their bounding box.
-    fn gather(&mut self, lights: &[PointLight], camera: Vec3, params: &ClusterParams) -> (Vec3, Vec3) {
+    fn gather(&mut self, camera: Vec3, params: &ClusterParams) -> (Vec3, Vec3) {
         let n = self.keys.len();
         for v in [&mut self.range, &mut self.to_camera, &mut self.d_min] {
             v.resize(n, 0.0);
@@ -444,15 +474,16 @@ impl Clusterer {
         let adaptive = params.is_view_adaptive();
         let (mut min, mut max) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for (i, &key) in self.keys.iter().enumerate() {
-            let id = key as u32;
-            let light = &lights[id as usize];
-            self.ids[i] = id;
-            self.pos[i] = light.position;
-            self.range[i] = light.range;
-            min = min.min(light.position);
-            max = max.max(light.position);
+            let v = key as u32 as usize;
+            self.ids[i] = self.visible_ids[v];
+            let [x, y, z, range] = self.visible_lights[v];
+            let position = Vec3::new(x, y, z);
+            self.pos[i] = position;
+            self.range[i] = range;
+            min = min.min(position);
+            max = max.max(position);
             // The same expression as `ClusterParams::d_min_at(position, camera)`.
-            let to_camera = if adaptive { light.position.distance(camera) } else { 0.0 };
+            let to_camera = if adaptive { position.distance(camera) } else { 0.0 };
             self.to_camera[i] = to_camera;
             self.d_min[i] = params.d_min_at_distance(to_camera);
         }
@@ -504,14 +535,25 @@ impl Clusterer {
             let Some(b) = grid.search_box(level, p, to_camera, radius) else {
                 continue;
             };
-            if let Some(d) = grid.cover_in_cell(grid.slot(level, b.own), p) {
+            if grid.levels[level].dense {
+                // Each row of cells along x is one contiguous run of entries (unused ones never cover).
+                for z in b.lo[2]..=b.hi[2] {
+                    for y in b.lo[1]..=b.hi[1] {
+                        if let Some(d) = grid.cover_in(grid.dense_row(level, b.lo[0], b.hi[0], y, z), p) {
+                            return Some(d);
+                        }
+                    }
+                }
+                continue;
+            }
+            if let Some(d) = grid.cover_in(grid.centers_in_cell(grid.slot(level, b.own)).0, p) {
                 return Some(d);
             }
             for z in b.lo[2]..=b.hi[2] {
                 for y in b.lo[1]..=b.hi[1] {
                     for x in b.lo[0]..=b.hi[0] {
                         if [x, y, z] != b.own {
-                            if let Some(d) = grid.cover_in_cell(grid.slot(level, [x, y, z]), p) {
+                            if let Some(d) = grid.cover_in(grid.centers_in_cell(grid.slot(level, [x, y, z])).0, p) {
                                 return Some(d);
                             }
                         }
@@ -557,7 +599,7 @@ impl Clusterer {
     #[inline]
     fn assign(&mut self, i: usize) {
         let p = self.pos[i];
-        let (k, d2) = match self.nearest_center(p, self.to_camera[i], self.cover[i]) {
+        let (k, d2) = match self.nearest_center(p, self.to_camera[i], self.cover[i], self.grid.light_slot[i]) {
             Some(found) => found,
             // Unreachable (the covering center is within the searched boxes); kept exact and panic-free.
             None => self.nearest_center_brute_force(p),
@@ -618,32 +660,34 @@ impl Clusterer {
     /// The nearest center to `p` (smallest squared distance, then smallest cluster index) among the centers
     /// within `radius`, with its squared distance.
     #[inline]
-    fn nearest_center(&self, p: Vec3, to_camera: f32, radius: f32) -> Option<(u32, f32)> {
+    fn nearest_center(&self, p: Vec3, to_camera: f32, radius: f32, own_slot: u32) -> Option<(u32, f32)> {
         let grid = &self.grid;
-        let mut best = NONE;
-        let mut best_d2 = f32::INFINITY;
+        let mut best = (NONE, f32::INFINITY);
+        // The centers of the light's own cell first: the nearest of them bounds the search (the nearest center
+        // overall is no farther), which usually shrinks the boxes to a few cells. Visiting them twice is harmless.
+        let (entries, first) = grid.centers_in_cell(own_slot);
+        grid.nearest_in(p, entries, first, &mut best);
+        let search = radius.min(best.1.sqrt());
         for level in 0..grid.levels.len() {
-            let Some(b) = grid.search_box(level, p, to_camera, radius) else {
+            let Some(b) = grid.search_box(level, p, to_camera, search) else {
                 continue;
             };
+            let dense = grid.levels[level].dense;
             for z in b.lo[2]..=b.hi[2] {
                 for y in b.lo[1]..=b.hi[1] {
-                    for x in b.lo[0]..=b.hi[0] {
-                        let (entries, first) = grid.centers_in_cell(grid.slot(level, [x, y, z]));
-                        for (e, entry) in entries.iter().enumerate() {
-                            let d2 = p.distance_squared(Vec3::new(entry[0], entry[1], entry[2]));
-                            if d2 <= best_d2 {
-                                let k = grid.entry_k[first + e];
-                                if d2 < best_d2 || k < best {
-                                    best = k;
-                                    best_d2 = d2;
-                                }
-                            }
+                    if dense {
+                        let (first, end) = grid.dense_row_range(level, b.lo[0], b.hi[0], y, z);
+                        grid.nearest_in(p, &grid.entries[first..end], first, &mut best);
+                    } else {
+                        for x in b.lo[0]..=b.hi[0] {
+                            let (entries, first) = grid.centers_in_cell(grid.slot(level, [x, y, z]));
+                            grid.nearest_in(p, entries, first, &mut best);
                         }
                     }
                 }
             }
         }
+        let (best, best_d2) = best;
         (best != NONE && best_d2.sqrt() <= radius).then_some((best, best_d2))
     }
 
@@ -657,6 +701,42 @@ impl Clusterer {
         }
         best
     }
+}
+
+/// The six frustum planes as two groups of four lanes (normal x, y, z and distance per lane; the second group
+/// repeats its last plane), so that step 1 tests a sphere against four planes at once.
+struct FrustumLanes {
+    x: [Vec4; 2],
+    y: [Vec4; 2],
+    z: [Vec4; 2],
+    w: [Vec4; 2],
+}
+
+impl FrustumLanes {
+    fn new(frustum: &Frustum) -> Self {
+        let p = &frustum.planes;
+        let lanes = |f: fn(&Vec4) -> f32| {
+            [Vec4::new(f(&p[0]), f(&p[1]), f(&p[2]), f(&p[3])), Vec4::new(f(&p[4]), f(&p[5]), f(&p[5]), f(&p[5]))]
+        };
+        FrustumLanes { x: lanes(|v| v.x), y: lanes(|v| v.y), z: lanes(|v| v.z), w: lanes(|v| v.w) }
+    }
+}
+
+/// Step 1's test, `light.is_valid() && frustum.intersects_sphere(light.position, light.range)` with the same
+/// arithmetic per plane (`normal.dot(center) + distance >= -range`, evaluated in the same order, lane by lane),
+/// but without branches, so the compiler keeps it in registers.
+#[inline(always)]
+fn is_visible(light: &PointLight, planes: &FrustumLanes) -> bool {
+    let (p, c, r) = (light.position, light.color, light.range);
+    let finite = p.is_finite() & c.is_finite() & light.intensity.is_finite() & r.is_finite();
+    let usable = (r > 0.0) & (light.intensity >= 0.0) & (c.x >= 0.0) & (c.y >= 0.0) & (c.z >= 0.0);
+    let (x, y, z, neg_r) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(-r));
+    let mut inside = true;
+    for g in 0..2 {
+        let d = planes.x[g] * x + planes.y[g] * y + planes.z[g] * z + planes.w[g];
+        inside &= d.cmpge(neg_r).all();
+    }
+    finite & usable & inside & light.spot.is_none_or(|s| s.is_valid())
 }
 
 /// Step 2: sort the keys made by step 1 ascending, i.e. by `L_att` descending, then by input index. Large inputs
@@ -698,13 +778,46 @@ fn sort_by_range(keys: &mut Vec<u64>, tmp: &mut Vec<u64>, hist: &mut Vec<[u32; R
     }
 }
 
+/// The cell of cell coordinate `x`, `floor(x)` clamped to `0..=top` (NaN gives 0). `as i32` truncates towards
+/// zero and saturates, which differs from `floor` only below 0, where the clamp gives 0 either way; integer
+/// clamping is cheaper than `f64::clamp`.
+#[inline(always)]
+fn cell_index(x: f64, top: i32) -> u32 {
+    (x as i32).clamp(0, top) as u32
+}
+
+/// The largest squared distance `d2` with `d2.sqrt() <= d_min`, or -1 when `d_min` is not positive (a center
+/// with `d_min = 0` covers nothing). `f32::sqrt` is correctly rounded, so for every `d2`,
+/// `d2 <= cover_limit(d_min)` exactly when `d2.sqrt() <= d_min`: step 3's `distance(p, c) <= d_min(c)` (glam's
+/// `distance` is `distance_squared(..).sqrt()`) without a square root per candidate.
+///
+/// `d2.sqrt()` rounds to at most `d_min` exactly when the exact root is below the midpoint `m` of `d_min` and the
+/// next `f32` (never equal: `m` has 25 significant bits, so `m^2` has 49 or 50 and is no `f32`). `m` and `m^2` are
+/// exact in `f64`, so the limit is the largest `f32` below `m^2`.
+fn cover_limit(d_min: f32) -> f32 {
+    if d_min.is_nan() || d_min <= 0.0 {
+        return -1.0;
+    }
+    let m = (d_min as f64 + d_min.next_up() as f64) * 0.5;
+    if !m.is_finite() {
+        return f32::MAX; // d_min is f32::MAX: every finite d2 is covered
+    }
+    let m2 = m * m;
+    let below = m2 as f32;
+    if below as f64 > m2 {
+        below.next_down()
+    } else {
+        below
+    }
+}
+
 /// One level of the grid: cells of one size, holding the centers of one `d_min` band.
 #[derive(Clone, Copy, Debug)]
 struct Level {
     cell: f64,
     inv_cell: f64,
-    /// `dims - 1` per axis, as `f64` for clamping cell coordinates.
-    top: [f64; 3],
+    /// `dims - 1` per axis (below 2^19), for clamping cell coordinates.
+    top: [i32; 3],
     dims: [u32; 3],
     dense: bool,
     /// Whether any light belongs to the level (then a dense level has its slots from `offset` on).
@@ -747,7 +860,7 @@ struct Grid {
     /// Per visible light (sorted order): its level and slot.
     light_level: Vec<u8>,
     light_slot: Vec<u32>,
-    /// Center entries `[x, y, z, d_min]` and cluster indices, grouped by slot.
+    /// Center entries `[x, y, z, cover_limit(d_min)]` and cluster indices, grouped by slot.
     entries: Vec<[f32; 4]>,
     entry_k: Vec<u32>,
     dense_budget: u64,
@@ -764,6 +877,8 @@ struct Grid {
 /// Level `l` has cells of `CELL_PER_D_MIN * d_init / 2^l`: at least this many times the largest `d_min` it
 /// holds (except the floor level, whose cells may be larger).
 const CELL_PER_D_MIN: f64 = 1.0;
+/// Lights sampled for the spacing estimate at most.
+const SPACING_SAMPLES: usize = 512;
 /// The floor level's cells, in estimated light spacings.
 const FLOOR_PER_SPACING: f64 = 2.0;
 
@@ -830,7 +945,7 @@ impl Grid {
             self.levels.push(Level {
                 cell: size,
                 inv_cell: 1.0 / size,
-                top: dims.map(|d| (d - 1) as f64),
+                top: dims.map(|d| (d - 1) as i32),
                 dims,
                 dense: cells <= self.dense_budget,
                 used: false,
@@ -875,7 +990,9 @@ impl Grid {
             *run = [start, start];
             start += count;
         }
-        self.entries.resize(n, [0.0; 4]);
+        // Unused entries are NaN, so scanning a row of cells across their gaps finds only centers.
+        self.entries.clear();
+        self.entries.resize(n, [f32::NAN; 4]);
         self.entry_k.resize(n, 0);
     }
 
@@ -904,19 +1021,25 @@ impl Grid {
         if !(cell.is_finite() && cell > 0.0) {
             return 0.0;
         }
-        let dims = extent.map(|e| ((e / cell) as u64).saturating_add(1));
+        // Occupancy is counted for a strided sample of at most SPACING_SAMPLES lights (sorted by range, so
+        // spread over space), in cells that hold one sampled light each on average: the spacing of the sample,
+        // times (sample / lights)^(1 / axes), estimates the lights' (the same for all of them).
+        let stride = positions.len().div_ceil(SPACING_SAMPLES).max(1);
+        let sampled = positions.len().div_ceil(stride);
+        let sample_cell = cell * (n / sampled as f64).powf(1.0 / axes as f64);
+        let dims = extent.map(|e| ((e / sample_cell) as u64).saturating_add(1));
         let cells = dims.iter().product::<u64>();
-        if cells > 64 * positions.len() as u64 {
+        if cells > 64 * sampled as u64 {
             return cell;
         }
         self.occupied.clear();
         self.occupied.resize(cells.div_ceil(64) as usize, 0);
         // Only an estimate: f32 is precise enough.
-        let inv = (1.0 / cell) as f32;
+        let inv = (1.0 / sample_cell) as f32;
         let origin = Vec3::new(origin[0] as f32, origin[1] as f32, origin[2] as f32);
         let top = dims.map(|d| (d - 1) as f32);
         let mut count = 0u64;
-        for &p in positions {
+        for &p in positions.iter().step_by(stride) {
             let q = (p - origin) * inv;
             let c = [q.x.clamp(0.0, top[0]) as u64, q.y.clamp(0.0, top[1]) as u64, q.z.clamp(0.0, top[2]) as u64];
             let index = c[0] + dims[0] * (c[1] + dims[1] * c[2]);
@@ -924,7 +1047,7 @@ impl Grid {
             count += (self.occupied[word] & bit == 0) as u64;
             self.occupied[word] |= bit;
         }
-        cell * (count as f64 / n).powf(1.0 / axes as f64)
+        cell * (count as f64 / sampled as f64).powf(1.0 / axes as f64)
     }
 
     /// The level for a center with `d_min`: the finest `l` with `d_init / 2^l >= d_min` (the last for 0).
@@ -946,7 +1069,7 @@ impl Grid {
     #[inline(always)]
     fn cell_of(&self, l: &Level, p: Vec3) -> [u32; 3] {
         let q = [p.x, p.y, p.z];
-        std::array::from_fn(|a| ((q[a] as f64 - self.origin[a]) * l.inv_cell).clamp(0.0, l.top[a]) as u32)
+        std::array::from_fn(|a| cell_index((q[a] as f64 - self.origin[a]) * l.inv_cell, l.top[a]))
     }
 
     /// Give a level in use its slots: a dense level its cells (unless slot indices would grow too large, then
@@ -1019,10 +1142,9 @@ impl Grid {
         let mut b = CellBox { lo: [0; 3], hi: [0; 3], own: [0; 3] };
         for (a, &v) in q.iter().enumerate() {
             let x = (v as f64 - self.origin[a]) * l.inv_cell;
-            // `as u32` truncates, which is floor for the non-negative values the clamp leaves.
-            b.lo[a] = (x - r).clamp(0.0, l.top[a]) as u32;
-            b.hi[a] = (x + r).clamp(0.0, l.top[a]) as u32;
-            b.own[a] = x.clamp(0.0, l.top[a]) as u32;
+            b.lo[a] = cell_index(x - r, l.top[a]);
+            b.hi[a] = cell_index(x + r, l.top[a]);
+            b.own[a] = cell_index(x, l.top[a]);
         }
         Some(b)
     }
@@ -1058,7 +1180,7 @@ impl Grid {
         }
     }
 
-    /// The centers in `slot` so far (entries `[x, y, z, d_min]`) and the index of the first.
+    /// The centers in `slot` so far (entries `[x, y, z, cover_limit(d_min)]`) and the index of the first.
     #[inline(always)]
     fn centers_in_cell(&self, slot: u32) -> (&[[f32; 4]], usize) {
         match self.runs.get(slot as usize) {
@@ -1067,16 +1189,48 @@ impl Grid {
         }
     }
 
-    /// Step 3's test within one cell: the distance to a center there that covers `p`.
+    /// Entries `first..end` of the cells `x0..=x1` of row `(y, z)` of dense `level`: their runs are adjacent,
+    /// and the entries between one cell's centers and the next cell's first are unused (NaN).
     #[inline(always)]
-    fn cover_in_cell(&self, slot: u32, p: Vec3) -> Option<f32> {
-        for e in self.centers_in_cell(slot).0 {
-            let d_min = e[3];
-            if d_min > 0.0 {
-                let d = p.distance(Vec3::new(e[0], e[1], e[2]));
-                if d <= d_min {
-                    return Some(d);
+    fn dense_row_range(&self, level: usize, x0: u32, x1: u32, y: u32, z: u32) -> (usize, usize) {
+        let l = &self.levels[level];
+        let s0 = Self::dense_slot(l, [x0, y, z]) as usize;
+        let s1 = s0 + (x1 - x0) as usize;
+        (self.runs[s0][0] as usize, self.runs[s1][1] as usize)
+    }
+
+    #[inline(always)]
+    fn dense_row(&self, level: usize, x0: u32, x1: u32, y: u32, z: u32) -> &[[f32; 4]] {
+        let (first, end) = self.dense_row_range(level, x0, x1, y, z);
+        &self.entries[first..end]
+    }
+
+    /// Step 4's test over `entries` (from index `first`): keep in `best` the nearest center to `p` (smallest
+    /// squared distance, then smallest cluster index) and its squared distance. Unused entries are NaN: never
+    /// nearer.
+    #[inline(always)]
+    fn nearest_in(&self, p: Vec3, entries: &[[f32; 4]], first: usize, best: &mut (u32, f32)) {
+        for (e, entry) in entries.iter().enumerate() {
+            let d2 = p.distance_squared(Vec3::new(entry[0], entry[1], entry[2]));
+            if d2 <= best.1 {
+                let k = self.entry_k[first + e];
+                if d2 < best.1 || k < best.0 {
+                    *best = (k, d2);
                 }
+            }
+        }
+    }
+
+    /// Step 3's test over some entries: the distance to a center among them that covers `p`.
+    ///
+    /// `distance(p, c) <= d_min(c)` is tested as `distance_squared(p, c) <= cover_limit(d_min(c))` (stored in
+    /// the entry), which is the same test without a square root per center; unused entries are NaN and fail it.
+    #[inline(always)]
+    fn cover_in(&self, entries: &[[f32; 4]], p: Vec3) -> Option<f32> {
+        for e in entries {
+            let d2 = p.distance_squared(Vec3::new(e[0], e[1], e[2]));
+            if d2 <= e[3] {
+                return Some(d2.sqrt());
             }
         }
         None
@@ -1095,7 +1249,39 @@ impl Grid {
         let run = &mut self.runs[self.light_slot[i] as usize];
         let e = run[1] as usize;
         run[1] += 1;
-        self.entries[e] = [p.x, p.y, p.z, d_min];
+        self.entries[e] = [p.x, p.y, p.z, cover_limit(d_min)];
         self.entry_k[e] = k;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cover_limit;
+
+    /// `cover_limit(d)` is the largest `d2` with `d2.sqrt() <= d`, over every binade (subnormals included).
+    #[test]
+    fn cover_limit_is_the_largest_square_covered() {
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut values = vec![f32::from_bits(1), f32::MIN_POSITIVE, 1e-20, 0.5, 1.0, 1.6, 3.0, 1e19, 1e30, f32::MAX];
+        for _ in 0..200_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let d = f32::from_bits((state >> 33) as u32 % 0x7F80_0000); // every positive finite f32 but 0
+            if d > 0.0 {
+                values.push(d);
+            }
+        }
+        for d in values {
+            let t = cover_limit(d);
+            assert!(t >= 0.0 && t.sqrt() <= d, "d {d:e}: limit {t:e} has root {:e}", t.sqrt());
+            if t < f32::MAX {
+                let above = t.next_up();
+                assert!(above.sqrt() > d, "d {d:e}: {above:e} above the limit {t:e} is still covered");
+            }
+        }
+        assert_eq!(cover_limit(0.0), -1.0);
+        assert_eq!(cover_limit(-1.0), -1.0);
+        assert_eq!(cover_limit(f32::NAN), -1.0);
     }
 }

@@ -19,7 +19,10 @@
 //! hundreds of clusters and still samples each cube map once per pixel and cluster, as the paper intends.
 //! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise. As production PCSS,
 //! it skips the filter where the blocker search's samples all agree: none blocked (lit), or all blocked with
-//! a filter no wider than the searched disc (umbra).
+//! a filter no wider than the searched disc (umbra). With `early_out` (the default) PCSS also stops its blocker
+//! search and its filter after the first half of their samples when those agree (none blocked in the search;
+//! all lit or all shadowed in the filter): the other half only changes penumbrae. PCF keeps the paper's fixed
+//! samples.
 
 pub mod clustering;
 
@@ -53,11 +56,15 @@ struct ClusterBatchUniform {
     normal_offset_texels: f32,
     tiles_per_row: u32,
     samples: u32,
-    pcss: u32,
+    /// Bit 0 PCSS, bit 1 early out (`FLAG_*`).
+    flags: u32,
     /// The one cluster whose visibility alone is drawn (grey), or `u32::MAX`: every cluster shaded.
     only_cluster: u32,
     _pad: [u32; 3],
 }
+/// Keep in sync with `FLAG_PCSS` and `FLAG_EARLY_OUT` in `lightcluster_shade.wgsl`.
+const FLAG_PCSS: u32 = 1;
+const FLAG_EARLY_OUT: u32 = 2;
 const _: () = assert!(std::mem::size_of::<ClusterBatchUniform>() == 48);
 
 /// Mirrors `Cluster` in `lightcluster_shade.wgsl`.
@@ -88,6 +95,10 @@ pub struct LightClusterParams {
     pub adaptive: bool,
     pub filter: Filter,
     pub samples: u32,
+    /// PCSS: in the blocker search and the filter, decide from the first half of the samples where they agree
+    /// (all lit or all shadowed), and take the rest only where they disagree (beyond the paper; PCF keeps its
+    /// fixed samples).
+    pub early_out: bool,
     /// Cube-map resolution, bias, normal offset, batch memory.
     pub cube: CubeMapParams,
     /// Render the reference path when clustering merges nothing (the paper's worst case).
@@ -104,6 +115,7 @@ impl Default for LightClusterParams {
             adaptive: true,
             filter: Filter::Pcss,
             samples: 8,
+            early_out: true,
             cube: CubeMapParams::default(),
             fallback: true,
             visibility_of: None,
@@ -242,6 +254,13 @@ impl Technique for LightCluster {
                 value: ParamValue::Int(p.samples as i64),
             },
             Param {
+                key: "early_out",
+                label: "PCSS early out",
+                help: "PCSS: stop after the first half of the samples when they agree (all lit or all shadowed)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.early_out),
+            },
+            Param {
                 key: "fallback",
                 label: "Reference when nothing clusters",
                 help: "Use the reference path when every visible light is its own cluster (the paper's worst case)",
@@ -270,6 +289,7 @@ impl Technique for LightCluster {
             ("adaptive", ParamValue::Bool(v)) => p.adaptive = *v,
             ("filter", ParamValue::Choice(v)) => p.filter = if v == "pcf" { Filter::Pcf } else { Filter::Pcss },
             ("samples", ParamValue::Int(v)) => p.samples = *v as u32,
+            ("early_out", ParamValue::Bool(v)) => p.early_out = *v,
             ("fallback", ParamValue::Bool(v)) => p.fallback = *v,
             ("visibility_of", ParamValue::Int(v)) => p.visibility_of = u32::try_from(*v).ok(),
             _ => {
@@ -406,7 +426,8 @@ impl Technique for LightCluster {
             normal_offset_texels: self.params.cube.normal_offset_texels,
             tiles_per_row: atlas.tiles_per_row,
             samples: self.params.samples,
-            pcss: u32::from(self.params.filter == Filter::Pcss),
+            flags: if self.params.filter == Filter::Pcss { FLAG_PCSS } else { 0 }
+                | if self.params.early_out { FLAG_EARLY_OUT } else { 0 },
             only_cluster: self.params.visibility_of.unwrap_or(u32::MAX),
             _pad: [0; 3],
         };
