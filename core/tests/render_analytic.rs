@@ -521,3 +521,33 @@ fn an_emissive_texture_on_the_second_uv_channel_is_sampled_with_it() {
         assert!((lo..=hi).contains(&g), "second channel {uv1}: emission {g} at the plate's centre");
     }
 }
+
+#[test]
+fn unchanged_overlays_are_drawn_from_the_last_upload() {
+    // The app draws the same overlays every UI frame: they are tessellated and uploaded once, and drawn the same.
+    use shadowlab_core::technique::Overlay;
+    let scene = plane_and_occluder();
+    let gpu = gpu();
+    let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
+    let mut t = renderer.create_technique("reference").unwrap();
+    let lights = [white_light(Vec3::new(0.0, 3.0, 0.0), 5.0, 20.0)];
+    renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    let a = vec![
+        Overlay::Sphere { center: Vec3::ZERO, radius: 1.0, color: [1.0, 0.0, 0.0, 1.0] },
+        Overlay::Point { position: Vec3::new(0.0, 1.0, 0.0), color: [0.0, 1.0, 0.0, 1.0], radius_px: 6.0 },
+    ];
+    let draw = |renderer: &mut Renderer, primitives: &[Overlay]| {
+        renderer.tonemap().unwrap();
+        renderer.draw_overlays(&scene.camera, primitives, false).unwrap();
+        renderer.read_output().unwrap()
+    };
+    let first = draw(&mut renderer, &a);
+    let second = draw(&mut renderer, &a.clone());
+    assert_eq!(renderer.overlay_uploads(), 1, "equal primitives are not uploaded again");
+    assert_eq!(first, second, "and are drawn the same");
+    let mut b = a.clone();
+    b[1] = Overlay::Point { position: Vec3::new(0.5, 1.0, 0.0), color: [0.0, 1.0, 0.0, 1.0], radius_px: 6.0 };
+    let third = draw(&mut renderer, &b);
+    assert_eq!(renderer.overlay_uploads(), 2, "changed primitives are");
+    assert_ne!(third, second, "and drawn where they now are");
+}

@@ -1204,6 +1204,8 @@ impl Renderer {
         if primitives.is_empty() {
             return Ok(());
         }
+        // wgpu's buffer helpers panic on a lost device.
+        self.gpu.check_lost()?;
         let overlay = self.overlay.get_or_insert_with(|| overlay::OverlayRenderer::new(&self.gpu));
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         let t = &self.targets;
@@ -1220,6 +1222,12 @@ impl Renderer {
         );
         self.gpu.queue.submit([encoder.finish()]);
         Ok(())
+    }
+
+    /// How many times [`Renderer::draw_overlays`] tessellated and uploaded primitives (it reuses the last upload
+    /// while they stay the same).
+    pub fn overlay_uploads(&self) -> u64 {
+        self.overlay.as_ref().map_or(0, |o| o.uploads)
     }
 
     /// Line width and the fading of occluded parts for [`Renderer::draw_overlays`].

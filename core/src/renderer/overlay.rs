@@ -73,6 +73,19 @@ pub struct OverlayRenderer {
     dot_pipelines: [wgpu::RenderPipeline; 3],
     idmap_pipeline: wgpu::RenderPipeline,
     idmap_layout: wgpu::BindGroupLayout,
+    /// The last primitives and what they became on the GPU: the app draws the same overlays every UI frame, and
+    /// they are tessellated and uploaded again only when they change.
+    cache: Option<Uploaded>,
+    /// How many times primitives were tessellated and uploaded (for tests and the timings panel).
+    pub uploads: u64,
+}
+
+/// Primitives tessellated and uploaded: vertex buffers of lines and dots, ID-map textures.
+struct Uploaded {
+    primitives: Vec<Overlay>,
+    lines: Option<(wgpu::Buffer, u32)>,
+    dots: Option<(wgpu::Buffer, u32)>,
+    id_maps: Vec<wgpu::BindGroup>,
 }
 
 /// Colour an ID map on the CPU: a distinct colour per ID at `alpha`, transparent where there is no ID.
@@ -318,23 +331,15 @@ impl OverlayRenderer {
             ],
             idmap_pipeline,
             idmap_layout,
+            cache: None,
+            uploads: 0,
         }
     }
 
     /// Draw `primitives` over `output` (the tone-mapped target) using `depth` (the G-buffer depth).
     #[allow(clippy::too_many_arguments)]
-    pub fn draw(
-        &self,
-        gpu: &GpuContext,
-        encoder: &mut wgpu::CommandEncoder,
-        output: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        clip_from_world: Mat4,
-        size: (u32, u32),
-        primitives: &[Overlay],
-        x_ray: bool,
-        style: OverlayStyle,
-    ) {
+    /// Tessellate `primitives` and upload them: line and dot vertex buffers, a texture per ID or colour map.
+    fn upload(&self, gpu: &GpuContext, primitives: &[Overlay]) -> Uploaded {
         let mut lines = Vec::new();
         let mut dots = Vec::new();
         tessellate(primitives, &mut lines, &mut dots);
@@ -355,35 +360,66 @@ impl OverlayRenderer {
                     }
                     _ => return None,
                 };
-                {
-                    let texture = gpu.device.create_texture_with_data(
-                        &gpu.queue,
-                        &wgpu::TextureDescriptor {
-                            label: Some("id map"),
-                            size: wgpu::Extent3d { width: *width, height: *height, depth_or_array_layers: 1 },
-                            mip_level_count: 1,
-                            sample_count: 1,
-                            dimension: wgpu::TextureDimension::D2,
-                            format: wgpu::TextureFormat::Rgba8Unorm,
-                            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                            view_formats: &[],
-                        },
-                        wgpu::util::TextureDataOrder::LayerMajor,
-                        &pixels,
-                    );
-                    let view = texture.create_view(&Default::default());
-                    Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                let texture = gpu.device.create_texture_with_data(
+                    &gpu.queue,
+                    &wgpu::TextureDescriptor {
                         label: Some("id map"),
-                        layout: &self.idmap_layout,
-                        entries: &[wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::TextureView(&view),
-                        }],
-                    }))
-                }
+                        size: wgpu::Extent3d { width: *width, height: *height, depth_or_array_layers: 1 },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: wgpu::TextureFormat::Rgba8Unorm,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    },
+                    wgpu::util::TextureDataOrder::LayerMajor,
+                    &pixels,
+                );
+                let view = texture.create_view(&Default::default());
+                Some(gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("id map"),
+                    layout: &self.idmap_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    }],
+                }))
             })
             .collect();
-        if lines.is_empty() && dots.is_empty() && id_maps.is_empty() {
+        let buffer = |data: &[u8]| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("overlay vertices"),
+                contents: data,
+                usage: wgpu::BufferUsages::VERTEX,
+            })
+        };
+        Uploaded {
+            primitives: primitives.to_vec(),
+            lines: (!lines.is_empty()).then(|| (buffer(bytemuck::cast_slice(&lines)), lines.len() as u32)),
+            dots: (!dots.is_empty()).then(|| (buffer(bytemuck::cast_slice(&dots)), dots.len() as u32)),
+            id_maps,
+        }
+    }
+
+    pub fn draw(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        output: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        clip_from_world: Mat4,
+        size: (u32, u32),
+        primitives: &[Overlay],
+        x_ray: bool,
+        style: OverlayStyle,
+    ) {
+        // Equal primitives (ID maps compare by pointer first) reuse last time's buffers and textures.
+        if self.cache.as_ref().is_none_or(|c| c.primitives.as_slice() != primitives) {
+            self.cache = Some(self.upload(gpu, primitives));
+            self.uploads += 1;
+        }
+        let Some(cache) = &self.cache else { return };
+        if cache.lines.is_none() && cache.dots.is_none() && cache.id_maps.is_empty() {
             return;
         }
         let (w, h) = (size.0 as f32, size.1 as f32);
@@ -393,15 +429,6 @@ impl OverlayRenderer {
             style: [style.line_width_px.clamp(0.5, 16.0), style.occluded_alpha.clamp(0.0, 1.0), 0.0, 0.0],
         };
         gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
-        let buffer = |data: &[u8]| {
-            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("overlay vertices"),
-                contents: data,
-                usage: wgpu::BufferUsages::VERTEX,
-            })
-        };
-        let line_buffer = (!lines.is_empty()).then(|| buffer(bytemuck::cast_slice(&lines)));
-        let dot_buffer = (!dots.is_empty()).then(|| buffer(bytemuck::cast_slice(&dots)));
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("overlays"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -428,21 +455,21 @@ impl OverlayRenderer {
             &[0]
         };
         pass.set_bind_group(0, &self.bind_group, &[]);
-        for group in &id_maps {
+        for group in &cache.id_maps {
             pass.set_pipeline(&self.idmap_pipeline);
             pass.set_bind_group(1, group, &[]);
             pass.draw(0..3, 0..1);
         }
         for &i in passes {
-            if let Some(b) = &line_buffer {
+            if let Some((b, n)) = &cache.lines {
                 pass.set_pipeline(&self.line_pipelines[i]);
                 pass.set_vertex_buffer(0, b.slice(..));
-                pass.draw(0..6, 0..lines.len() as u32);
+                pass.draw(0..6, 0..*n);
             }
-            if let Some(b) = &dot_buffer {
+            if let Some((b, n)) = &cache.dots {
                 pass.set_pipeline(&self.dot_pipelines[i]);
                 pass.set_vertex_buffer(0, b.slice(..));
-                pass.draw(0..dots.len() as u32, 0..1);
+                pass.draw(0..*n, 0..1);
             }
         }
     }
