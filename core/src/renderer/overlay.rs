@@ -337,7 +337,6 @@ impl OverlayRenderer {
     }
 
     /// Draw `primitives` over `output` (the tone-mapped target) using `depth` (the G-buffer depth).
-    #[allow(clippy::too_many_arguments)]
     /// Tessellate `primitives` and upload them: line and dot vertex buffers, a texture per ID or colour map.
     fn upload(&self, gpu: &GpuContext, primitives: &[Overlay]) -> Uploaded {
         let mut lines = Vec::new();
@@ -401,6 +400,7 @@ impl OverlayRenderer {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &mut self,
         gpu: &GpuContext,
