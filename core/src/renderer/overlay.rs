@@ -336,7 +336,6 @@ impl OverlayRenderer {
         }
     }
 
-    /// Draw `primitives` over `output` (the tone-mapped target) using `depth` (the G-buffer depth).
     /// Tessellate `primitives` and upload them: line and dot vertex buffers, a texture per ID or colour map.
     fn upload(&self, gpu: &GpuContext, primitives: &[Overlay]) -> Uploaded {
         let mut lines = Vec::new();
@@ -400,6 +399,7 @@ impl OverlayRenderer {
         }
     }
 
+    /// Draw `primitives` over `output` (the tone-mapped target) using `depth` (the G-buffer depth).
     #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &mut self,
