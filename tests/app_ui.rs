@@ -1012,3 +1012,22 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
     assert_eq!(fresh.state().technique, "lightcluster");
     assert_eq!(fresh.state().lights, lights);
 }
+
+#[test]
+fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
+    let mut h = start("auto-exposure", "cornell");
+    let settings = h.state().render_settings(egui::vec2(320.0, 200.0), false);
+    assert_eq!(settings.auto_exposure, shadowlab_core::AutoExposure::Meter, "the full image meters");
+    let preview = h.state().render_settings(egui::vec2(320.0, 200.0), true);
+    assert_eq!(preview.auto_exposure, shadowlab_core::AutoExposure::Hold, "the preview holds the metered value");
+    let metered = h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
+    let (scale, average) = metered.expect("metered");
+    assert!(scale.is_finite() && scale > 0.0 && average > 0.0, "{scale} {average}");
+    h.state_mut().view.auto_exposure = false;
+    h.run_steps(3);
+    assert_eq!(
+        h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap(),
+        None,
+        "off: the exposure as set"
+    );
+}
