@@ -1295,7 +1295,8 @@ fn sequence(args: SequenceArgs) -> Result<()> {
         Some(text) => parse_vec3s(text)?.1,
         None => crate::sequence::orbit_target(&camera, &scene.bounds),
     };
-    let mut images = Vec::with_capacity(if args.gif.is_some() { frames } else { 0 });
+    let mut gif = args.gif.as_deref().map(|g| crate::sequence::GifWriter::new(g, args.frame_ms)).transpose()?;
+    let mut gif_secs = 0.0;
     let mut progress = Progress::new(&format!("sequence {}", args.technique), f.quiet).with_unit("frame");
     for i in 0..frames {
         let (camera, moved) = match args.motion {
@@ -1311,24 +1312,21 @@ fn sequence(args: SequenceArgs) -> Result<()> {
         renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
         let image = renderer.read_output()?;
         write_atomic(&crate::sequence::frame_path(&args.out_dir, i), &encode_png(&image)?)?;
-        if args.gif.is_some() {
-            images.push(image);
+        if let Some(gif) = &mut gif {
+            let start = Instant::now();
+            gif.add(&image)?;
+            gif_secs += start.elapsed().as_secs_f32();
         }
         progress.update(i + 1, frames);
     }
-    let gif_secs = match &args.gif {
-        Some(g) => {
-            let start = Instant::now();
-            crate::sequence::write_gif(g, &images, args.frame_ms)?;
-            Some(start.elapsed().as_secs_f32())
-        }
-        None => None,
-    };
+    if let Some(gif) = gif {
+        gif.finish()?;
+    }
     if !f.quiet {
         eprintln!("wrote {frames} frames in {}", args.out_dir.display());
-        if let (Some(g), Some(secs)) = (&args.gif, gif_secs) {
+        if let Some(g) = &args.gif {
             let kib = std::fs::metadata(g).map(|m| m.len() / 1024).unwrap_or(0);
-            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {secs:.2} s)", g.display());
+            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {gif_secs:.2} s)", g.display());
         }
     }
     Ok(())

@@ -157,7 +157,9 @@ impl ShadowLabApp {
         orbit.set_mode(CameraMode::Orbit);
         let start_yaw = orbit.yaw;
         let mut paths = Vec::with_capacity(frames);
-        let mut images = Vec::with_capacity(frames);
+        let frame_ms = period_secs.map_or(80, |p| (p * 1000.0 / frames as f32).round() as u32);
+        let gif_path = dir.join("sequence.gif");
+        let mut gif = sequence::GifWriter::new(&gif_path, frame_ms)?;
         for i in 0..frames {
             let share = i as f32 / frames as f32;
             let lights = match period_secs {
@@ -184,12 +186,10 @@ impl ShadowLabApp {
             let image = renderer.read_output()?;
             image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
             paths.push(path);
-            images.push(image);
+            gif.add(&image)?;
         }
-        let frame_ms = period_secs.map_or(80, |p| (p * 1000.0 / frames as f32).round() as u32);
-        let gif = dir.join("sequence.gif");
-        sequence::write_gif(&gif, &images, frame_ms)?;
-        Ok(SavedSequence { frames: paths, gif })
+        gif.finish()?;
+        Ok(SavedSequence { frames: paths, gif: gif_path })
     }
 }
 
