@@ -958,6 +958,28 @@ fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     let (at, k) = indirect_point_on_screen(&mut h, "fuzzy", "vpl cluster representatives");
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
+    // A pixel of the per-pixel shading-point cluster map, once that layer is on: its cluster.
+    let centre = h.state().last_viewport_rect.unwrap().center();
+    for layer in [
+        "vpl cluster representatives",
+        "vpls by cluster",
+        "probe: clusters and visibility rays (green visible, red blocked)",
+    ] {
+        h.state_mut().view.overlays.insert(layer.into(), false);
+    }
+    assert!(h.state_mut().overlay_tooltip(&p, centre).is_empty(), "the map's layer is off");
+    h.state_mut().view.overlays.insert("shading-point clusters".into(), true);
+    let lines = h.state_mut().overlay_tooltip(&p, centre);
+    let id: usize = lines
+        .first()
+        .and_then(|l| l.strip_prefix("shading-point clusters: "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{lines:?}"));
+    assert!(
+        lines[1].starts_with(&format!("shading-point cluster {id} (")) && lines[2].ends_with("members"),
+        "{lines:?}"
+    );
 }
 
 #[test]
