@@ -637,6 +637,18 @@ fn sequence_writes_an_orbits_pngs_and_a_gif_of_them() {
     let a = image::open(lights_dir.join("frame-0000.png")).unwrap();
     let b = image::open(lights_dir.join("frame-0001.png")).unwrap();
     assert!(a != b, "the lights moved");
+    // With the default overlay layers (the lights' dots) drawn over each frame.
+    let overlays_dir = dir.join("overlays");
+    let mut args = vec!["sequence", "--quiet", "--scene", "cornell", "--frames", "2", "--motion", "lights"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--step", "0.3,0,0", "--overlays", "--out-dir", overlays_dir.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(image::open(overlays_dir.join("frame-0000.png")).unwrap() != a, "the overlays are drawn");
+    let mut args = vec!["sequence", "--scene", "cornell", "--frames", "1", "--overlay-layer", "nope"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--out-dir", overlays_dir.to_str().unwrap()]);
+    assert_fails_with(&args, "--overlay-layer 'nope'");
     let no_dir = ["--out-dir", "/tmp/shadowlab-seq"];
     assert_fails_with(&[&["sequence", "--frames", "0"][..], &no_dir].concat(), "--frames 0");
     assert_fails_with(&[&["sequence", "--gif", "x.png"][..], &no_dir].concat(), "must end in .gif");

@@ -101,6 +101,12 @@ pub struct SequenceArgs {
     /// How long the GIF shows each frame, in milliseconds (GIF counts hundredths of a second).
     #[arg(long, default_value_t = 80)]
     pub frame_ms: u32,
+    /// Draw the overlay layers the techniques show by default over every frame; `--overlay-layer NAME` picks
+    /// layers by name instead (repeatable).
+    #[arg(long)]
+    pub overlays: bool,
+    #[arg(long = "overlay-layer", value_name = "NAME")]
+    pub overlay_layers: Vec<String>,
 }
 
 #[derive(Args, Debug)]
@@ -670,30 +676,7 @@ fn render(args: RenderArgs) -> Result<()> {
         }
     }
     if args.overlays || !args.overlay_layers.is_empty() {
-        let mut layers = technique.overlays(&lights);
-        if let Some(i) = renderer.indirect() {
-            layers.extend(i.overlays(&lights));
-        }
-        for name in &args.overlay_layers {
-            if !layers.iter().any(|l| l.name == name) {
-                bail!(
-                    "--overlay-layer '{name}': the techniques have the layers {}",
-                    layers.iter().map(|l| format!("'{}'", l.name)).collect::<Vec<_>>().join(", ")
-                );
-            }
-        }
-        let primitives: Vec<technique::Overlay> = layers
-            .into_iter()
-            .filter(|l| {
-                if args.overlay_layers.is_empty() {
-                    l.visible_by_default
-                } else {
-                    args.overlay_layers.iter().any(|n| n == l.name)
-                }
-            })
-            .flat_map(|l| l.primitives)
-            .collect();
-        renderer.draw_overlays(&camera, &primitives, false)?;
+        draw_overlays(&mut renderer, technique.as_ref(), &camera, &lights, &args.overlay_layers)?;
     }
     write_atomic(&args.out, &encode_png(&renderer.read_output()?)?)?;
 
@@ -1260,6 +1243,35 @@ fn sweep(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// Draw the overlay layers of the technique and the indirect technique over the last frame: the layers
+/// named in `names`, or those shown by default when it is empty.
+fn draw_overlays(
+    renderer: &mut Renderer,
+    technique: &dyn Technique,
+    camera: &Camera,
+    lights: &[PointLight],
+    names: &[String],
+) -> Result<()> {
+    let mut layers = technique.overlays(lights);
+    if let Some(i) = renderer.indirect() {
+        layers.extend(i.overlays(lights));
+    }
+    for name in names {
+        if !layers.iter().any(|l| l.name == name) {
+            bail!(
+                "--overlay-layer '{name}': the techniques have the layers {}",
+                layers.iter().map(|l| format!("'{}'", l.name)).collect::<Vec<_>>().join(", ")
+            );
+        }
+    }
+    let primitives: Vec<technique::Overlay> = layers
+        .into_iter()
+        .filter(|l| if names.is_empty() { l.visible_by_default } else { names.iter().any(|n| n == l.name) })
+        .flat_map(|l| l.primitives)
+        .collect();
+    Ok(renderer.draw_overlays(camera, &primitives, false)?)
+}
+
 /// `--step DX,DY,DZ`.
 fn parse_step(text: &str) -> Result<Vec3> {
     let step: Vec<f32> = text
@@ -1310,6 +1322,9 @@ fn sequence(args: SequenceArgs) -> Result<()> {
             }
         };
         renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
+        if args.overlays || !args.overlay_layers.is_empty() {
+            draw_overlays(&mut renderer, technique.as_ref(), &camera, &moved, &args.overlay_layers)?;
+        }
         let image = renderer.read_output()?;
         write_atomic(&crate::sequence::frame_path(&args.out_dir, i), &encode_png(&image)?)?;
         if let Some(gif) = &mut gif {
