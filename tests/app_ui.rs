@@ -711,6 +711,12 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     assert_eq!(gif.len(), 3, "one GIF frame per PNG");
     assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
     assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
+    // The view's overlay layers (LightCluster's lights by cluster) are drawn over the frames, unless switched off.
+    h.state_mut().sequence_overlays = false;
+    let plain = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
+    let plain: Vec<_> = plain.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    assert!(plain[0] != images[0] && plain[0].dimensions() == images[0].dimensions(), "overlays drawn");
+    h.state_mut().sequence_overlays = true;
     // The light animation: an error while it is off, then one period in 2 frames that differ.
     assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
     h.state_mut().animation = shadowlab::gui::Animation::Bob;

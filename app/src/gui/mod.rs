@@ -255,6 +255,8 @@ pub struct ShadowLabApp {
     pub last_view_pixels: egui::Vec2,
     /// Frames of an orbit image sequence (File menu).
     pub orbit_frames: usize,
+    /// Draw the view's visible overlay layers over the frames of image sequences (File menu).
+    pub sequence_overlays: bool,
     /// The shadow-map inspector's state.
     pub inspector: inspector::Inspector,
     /// The Explain panel's chosen step: (technique key, step index).
@@ -321,6 +323,7 @@ impl ShadowLabApp {
             legends: Vec::new(),
             last_view_pixels: egui::vec2(640.0, 360.0),
             orbit_frames: 36,
+            sequence_overlays: true,
             inspector: inspector::Inspector::default(),
             explain_step: None,
             explain_saved: BTreeMap::new(),
