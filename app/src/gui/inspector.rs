@@ -383,7 +383,8 @@ impl Inspector {
         self.sources = sources;
         let sources = &self.sources;
         let current = sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none");
-        let combo = egui::ComboBox::from_id_salt("inspector maps").width(ui.available_width() - 8.0);
+        // Labelled (the label also names it for accessibility), and narrow enough to leave the label room.
+        let combo = egui::ComboBox::from_label("maps").width((ui.available_width() - 48.0).max(80.0));
         combo.selected_text(current).show_ui(ui, |ui| {
             for (source, label) in sources {
                 ui.selectable_value(&mut self.source, *source, label);
