@@ -867,7 +867,7 @@ impl ShadowLabApp {
             let from = (gpu.main.frame_key(), source);
             if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
                 let ctx = gpu.ctx.clone();
-                // Set `set` 0 is the shadow atlas when there is one, so count from the technique's own list.
+                // `set` 0 is the shadow atlas; without one the depth images still start at 1.
                 let read = |t: &dyn Technique| {
                     let offset = usize::from(t.shadow_atlas().is_none());
                     let all = sets(t);
