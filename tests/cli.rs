@@ -687,6 +687,15 @@ fn maps_out_saves_the_shadow_atlases() {
     // Drawn depth is grey to white somewhere, empty texels black.
     assert!(direct.pixels().any(|p| p[0] > 64) && val.pixels().any(|p| p[0] > 64));
     assert_eq!(val.width() % 32, 0);
+    // INSM: its cube maps drawn from the meshes, and its intermediate images (4 of 32²: a 2x2 atlas).
+    let images = dir.join("maps-images.png");
+    let _ = std::fs::remove_file(&images);
+    let insm = ["--scene", "cornell", "--width", "32", "--height", "24", "--shadow-res", "32", "--technique", "insm"];
+    let insm_params = ["--param", "k=4", "--param", "insm_res=32", "--maps-out", &maps_arg];
+    render_ok("maps", &[&insm[..], &insm_params[..]].concat());
+    let images = image::open(&images).unwrap().to_rgba8();
+    assert_eq!(images.dimensions(), (64, 64), "four 32² images");
+    assert!(images.pixels().any(|p| p[0] > 64), "the images see the room");
     let png = dir.join("x.png");
     assert_fails_with(
         &[

@@ -269,8 +269,9 @@ pub struct RenderArgs {
     pub overlays: bool,
     #[arg(long = "overlay-layer", value_name = "NAME")]
     pub overlay_layers: Vec<String>,
-    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, and the indirect
-    /// technique's as `<name>-indirect.png` (the last batch when a frame had several).
+    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, the indirect
+    /// technique's as `<name>-indirect.png` (the last batch when a frame had several), and other depth
+    /// images the technique renders (INSM's intermediate images) as `<name>-images.png`.
     #[arg(long)]
     pub maps_out: Option<PathBuf>,
 }
@@ -669,6 +670,19 @@ fn render(args: RenderArgs) -> Result<()> {
             wrote += 1;
             if !frame.quiet {
                 eprintln!("wrote {} ({what}, {} tiles of {}²)", indirect_path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        // Other depth images the technique rendered (INSM's intermediate images): `<name>-images.png`.
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps").to_string();
+        let images = technique.depth_images();
+        for (i, (atlas, what)) in images.iter().enumerate() {
+            let suffix = if images.len() == 1 { String::new() } else { format!("-{i}") };
+            let images_path = path.with_file_name(format!("{stem}-images{suffix}.png"));
+            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            write_atomic(&images_path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", images_path.display(), atlas.tiles, atlas.resolution);
             }
         }
         if wrote == 0 {
