@@ -711,6 +711,12 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     assert_eq!(gif.len(), 3, "one GIF frame per PNG");
     assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
     assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
+    // The view's overlay layers (LightCluster's lights by cluster) are drawn over the frames, unless switched off.
+    h.state_mut().sequence_overlays = false;
+    let plain = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
+    let plain: Vec<_> = plain.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
+    assert!(plain[0] != images[0] && plain[0].dimensions() == images[0].dimensions(), "overlays drawn");
+    h.state_mut().sequence_overlays = true;
     // The light animation: an error while it is off, then one period in 2 frames that differ.
     assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
     h.state_mut().animation = shadowlab::gui::Animation::Bob;
@@ -958,6 +964,28 @@ fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     let (at, k) = indirect_point_on_screen(&mut h, "fuzzy", "vpl cluster representatives");
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
+    // A pixel of the per-pixel shading-point cluster map, once that layer is on: its cluster.
+    let centre = h.state().last_viewport_rect.unwrap().center();
+    for layer in [
+        "vpl cluster representatives",
+        "vpls by cluster",
+        "probe: clusters and visibility rays (green visible, red blocked)",
+    ] {
+        h.state_mut().view.overlays.insert(layer.into(), false);
+    }
+    assert!(h.state_mut().overlay_tooltip(&p, centre).is_empty(), "the map's layer is off");
+    h.state_mut().view.overlays.insert("shading-point clusters".into(), true);
+    let lines = h.state_mut().overlay_tooltip(&p, centre);
+    let id: usize = lines
+        .first()
+        .and_then(|l| l.strip_prefix("shading-point clusters: "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{lines:?}"));
+    assert!(
+        lines[1].starts_with(&format!("shading-point cluster {id} (")) && lines[2].ends_with("members"),
+        "{lines:?}"
+    );
 }
 
 #[test]

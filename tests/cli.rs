@@ -637,6 +637,18 @@ fn sequence_writes_an_orbits_pngs_and_a_gif_of_them() {
     let a = image::open(lights_dir.join("frame-0000.png")).unwrap();
     let b = image::open(lights_dir.join("frame-0001.png")).unwrap();
     assert!(a != b, "the lights moved");
+    // With the default overlay layers (the lights' dots) drawn over each frame.
+    let overlays_dir = dir.join("overlays");
+    let mut args = vec!["sequence", "--quiet", "--scene", "cornell", "--frames", "2", "--motion", "lights"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--step", "0.3,0,0", "--overlays", "--out-dir", overlays_dir.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(image::open(overlays_dir.join("frame-0000.png")).unwrap() != a, "the overlays are drawn");
+    let mut args = vec!["sequence", "--scene", "cornell", "--frames", "1", "--overlay-layer", "nope"];
+    args.extend_from_slice(&size);
+    args.extend_from_slice(&["--out-dir", overlays_dir.to_str().unwrap()]);
+    assert_fails_with(&args, "--overlay-layer 'nope'");
     let no_dir = ["--out-dir", "/tmp/shadowlab-seq"];
     assert_fails_with(&[&["sequence", "--frames", "0"][..], &no_dir].concat(), "--frames 0");
     assert_fails_with(&[&["sequence", "--gif", "x.png"][..], &no_dir].concat(), "must end in .gif");
@@ -675,6 +687,15 @@ fn maps_out_saves_the_shadow_atlases() {
     // Drawn depth is grey to white somewhere, empty texels black.
     assert!(direct.pixels().any(|p| p[0] > 64) && val.pixels().any(|p| p[0] > 64));
     assert_eq!(val.width() % 32, 0);
+    // INSM: its cube maps drawn from the meshes, and its intermediate images (4 of 32²: a 2x2 atlas).
+    let images = dir.join("maps-images.png");
+    let _ = std::fs::remove_file(&images);
+    let insm = ["--scene", "cornell", "--width", "32", "--height", "24", "--shadow-res", "32", "--technique", "insm"];
+    let insm_params = ["--param", "k=4", "--param", "insm_res=32", "--maps-out", &maps_arg];
+    render_ok("maps", &[&insm[..], &insm_params[..]].concat());
+    let images = image::open(&images).unwrap().to_rgba8();
+    assert_eq!(images.dimensions(), (64, 64), "four 32² images");
+    assert!(images.pixels().any(|p| p[0] > 64), "the images see the room");
     let png = dir.join("x.png");
     assert_fails_with(
         &[

@@ -101,6 +101,12 @@ pub struct SequenceArgs {
     /// How long the GIF shows each frame, in milliseconds (GIF counts hundredths of a second).
     #[arg(long, default_value_t = 80)]
     pub frame_ms: u32,
+    /// Draw the overlay layers the techniques show by default over every frame; `--overlay-layer NAME` picks
+    /// layers by name instead (repeatable).
+    #[arg(long)]
+    pub overlays: bool,
+    #[arg(long = "overlay-layer", value_name = "NAME")]
+    pub overlay_layers: Vec<String>,
 }
 
 #[derive(Args, Debug)]
@@ -268,8 +274,9 @@ pub struct RenderArgs {
     pub overlays: bool,
     #[arg(long = "overlay-layer", value_name = "NAME")]
     pub overlay_layers: Vec<String>,
-    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, and the indirect
-    /// technique's as `<name>-indirect.png` (the last batch when a frame had several).
+    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, the indirect
+    /// technique's as `<name>-indirect.png` (the last batch when a frame had several), and other depth
+    /// images the technique renders (INSM's intermediate images) as `<name>-images.png`.
     #[arg(long)]
     pub maps_out: Option<PathBuf>,
 }
@@ -671,35 +678,25 @@ fn render(args: RenderArgs) -> Result<()> {
                 eprintln!("wrote {} ({what}, {} tiles of {}²)", indirect_path.display(), atlas.tiles, atlas.resolution);
             }
         }
+        // Other depth images the technique rendered (INSM's intermediate images): `<name>-images.png`.
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps").to_string();
+        let images = technique.depth_images();
+        for (i, (atlas, what)) in images.iter().enumerate() {
+            let suffix = if images.len() == 1 { String::new() } else { format!("-{i}") };
+            let images_path = path.with_file_name(format!("{stem}-images{suffix}.png"));
+            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            write_atomic(&images_path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", images_path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
         if wrote == 0 {
             bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.technique);
         }
     }
     if args.overlays || !args.overlay_layers.is_empty() {
-        let mut layers = technique.overlays(&lights);
-        if let Some(i) = renderer.indirect() {
-            layers.extend(i.overlays(&lights));
-        }
-        for name in &args.overlay_layers {
-            if !layers.iter().any(|l| l.name == name) {
-                bail!(
-                    "--overlay-layer '{name}': the techniques have the layers {}",
-                    layers.iter().map(|l| format!("'{}'", l.name)).collect::<Vec<_>>().join(", ")
-                );
-            }
-        }
-        let primitives: Vec<technique::Overlay> = layers
-            .into_iter()
-            .filter(|l| {
-                if args.overlay_layers.is_empty() {
-                    l.visible_by_default
-                } else {
-                    args.overlay_layers.iter().any(|n| n == l.name)
-                }
-            })
-            .flat_map(|l| l.primitives)
-            .collect();
-        renderer.draw_overlays(&camera, &primitives, false)?;
+        draw_overlays(&mut renderer, technique.as_ref(), &camera, &lights, &args.overlay_layers)?;
     }
     write_atomic(&args.out, &encode_png(&renderer.read_output()?)?)?;
 
@@ -1272,6 +1269,35 @@ fn sweep(args: SweepArgs) -> Result<()> {
     Ok(())
 }
 
+/// Draw the overlay layers of the technique and the indirect technique over the last frame: the layers
+/// named in `names`, or those shown by default when it is empty.
+fn draw_overlays(
+    renderer: &mut Renderer,
+    technique: &dyn Technique,
+    camera: &Camera,
+    lights: &[PointLight],
+    names: &[String],
+) -> Result<()> {
+    let mut layers = technique.overlays(lights);
+    if let Some(i) = renderer.indirect() {
+        layers.extend(i.overlays(lights));
+    }
+    for name in names {
+        if !layers.iter().any(|l| l.name == name) {
+            bail!(
+                "--overlay-layer '{name}': the techniques have the layers {}",
+                layers.iter().map(|l| format!("'{}'", l.name)).collect::<Vec<_>>().join(", ")
+            );
+        }
+    }
+    let primitives: Vec<technique::Overlay> = layers
+        .into_iter()
+        .filter(|l| if names.is_empty() { l.visible_by_default } else { names.iter().any(|n| n == l.name) })
+        .flat_map(|l| l.primitives)
+        .collect();
+    Ok(renderer.draw_overlays(camera, &primitives, false)?)
+}
+
 /// `--step DX,DY,DZ`.
 fn parse_step(text: &str) -> Result<Vec3> {
     let step: Vec<f32> = text
@@ -1307,7 +1333,8 @@ fn sequence(args: SequenceArgs) -> Result<()> {
         Some(text) => parse_vec3s(text)?.1,
         None => crate::sequence::orbit_target(&camera, &scene.bounds),
     };
-    let mut images = Vec::with_capacity(if args.gif.is_some() { frames } else { 0 });
+    let mut gif = args.gif.as_deref().map(|g| crate::sequence::GifWriter::new(g, args.frame_ms)).transpose()?;
+    let mut gif_secs = 0.0;
     let mut progress = Progress::new(&format!("sequence {}", args.technique), f.quiet).with_unit("frame");
     for i in 0..frames {
         let (camera, moved) = match args.motion {
@@ -1321,26 +1348,26 @@ fn sequence(args: SequenceArgs) -> Result<()> {
             }
         };
         renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
+        if args.overlays || !args.overlay_layers.is_empty() {
+            draw_overlays(&mut renderer, technique.as_ref(), &camera, &moved, &args.overlay_layers)?;
+        }
         let image = renderer.read_output()?;
         write_atomic(&crate::sequence::frame_path(&args.out_dir, i), &encode_png(&image)?)?;
-        if args.gif.is_some() {
-            images.push(image);
+        if let Some(gif) = &mut gif {
+            let start = Instant::now();
+            gif.add(&image)?;
+            gif_secs += start.elapsed().as_secs_f32();
         }
         progress.update(i + 1, frames);
     }
-    let gif_secs = match &args.gif {
-        Some(g) => {
-            let start = Instant::now();
-            crate::sequence::write_gif(g, &images, args.frame_ms)?;
-            Some(start.elapsed().as_secs_f32())
-        }
-        None => None,
-    };
+    if let Some(gif) = gif {
+        gif.finish()?;
+    }
     if !f.quiet {
         eprintln!("wrote {frames} frames in {}", args.out_dir.display());
-        if let (Some(g), Some(secs)) = (&args.gif, gif_secs) {
+        if let Some(g) = &args.gif {
             let kib = std::fs::metadata(g).map(|m| m.len() / 1024).unwrap_or(0);
-            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {secs:.2} s)", g.display());
+            eprintln!("wrote {} ({frames} frames, {kib} KiB, encoded in {gif_secs:.2} s)", g.display());
         }
     }
     Ok(())

@@ -158,6 +158,28 @@ pub fn render_technique(
     repeat: u32,
     progress: &mut dyn FnMut(&str),
 ) -> Result<Rendered> {
+    let no_after = &mut |_: &mut Renderer, _: &dyn shadowlab_core::technique::Technique| Ok(());
+    render_technique_then(
+        renderer, technique, shadow_res, params, camera, lights, indirect, warmup, repeat, progress, no_after,
+    )
+}
+
+/// [`render_technique`], then `after` with the renderer and the technique of the last frame (e.g. to draw the
+/// technique's overlays over the output).
+#[allow(clippy::too_many_arguments)]
+pub fn render_technique_then(
+    renderer: &mut Renderer,
+    technique: &str,
+    shadow_res: Option<u32>,
+    params: &[String],
+    camera: &Camera,
+    lights: &[PointLight],
+    indirect: &IndirectChoice,
+    warmup: u32,
+    repeat: u32,
+    progress: &mut dyn FnMut(&str),
+    after: &mut dyn FnMut(&mut Renderer, &dyn shadowlab_core::technique::Technique) -> Result<()>,
+) -> Result<Rendered> {
     apply_indirect(renderer, indirect)?;
     let mut t = renderer.create_technique(technique).ok_or_else(|| {
         anyhow!("unknown technique '{technique}' (choose one of: {})", shadowlab_core::technique::keys())
@@ -173,6 +195,7 @@ pub fn render_technique(
     }
     let (w, h) = (renderer.settings().width, renderer.settings().height);
     let image = Image::new(w, h, renderer.read_hdr()?)?;
+    after(renderer, t.as_ref())?;
     let mut parameters: BTreeMap<String, String> =
         t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
     if let Some(i) = renderer.indirect() {

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{bail, Context, Result};
 use glam::{Quat, Vec3};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
@@ -57,29 +57,76 @@ pub fn check_frames(frames: usize) -> Result<()> {
     Ok(())
 }
 
-/// Write `frames` (all of one size, at most 65,535 pixels a side) as a GIF that loops forever, each shown for
-/// `frame_ms` (GIF delays are in hundredths of a second: rounded down to 10 ms, at least 10). Written to a
-/// temporary file first, so a failure leaves no half GIF.
-pub fn write_gif(path: &Path, frames: &[RgbaImage], frame_ms: u32) -> Result<()> {
-    let first = frames.first().ok_or_else(|| anyhow!("a GIF needs at least one frame"))?;
-    if frames.iter().any(|f| f.dimensions() != first.dimensions()) {
-        bail!("the frames of a GIF must all have one size");
+/// A looping GIF written frame by frame, so a long sequence never holds its raw frames: only the encoded
+/// bytes are kept (a GIF is small: 36 frames of 320x180 take about 180 KiB), written to the file by
+/// [`GifWriter::finish`] (a temporary file, then a rename: a failure leaves no half GIF).
+pub struct GifWriter {
+    encoder: Option<GifEncoder<SharedBytes>>,
+    bytes: SharedBytes,
+    path: PathBuf,
+    delay: Delay,
+    size: Option<(u32, u32)>,
+}
+
+/// The encoder's output, shared so the bytes can be taken once the encoder is dropped (dropping it writes
+/// the GIF trailer, which cannot fail into memory).
+#[derive(Clone, Default)]
+struct SharedBytes(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl std::io::Write for SharedBytes {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
     }
-    if first.width() > u16::MAX as u32 || first.height() > u16::MAX as u32 {
-        bail!("{}x{} is too large for a GIF (at most 65535 a side)", first.width(), first.height());
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
-    let delay = Delay::from_numer_denom_ms(frame_ms.clamp(10, 655_350) / 10 * 10, 1);
-    let mut bytes = Vec::new();
-    {
-        let mut encoder = GifEncoder::new_with_speed(&mut bytes, GIF_SPEED);
+}
+
+impl GifWriter {
+    /// Each frame shown for `frame_ms` (GIF delays are in hundredths of a second: rounded down to 10 ms, at
+    /// least 10).
+    pub fn new(path: &Path, frame_ms: u32) -> Result<GifWriter> {
+        let bytes = SharedBytes::default();
+        let mut encoder = GifEncoder::new_with_speed(bytes.clone(), GIF_SPEED);
         encoder.set_repeat(Repeat::Infinite).context("cannot encode the GIF")?;
-        for f in frames {
-            encoder
-                .encode_frame(Frame::from_parts(f.clone(), 0, 0, delay))
-                .context("cannot encode a frame of the GIF")?;
-        }
+        let delay = Delay::from_numer_denom_ms(frame_ms.clamp(10, 655_350) / 10 * 10, 1);
+        Ok(GifWriter { encoder: Some(encoder), bytes, path: path.to_path_buf(), delay, size: None })
     }
-    crate::cli::write_atomic(path, &bytes)
+
+    /// Add a frame: all of one size, at most 65,535 pixels a side.
+    pub fn add(&mut self, frame: &RgbaImage) -> Result<()> {
+        let size = *self.size.get_or_insert(frame.dimensions());
+        if frame.dimensions() != size {
+            bail!("the frames of a GIF must all have one size");
+        }
+        if size.0 > u16::MAX as u32 || size.1 > u16::MAX as u32 {
+            bail!("{}x{} is too large for a GIF (at most 65535 a side)", size.0, size.1);
+        }
+        let encoder = self.encoder.as_mut().expect("encoding until finished");
+        encoder
+            .encode_frame(Frame::from_parts(frame.clone(), 0, 0, self.delay))
+            .context("cannot encode a frame of the GIF")
+    }
+
+    /// Write the file.
+    pub fn finish(mut self) -> Result<()> {
+        if self.size.is_none() {
+            bail!("a GIF needs at least one frame");
+        }
+        drop(self.encoder.take());
+        let bytes = std::mem::take(&mut *self.bytes.0.borrow_mut());
+        crate::cli::write_atomic(&self.path, &bytes)
+    }
+}
+
+/// Write `frames` as a looping GIF (see [`GifWriter`]).
+pub fn write_gif(path: &Path, frames: &[RgbaImage], frame_ms: u32) -> Result<()> {
+    let mut gif = GifWriter::new(path, frame_ms)?;
+    for f in frames {
+        gif.add(f)?;
+    }
+    gif.finish()
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Context, Result};
-use shadowlab_core::technique::ParamValue;
+use shadowlab_core::technique::{Overlay, ParamValue};
 use shadowlab_core::Renderer;
 
 use super::camera::CameraMode;
@@ -157,7 +157,22 @@ impl ShadowLabApp {
         orbit.set_mode(CameraMode::Orbit);
         let start_yaw = orbit.yaw;
         let mut paths = Vec::with_capacity(frames);
-        let mut images = Vec::with_capacity(frames);
+        let frame_ms = period_secs.map_or(80, |p| (p * 1000.0 / frames as f32).round() as u32);
+        let gif_path = dir.join("sequence.gif");
+        let mut gif = sequence::GifWriter::new(&gif_path, frame_ms)?;
+        // The overlay layers the view shows, drawn as the view draws them (dots and lines in screen points).
+        let layers: Vec<String> = if self.sequence_overlays {
+            self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(name, _)| name).collect()
+        } else {
+            Vec::new()
+        };
+        let view_points = self.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
+        let render_pixels_per_point = renderer.settings().width as f32 / view_points;
+        renderer.set_overlay_style(shadowlab_core::renderer::overlay::OverlayStyle {
+            line_width_px: (2.0 * render_pixels_per_point).max(1.0),
+            occluded_alpha: 0.25,
+        });
+        let x_ray = self.view.x_ray;
         for i in 0..frames {
             let share = i as f32 / frames as f32;
             let lights = match period_secs {
@@ -168,7 +183,24 @@ impl ShadowLabApp {
                 }
             };
             let camera = orbit.camera();
-            measure::render_technique(
+            let draw_overlays = &mut |r: &mut Renderer, t: &dyn shadowlab_core::technique::Technique| {
+                if layers.is_empty() {
+                    return Ok(());
+                }
+                let mut all = t.overlays(&lights);
+                if let Some(i) = r.indirect() {
+                    all.extend(i.overlays(&lights));
+                }
+                let mut primitives: Vec<Overlay> =
+                    all.into_iter().filter(|l| layers.iter().any(|n| n == l.name)).flat_map(|l| l.primitives).collect();
+                for o in &mut primitives {
+                    if let Overlay::Point { radius_px, .. } = o {
+                        *radius_px *= render_pixels_per_point;
+                    }
+                }
+                Ok(r.draw_overlays(&camera, &primitives, x_ray)?)
+            };
+            measure::render_technique_then(
                 &mut renderer,
                 &self.technique,
                 None,
@@ -179,17 +211,16 @@ impl ShadowLabApp {
                 0,
                 1,
                 &mut |_| {},
+                draw_overlays,
             )?;
             let path = sequence::frame_path(&dir, i);
             let image = renderer.read_output()?;
             image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
             paths.push(path);
-            images.push(image);
+            gif.add(&image)?;
         }
-        let frame_ms = period_secs.map_or(80, |p| (p * 1000.0 / frames as f32).round() as u32);
-        let gif = dir.join("sequence.gif");
-        sequence::write_gif(&gif, &images, frame_ms)?;
-        Ok(SavedSequence { frames: paths, gif })
+        gif.finish()?;
+        Ok(SavedSequence { frames: paths, gif: gif_path })
     }
 }
 

@@ -383,7 +383,9 @@ impl Inspector {
         self.sources = sources;
         let sources = &self.sources;
         let current = sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none");
-        egui::ComboBox::from_label("maps").selected_text(current).show_ui(ui, |ui| {
+        // Labelled (the label also names it for accessibility), and narrow enough to leave the label room.
+        let combo = egui::ComboBox::from_label("maps").width((ui.available_width() - 48.0).max(80.0));
+        combo.selected_text(current).show_ui(ui, |ui| {
             for (source, label) in sources {
                 ui.selectable_value(&mut self.source, *source, label);
             }
@@ -395,7 +397,11 @@ impl Inspector {
             ui.label("No shadow maps: the technique renders none, or its frame is not complete yet.");
             return;
         };
-        ui.label(format!("{}: {} tiles of {}² texels", atlas.what, atlas.tiles, atlas.resolution));
+        let rendered = atlas.projections.iter().flatten().count();
+        ui.label(format!(
+            "{}: {} tiles of {}² texels, {rendered} rendered in the last pass",
+            atlas.what, atlas.tiles, atlas.resolution
+        ));
         let cubes = atlas.cubes();
         let mut cube = self.cube;
         ui.horizontal(|ui| {

@@ -274,6 +274,8 @@ pub struct ShadowLabApp {
     pub last_view_pixels: egui::Vec2,
     /// Frames of an orbit image sequence (File menu).
     pub orbit_frames: usize,
+    /// Draw the view's visible overlay layers over the frames of image sequences (File menu).
+    pub sequence_overlays: bool,
     /// The shadow-map inspector's state.
     pub inspector: inspector::Inspector,
     /// The Explain panel's chosen step: (technique key, step index).
@@ -345,6 +347,7 @@ impl ShadowLabApp {
             legends: Vec::new(),
             last_view_pixels: egui::vec2(640.0, 360.0),
             orbit_frames: 36,
+            sequence_overlays: true,
             inspector: inspector::Inspector::default(),
             explain_step: None,
             uncaptured_errors: Default::default(),
@@ -976,7 +979,7 @@ impl ShadowLabApp {
             let from = (gpu.main.frame_key(), source);
             if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
                 let ctx = gpu.ctx.clone();
-                // Set `set` 0 is the shadow atlas when there is one, so count from the technique's own list.
+                // `set` 0 is the shadow atlas; without one the depth images still start at 1.
                 let read = |t: &dyn Technique| {
                     let offset = usize::from(t.shadow_atlas().is_none());
                     let all = sets(t);
@@ -1074,7 +1077,47 @@ impl ShadowLabApp {
             return lines;
         }
         let indirect = indirect_key.and_then(|k| gpu.main.indirect_technique(&k).ok());
-        indirect.and_then(|t| pick(t.borrow().as_ref())).unwrap_or_default()
+        if let Some(lines) = indirect.as_ref().and_then(|t| pick(t.borrow().as_ref())) {
+            return lines;
+        }
+        // A visible per-pixel ID map (a cluster per pixel) under the pointer: the ID there, and what the
+        // technique says of that ID as a hover index of the map's layer. Only in the single view, which the
+        // render target fills.
+        let Some(rect) = self.last_viewport_rect.filter(|_| self.view.mode == ViewMode::Single) else {
+            return Vec::new();
+        };
+        // (layer, size, ids, from the indirect technique)
+        type IdMapLayer = (&'static str, (u32, u32), Arc<Vec<u32>>, bool);
+        let mut maps: Vec<IdMapLayer> = Vec::new();
+        if let Some((_, name, ids, size)) = &self.pixel_ids {
+            maps.push((name, *size, ids.clone(), false));
+        }
+        if let Some(t) = &indirect {
+            for layer in t.borrow().overlays(&[]) {
+                for o in &layer.primitives {
+                    if let Overlay::IdMap { width, height, ids, .. } = o {
+                        maps.push((layer.name, (*width, *height), ids.clone(), true));
+                    }
+                }
+            }
+        }
+        let uv = (pos - rect.min) / rect.size();
+        for (name, (w, h), ids, from_indirect) in maps {
+            if !visible.iter().any(|v| v == name) || !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
+                continue;
+            }
+            let (x, y) = ((uv.x * w as f32) as u32, (uv.y * h as f32) as u32);
+            let Some(&id) = ids.get((y * w + x) as usize).filter(|id| **id != u32::MAX) else { continue };
+            let mut lines = vec![format!("{name}: {id} (pixel {x}, {y})")];
+            let details = if from_indirect {
+                indirect.as_ref().map(|t| t.borrow().hover_details(name, id as usize))
+            } else {
+                gpu.main.technique(&self.technique).ok().map(|t| t.hover_details(name, id as usize))
+            };
+            lines.extend(details.unwrap_or_default());
+            return lines;
+        }
+        Vec::new()
     }
 
     /// Names of the overlay layers the current technique offers, with their state.

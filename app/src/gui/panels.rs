@@ -114,6 +114,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.horizontal(|ui| {
                     let label = ui.label("frames per sequence");
                     ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720)).labelled_by(label.id);
+                    ui.checkbox(&mut app.sequence_overlays, "with the overlays");
                 });
             });
             ui.menu_button("Scene", |ui| {

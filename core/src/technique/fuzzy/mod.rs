@@ -978,6 +978,8 @@ impl Technique for FuzzyClustering {
         match layer {
             "vpl cluster representatives" => cluster("VPL cluster", &ins.vpl_clusters),
             "shading-point centroids" => cluster("shading-point cluster", &ins.sp_centroids),
+            // A pixel's cluster in the per-pixel map: the cluster's representative.
+            "shading-point clusters" => cluster("shading-point cluster", &ins.sp_clusters),
             l if l.starts_with("vpls by cluster") || crate::renderer::vpl_gather::is_vpl_layer(&self.vpls, l) => {
                 let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
                 if let Some(k) = ins.vpl_assignment.get(index).filter(|k| **k != u32::MAX) {
