@@ -158,11 +158,7 @@ struct MeshBuffers {
     k: u32,
     resolution: u32,
     vertices: wgpu::Buffer,
-    /// Each tile's triangles at the start of its fixed slot, as the triangulation writes them.
     indices: wgpu::Buffer,
-    /// The same triangles back to back, in tile order (copied once the tile counts are read back), so that the
-    /// visible tiles of a cube face that follow each other in the image are one draw.
-    compact_indices: wgpu::Buffer,
     tiles: wgpu::Buffer,
     tiles_readback: wgpu::Buffer,
     vertices_readback: Option<wgpu::Buffer>,
@@ -379,11 +375,6 @@ impl Insm {
             tiles * MAX_TRIANGLES_PER_TILE as u64 * 12,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
         );
-        let compact_indices = buffer(
-            "insm compact indices",
-            tiles * MAX_TRIANGLES_PER_TILE as u64 * 12,
-            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-        );
         let tile_bytes = tiles * std::mem::size_of::<GpuTile>() as u64;
         let tiles_buffer = buffer("insm tiles", tile_bytes, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let readback = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
@@ -397,7 +388,6 @@ impl Insm {
             bind_group: self.bind_group_for(gpu, &vertices, &indices, &tiles_buffer),
             vertices,
             indices,
-            compact_indices,
             tiles: tiles_buffer,
             tiles_readback,
             vertices_readback,
@@ -461,10 +451,9 @@ impl Insm {
         self.tiles_ready = false;
     }
 
-    /// Before the first light batch: read the tiles back, make the tile list the lights cull against, and copy
-    /// the tiles' triangles back to back (`encoder`, before the batch's passes). The samples stay on the GPU
-    /// until an overlay asks for them.
-    fn read_tiles(&mut self, gpu: &GpuContext, encoder: &mut wgpu::CommandEncoder) -> Result<(), GpuError> {
+    /// Before the first light batch: read the tiles back and make the tile list the lights cull against (the
+    /// samples stay on the GPU until an overlay asks for them).
+    fn read_tiles(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
         let start = std::time::Instant::now();
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
         let k = self.views.len() as u64;
@@ -473,24 +462,11 @@ impl Insm {
         let tiles: Vec<GpuTile> = bytemuck::cast_slice(&map_read(gpu, &mesh.tiles_readback, tile_bytes)?).to_vec();
         self.tiles.clear();
         self.mesh_triangles = 0;
-        // One copy per run of tiles whose slots are full (then contiguous in both buffers) or per tile.
-        let mut copy: Option<(u64, u64, u64)> = None;
-        let slot_bytes = MAX_TRIANGLES_PER_TILE as u64 * 12;
         for (i, t) in tiles.iter().enumerate() {
             let count = t.count.min(MAX_TRIANGLES_PER_TILE);
             if count == 0 {
                 continue;
             }
-            let first_index = self.mesh_triangles as u32 * 3;
-            let (src, dst, bytes) = (i as u64 * slot_bytes, self.mesh_triangles * 12, count as u64 * 12);
-            copy = match copy {
-                Some((s, d, b)) if s + b == src && d + b == dst => Some((s, d, b + bytes)),
-                Some((s, d, b)) => {
-                    encoder.copy_buffer_to_buffer(&mesh.indices, s, &mesh.compact_indices, d, b);
-                    Some((src, dst, bytes))
-                }
-                None => Some((src, dst, bytes)),
-            };
             self.mesh_triangles += count as u64;
             let min = Vec3::from_slice(&t.bounds_min[..3]);
             let max = Vec3::from_slice(&t.bounds_max[..3]);
@@ -500,10 +476,12 @@ impl Insm {
             } else {
                 Aabb { min: Vec3::splat(-f32::MAX), max: Vec3::splat(f32::MAX) }
             };
-            self.tiles.push(Chunk { first_index, index_count: count * 3, material: 0, bounds });
-        }
-        if let Some((s, d, b)) = copy {
-            encoder.copy_buffer_to_buffer(&mesh.indices, s, &mesh.compact_indices, d, b);
+            self.tiles.push(Chunk {
+                first_index: i as u32 * MAX_TRIANGLES_PER_TILE * 3,
+                index_count: count * 3,
+                material: 0,
+                bounds,
+            });
         }
         self.snapshot = MeshSnapshot {
             resolution: mesh.resolution,
@@ -741,12 +719,12 @@ impl Technique for Insm {
             return Ok(());
         }
         if !self.tiles_ready {
-            self.read_tiles(ctx.gpu, encoder)?;
+            self.read_tiles(ctx.gpu)?;
         }
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
         let geometry = CubeGeometry {
             vertex_buffer: &mesh.vertices,
-            index_buffer: &mesh.compact_indices,
+            index_buffer: &mesh.indices,
             chunks: &self.tiles,
             triangle_count: self.mesh_triangles,
             cull: true,
