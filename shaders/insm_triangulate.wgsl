@@ -15,12 +15,20 @@
 //
 // Adaptive meshes (a deviation beyond the paper, `adaptive` on; the CPU twin is
 // core/src/technique/insm/triangulate.rs): a first pass (`classify`) flags each whole tile whose 64
-// neighbourhoods all keep both triangles and whose samples' inverse depths are all within eps (relative) of the
-// affine function through its corners z(0,0), z(8,0), z(0,8) (the second-difference test taken across the
-// tile: affine on a plane). The second pass (`triangulate`) writes a flagged tile as two triangles when its four
+// neighbourhoods all keep both triangles and whose samples' inverse depths are all within merge_epsilon
+// (relative) of the affine function through its corners z(0,0), z(8,0), z(0,8) (the second-difference test
+// taken across the tile: affine on a plane). The second pass (`triangulate`) writes a flagged tile as two triangles when its four
 // neighbours are flagged too (or have no neighbourhoods), else as a fan from its centre sample over its
 // boundary, one segment per side facing a flagged (or absent) neighbour and every sample of the other sides,
-// so neighbours always share every vertex of a common side: no T-junctions, no cracks.
+// so neighbours always share every vertex of a common side: no T-junctions, no cracks. The plane test uses
+// merge_epsilon (tighter than eps). `classify` also writes every sample's vertex and, per tile, which of its
+// neighbourhoods keep both triangles (`full_lo`, `full_hi`), so that `triangulate` can look at other maps.
+//
+// Covered triangles (a deviation beyond the paper, `drop_covered` on; see core/src/technique/insm/mod.rs): a
+// sample of map j is covered when another map i reconstructs it more finely (it projects into a neighbourhood
+// of i that keeps both triangles, lies on i's triangle there within eps, and that neighbourhood is smaller in
+// world area than the sample's own, within FINER_SLACK: the lower-numbered map). `triangulate` drops a
+// triangle whose three corners are covered, and a merged tile whose samples all are.
 //
 // Outputs: one vertex per sample (world position, inverse depth; inverse depth 0 = background), the kept
 // triangles of each tile compacted at the start of the tile's fixed slot of MAX_TRIS triangles, and per tile
@@ -35,13 +43,16 @@ struct Params {
     atlas_tiles_per_row: u32,
     // 1: merge planar tiles (the adaptive mesh)
     adaptive: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // relative tolerance of the merge test (tighter than epsilon: planes pass it to rounding)
+    merge_epsilon: f32,
+    // 1: drop what another map reconstructs more finely
+    drop_covered: u32,
     _pad2: u32,
 }
 
 struct View {
     world_from_clip: mat4x4<f32>,
+    clip_from_world: mat4x4<f32>,
     near: f32,
     far: f32,
     _pad0: f32,
@@ -52,8 +63,9 @@ struct Tile {
     count: u32,
     // 1 when the adaptive mesh merged the tile (written by `classify`, kept by `triangulate`)
     merged: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // bit y * TILE + x: neighbourhood (x, y) of the tile keeps both triangles (`classify`; kept by `triangulate`)
+    full_lo: u32,
+    full_hi: u32,
     bounds_min: vec4<f32>,
     bounds_max: vec4<f32>,
 }
@@ -77,6 +89,11 @@ var<private> tile_origin: vec2<i32>;
 
 var<workgroup> tri_count: atomic<u32>;
 var<workgroup> planar_count: atomic<u32>;
+var<workgroup> full_bits: array<atomic<u32>, 2>;
+// Sample (x, y) of the tile (0..=TILE each): 1 when another map reconstructs it more finely.
+const CORNERS: u32 = 9u; // TILE + 1
+var<workgroup> covered: array<u32, 81>; // CORNERS * CORNERS
+var<workgroup> covered_count: atomic<u32>;
 var<workgroup> lo: array<atomic<u32>, 3>;
 var<workgroup> hi: array<atomic<u32>, 3>;
 
@@ -167,6 +184,9 @@ fn load_halo(wg: vec3<u32>, li: u32) {
     if li == 0u {
         atomicStore(&tri_count, 0u);
         atomicStore(&planar_count, 0u);
+        atomicStore(&full_bits[0], 0u);
+        atomicStore(&full_bits[1], 0u);
+        atomicStore(&covered_count, 0u);
         for (var i = 0u; i < 3u; i++) {
             atomicStore(&lo[i], 0xffffffffu);
             atomicStore(&hi[i], 0u);
@@ -193,7 +213,7 @@ fn on_tile_plane(p: vec2<i32>) -> bool {
     let f = vec2<f32>(p - tile_origin) / f32(TILE);
     let fit = z00 + (z10 - z00) * f.x + (z01 - z00) * f.y;
     let z = z_at(p);
-    return abs(z - fit) < params.epsilon * z;
+    return abs(z - fit) < params.merge_epsilon * z;
 }
 
 fn tile_index(image: u32, t: vec2<u32>) -> u32 {
@@ -211,20 +231,128 @@ fn classify(
     workgroupBarrier();
     let r = params.resolution;
     let whole = wg.x * TILE + TILE < r && wg.y * TILE + TILE < r;
-    if whole {
-        let p00 = vec2<i32>(wg.xy * TILE + lid.xy);
+    let uv = wg.xy * TILE + lid.xy;
+    // The vertex of sample (u, v): every sample belongs to exactly one invocation. Written here so that
+    // `triangulate` reads every map's samples from the buffer.
+    if uv.x < r && uv.y < r {
+        let z = z_at(vec2<i32>(uv));
+        vertices[wg.z * r * r + uv.y * r + uv.x] = select(vec4<f32>(0.0), vec4<f32>(p_at(vec2<i32>(uv)), z), z > 0.0);
+    }
+    if uv.x + 1u < r && uv.y + 1u < r {
+        let p00 = vec2<i32>(uv);
         let kept = neighbourhood_triangles(p00);
-        let planar = on_tile_plane(p00) && on_tile_plane(p00 + vec2<i32>(0, 1)) && on_tile_plane(p00 + vec2<i32>(1, 1))
-            && on_tile_plane(p00 + vec2<i32>(1, 0));
-        if kept.x && kept.y && planar {
-            atomicAdd(&planar_count, 1u);
+        if kept.x && kept.y {
+            atomicOr(&full_bits[li / 32u], 1u << (li % 32u));
+            let planar = on_tile_plane(p00) && on_tile_plane(p00 + vec2<i32>(0, 1))
+                && on_tile_plane(p00 + vec2<i32>(1, 1)) && on_tile_plane(p00 + vec2<i32>(1, 0));
+            if whole && planar {
+                atomicAdd(&planar_count, 1u);
+            }
         }
     }
     workgroupBarrier();
     if li == 0u {
         let flag = params.adaptive != 0u && atomicLoad(&planar_count) == TILE * TILE;
-        tiles[tile_index(wg.z, wg.xy)].merged = select(0u, 1u, flag);
+        let t = tile_index(wg.z, wg.xy);
+        tiles[t].merged = select(0u, 1u, flag);
+        tiles[t].full_lo = atomicLoad(&full_bits[0]);
+        tiles[t].full_hi = atomicLoad(&full_bits[1]);
     }
+}
+
+// Neighbourhood n of `image` keeps both triangles (the bits `classify` wrote).
+fn neighbourhood_full(image: u32, n: vec2<u32>) -> bool {
+    let t = tile_index(image, n / TILE);
+    let bit = (n.y % TILE) * TILE + n.x % TILE;
+    let word = select(tiles[t].full_lo, tiles[t].full_hi, bit >= 32u);
+    return ((word >> (bit % 32u)) & 1u) != 0u;
+}
+
+fn quad_area(p00: vec3<f32>, p10: vec3<f32>, p01: vec3<f32>, p11: vec3<f32>) -> f32 {
+    return 0.5 * length(cross(p11 - p00, p01 - p10));
+}
+
+// Slack of the finer-sampling comparison (FINER_SLACK in the CPU twin).
+const FINER_SLACK: f32 = 0.95;
+
+// Map i reconstructs world point w (a sample of map j, whose neighbourhood there spans area_j) more finely: w
+// projects into a neighbourhood of i that keeps both triangles, lies on its triangle there (inverse depth within
+// epsilon, relative), and that neighbourhood is smaller (or, within FINER_SLACK, i is the lower-numbered map).
+fn reconstructs_better(i: u32, j: u32, w: vec3<f32>, area_j: f32) -> bool {
+    let v = views[i];
+    let c = v.clip_from_world * vec4<f32>(w, 1.0);
+    if c.w <= 0.0 {
+        return false;
+    }
+    let ndc = c.xyz / c.w;
+    // Written so that NaN fails.
+    if !(abs(ndc.x) <= 1.0 && abs(ndc.y) <= 1.0 && ndc.z >= 0.0 && ndc.z <= 1.0) {
+        return false;
+    }
+    let r = f32(params.resolution);
+    let f = vec2<f32>((ndc.x + 1.0) * 0.5 * r - 0.5, (1.0 - ndc.y) * 0.5 * r - 0.5);
+    let n = floor(f);
+    if n.x < 0.0 || n.y < 0.0 || n.x + 1.0 >= r || n.y + 1.0 >= r {
+        return false;
+    }
+    let ni = vec2<u32>(n);
+    if !neighbourhood_full(i, ni) {
+        return false;
+    }
+    // Map i's samples as `classify` wrote them (world position, inverse depth).
+    let ru = params.resolution;
+    let o = i * ru * ru + ni.y * ru + ni.x;
+    let s00 = vertices[o];
+    let s10 = vertices[o + 1u];
+    let s01 = vertices[o + ru];
+    let s11 = vertices[o + ru + 1u];
+    let z00 = s00.w;
+    let z10 = s10.w;
+    let z01 = s01.w;
+    let z11 = s11.w;
+    let a = f - n;
+    // The neighbourhood's triangles [(0,0), (0,1), (1,1)] (a.x <= a.y) and [(1,1), (1,0), (0,0)].
+    var fit: f32;
+    if a.x <= a.y {
+        fit = z00 + a.x * (z11 - z01) + a.y * (z01 - z00);
+    } else {
+        fit = z00 + a.x * (z10 - z00) + a.y * (z11 - z10);
+    }
+    let zp = (v.far - ndc.z * (v.far - v.near)) / (v.near * v.far);
+    if !(abs(zp - fit) < params.epsilon * zp) {
+        return false;
+    }
+    let area_i = quad_area(s00.xyz, s10.xyz, s01.xyz, s11.xyz);
+    return area_i < area_j * FINER_SLACK || (i < j && area_i * FINER_SLACK <= area_j);
+}
+
+// Sample p of map j (in the tile's halo) is reconstructed more finely by another of the k maps. Its own
+// footprint is the area of the neighbourhood it is the top-left corner of (the last one of its row or column
+// at the image's edge); one with a background corner is unbounded.
+fn sample_covered(p: vec2<i32>, j: u32, k: u32) -> bool {
+    let z = z_at(p);
+    let r = i32(params.resolution);
+    if z <= 0.0 || r < 2 {
+        return false;
+    }
+    let q = min(p, vec2<i32>(r - 2));
+    let z4 = vec4<f32>(z_at(q), z_at(q + vec2<i32>(1, 0)), z_at(q + vec2<i32>(0, 1)), z_at(q + vec2<i32>(1, 1)));
+    var area_j = 3.4028235e38;
+    if all(z4 > vec4<f32>(0.0)) {
+        area_j = quad_area(p_at(q), p_at(q + vec2<i32>(1, 0)), p_at(q + vec2<i32>(0, 1)), p_at(q + vec2<i32>(1, 1)));
+    }
+    let w = p_at(p);
+    for (var i = 0u; i < k; i++) {
+        if i != j && reconstructs_better(i, j, w, area_j) {
+            return true;
+        }
+    }
+    return false;
+}
+
+fn corner_covered(p: vec2<i32>) -> bool {
+    let l = vec2<u32>(p - tile_origin);
+    return covered[l.y * CORNERS + l.x] != 0u;
 }
 
 // A side of a merged tile meets a merged neighbour, or one without neighbourhoods.
@@ -258,25 +386,33 @@ fn triangulate(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     let image = wg.z;
     load_halo(wg, li);
     workgroupBarrier();
 
     let r = params.resolution;
+    // The tile's samples (its neighbourhoods' corners) that another map reconstructs more finely.
+    for (var c = li; c < CORNERS * CORNERS; c += TILE * TILE) {
+        let p = tile_origin + vec2<i32>(i32(c % CORNERS), i32(c / CORNERS));
+        let inside = all(p < vec2<i32>(i32(r)));
+        let cov = params.drop_covered != 0u && inside && sample_covered(p, image, groups.z);
+        covered[c] = select(0u, 1u, cov);
+        if cov {
+            atomicAdd(&covered_count, 1u);
+        }
+    }
+    workgroupBarrier();
     let uv = wg.xy * TILE + lid.xy;
     let tile = (image * params.tiles_per_side + wg.y) * params.tiles_per_side + wg.x;
     let base = image * r * r;
     let p00 = vec2<i32>(uv);
 
-    // The vertex of sample (u, v): every sample belongs to exactly one invocation.
-    if uv.x < r && uv.y < r {
-        let z = z_at(p00);
-        vertices[base + uv.y * r + uv.x] = select(vec4<f32>(0.0), vec4<f32>(p_at(p00), z), z > 0.0);
-    }
-
     let tile_merged = tiles[tile].merged != 0u;
-    if tile_merged && li < 4u {
+    // A merged tile is whole: all its samples lie in the image.
+    let tile_dropped = tile_merged && atomicLoad(&covered_count) == CORNERS * CORNERS;
+    if tile_merged && !tile_dropped && li < 4u {
         // Invocation `li` writes side `li` of the merged tile's fan (or, with four coarse sides, invocation 0
         // the two triangles).
         let t = vec2<i32>(wg.xy);
@@ -317,11 +453,13 @@ fn triangulate(
     // The two triangles of the neighbourhood (Algorithm 2, lines 2-5).
     if !tile_merged && uv.x + 1u < r && uv.y + 1u < r {
         let kept = neighbourhood_triangles(p00);
-        let t1 = kept.x;
-        let t2 = kept.y;
         let p01 = p00 + vec2<i32>(0, 1);
         let p11 = p00 + vec2<i32>(1, 1);
         let p10 = p00 + vec2<i32>(1, 0);
+        // A triangle whose three corners another map reconstructs more finely is dropped.
+        let shared_covered = corner_covered(p00) && corner_covered(p11);
+        let t1 = kept.x && !(shared_covered && corner_covered(p01));
+        let t2 = kept.y && !(shared_covered && corner_covered(p10));
         let n = u32(t1) + u32(t2);
         if n > 0u {
             let slot = atomicAdd(&tri_count, n);
@@ -352,8 +490,10 @@ fn triangulate(
     if li == 0u {
         var t: Tile;
         t.count = atomicLoad(&tri_count);
-        // Neighbours may read this flag meanwhile: it is written with the value it had.
+        // Neighbours may read these flags meanwhile: they are written with the values they had.
         t.merged = select(0u, 1u, tile_merged);
+        t.full_lo = tiles[tile].full_lo;
+        t.full_hi = tiles[tile].full_hi;
         t.bounds_min = vec4<f32>(unordered(atomicLoad(&lo[0])), unordered(atomicLoad(&lo[1])), unordered(atomicLoad(&lo[2])), 0.0);
         t.bounds_max = vec4<f32>(unordered(atomicLoad(&hi[0])), unordered(atomicLoad(&hi[1])), unordered(atomicLoad(&hi[2])), 0.0);
         tiles[tile] = t;

@@ -8,7 +8,7 @@ use std::collections::HashSet;
 use common::*;
 use glam::Vec3;
 use shadowlab_core::scene::{PointLight, Scene};
-use shadowlab_core::technique::insm::triangulate::SampledImage;
+use shadowlab_core::technique::insm::triangulate::{self, SampledImage};
 use shadowlab_core::technique::insm::viewpoints::Viewpoint;
 use shadowlab_core::technique::insm::Insm;
 use shadowlab_core::technique::{ParamValue, Technique};
@@ -57,28 +57,32 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
     insm.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
     let lights = lights_above();
     let mut mesh_sizes = Vec::new();
-    for adaptive in [false, true] {
+    // Algorithm 2, the adaptive mesh, and the adaptive mesh without what another map reconstructs more finely.
+    for (adaptive, drop_covered) in [(false, false), (true, false), (true, true)] {
         insm.set_param("adaptive", &ParamValue::Bool(adaptive)).unwrap();
+        insm.set_param("drop_covered", &ParamValue::Bool(drop_covered)).unwrap();
         let (_, report) = render(&mut r, &mut insm, &scene, &lights);
         let (samples, gpu_triangles) = insm.read_meshes(r.gpu()).unwrap();
         assert_eq!(samples.len(), 6 * 64 * 64);
         assert!(!gpu_triangles.is_empty(), "the intermediate maps see the plane and the plate");
 
         // The CPU twin run on the samples the GPU wrote gives the same triangles (up to floating-point ties),
-        // with Algorithm 2's mesh and with the adaptive one.
-        let eps = insm.params.epsilon;
+        // with Algorithm 2's mesh, the adaptive one and without the covered triangles.
+        let images: Vec<SampledImage> =
+            samples.chunks(64 * 64).map(|s| SampledImage { resolution: 64, samples: s }).collect();
         let mut cpu: HashSet<[u32; 3]> = HashSet::new();
-        for (j, image) in samples.chunks(64 * 64).enumerate() {
+        for (j, mesh) in triangulate::meshes(&images, &insm.map_views(), &insm.mesh_settings()).into_iter().enumerate()
+        {
             let base = (j * 64 * 64) as u32;
-            let img = SampledImage { resolution: 64, samples: image };
-            cpu.extend(img.mesh(eps, adaptive).into_iter().map(|t| t.map(|i| i + base)));
+            cpu.extend(mesh.into_iter().map(|t| t.map(|i| i + base)));
         }
         let gpu: HashSet<[u32; 3]> = gpu_triangles.iter().copied().collect();
         assert_eq!(gpu.len(), gpu_triangles.len(), "no triangle is written twice");
         let differ = gpu.symmetric_difference(&cpu).count();
         assert!(
             differ * 1000 <= cpu.len().max(1000),
-            "adaptive {adaptive}: GPU and CPU triangulations differ in {differ} of {} triangles",
+            "adaptive {adaptive}, drop_covered {drop_covered}: GPU and CPU triangulations differ in {differ} of {} \
+             triangles",
             cpu.len()
         );
         // Every triangle joins valid samples; and the reconstructed vertices lie on the scene (plane y=0 or
@@ -104,6 +108,9 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
     // The ground and the plate are planes, but at 64² from the box placement many 8x8 tiles hold an edge of
     // the ground or the plate (or the image's last row and column, never merged): measured 7,566 of 10,178.
     assert!(mesh_sizes[1] * 10 < mesh_sizes[0] * 8, "adaptive mesh {} vs {} triangles", mesh_sizes[1], mesh_sizes[0]);
+    // Six maps of the same ground and plate from the box placement: what one map sees, others see, mostly as
+    // merged tiles of two triangles each (measured 6,086 of 7,566 triangles left).
+    assert!(mesh_sizes[2] * 10 < mesh_sizes[1] * 9, "without covered triangles {mesh_sizes:?}");
 }
 
 /// Four viewpoints above the plate looking down at it, as a user would place them: the plate is 1 m on a
@@ -266,4 +273,29 @@ fn mesh_overlays_are_built_only_when_shown() {
     // overlays() is everything, as before.
     let all = insm.overlays(&lights);
     assert!(all.iter().filter(|l| names.contains(&l.name)).all(|l| !l.primitives.is_empty()));
+}
+
+#[test]
+fn dropping_covered_triangles_shrinks_the_mesh_and_keeps_the_image() {
+    // The Cornell box from inside: the ten maps see the same walls, so much of each copy goes (measured
+    // 91,090 of 125,356 triangles left: one map, near the floor, sees the blocks up close and keeps almost
+    // all of its 30k); the image stays as close to the reference as with every copy.
+    let scene = Scene::builtin("cornell").unwrap();
+    let lights = scene.lights.clone();
+    let mut r = renderer(&scene);
+    let mut reference = r.create_technique("reference").unwrap();
+    reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
+    let (expected, _) = render(&mut r, reference.as_mut(), &scene, &lights);
+    let mut insm = r.create_technique("insm").unwrap();
+    insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
+    insm.set_param("placement", &ParamValue::Choice("inside".into())).unwrap();
+    let mut results = Vec::new();
+    for drop_covered in [false, true] {
+        insm.set_param("drop_covered", &ParamValue::Bool(drop_covered)).unwrap();
+        let (actual, report) = render(&mut r, insm.as_mut(), &scene, &lights);
+        results.push((share_over(&actual, &expected, 0.05), report.counts.technique.insm_mesh_triangles.unwrap()));
+    }
+    let [(share_all, all), (share_dropped, dropped)] = results[..] else { unreachable!() };
+    assert!(dropped * 10 < all * 8, "mesh {dropped} vs {all} triangles");
+    assert!(share_dropped < 0.05 && share_dropped <= share_all + 0.005, "pixels over 5 %: {results:?}");
 }

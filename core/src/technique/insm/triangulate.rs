@@ -2,10 +2,11 @@
 //! (world position and inverse depth per sample). The technique uses it for its overlays (the reconstructed
 //! mesh, its samples and the dropped edges); the tests check the GPU against it.
 //!
-//! See the shader for the connectivity test and the tile merging of the adaptive mesh. Samples are indexed
+//! See the shader for the connectivity test, the tile merging of the adaptive mesh and the covered triangles
+//! ([`covered_samples`], [`meshes`]: the maps' meshes together). Samples are indexed
 //! `(u, v)` = `(x, y)`, row-major per image.
 
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// Neighbourhoods per tile side; the workgroup size of `insm_triangulate.wgsl`.
 pub const TILE: u32 = 8;
@@ -19,7 +20,8 @@ pub struct GpuTile {
     pub count: u32,
     /// 1 when the adaptive mesh merged the tile.
     pub merged: u32,
-    pub _pad: [u32; 2],
+    /// Bit `y * TILE + x` (low word, then high): neighbourhood `(x, y)` of the tile keeps both triangles.
+    pub full: [u32; 2],
     pub bounds_min: [f32; 4],
     pub bounds_max: [f32; 4],
 }
@@ -28,6 +30,125 @@ const _: () = assert!(std::mem::size_of::<GpuTile>() == 48);
 /// Tiles per image side for `resolution` samples per side (every sample belongs to one tile).
 pub fn tiles_per_side(resolution: u32) -> u32 {
     resolution.div_ceil(TILE)
+}
+
+/// How the meshes are built: the connectivity test's `epsilon`, and the two steps beyond the paper.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshSettings {
+    pub epsilon: f32,
+    /// Merge planar tiles (the adaptive mesh).
+    pub adaptive: bool,
+    /// Relative tolerance of the merge test ([`SampledImage::tile_merged`]).
+    pub merge_epsilon: f32,
+    /// Drop the triangles another map reconstructs more finely ([`covered_samples`]).
+    pub drop_covered: bool,
+}
+
+/// Algorithm 2 exactly.
+impl Default for MeshSettings {
+    fn default() -> Self {
+        MeshSettings { epsilon: 0.01, adaptive: false, merge_epsilon: 0.002, drop_covered: false }
+    }
+}
+
+/// The camera of an intermediate map: its clip-from-world and the depth range it was rendered with (the
+/// inverse depth of a point is `(far - d (far - near)) / (near far)` for its depth-buffer value `d`).
+#[derive(Clone, Copy, Debug)]
+pub struct MapView {
+    pub clip_from_world: Mat4,
+    pub near: f32,
+    pub far: f32,
+}
+
+/// Slack of the finer-sampling comparison of [`covered_samples`]: a map whose neighbourhood is within 5 % of
+/// the other's area is neither finer nor coarser, and the lower-numbered map keeps the surface.
+const FINER_SLACK: f32 = 0.95;
+
+/// Area of the quad of samples `p00, p10, p01, p11` (half the cross product of its diagonals).
+fn quad_area(p00: Vec3, p10: Vec3, p01: Vec3, p11: Vec3) -> f32 {
+    0.5 * (p11 - p00).cross(p01 - p10).length()
+}
+
+/// Map `i` reconstructs world point `w` more finely than a map whose neighbourhood at `w` spans `area_j`:
+/// `w` projects into a neighbourhood of `i` that keeps both triangles, lies on its triangle there (inverse
+/// depth within `epsilon`, relative), and that neighbourhood is smaller (or, within [`FINER_SLACK`], `i` is
+/// the lower-numbered map, `lower`). The twin of `reconstructs_better` in the shader.
+fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f32, lower: bool, epsilon: f32) -> bool {
+    let c = view.clip_from_world * w.extend(1.0);
+    if c.w <= 0.0 {
+        return false;
+    }
+    let ndc = c.truncate() / c.w;
+    // Written so that NaN fails.
+    if !(ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0 && ndc.z >= 0.0 && ndc.z <= 1.0) {
+        return false;
+    }
+    let r = image.resolution as f32;
+    let f = Vec2::new((ndc.x + 1.0) * 0.5 * r - 0.5, (1.0 - ndc.y) * 0.5 * r - 0.5);
+    let n = f.floor();
+    if n.x < 0.0 || n.y < 0.0 || n.x + 1.0 >= r || n.y + 1.0 >= r {
+        return false;
+    }
+    let (x, y) = (n.x as u32, n.y as u32);
+    if !image.neighbourhood(x, y, epsilon).iter().all(Option::is_some) {
+        return false;
+    }
+    let ri = image.resolution;
+    let s = |dx: u32, dy: u32| image.samples[((y + dy) * ri + x + dx) as usize];
+    let (s00, s10, s01, s11) = (s(0, 0), s(1, 0), s(0, 1), s(1, 1));
+    let a = f - n;
+    // The neighbourhood's triangles [(0,0), (0,1), (1,1)] (a.x <= a.y) and [(1,1), (1,0), (0,0)]: inverse depth
+    // is affine on each.
+    let fit = if a.x <= a.y {
+        s00.w + a.x * (s11.w - s01.w) + a.y * (s01.w - s00.w)
+    } else {
+        s00.w + a.x * (s10.w - s00.w) + a.y * (s11.w - s10.w)
+    };
+    let zp = (view.far - ndc.z * (view.far - view.near)) / (view.near * view.far);
+    // Written so that NaN fails.
+    let on_surface = (zp - fit).abs() < epsilon * zp;
+    if !on_surface {
+        return false;
+    }
+    let area_i = quad_area(s00.truncate(), s10.truncate(), s01.truncate(), s11.truncate());
+    area_i < area_j * FINER_SLACK || (lower && area_i * FINER_SLACK <= area_j)
+}
+
+/// For every sample of map `j` (row-major), whether another map reconstructs it more finely (beyond the paper,
+/// see `insm/mod.rs`). A sample's own footprint is the area of the neighbourhood it is the top-left corner of
+/// (the last one of its row or column at the image's edge); one with a background corner is unbounded.
+pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, epsilon: f32) -> Vec<bool> {
+    let img = &images[j];
+    let r = img.resolution;
+    (0..r * r)
+        .map(|s| {
+            let (x, y) = (s % r, s / r);
+            let w = img.samples[s as usize];
+            if w.w <= 0.0 || r < 2 {
+                return false;
+            }
+            let (qx, qy) = (x.min(r - 2), y.min(r - 2));
+            let q = |dx: u32, dy: u32| img.samples[((qy + dy) * r + qx + dx) as usize];
+            let corners = [q(0, 0), q(1, 0), q(0, 1), q(1, 1)];
+            let area_j = if corners.iter().all(|c| c.w > 0.0) {
+                quad_area(corners[0].truncate(), corners[1].truncate(), corners[2].truncate(), corners[3].truncate())
+            } else {
+                f32::MAX
+            };
+            (0..images.len())
+                .any(|i| i != j && reconstructs_better(&images[i], &views[i], w.truncate(), area_j, i < j, epsilon))
+        })
+        .collect()
+}
+
+/// The meshes of all maps (sample indices within each map), as `shaders/insm_triangulate.wgsl` writes them.
+pub fn meshes(images: &[SampledImage], views: &[MapView], settings: &MeshSettings) -> Vec<Vec<[u32; 3]>> {
+    (0..images.len())
+        .map(|j| {
+            let covered = settings.drop_covered.then(|| covered_samples(images, views, j, settings.epsilon));
+            images[j].mesh_with(settings, covered.as_deref())
+        })
+        .collect()
 }
 
 /// One intermediate shadow map as the GPU reconstructed it: `resolution²` samples of (world xyz, inverse depth).
@@ -88,10 +209,11 @@ impl SampledImage<'_> {
 
     /// True when tile `(tx, ty)` (of [`TILE`]² neighbourhoods) is merged into a few large triangles: it is
     /// whole (its `(TILE + 1)²` samples lie in the image), every one of its neighbourhoods keeps both
-    /// triangles, and every sample's inverse depth is within `epsilon` (relative, as the connectivity test) of
-    /// the affine function through the tile's corners `z(0,0)`, `z(TILE,0)`, `z(0,TILE)`: on a plane inverse depth
-    /// is affine in image coordinates, so this is the second-difference test taken across the whole tile.
-    pub fn tile_merged(&self, tx: u32, ty: u32, epsilon: f32) -> bool {
+    /// triangles (by `epsilon`), and every sample's inverse depth is within `merge_epsilon` (relative) of the
+    /// affine function through the tile's corners `z(0,0)`, `z(TILE,0)`, `z(0,TILE)`: on a plane inverse depth
+    /// is affine in image coordinates, so this is the second-difference test taken across the whole tile, with a
+    /// tolerance that planes pass to rounding and that bounds how far a merged tile strays from its samples.
+    pub fn tile_merged(&self, tx: u32, ty: u32, epsilon: f32, merge_epsilon: f32) -> bool {
         let (u0, v0) = (tx * TILE, ty * TILE);
         if u0 + TILE >= self.resolution || v0 + TILE >= self.resolution {
             return false;
@@ -103,7 +225,7 @@ impl SampledImage<'_> {
                 let fit = z00 + (z10 - z00) * (i as f32 / TILE as f32) + (z01 - z00) * (j as f32 / TILE as f32);
                 let zs = z(i, j);
                 // Written so that NaN fails.
-                let on_plane = (zs - fit).abs() < epsilon * zs;
+                let on_plane = (zs - fit).abs() < merge_epsilon * zs;
                 if !on_plane {
                     return false;
                 }
@@ -117,21 +239,35 @@ impl SampledImage<'_> {
     /// a fan from its centre sample over its boundary, where each side facing a merged (or absent) neighbour
     /// is one segment and each other side keeps all `TILE + 1` samples; other tiles keep Algorithm 2's
     /// triangles. Neighbours share every vertex of a common side, so there are no T-junctions, hence no cracks.
-    /// `merged` is the flags of every tile, row-major (`tiles_per_side(resolution)²`).
-    pub fn tile_triangles(&self, tx: u32, ty: u32, epsilon: f32, merged: &[bool]) -> Vec<[u32; 3]> {
+    /// `merged` is the flags of every tile, row-major (`tiles_per_side(resolution)²`). With `covered` (per
+    /// sample, [`covered_samples`]) a triangle whose three corners are covered is dropped, and a merged tile
+    /// whose samples are all covered.
+    pub fn tile_triangles(
+        &self,
+        tx: u32,
+        ty: u32,
+        epsilon: f32,
+        merged: &[bool],
+        covered: Option<&[bool]>,
+    ) -> Vec<[u32; 3]> {
         let r = self.resolution;
         let tps = tiles_per_side(r);
         let (u0, v0) = (tx * TILE, ty * TILE);
+        let is_covered = |i: u32| covered.is_some_and(|c| c[i as usize]);
         let mut out = Vec::new();
         if !merged[(ty * tps + tx) as usize] {
             for v in v0..(v0 + TILE).min(r.saturating_sub(1)) {
                 for u in u0..(u0 + TILE).min(r.saturating_sub(1)) {
-                    out.extend(self.neighbourhood(u, v, epsilon).into_iter().flatten());
+                    let kept = self.neighbourhood(u, v, epsilon).into_iter().flatten();
+                    out.extend(kept.filter(|t| !t.iter().all(|&i| is_covered(i))));
                 }
             }
             return out;
         }
         let index = |i: u32, j: u32| (v0 + j) * r + u0 + i;
+        if (0..=TILE).all(|j| (0..=TILE).all(|i| is_covered(index(i, j)))) {
+            return out;
+        }
         // A neighbour without neighbourhoods (outside the image, or past its last sample) has no side to meet.
         let neighbourhoods = r.saturating_sub(1) as i64;
         let neighbour_merged = |dx: i64, dy: i64| {
@@ -166,19 +302,25 @@ impl SampledImage<'_> {
     }
 
     /// The merge flag of every tile, row-major.
-    pub fn merged_tiles(&self, epsilon: f32) -> Vec<bool> {
+    pub fn merged_tiles(&self, epsilon: f32, merge_epsilon: f32) -> Vec<bool> {
         let tps = tiles_per_side(self.resolution);
-        (0..tps * tps).map(|t| self.tile_merged(t % tps, t / tps, epsilon)).collect()
+        (0..tps * tps).map(|t| self.tile_merged(t % tps, t / tps, epsilon, merge_epsilon)).collect()
     }
 
-    /// The reconstructed mesh: the adaptive one when `adaptive`, else Algorithm 2's ([`SampledImage::triangles`]).
-    pub fn mesh(&self, epsilon: f32, adaptive: bool) -> Vec<[u32; 3]> {
-        if !adaptive {
-            return self.triangles(epsilon);
-        }
+    /// This map's reconstructed mesh on its own (`drop_covered` needs the other maps: [`meshes`]): the adaptive
+    /// one when `adaptive`, else Algorithm 2's ([`SampledImage::triangles`]).
+    pub fn mesh(&self, settings: &MeshSettings) -> Vec<[u32; 3]> {
+        self.mesh_with(settings, None)
+    }
+
+    fn mesh_with(&self, settings: &MeshSettings, covered: Option<&[bool]>) -> Vec<[u32; 3]> {
         let tps = tiles_per_side(self.resolution);
-        let merged = self.merged_tiles(epsilon);
-        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, epsilon, &merged)).collect()
+        let merged = if settings.adaptive {
+            self.merged_tiles(settings.epsilon, settings.merge_epsilon)
+        } else {
+            vec![false; (tps * tps) as usize]
+        };
+        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, settings.epsilon, &merged, covered)).collect()
     }
 
     /// Every kept triangle, neighbourhood by neighbourhood.
@@ -225,6 +367,10 @@ impl SampledImage<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn adaptive_mesh(epsilon: f32) -> MeshSettings {
+        MeshSettings { epsilon, adaptive: true, ..MeshSettings::default() }
+    }
 
     /// A `r x r` image of inverse depths from `f(x, y)` (positions on a fake grid).
     fn image(r: u32, f: impl Fn(u32, u32) -> f32) -> Vec<Vec4> {
@@ -303,7 +449,7 @@ mod tests {
             let s = image(r, |x, y| a + b * x as f32 + c * y as f32);
             let img = SampledImage { resolution: r, samples: &s };
             let full = img.triangles(1e-3);
-            let adaptive = img.mesh(1e-3, true);
+            let adaptive = img.mesh(&adaptive_mesh(1e-3));
             assert_eq!(full.len(), 2 * 64 * 64);
             // 8x8 merged tiles of two triangles each (the ninth tile column and row hold no neighbourhood).
             assert_eq!(adaptive.len(), 2 * 64, "plane {a} {b} {c}");
@@ -318,12 +464,12 @@ mod tests {
         let r = 4 * TILE + 1;
         let s = image(r, |x, y| 0.5 + 0.001 * (x * x + y * y) as f32);
         let img = SampledImage { resolution: r, samples: &s };
-        assert!(img.merged_tiles(0.01).iter().all(|m| !m));
+        assert!(img.merged_tiles(0.01, MeshSettings::default().merge_epsilon).iter().all(|m| !m));
         let sorted = |mut t: Vec<[u32; 3]>| {
             t.sort();
             t
         };
-        assert_eq!(sorted(img.mesh(0.01, true)), sorted(img.triangles(0.01)));
+        assert_eq!(sorted(img.mesh(&adaptive_mesh(0.01))), sorted(img.triangles(0.01)));
         assert_eq!(img.triangles(0.01).len(), 2 * 32 * 32);
     }
 
@@ -337,13 +483,125 @@ mod tests {
         };
         let s = image(r, |x, y| 0.6 + 0.001 * x as f32 + bump(x, y));
         let img = SampledImage { resolution: r, samples: &s };
-        let merged = img.merged_tiles(0.01);
+        // The crack test, at a merge tolerance as loose as epsilon so that the bump's neighbours merge.
+        let settings = MeshSettings { epsilon: 0.01, adaptive: true, merge_epsilon: 0.01, drop_covered: false };
+        let merged = img.merged_tiles(0.01, settings.merge_epsilon);
         let tps = tiles_per_side(r) as usize;
         assert!(!merged[tps + 1], "the bump's tile must not merge");
         assert!(merged.iter().filter(|&&m| m).count() >= 8, "the flat tiles merge: {merged:?}");
-        let mesh = img.mesh(0.01, true);
+        let mesh = img.mesh(&settings);
         assert!(mesh.len() < img.triangles(0.01).len() / 2);
         assert_watertight(r, &mesh);
+    }
+
+    #[test]
+    fn the_default_merge_tolerance_keeps_curved_tiles_that_epsilon_would_merge() {
+        // A gentle bend: within epsilon (1 %) of each tile's plane, not within the merge tolerance.
+        let r = 4 * TILE + 1;
+        let s = image(r, |x, y| 0.5 + 0.00004 * (x * x + y * y) as f32);
+        let img = SampledImage { resolution: r, samples: &s };
+        assert!(img.merged_tiles(0.01, 0.01).iter().filter(|&&m| m).count() >= 4);
+        assert!(img.merged_tiles(0.01, MeshSettings::default().merge_epsilon).iter().filter(|&&m| m).count() < 4);
+    }
+
+    /// A camera at `eye` looking straight down (up = -z), 60°, with near and far as INSM sets them.
+    fn looking_down(eye: Vec3) -> MapView {
+        let (near, far) = (0.01, 20.0);
+        let clip_from_world = crate::math::perspective_rh(60f32.to_radians(), 1.0, near, far)
+            * crate::math::look_to_rh(eye, -Vec3::Y, Vec3::NEG_Z);
+        MapView { clip_from_world, near, far }
+    }
+
+    /// The `r x r` samples of `view` seeing the plane y = `height` (world position, inverse view depth), as
+    /// the GPU writes them: a ray through each sample's centre.
+    fn samples_of_plane(view: &MapView, r: u32, height: f32) -> Vec<Vec4> {
+        let world_from_clip = view.clip_from_world.inverse();
+        (0..r * r)
+            .map(|i| {
+                let ndc = Vec2::new(
+                    ((i % r) as f32 + 0.5) / r as f32 * 2.0 - 1.0,
+                    1.0 - ((i / r) as f32 + 0.5) / r as f32 * 2.0,
+                );
+                let a = world_from_clip.project_point3(ndc.extend(0.0));
+                let b = world_from_clip.project_point3(ndc.extend(1.0));
+                let p = a + (b - a) * ((height - a.y) / (b.y - a.y));
+                let c = view.clip_from_world * p.extend(1.0);
+                let z = c.z / c.w;
+                p.extend((view.far - z * (view.far - view.near)) / (view.near * view.far))
+            })
+            .collect()
+    }
+
+    /// Sample `i` of a map of `r²` projected into `view`'s image: inside it with a margin of `margin` samples.
+    fn inside(view: &MapView, p: Vec3, r: u32, margin: f32) -> bool {
+        let c = view.clip_from_world * p.extend(1.0);
+        let ndc = c.truncate() / c.w;
+        let (fx, fy) = ((ndc.x + 1.0) * 0.5 * r as f32 - 0.5, (1.0 - ndc.y) * 0.5 * r as f32 - 0.5);
+        let hi = r as f32 - 1.0 - margin;
+        fx >= margin && fy >= margin && fx <= hi && fy <= hi
+    }
+
+    #[test]
+    fn a_map_drops_what_a_finer_map_reconstructs_and_keeps_the_rest() {
+        // A near map (2 m above the ground) and a far one (6 m, three times coarser, seeing three times as
+        // much): the far map's triangles over the near map's footprint go, the rest stay, the near map keeps all.
+        let r = 33;
+        let settings = MeshSettings { drop_covered: true, ..MeshSettings::default() };
+        for near_first in [true, false] {
+            let (near, far) = (looking_down(Vec3::new(0.0, 2.0, 0.0)), looking_down(Vec3::new(0.3, 6.0, 0.0)));
+            let (near_s, far_s) = (samples_of_plane(&near, r, 0.0), samples_of_plane(&far, r, 0.0));
+            let (views, samples, n, f) = if near_first {
+                ([near, far], [&near_s, &far_s], 0, 1)
+            } else {
+                ([far, near], [&far_s, &near_s], 1, 0)
+            };
+            let images: Vec<SampledImage> =
+                samples.iter().map(|s| SampledImage { resolution: r, samples: s }).collect();
+            let meshes = meshes(&images, &views, &settings);
+            assert_eq!(meshes[n].len(), images[n].triangles(settings.epsilon).len(), "the finest map keeps everything");
+            let kept: std::collections::HashSet<[u32; 3]> = meshes[f].iter().copied().collect();
+            let (mut dropped, mut outside) = (0, 0);
+            for t in images[f].triangles(settings.epsilon) {
+                let corners = t.map(|i| images[f].samples[i as usize].truncate());
+                if corners.iter().all(|&p| inside(&views[n], p, r, 1.0)) {
+                    assert!(!kept.contains(&t), "near first {near_first}: {t:?} is over the near map and kept");
+                    dropped += 1;
+                } else if corners.iter().any(|&p| !inside(&views[n], p, r, -0.5)) {
+                    assert!(kept.contains(&t), "near first {near_first}: {t:?} is outside the near map and dropped");
+                    outside += 1;
+                }
+            }
+            assert!(dropped > 100 && outside > 1000, "{dropped} dropped, {outside} outside the near map");
+            // Without the option nothing is dropped.
+            let all = self::meshes(&images, &views, &MeshSettings { drop_covered: false, ..settings });
+            assert_eq!(all[f].len(), images[f].triangles(settings.epsilon).len());
+        }
+    }
+
+    #[test]
+    fn equal_maps_keep_one_copy_and_other_surfaces_are_not_covered() {
+        let r = 17;
+        let settings = MeshSettings { drop_covered: true, ..MeshSettings::default() };
+        let view = looking_down(Vec3::new(0.0, 3.0, 0.0));
+        let ground = samples_of_plane(&view, r, 0.0);
+        // The same map twice: the lower-numbered one keeps every triangle, the other only those touching its
+        // border (a border sample projects onto the first map's border, half a sample from its neighbourhoods'
+        // edge, rounded either way).
+        let images =
+            [SampledImage { resolution: r, samples: &ground }, SampledImage { resolution: r, samples: &ground }];
+        let m = meshes(&images, &[view, view], &settings);
+        let full = images[0].triangles(settings.epsilon).len();
+        assert_eq!(m[0].len(), full);
+        let border = |i: u32| i.is_multiple_of(r) || i / r == 0 || i % r == r - 1 || i / r == r - 1;
+        assert!(m[1].iter().all(|t| t.iter().any(|&i| border(i))), "an inner triangle of the copy is kept");
+        assert!(m[1].len() <= 2 * 4 * (r as usize - 2), "{} of {full} triangles kept by the copy", m[1].len());
+        // A map of a plane 0.5 m above the ground (a table top): the ground map does not reconstruct it, and
+        // the table does not cover the ground map.
+        let top = samples_of_plane(&view, r, 0.5);
+        let images = [SampledImage { resolution: r, samples: &ground }, SampledImage { resolution: r, samples: &top }];
+        let m = meshes(&images, &[view, view], &settings);
+        assert_eq!(m[0].len(), full);
+        assert_eq!(m[1].len(), full);
     }
 
     #[test]
