@@ -1051,6 +1051,15 @@ fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
     let metered = h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
     let (scale, average) = metered.expect("metered");
     assert!(scale.is_finite() && scale > 0.0 && average > 0.0, "{scale} {average}");
+    // Side by side, the reference is shown at the technique's exposure (held, not metered on its own image).
+    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().view.mode = shadowlab::gui::document::ViewMode::SideBySide;
+    h.run_steps(6);
+    let gpu = h.state().gpu.as_ref().unwrap();
+    let main = gpu.main.renderer.auto_exposure().unwrap().unwrap();
+    let reference = gpu.reference.renderer.auto_exposure().unwrap().unwrap();
+    assert_eq!(gpu.reference.renderer.settings().auto_exposure, shadowlab_core::AutoExposure::Hold);
+    assert_eq!(main.0, reference.0, "one exposure for both views");
     h.state_mut().view.auto_exposure = false;
     h.run_steps(3);
     assert_eq!(

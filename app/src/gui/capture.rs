@@ -57,6 +57,15 @@ impl ShadowLabApp {
             no_progress,
         )?;
         let tech_image = renderer.read_output()?;
+        // The target is shown at the technique's metered exposure, so equal radiance looks equal in the panes.
+        if let Some((scale, average)) = renderer.auto_exposure()? {
+            let held = shadowlab_core::RenderSettings {
+                auto_exposure: shadowlab_core::AutoExposure::Hold,
+                ..renderer.settings().clone()
+            };
+            renderer.set_settings(held)?;
+            renderer.set_held_exposure(scale, average)?;
+        }
         let against = self.view.compare_against.clone();
         let against_params = param_strings(self.params.get(&against));
         let target = measure::render_technique(

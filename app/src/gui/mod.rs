@@ -1178,6 +1178,13 @@ impl ShadowLabApp {
         // While the user drags, keep the UI fluid: the preview gets a third of the budget.
         let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
         let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
+        // The comparison view shows the technique's exposure (held, never metered itself), so the same radiance
+        // looks the same on both sides of a split or side-by-side view.
+        if gpu.main.new_report && settings.auto_exposure == AutoExposure::Meter {
+            if let Some((scale, average)) = gpu.main.renderer.auto_exposure()? {
+                gpu.reference.renderer.set_held_exposure(scale, average)?;
+            }
+        }
         // The technique's per-pixel ID map, once per converged frame, when its layer is on.
         if gpu.main.is_converged() {
             let key = gpu.main.frame_key();
@@ -1214,7 +1221,13 @@ impl ShadowLabApp {
                 params: self.params.get(reference_technique).cloned().unwrap_or_default(),
                 indirect,
                 indirect_params,
-                settings,
+                settings: RenderSettings {
+                    auto_exposure: match settings.auto_exposure {
+                        AutoExposure::Off => AutoExposure::Off,
+                        _ => AutoExposure::Hold,
+                    },
+                    ..settings
+                },
             };
             // The reference gets what is left of the budget once the technique's image is complete.
             let left = if gpu.main.is_converged() { budget - spent } else { budget * 0.25 };

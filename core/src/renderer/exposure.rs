@@ -128,6 +128,12 @@ impl ExposureMeter {
         self.metered = true;
     }
 
+    /// Use this scale (metered elsewhere: the view a comparison is made with) as if it had been metered here.
+    pub fn hold(&mut self, gpu: &GpuContext, scale: f32, average: f32) {
+        gpu.queue.write_buffer(&self.result, 0, bytemuck::cast_slice(&[scale, average, 0.0, 1.0]));
+        self.metered = true;
+    }
+
     /// The last metered scale and log-average luminance (a small blocking readback).
     pub fn read(&self, gpu: &GpuContext) -> Result<(f32, f32), GpuError> {
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {

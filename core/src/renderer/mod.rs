@@ -696,6 +696,18 @@ impl Renderer {
         );
     }
 
+    /// Tone-map with this auto-exposure scale (and its log-average luminance) from now on in
+    /// [`AutoExposure::Hold`]: what a view compared with another shows at the other's exposure (the app's
+    /// reference view, the panes of a figure), so equal radiance looks equal side by side.
+    pub fn set_held_exposure(&mut self, scale: f32, average: f32) -> Result<(), GpuError> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(GpuError::InvalidSettings(format!("auto-exposure scale {scale} must be > 0")));
+        }
+        self.gpu.check_lost()?;
+        self.exposure.hold(&self.gpu, scale, average);
+        Ok(())
+    }
+
     /// The auto-exposure scale and the log-average luminance it was metered from, as of the last complete
     /// frame (`None` while [`RenderSettings::auto_exposure`] is off). A small blocking readback.
     pub fn auto_exposure(&self) -> Result<Option<(f32, f32)>, GpuError> {
