@@ -1060,6 +1060,7 @@ fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
     let reference = gpu.reference.renderer.auto_exposure().unwrap().unwrap();
     assert_eq!(gpu.reference.renderer.settings().auto_exposure, shadowlab_core::AutoExposure::Hold);
     assert_eq!(main.0, reference.0, "one exposure for both views");
+    assert_eq!(h.state().metered_exposure.map(|m| m.0), Some(main.0), "the Render panel's figure is the view's");
     h.state_mut().view.auto_exposure = false;
     h.run_steps(3);
     assert_eq!(

@@ -285,6 +285,8 @@ pub struct ShadowLabApp {
     relaunch_on_device_loss: bool,
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
+    /// The last complete frame's auto-exposure: (scale, log-average luminance), shown in the Render panel.
+    pub metered_exposure: Option<(f32, f32)>,
     /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
     /// that does not set them is chosen.
     explain_saved: BTreeMap<(String, String), shadowlab_core::technique::ParamValue>,
@@ -353,6 +355,7 @@ impl ShadowLabApp {
             uncaptured_errors: Default::default(),
             relaunch_on_device_loss: startup.relaunch_on_device_loss,
             recovery: None,
+            metered_exposure: None,
             explain_saved: BTreeMap::new(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
@@ -1183,6 +1186,7 @@ impl ShadowLabApp {
         if gpu.main.new_report && settings.auto_exposure == AutoExposure::Meter {
             if let Some((scale, average)) = gpu.main.renderer.auto_exposure()? {
                 gpu.reference.renderer.set_held_exposure(scale, average)?;
+                self.metered_exposure = Some((scale, average));
             }
         }
         // The technique's per-pixel ID map, once per converged frame, when its layer is on.

@@ -435,6 +435,9 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
              the last one.",
         );
     });
+    if let (true, Some((scale, average))) = (app.view.auto_exposure, app.metered_exposure) {
+        ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"));
+    }
     let label = if app.view.auto_exposure { "compensation" } else { "exposure" };
     ui.add(egui::Slider::new(&mut app.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
     ui.checkbox(&mut app.view.specular, "Blinn-Phong specular");
