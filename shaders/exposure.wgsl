@@ -19,6 +19,19 @@ const MAX_SCALE: f32 = 65536.0;
 
 var<workgroup> tile_sum: array<vec2<f32>, 256>;
 
+// Sum `value` over the workgroup's 256 invocations into tile_sum[0] (a tree in workgroup memory; every
+// invocation must call it).
+fn reduce(local: u32, value: vec2<f32>) {
+    tile_sum[local] = value;
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride /= 2u) {
+        if local < stride {
+            tile_sum[local] += tile_sum[local + stride];
+        }
+        workgroupBarrier();
+    }
+}
+
 fn tiles_x() -> u32 {
     return (u32(frame.viewport.x) + 15u) / 16u;
 }
@@ -38,14 +51,7 @@ fn meter_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invoc
             }
         }
     }
-    tile_sum[local] = value;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride /= 2u) {
-        if local < stride {
-            tile_sum[local] += tile_sum[local + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce(local, value);
     if local == 0u {
         partials[group.y * tiles_x() + group.x] = tile_sum[0];
     }
@@ -58,14 +64,7 @@ fn meter_resolve(@builtin(local_invocation_index) local: u32) {
     for (var i = local; i < tiles; i += 256u) {
         value += partials[i];
     }
-    tile_sum[local] = value;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride /= 2u) {
-        if local < stride {
-            tile_sum[local] += tile_sum[local + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce(local, value);
     if local == 0u {
         let total = tile_sum[0];
         if total.y > 0.0 {

@@ -471,12 +471,17 @@ fn auto_exposure_meters_the_log_average_and_cancels_light_scale() {
 
 #[test]
 fn auto_exposure_of_an_empty_view_stays_one() {
-    // No geometry pixel: nothing to meter, the scale stays 1 (no division by zero, no NaN exposure).
+    // No geometry pixel: nothing to meter, the scale goes back to 1 (no division by zero, no NaN exposure),
+    // after a view of the scene metered another one.
     let scene = plane_and_occluder();
     let gpu = gpu();
     let mut renderer =
         Renderer::new(&gpu, &scene, RenderSettings { auto_exposure: AutoExposure::Meter, ..settings() }).unwrap();
     let mut t = renderer.create_technique("reference").unwrap();
+    let lights = [white_light(Vec3::new(0.0, 3.0, 0.0), 5.0, 20.0)];
+    renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
+    let scene_scale = renderer.auto_exposure().unwrap().unwrap().0;
+    assert!(scene_scale.is_finite() && (scene_scale - 1.0).abs() > 0.05, "the scene metered a scale: {scene_scale}");
     let c = scene.camera;
     let camera = shadowlab_core::scene::Camera::look_at(c.position, c.position + Vec3::Y, c.fov_y, c.near, c.z_far);
     renderer.render_frame(t.as_mut(), &camera, &[], &mut |_, _| {}).unwrap();

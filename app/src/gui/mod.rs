@@ -478,10 +478,8 @@ impl ShadowLabApp {
                         ),
                     }
                 } else {
-                    if self.relaunch_on_device_loss {
-                        recovery.relaunch = None;
-                    } else {
-                        // Tests: the command a binary would run.
+                    // Tests record the command the binary would run; a recovered process runs none.
+                    if !self.relaunch_on_device_loss {
                         recovery.relaunch = Some((program, args));
                     }
                     format!(

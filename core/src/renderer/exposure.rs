@@ -8,7 +8,7 @@
 use wgpu::util::DeviceExt;
 
 use super::targets::FrameTargets;
-use super::vpl_gather::compute_pipeline;
+use super::vpl_gather::{compute_pipeline, storage_rw_entry};
 use super::SharedLayouts;
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
@@ -30,19 +30,6 @@ fn tiles(width: u32, height: u32) -> u64 {
     width.div_ceil(16) as u64 * height.div_ceil(16) as u64
 }
 
-fn storage_rw(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: false },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
 impl ExposureMeter {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts, targets: &FrameTargets, indirect: &wgpu::Buffer) -> Self {
         let device = &gpu.device;
@@ -60,8 +47,8 @@ impl ExposureMeter {
                     count: None,
                 },
                 storage_entry(1),
-                storage_rw(2),
-                storage_rw(3),
+                storage_rw_entry(2),
+                storage_rw_entry(3),
             ],
         });
         let meter =

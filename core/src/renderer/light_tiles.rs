@@ -18,6 +18,7 @@
 
 use wgpu::util::DeviceExt;
 
+use super::vpl_gather::storage_rw_entry;
 use crate::gpu::GpuContext;
 use crate::shaders;
 use crate::technique::{storage_entry, uniform_entry, GrowableBuffer};
@@ -58,19 +59,6 @@ pub fn read_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         label: Some("light tiles (read)"),
         entries: &[uniform_entry(0), storage_entry(1)],
     })
-}
-
-fn storage_rw_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: false },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
 }
 
 /// Tiles and their capacity for a `width x height` screen, `spheres` spheres and lists of at most

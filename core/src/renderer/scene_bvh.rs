@@ -118,6 +118,17 @@ impl BvhCutouts {
     /// Records of `bvh`'s triangles whose material cuts out (`alpha[material]` is `Some`), with UVs from
     /// `geometry`. At most `max_layers` materials get a mask (the rest stay opaque, said in the log).
     pub fn build(bvh: &Bvh, geometry: &ChunkedGeometry, alpha: &[Option<CutoutAlpha>], max_layers: u32) -> Self {
+        Self::build_with(bvh, geometry, &triangle_materials(geometry), alpha, max_layers)
+    }
+
+    /// [`BvhCutouts::build`] with each input triangle's material already known.
+    fn build_with(
+        bvh: &Bvh,
+        geometry: &ChunkedGeometry,
+        triangle_material: &[u32],
+        alpha: &[Option<CutoutAlpha>],
+        max_layers: u32,
+    ) -> Self {
         let mut layer_of = vec![None; alpha.len()];
         let mut sources = Vec::new();
         for (m, a) in alpha.iter().enumerate() {
@@ -144,15 +155,6 @@ impl BvhCutouts {
                 image::imageops::resize(&source, mask_size, mask_size, image::imageops::FilterType::Triangle).into_raw()
             })
             .collect();
-        // Material of each input triangle: chunks are index ranges with one material each.
-        let mut triangle_material = vec![u32::MAX; geometry.triangle_count()];
-        for c in &geometry.chunks {
-            let first = (c.first_index / 3) as usize;
-            let end = (first + c.triangle_count() as usize).min(triangle_material.len());
-            for m in &mut triangle_material[first.min(end)..end] {
-                *m = c.material;
-            }
-        }
         let mut ids = vec![0u32; bvh.triangles.len()];
         let mut records = Vec::new();
         for (k, &id) in bvh.triangle_ids.iter().enumerate() {
@@ -184,6 +186,19 @@ impl BvhCutouts {
     pub fn is_empty(&self) -> bool {
         self.records.is_empty()
     }
+}
+
+/// The material of each input triangle of `geometry` (chunks are index ranges with one material each).
+fn triangle_materials(geometry: &ChunkedGeometry) -> Vec<u32> {
+    let mut out = vec![u32::MAX; geometry.triangle_count()];
+    for c in &geometry.chunks {
+        let first = (c.first_index / 3) as usize;
+        let end = (first + c.triangle_count() as usize).min(out.len());
+        for m in &mut out[first.min(end)..end] {
+            *m = c.material;
+        }
+    }
+    out
 }
 
 /// `textureSampleLevel` of an `R8Unorm` `size x size` texture with a linear, repeating sampler.
@@ -360,16 +375,10 @@ impl SceneBvh {
         cutout_alpha: &[Option<CutoutAlpha>],
     ) -> SceneBvh {
         let cpu = Bvh::from_geometry(geometry);
-        let cutouts = BvhCutouts::build(&cpu, geometry, cutout_alpha, gpu.device.limits().max_texture_array_layers);
+        let triangle_material = triangle_materials(geometry);
+        let max_layers = gpu.device.limits().max_texture_array_layers;
+        let cutouts = BvhCutouts::build_with(&cpu, geometry, &triangle_material, cutout_alpha, max_layers);
         let cutout_textures = CutoutTextures::new(gpu, &cutouts);
-        // Material of each input triangle: chunks are index ranges with one material each.
-        let mut triangle_material = vec![0u32; geometry.triangle_count()];
-        for c in &geometry.chunks {
-            let first = (c.first_index / 3) as usize;
-            for m in &mut triangle_material[first..first + c.triangle_count() as usize] {
-                *m = c.material;
-            }
-        }
         let surfaces: Vec<BvhSurface> = cpu
             .triangles
             .iter()
@@ -377,8 +386,8 @@ impl SceneBvh {
             .map(|(t, &id)| {
                 let [a, b, c] = t.vertices();
                 let n = (b - a).cross(c - a).normalize_or(Vec3::Y);
-                let albedo =
-                    material_albedo.get(triangle_material[id as usize] as usize).copied().unwrap_or(Vec3::ZERO);
+                let material = triangle_material.get(id as usize).copied().unwrap_or(u32::MAX);
+                let albedo = material_albedo.get(material as usize).copied().unwrap_or(Vec3::ZERO);
                 BvhSurface { normal: n.extend(0.0).to_array(), albedo: albedo.extend(1.0).to_array() }
             })
             .collect();

@@ -942,7 +942,7 @@ impl MeshSnapshot {
                 radius_px: 1.5,
             })
             .collect();
-        layers.push(OverlayLayer { name: "INSM samples", visible_by_default: false, primitives: points });
+        layers.push(OverlayLayer { name: MESH_LAYERS[0], visible_by_default: false, primitives: points });
 
         // Wireframe of the reconstructed triangles (the CPU twin's mesh): every `stride`-th when large.
         let mut wire = Vec::new();
@@ -959,7 +959,7 @@ impl MeshSnapshot {
                 wire.push(Overlay::Line { from: p[2], to: p[0], color });
             }
         }
-        layers.push(OverlayLayer { name: "INSM mesh (wireframe)", visible_by_default: false, primitives: wire });
+        layers.push(OverlayLayer { name: MESH_LAYERS[1], visible_by_default: false, primitives: wire });
 
         // Dropped edges: the depth discontinuities, in red.
         let mut dropped: Vec<Overlay> = Vec::new();
@@ -971,7 +971,7 @@ impl MeshSnapshot {
                 dropped.push(Overlay::Line { from: e.from, to: e.to, color: [1.0, 0.1, 0.1, 1.0] });
             }
         }
-        layers.push(OverlayLayer { name: "INSM dropped edges", visible_by_default: false, primitives: dropped });
+        layers.push(OverlayLayer { name: MESH_LAYERS[2], visible_by_default: false, primitives: dropped });
         layers
     }
 }
