@@ -1,6 +1,6 @@
 // Ray-traced shadows: the scene BVH and any-hit traversal for shadow rays. The layout and every operation mirror
 // core/src/technique/raytraced/bvh.rs (`BvhNode`, `BvhTriangle`, `occluded_cpu`), the CPU twin the tests compare
-// this with. Composed in front of raytrace_shadow.wgsl (after common.wgsl) and of raytrace_test.wgsl.
+// this with. Composed in front of raytraced/shadow.wgsl (after common.wgsl) and of raytrace_test.wgsl.
 
 // 32 bytes. Interior: count == 0, children at first and first + 1. Leaf: `count` triangles from `first`.
 struct BvhNode {

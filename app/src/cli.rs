@@ -661,7 +661,7 @@ fn render(args: RenderArgs) -> Result<()> {
     if let Some(path) = &args.maps_out {
         let mut wrote = 0;
         if let Some((atlas, what)) = technique.shadow_atlas() {
-            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
             write_atomic(path, &encode_png(&img)?)?;
             wrote += 1;
             if !frame.quiet {
@@ -671,7 +671,7 @@ fn render(args: RenderArgs) -> Result<()> {
         if let Some((atlas, what)) = renderer.indirect().and_then(|t| t.shadow_atlas()) {
             let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps");
             let indirect_path = path.with_file_name(format!("{stem}-indirect.png"));
-            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
             write_atomic(&indirect_path, &encode_png(&img)?)?;
             wrote += 1;
             if !frame.quiet {
@@ -684,7 +684,7 @@ fn render(args: RenderArgs) -> Result<()> {
         for (i, (atlas, what)) in images.iter().enumerate() {
             let suffix = if images.len() == 1 { String::new() } else { format!("-{i}") };
             let images_path = path.with_file_name(format!("{stem}-images{suffix}.png"));
-            let img = shadowlab_core::renderer::readback::depth_atlas_image(renderer.gpu(), atlas)?;
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
             write_atomic(&images_path, &encode_png(&img)?)?;
             wrote += 1;
             if !frame.quiet {

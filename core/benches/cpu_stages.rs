@@ -5,10 +5,10 @@
 use std::hint::black_box;
 use std::time::Instant;
 
+use shadowlab_core::accel::bvh::Bvh;
 use shadowlab_core::compare::{self, CompareOptions, Image};
 use shadowlab_core::scene::chunks::ChunkedGeometry;
 use shadowlab_core::scene::Scene;
-use shadowlab_core::technique::raytraced::bvh::Bvh;
 
 fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
     let mut times: Vec<f64> = (0..runs)

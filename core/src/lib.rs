@@ -1,5 +1,6 @@
 //! ShadowLab's core: scenes, the many-light renderer and its shadow techniques, measurement. No UI code.
 
+pub mod accel;
 pub mod compare;
 pub mod error;
 pub mod scene;

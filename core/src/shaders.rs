@@ -1,164 +1,92 @@
-//! WGSL sources, loaded from `shaders/` at compile time. A pass's module is its own file composed after the
-//! shared files it uses (plain concatenation, no preprocessor). `MODULES` lists every composed module; a test
-//! validates each with naga and checks that every `.wgsl` file in `shaders/` is used.
+//! WGSL sources, loaded at compile time. A pass's module is its own file composed after the shared files it
+//! uses (plain concatenation, no preprocessor), with [`wgsl!`](crate::wgsl). The shared modules (`shaders/`)
+//! and the renderer services' passes are listed here in [`MODULES`]; a technique's own WGSL lives in its folder
+//! (`core/src/technique/<name>/*.wgsl`) and its modules are listed by its registry entry. A test validates
+//! every module with naga and checks that every `.wgsl` file of the repository is used by one.
 
-pub const GBUFFER: &str =
-    concat!(include_str!("../../shaders/material.wgsl"), include_str!("../../shaders/gbuffer.wgsl"));
-pub const SHADOW_DEPTH: &str =
-    concat!(include_str!("../../shaders/material.wgsl"), include_str!("../../shaders/shadow_depth.wgsl"));
-pub const AMBIENT: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/ambient.wgsl"));
-pub const TONEMAP: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/display.wgsl"),
-    include_str!("../../shaders/tonemap.wgsl")
-);
-pub const EXPOSURE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/display.wgsl"),
-    include_str!("../../shaders/exposure.wgsl")
-);
-pub const REFERENCE_SHADE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/light_tiles.wgsl"),
-    include_str!("../../shaders/cube_shadow.wgsl"),
-    include_str!("../../shaders/reference_shade.wgsl")
-);
-pub const LIGHTCLUSTER_SHADE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/light_tiles.wgsl"),
-    include_str!("../../shaders/cube_shadow.wgsl"),
-    include_str!("../../shaders/lightcluster_shade.wgsl")
-);
-pub const UNSHADOWED_SHADE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/light_tiles.wgsl"),
-    include_str!("../../shaders/unshadowed_shade.wgsl")
-);
-pub const LIGHT_TILES_BUILD: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/light_tiles_build.wgsl"));
-pub const RAYTRACE_SHADOW: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/light_tiles.wgsl"),
-    include_str!("../../shaders/raytrace_bvh.wgsl"),
-    include_str!("../../shaders/raytrace_shadow.wgsl")
-);
-pub const RAYTRACE_TEST: &str =
-    concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/raytrace_test.wgsl"));
-pub const INSM_TRIANGULATE: &str = include_str!("../../shaders/insm_triangulate.wgsl");
-pub const OVERLAY: &str = include_str!("../../shaders/overlay.wgsl");
-pub const PARABOLOID_DEPTH: &str = concat!(
-    include_str!("../../shaders/vpl_basis.wgsl"),
-    include_str!("../../shaders/material.wgsl"),
-    include_str!("../../shaders/paraboloid_depth.wgsl")
-);
-pub const VPL_GATHER_UNSHADOWED: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/vpl_common.wgsl"),
-    include_str!("../../shaders/vpl_vis_none.wgsl"),
-    include_str!("../../shaders/vpl_gather.wgsl")
-);
-pub const VPL_GATHER_RAYTRACED: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/raytrace_bvh.wgsl"),
-    include_str!("../../shaders/vpl_common.wgsl"),
-    include_str!("../../shaders/vpl_vis_raytraced.wgsl"),
-    include_str!("../../shaders/vpl_gather.wgsl")
-);
-pub const VPL_GATHER_PARABOLOID: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/vpl_common.wgsl"),
-    include_str!("../../shaders/vpl_basis.wgsl"),
-    include_str!("../../shaders/vpl_vis_paraboloid.wgsl"),
-    include_str!("../../shaders/vpl_gather.wgsl")
-);
-pub const VAL_GATHER: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/vpl_common.wgsl"),
-    include_str!("../../shaders/vpl_basis.wgsl"),
-    include_str!("../../shaders/val_gather.wgsl")
-);
-pub const VAL_CSSM: &str = include_str!("../../shaders/val_cssm.wgsl");
-pub const VAL_KMEANS: &str =
-    concat!(include_str!("../../shaders/vpl_basis.wgsl"), include_str!("../../shaders/val_kmeans.wgsl"));
-pub const VPL_BLUR: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/vpl_blur.wgsl"));
-pub const PATHTRACE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/raytrace_bvh.wgsl"),
-    include_str!("../../shaders/vpl_basis.wgsl"),
-    include_str!("../../shaders/pathtrace.wgsl")
-);
-
-pub const FUZZY_KMEANS: &str = include_str!("../../shaders/fuzzy_kmeans.wgsl");
-pub const FUZZY_POINTS: &str =
-    concat!(include_str!("../../shaders/common.wgsl"), include_str!("../../shaders/fuzzy_points.wgsl"));
-pub const FUZZY_VISIBILITY: &str =
-    concat!(include_str!("../../shaders/raytrace_bvh.wgsl"), include_str!("../../shaders/fuzzy_visibility.wgsl"));
-pub const FUZZY_SHADE: &str = concat!(
-    include_str!("../../shaders/common.wgsl"),
-    include_str!("../../shaders/vpl_common.wgsl"),
-    include_str!("../../shaders/fuzzy_shade.wgsl")
-);
-
-/// Every composed shader module: (name, the files it is made of, source).
-pub const MODULES: &[(&str, &[&str], &str)] = &[
-    ("gbuffer", &["material.wgsl", "gbuffer.wgsl"], GBUFFER),
-    ("shadow_depth", &["material.wgsl", "shadow_depth.wgsl"], SHADOW_DEPTH),
-    ("ambient", &["common.wgsl", "ambient.wgsl"], AMBIENT),
-    ("tonemap", &["common.wgsl", "display.wgsl", "tonemap.wgsl"], TONEMAP),
-    ("exposure", &["common.wgsl", "display.wgsl", "exposure.wgsl"], EXPOSURE),
-    (
-        "reference_shade",
-        &["common.wgsl", "light_tiles.wgsl", "cube_shadow.wgsl", "reference_shade.wgsl"],
-        REFERENCE_SHADE,
-    ),
-    ("overlay", &["overlay.wgsl"], OVERLAY),
-    ("unshadowed_shade", &["common.wgsl", "light_tiles.wgsl", "unshadowed_shade.wgsl"], UNSHADOWED_SHADE),
-    (
-        "lightcluster_shade",
-        &["common.wgsl", "light_tiles.wgsl", "cube_shadow.wgsl", "lightcluster_shade.wgsl"],
-        LIGHTCLUSTER_SHADE,
-    ),
-    ("light_tiles_build", &["common.wgsl", "light_tiles_build.wgsl"], LIGHT_TILES_BUILD),
-    (
-        "raytrace_shadow",
-        &["common.wgsl", "light_tiles.wgsl", "raytrace_bvh.wgsl", "raytrace_shadow.wgsl"],
-        RAYTRACE_SHADOW,
-    ),
-    ("raytrace_test", &["raytrace_bvh.wgsl", "raytrace_test.wgsl"], RAYTRACE_TEST),
-    ("insm_triangulate", &["insm_triangulate.wgsl"], INSM_TRIANGULATE),
-    ("paraboloid_depth", &["vpl_basis.wgsl", "material.wgsl", "paraboloid_depth.wgsl"], PARABOLOID_DEPTH),
-    (
-        "vpl_gather_unshadowed",
-        &["common.wgsl", "vpl_common.wgsl", "vpl_vis_none.wgsl", "vpl_gather.wgsl"],
-        VPL_GATHER_UNSHADOWED,
-    ),
-    (
-        "vpl_gather_raytraced",
-        &["common.wgsl", "raytrace_bvh.wgsl", "vpl_common.wgsl", "vpl_vis_raytraced.wgsl", "vpl_gather.wgsl"],
-        VPL_GATHER_RAYTRACED,
-    ),
-    (
-        "vpl_gather_paraboloid",
-        &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "vpl_vis_paraboloid.wgsl", "vpl_gather.wgsl"],
-        VPL_GATHER_PARABOLOID,
-    ),
-    ("pathtrace", &["common.wgsl", "raytrace_bvh.wgsl", "vpl_basis.wgsl", "pathtrace.wgsl"], PATHTRACE),
-    ("vpl_blur", &["common.wgsl", "vpl_blur.wgsl"], VPL_BLUR),
-    ("val_kmeans", &["vpl_basis.wgsl", "val_kmeans.wgsl"], VAL_KMEANS),
-    ("val_cssm", &["val_cssm.wgsl"], VAL_CSSM),
-    ("val_gather", &["common.wgsl", "vpl_common.wgsl", "vpl_basis.wgsl", "val_gather.wgsl"], VAL_GATHER),
-    ("fuzzy_kmeans", &["fuzzy_kmeans.wgsl"], FUZZY_KMEANS),
-    ("fuzzy_points", &["common.wgsl", "fuzzy_points.wgsl"], FUZZY_POINTS),
-    ("fuzzy_visibility", &["raytrace_bvh.wgsl", "fuzzy_visibility.wgsl"], FUZZY_VISIBILITY),
-    ("fuzzy_shade", &["common.wgsl", "vpl_common.wgsl", "fuzzy_shade.wgsl"], FUZZY_SHADE),
-];
-
-/// Create a shader module from one of the sources above.
-pub fn create_module(device: &wgpu::Device, label: &str, source: &str) -> wgpu::ShaderModule {
-    device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    })
+/// A composed WGSL module: its name, the files it is made of (paths from the repository root, in order) and
+/// its source.
+#[derive(Clone, Copy, Debug)]
+pub struct WgslModule {
+    pub name: &'static str,
+    pub files: &'static [&'static str],
+    pub source: &'static str,
 }
+
+/// `wgsl!("name", ["shaders/common.wgsl", "core/src/technique/x/shade.wgsl"])`: a [`WgslModule`] made of the
+/// given files (paths from the repository root), concatenated in order at compile time.
+#[macro_export]
+macro_rules! wgsl {
+    ($name:literal, [$($file:literal),+ $(,)?]) => {
+        $crate::shaders::WgslModule {
+            name: $name,
+            files: &[$($file),+],
+            source: concat!($(include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../", $file))),+),
+        }
+    };
+}
+
+pub const GBUFFER: WgslModule = crate::wgsl!("gbuffer", ["shaders/material.wgsl", "shaders/gbuffer.wgsl"]);
+pub const SHADOW_DEPTH: WgslModule =
+    crate::wgsl!("shadow_depth", ["shaders/material.wgsl", "shaders/shadow_depth.wgsl"]);
+pub const AMBIENT: WgslModule = crate::wgsl!("ambient", ["shaders/common.wgsl", "shaders/ambient.wgsl"]);
+pub const TONEMAP: WgslModule =
+    crate::wgsl!("tonemap", ["shaders/common.wgsl", "shaders/display.wgsl", "shaders/tonemap.wgsl"]);
+pub const EXPOSURE: WgslModule =
+    crate::wgsl!("exposure", ["shaders/common.wgsl", "shaders/display.wgsl", "shaders/exposure.wgsl"]);
+pub const LIGHT_TILES_BUILD: WgslModule =
+    crate::wgsl!("light_tiles_build", ["shaders/common.wgsl", "shaders/light_tiles_build.wgsl"]);
+pub const RAYTRACE_TEST: WgslModule =
+    crate::wgsl!("raytrace_test", ["shaders/raytrace_bvh.wgsl", "shaders/raytrace_test.wgsl"]);
+pub const OVERLAY: WgslModule = crate::wgsl!("overlay", ["shaders/overlay.wgsl"]);
+pub const PARABOLOID_DEPTH: WgslModule = crate::wgsl!(
+    "paraboloid_depth",
+    ["shaders/vpl_basis.wgsl", "shaders/material.wgsl", "shaders/paraboloid_depth.wgsl"]
+);
+pub const VPL_GATHER_UNSHADOWED: WgslModule = crate::wgsl!(
+    "vpl_gather_unshadowed",
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_vis_none.wgsl", "shaders/vpl_gather.wgsl"]
+);
+pub const VPL_GATHER_RAYTRACED: WgslModule = crate::wgsl!(
+    "vpl_gather_raytraced",
+    [
+        "shaders/common.wgsl",
+        "shaders/raytrace_bvh.wgsl",
+        "shaders/vpl_common.wgsl",
+        "shaders/vpl_vis_raytraced.wgsl",
+        "shaders/vpl_gather.wgsl"
+    ]
+);
+pub const VPL_GATHER_PARABOLOID: WgslModule = crate::wgsl!(
+    "vpl_gather_paraboloid",
+    [
+        "shaders/common.wgsl",
+        "shaders/vpl_common.wgsl",
+        "shaders/vpl_basis.wgsl",
+        "shaders/vpl_vis_paraboloid.wgsl",
+        "shaders/vpl_gather.wgsl"
+    ]
+);
+pub const PER_LIGHT_SHADE: WgslModule = crate::wgsl!(
+    "per_light_shade",
+    ["shaders/common.wgsl", "shaders/light_tiles.wgsl", "shaders/cube_shadow.wgsl", "shaders/per_light_shade.wgsl"]
+);
+pub const VPL_BLUR: WgslModule = crate::wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_blur.wgsl"]);
+
+/// Every shared composed module (the renderer services' passes and the VPL gathers several techniques use).
+pub const MODULES: &[WgslModule] = &[
+    GBUFFER,
+    SHADOW_DEPTH,
+    AMBIENT,
+    TONEMAP,
+    EXPOSURE,
+    LIGHT_TILES_BUILD,
+    RAYTRACE_TEST,
+    OVERLAY,
+    PARABOLOID_DEPTH,
+    VPL_GATHER_UNSHADOWED,
+    VPL_GATHER_RAYTRACED,
+    VPL_GATHER_PARABOLOID,
+    VPL_BLUR,
+    PER_LIGHT_SHADE,
+];

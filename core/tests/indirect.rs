@@ -128,10 +128,10 @@ fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
     let (side, h, albedo) = (8.0, 2.0, 0.6);
     let scene = plane_scene(side, albedo);
     let gpu = gpu();
-    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
         &gpu,
         &scene,
-        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
     );
     let (bvh, _) = gpu_scene.bvh(&gpu);
     let light = PointLight::new(Vec3::new(0.0, h, 0.0), Vec3::new(1.0, 0.5, 0.25), 10.0, 50.0);
@@ -159,10 +159,10 @@ fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
 fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little() {
     let scene = plane_scene(8.0, 0.5);
     let gpu = gpu();
-    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
         &gpu,
         &scene,
-        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
     );
     let (bvh, _) = gpu_scene.bvh(&gpu);
     let light = PointLight::new(Vec3::new(0.3, 2.0, -0.2), Vec3::ONE, 5.0, 50.0);
@@ -187,9 +187,9 @@ fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little(
 #[test]
 fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error() {
     let gpu = gpu();
-    let layout = shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device);
+    let layout = shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
     let scene = plane_scene(8.0, 0.5);
-    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
     let (bvh, _) = gpu_scene.bvh(&gpu);
     // Below the plane and facing nowhere it is single-sided? No: planes are hit from both sides; a light far
     // outside the scene with a short range reaches nothing.
@@ -201,7 +201,7 @@ fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error(
     let zero = vpl::generate(&bvh, &[away], &VplSettings { count: 0, ..Default::default() });
     assert!(zero.vpls.is_empty() && zero.samples == 0);
     let black = plane_scene(8.0, 0.0);
-    let black_gpu = shadowlab_core::renderer::gpu_scene::GpuScene::new(&gpu, &black, &layout);
+    let black_gpu = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &black, &layout);
     let (black_bvh, _) = black_gpu.bvh(&gpu);
     let light = PointLight::new(Vec3::new(0.0, 2.0, 0.0), Vec3::ONE, 5.0, 50.0);
     assert!(vpl::generate(&black_bvh, &[light], &VplSettings::default()).vpls.is_empty());
@@ -443,10 +443,10 @@ fn spot_lights_light_their_cone_only_in_every_direct_technique() {
 fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
     let scene = plane_scene(8.0, 0.5);
     let gpu = gpu();
-    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
         &gpu,
         &scene,
-        &shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device),
+        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
     );
     let (bvh, _) = gpu_scene.bvh(&gpu);
     let spot = spot_over_plane(25.0);

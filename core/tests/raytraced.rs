@@ -9,7 +9,8 @@ use common::*;
 use glam::{Vec2, Vec3, Vec4};
 use shadowlab_core::scene::chunks::ChunkedGeometry;
 use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
-use shadowlab_core::technique::raytraced::{gpu_occluded, occluded_brute_force, occluded_cpu, Bvh, Ray};
+use shadowlab_core::accel::bvh::{occluded_brute_force, occluded_cpu, Bvh, Ray};
+use shadowlab_core::accel::gpu_trace::gpu_occluded;
 use shadowlab_core::technique::{ParamError, ParamValue};
 use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
 
@@ -162,7 +163,7 @@ fn cpu_traversal_equals_brute_force_on_builtin_scenes() {
         let s = &bvh.stats;
         eprintln!("{name}: {s:?}");
         assert_eq!(s.triangles + s.degenerate_skipped, geometry.triangle_count());
-        assert!(s.max_depth <= shadowlab_core::technique::raytraced::bvh::MAX_DEPTH);
+        assert!(s.max_depth <= shadowlab_core::accel::bvh::MAX_DEPTH);
         // Every input triangle is in exactly one leaf.
         let mut ids = bvh.triangle_ids.clone();
         ids.sort_unstable();

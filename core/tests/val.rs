@@ -116,8 +116,8 @@ fn gpu_kmeans_matches_its_cpu_twin() {
     use wgpu::util::DeviceExt;
     let scene = room();
     let gpu = gpu();
-    let layout = shadowlab_core::renderer::gpu_scene::GpuScene::material_layout(&gpu.device);
-    let gpu_scene = shadowlab_core::renderer::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
+    let layout = shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
     let (bvh, _) = gpu_scene.bvh(&gpu);
     let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0), white_light(Vec3::new(-2.0, 1.0, 1.0), 4.0, 30.0)];
     let set = shadowlab_core::vpl::generate(&bvh, &lights, &VplSettings { count: 1024, ..Default::default() });

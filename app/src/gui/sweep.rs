@@ -44,8 +44,8 @@ pub struct Sweep {
 pub struct SweepJob {
     pub gpu: GpuContext,
     /// The main view's scene on the GPU (shared, not uploaded again) and the layouts it was made with.
-    pub scene: std::sync::Arc<shadowlab_core::renderer::gpu_scene::GpuScene>,
-    pub layouts: std::sync::Arc<shadowlab_core::renderer::SharedLayouts>,
+    pub scene: std::sync::Arc<shadowlab_core::accel::gpu_scene::GpuScene>,
+    pub layouts: std::sync::Arc<shadowlab_core::renderer::layouts::SharedLayouts>,
     pub lights: Vec<PointLight>,
     pub camera: Camera,
     pub settings: RenderSettings,

@@ -3,10 +3,11 @@
 
 use wgpu::util::DeviceExt;
 
-use super::gpu_data::MaterialUniform;
+use glam::Vec3;
+
 use crate::gpu::GpuContext;
 use crate::scene::chunks::{Chunk, ChunkedGeometry};
-use crate::scene::{Scene, TextureImage};
+use crate::scene::{Material, Scene, TextureImage};
 
 pub struct GpuScene {
     pub vertex_buffer: wgpu::Buffer,
@@ -234,4 +235,38 @@ fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::Tex
         );
     }
     texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// Mirrors `Material` in `material.wgsl` (the G-buffer and the alpha-tested depth passes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct MaterialUniform {
+    pub base_color: [f32; 4],
+    pub emissive: [f32; 4],
+    pub specular: [f32; 4],
+    /// x: alpha cutoff (0: opaque).
+    pub alpha: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 64);
+
+impl MaterialUniform {
+    pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool, occlusion_strength: f32) -> Self {
+        let spec: Vec3 = m.specular;
+        MaterialUniform {
+            base_color: m.base_color.to_array(),
+            emissive: [m.emissive.x, m.emissive.y, m.emissive.z, if has_texture { 1.0 } else { 0.0 }],
+            specular: [
+                (spec.x + spec.y + spec.z) / 3.0,
+                m.shininess.clamp(1.0, 4096.0),
+                if has_emissive_texture { 1.0 } else { 0.0 },
+                occlusion_strength,
+            ],
+            alpha: [
+                if m.alpha_cutoff.is_finite() { m.alpha_cutoff.clamp(0.0, 1.0) } else { 0.0 },
+                if m.emissive_uv1 { 1.0 } else { 0.0 },
+                if m.occlusion_uv1 { 1.0 } else { 0.0 },
+                0.0,
+            ],
+        }
+    }
 }

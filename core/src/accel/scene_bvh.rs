@@ -1,5 +1,5 @@
 //! The scene's BVH as a renderer service: built once per scene on the CPU (binned SAH,
-//! [`crate::technique::raytraced::bvh`]), uploaded once, and shared by everything that traces rays: the
+//! [`crate::accel::bvh`]), uploaded once, and shared by everything that traces rays: the
 //! ray-traced shadows, the VPL generator (closest hits on the CPU), the VPL ray-traced gather and the path
 //! tracer (closest hits on the GPU). It lives in [`GpuScene`] behind a `OnceLock`, so a scene that never
 //! traces a ray never pays for it.
@@ -23,9 +23,9 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::gpu_scene::GpuScene;
+use crate::accel::bvh::{self, Bvh, Hit};
 use crate::gpu::GpuContext;
 use crate::scene::chunks::ChunkedGeometry;
-use crate::technique::raytraced::bvh::{self, Bvh, Hit};
 
 /// Per BVH triangle: geometric normal (xyz) and the material's mean albedo (rgb).
 #[repr(C)]
@@ -427,7 +427,7 @@ impl SceneBvh {
     /// The BVH group's layout entries every tracer starts from: nodes (0), triangles (1) and the cut-out data
     /// ([`CUTOUT_BINDINGS`]); a pass appends its own bindings (2 to 9).
     pub fn layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
-        let mut entries = vec![crate::technique::storage_entry(0), crate::technique::storage_entry(1)];
+        let mut entries = vec![crate::gpu::bind::storage_entry(0), crate::gpu::bind::storage_entry(1)];
         entries.extend(CutoutTextures::layout_entries());
         entries
     }

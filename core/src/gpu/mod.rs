@@ -1,6 +1,11 @@
 //! The GPU context: created headless from the environment (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, ...) or handed
 //! over by the app (eframe's device). Timestamp features are requested whenever the adapter has them.
 
+pub mod bind;
+pub mod buffer;
+pub mod pipeline;
+pub mod readback;
+
 use crate::error::GpuError;
 
 /// A device and queue plus what the renderer needs to know about them.

@@ -1,7 +1,7 @@
 //! Copying textures and buffers back to the CPU (texture rows padded to 256 bytes, as wgpu requires).
 
+use super::GpuContext;
 use crate::error::GpuError;
-use crate::gpu::GpuContext;
 
 /// Read a 2D texture of `bytes_per_pixel` into tightly packed rows.
 pub fn read_texture(
@@ -82,12 +82,9 @@ pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, G
 
 /// A depth atlas as a grey PNG-ready image: near is white, far (and empty) is black, stretched between the
 /// nearest and farthest drawn depth so both hardware (cube) and linear (paraboloid) depth are readable.
-pub fn depth_atlas_image(
-    gpu: &GpuContext,
-    atlas: &crate::renderer::cube_shadows::CubeAtlas,
-) -> Result<image::RgbaImage, GpuError> {
-    let size = atlas.texture.size();
-    let bytes = read_texture(gpu, &atlas.texture, size.width, size.height, 4)?;
+pub fn depth_atlas_image(gpu: &GpuContext, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
+    let size = texture.size();
+    let bytes = read_texture(gpu, texture, size.width, size.height, 4)?;
     let depths: Vec<f32> = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
     let drawn = depths.iter().copied().filter(|&d| d < 1.0);
     let (lo, hi) = drawn.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));

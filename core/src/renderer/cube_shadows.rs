@@ -14,7 +14,7 @@
 use glam::Vec3;
 
 use super::gpu_data::MatrixUniform;
-use super::gpu_scene::GpuScene;
+use crate::accel::gpu_scene::GpuScene;
 use crate::gpu::GpuContext;
 use crate::math::CUBE_FACES;
 use crate::scene::chunks::{merge_draw_ranges, Chunk};
@@ -86,6 +86,58 @@ fn split_cutouts(geometry: &CubeGeometry<'_>, ids: &[u32], opaque: &mut Vec<u32>
             opaque.push(id);
         }
     }
+}
+
+/// The draw lists of one depth pass: per tile its merged opaque index ranges and its cut-out chunks.
+#[derive(Default)]
+struct DrawLists {
+    draws: Vec<TileDraw>,
+    ranges: Vec<(u32, u32)>,
+    masked: Vec<u32>,
+}
+
+/// Reused per-tile scratch of the culled draw loop.
+#[derive(Default)]
+struct TileScratch {
+    selected: Vec<u32>,
+    opaque: Vec<u32>,
+    ranges: Vec<(u32, u32)>,
+}
+
+/// The culled draw loop of every view (cube face, paraboloid, perspective): of the chunks `candidates`, those
+/// `keep` accepts are drawn into `tile`, opaque ones merged into ranges, cut-outs one by one; the triangles
+/// submitted and culled are added to `stats`.
+fn push_tile(
+    lists: &mut DrawLists,
+    scratch: &mut TileScratch,
+    geometry: &CubeGeometry<'_>,
+    tile: usize,
+    candidates: impl Iterator<Item = u32>,
+    keep: impl Fn(&Chunk) -> bool,
+    stats: &mut CubeStats,
+) {
+    scratch.selected.clear();
+    let mut tris = 0u64;
+    for id in candidates {
+        let chunk = &geometry.chunks[id as usize];
+        if keep(chunk) {
+            scratch.selected.push(id);
+            tris += chunk.triangle_count() as u64;
+        }
+    }
+    stats.triangles_submitted += tris;
+    stats.triangles_culled += geometry.triangle_count - tris;
+    let first_masked = lists.masked.len();
+    split_cutouts(geometry, &scratch.selected, &mut scratch.opaque, &mut lists.masked);
+    merge_draw_ranges(geometry.chunks, scratch.opaque.iter().copied(), &mut scratch.ranges);
+    lists.draws.push(TileDraw {
+        tile: tile as u32,
+        first: lists.ranges.len(),
+        count: scratch.ranges.len(),
+        first_masked,
+        masked: lists.masked.len() - first_masked,
+    });
+    lists.ranges.extend_from_slice(&scratch.ranges);
 }
 
 impl GpuScene {
@@ -241,15 +293,14 @@ pub struct CubeShadowRenderer {
     /// Alpha-tested variants (cube faces and views, paraboloids), created when cut-out chunks are first drawn.
     masked_pipeline: Option<wgpu::RenderPipeline>,
     paraboloid_masked_pipeline: Option<wgpu::RenderPipeline>,
-    opaque: Vec<u32>,
     faces_layout: wgpu::BindGroupLayout,
     vertex_stride: u64,
     faces: wgpu::Buffer,
     faces_bind_group: wgpu::BindGroup,
     atlas: Option<CubeAtlas>,
-    ranges: Vec<(u32, u32)>,
+    /// Chunks within the current caster's range (the cube faces' candidates).
     visible: Vec<u32>,
-    face_visible: Vec<u32>,
+    scratch: TileScratch,
 }
 
 impl CubeShadowRenderer {
@@ -292,22 +343,20 @@ impl CubeShadowRenderer {
                 }),
             }],
         });
-        let module = shaders::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH);
+        let module = crate::gpu::pipeline::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH.source);
         let pipeline = Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth", false);
         CubeShadowRenderer {
             pipeline,
             paraboloid_pipeline: None,
             masked_pipeline: None,
             paraboloid_masked_pipeline: None,
-            opaque: Vec::new(),
             faces_layout: layout,
             vertex_stride,
             faces,
             faces_bind_group,
             atlas: None,
-            ranges: Vec::new(),
             visible: Vec::new(),
-            face_visible: Vec::new(),
+            scratch: TileScratch::default(),
         }
     }
 
@@ -396,13 +445,13 @@ impl CubeShadowRenderer {
         if !slot_empty {
             return;
         }
-        let material_layout = crate::renderer::gpu_scene::GpuScene::material_layout(&gpu.device);
+        let material_layout = crate::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
         let (label, source) = if paraboloid {
-            ("paraboloid depth (alpha-tested)", shaders::PARABOLOID_DEPTH)
+            ("paraboloid depth (alpha-tested)", shaders::PARABOLOID_DEPTH.source)
         } else {
-            ("shadow depth (alpha-tested)", shaders::SHADOW_DEPTH)
+            ("shadow depth (alpha-tested)", shaders::SHADOW_DEPTH.source)
         };
-        let module = shaders::create_module(&gpu.device, label, source);
+        let module = crate::gpu::pipeline::create_module(&gpu.device, label, source);
         let pipeline = Self::depth_pipeline_with(
             &gpu.device,
             &self.faces_layout,
@@ -436,7 +485,8 @@ impl CubeShadowRenderer {
         let atlas = self.atlas.as_ref().expect("ensure_tiles before render_paraboloids");
         assert!(first_tile + casters.len() <= atlas.tiles && first_tile + casters.len() <= MAX_CUBES_PER_BATCH * 6);
         if self.paraboloid_pipeline.is_none() {
-            let module = shaders::create_module(&gpu.device, "paraboloid_depth", shaders::PARABOLOID_DEPTH);
+            let module =
+                crate::gpu::pipeline::create_module(&gpu.device, "paraboloid_depth", shaders::PARABOLOID_DEPTH.source);
             self.paraboloid_pipeline = Some(Self::depth_pipeline(
                 &gpu.device,
                 &self.faces_layout,
@@ -462,38 +512,19 @@ impl CubeShadowRenderer {
         self.atlas.as_mut().expect("checked above").record_projections(true, first_tile, projections);
         self.ensure_masked(gpu, &geometry, true);
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
-        let mut draws: Vec<TileDraw> = Vec::new();
-        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
-        let mut all_masked: Vec<u32> = Vec::new();
+        let mut lists = DrawLists::default();
+        let all = 0..geometry.chunks.len() as u32;
         for (i, c) in casters.iter().enumerate() {
-            self.visible.clear();
-            let mut tris = 0u64;
-            for (ci, chunk) in geometry.chunks.iter().enumerate() {
-                if !geometry.cull
+            let keep = |chunk: &Chunk| {
+                !geometry.cull
                     || (in_front_of(&chunk.bounds, c.centre, c.normal)
                         && chunk.bounds.intersects_sphere(c.centre, c.far))
-                {
-                    self.visible.push(ci as u32);
-                    tris += chunk.triangle_count() as u64;
-                }
-            }
-            stats.triangles_submitted += tris;
-            stats.triangles_culled += geometry.triangle_count - tris;
-            let first_masked = all_masked.len();
-            split_cutouts(&geometry, &self.visible, &mut self.opaque, &mut all_masked);
-            merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
-            draws.push(TileDraw {
-                tile: (first_tile + i) as u32,
-                first: all_ranges.len(),
-                count: self.ranges.len(),
-                first_masked,
-                masked: all_masked.len() - first_masked,
-            });
-            all_ranges.extend_from_slice(&self.ranges);
+            };
+            push_tile(&mut lists, &mut self.scratch, &geometry, first_tile + i, all.clone(), keep, &mut stats);
         }
         let pipeline = self.paraboloid_pipeline.as_ref().expect("created above");
         let masked = self.paraboloid_masked_pipeline.as_ref();
-        self.record(pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, true);
+        self.record(pipeline, masked, geometry, timer, encoder, label, &lists, true);
         stats
     }
 
@@ -580,35 +611,15 @@ impl CubeShadowRenderer {
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&matrices));
         self.ensure_masked(gpu, &geometry, false);
         let mut stats = CubeStats::default();
-        let mut draws: Vec<TileDraw> = Vec::new();
-        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
-        let mut all_masked: Vec<u32> = Vec::new();
+        let mut lists = DrawLists::default();
+        let all = 0..geometry.chunks.len() as u32;
         for (vi, m) in views.iter().enumerate() {
             let frustum = crate::math::Frustum::from_clip_from_world(m);
-            self.visible.clear();
-            let mut tris = 0u64;
-            for (i, c) in geometry.chunks.iter().enumerate() {
-                if frustum.intersects_aabb(&c.bounds) {
-                    self.visible.push(i as u32);
-                    tris += c.triangle_count() as u64;
-                }
-            }
-            stats.triangles_submitted += tris;
-            stats.triangles_culled += geometry.triangle_count - tris;
-            let first_masked = all_masked.len();
-            split_cutouts(&geometry, &self.visible, &mut self.opaque, &mut all_masked);
-            merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
-            draws.push(TileDraw {
-                tile: (first_tile + vi) as u32,
-                first: all_ranges.len(),
-                count: self.ranges.len(),
-                first_masked,
-                masked: all_masked.len() - first_masked,
-            });
-            all_ranges.extend_from_slice(&self.ranges);
+            let keep = |chunk: &Chunk| frustum.intersects_aabb(&chunk.bounds);
+            push_tile(&mut lists, &mut self.scratch, &geometry, first_tile + vi, all.clone(), keep, &mut stats);
         }
         let masked = self.masked_pipeline.as_ref();
-        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, clear);
+        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &lists, clear);
         stats
     }
 
@@ -637,13 +648,11 @@ impl CubeShadowRenderer {
         self.atlas.as_mut().expect("checked above").record_projections(true, 0, projections);
 
         // Culling on the CPU, draw lists per face.
-        let total_triangles = geometry.triangle_count;
         self.ensure_masked(gpu, &geometry, false);
         let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
-        let mut draws: Vec<TileDraw> = Vec::new();
-        let mut all_ranges: Vec<(u32, u32)> = Vec::new();
-        let mut all_masked: Vec<u32> = Vec::new();
+        let mut lists = DrawLists::default();
         for (ci, caster) in casters.iter().enumerate() {
+            // A chunk outside the caster's range sphere is culled for all six faces at once.
             self.visible.clear();
             self.visible.extend(
                 geometry
@@ -654,33 +663,14 @@ impl CubeShadowRenderer {
                     .map(|(i, _)| i as u32),
             );
             for (fi, face) in CUBE_FACES.iter().enumerate() {
-                self.face_visible.clear();
-                let mut tris = 0u64;
-                for &id in &self.visible {
-                    let c = &geometry.chunks[id as usize];
-                    if !cull || face.intersects_aabb(caster.position, &c.bounds) {
-                        self.face_visible.push(id);
-                        tris += c.triangle_count() as u64;
-                    }
-                }
-                stats.triangles_submitted += tris;
-                stats.triangles_culled += total_triangles - tris;
-                let first_masked = all_masked.len();
-                split_cutouts(&geometry, &self.face_visible, &mut self.opaque, &mut all_masked);
-                merge_draw_ranges(geometry.chunks, self.opaque.iter().copied(), &mut self.ranges);
-                draws.push(TileDraw {
-                    tile: (ci * 6 + fi) as u32,
-                    first: all_ranges.len(),
-                    count: self.ranges.len(),
-                    first_masked,
-                    masked: all_masked.len() - first_masked,
-                });
-                all_ranges.extend_from_slice(&self.ranges);
+                let keep = |c: &Chunk| !cull || face.intersects_aabb(caster.position, &c.bounds);
+                let candidates = self.visible.iter().copied();
+                push_tile(&mut lists, &mut self.scratch, &geometry, ci * 6 + fi, candidates, keep, &mut stats);
             }
         }
 
         let masked = self.masked_pipeline.as_ref();
-        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &draws, &all_ranges, &all_masked, true);
+        self.record(&self.pipeline, masked, geometry, timer, encoder, label, &lists, true);
         stats
     }
 
@@ -695,11 +685,10 @@ impl CubeShadowRenderer {
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
-        draws: &[TileDraw],
-        all_ranges: &[(u32, u32)],
-        all_masked: &[u32],
+        lists: &DrawLists,
         clear: bool,
     ) {
+        let (draws, all_ranges, all_masked) = (&lists.draws, &lists.ranges, &lists.masked);
         let atlas = self.atlas.as_ref().expect("the atlas exists when recording");
         let res = atlas.resolution;
         let tiles_per_row = atlas.tiles_per_row;

@@ -7,12 +7,13 @@
 
 use wgpu::util::DeviceExt;
 
+use super::layouts::compute_pipeline;
+use super::layouts::SharedLayouts;
 use super::targets::FrameTargets;
-use super::vpl_gather::{compute_pipeline, storage_rw_entry};
-use super::SharedLayouts;
 use crate::error::GpuError;
+use crate::gpu::bind::storage_entry;
+use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::GpuContext;
-use crate::technique::storage_entry;
 
 pub struct ExposureMeter {
     layout: wgpu::BindGroupLayout,
@@ -52,9 +53,15 @@ impl ExposureMeter {
             ],
         });
         let meter =
-            compute_pipeline(gpu, layouts, "exposure meter", crate::shaders::EXPOSURE, "meter_main", &[&layout]);
-        let resolve =
-            compute_pipeline(gpu, layouts, "exposure resolve", crate::shaders::EXPOSURE, "meter_resolve", &[&layout]);
+            compute_pipeline(gpu, layouts, "exposure meter", crate::shaders::EXPOSURE.source, "meter_main", &[&layout]);
+        let resolve = compute_pipeline(
+            gpu,
+            layouts,
+            "exposure resolve",
+            crate::shaders::EXPOSURE.source,
+            "meter_resolve",
+            &[&layout],
+        );
         let result = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("auto exposure"),
             contents: bytemuck::cast_slice(&[1.0f32, 0.0, 0.0, 0.0]),
@@ -132,7 +139,7 @@ impl ExposureMeter {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&self.result, 0, &staging, 0, 16);
         gpu.queue.submit([encoder.finish()]);
-        let data = super::readback::map_read(gpu, &staging, 16)?;
+        let data = crate::gpu::readback::map_read(gpu, &staging, 16)?;
         let v: &[f32] = bytemuck::cast_slice(&data);
         Ok((v[0], v[1]))
     }

@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::scene::{Material, PointLight};
+use crate::scene::PointLight;
 
 /// Mirrors `Frame` in `common.wgsl`.
 #[repr(C)]
@@ -78,38 +78,4 @@ impl GpuLight {
 /// large enough to keep 32-bit depth precise at the range.
 pub fn shadow_near(range: f32) -> f32 {
     (range * 0.002).clamp(1e-4, 0.05)
-}
-
-/// Mirrors `Material` in `material.wgsl` (the G-buffer and the alpha-tested depth passes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MaterialUniform {
-    pub base_color: [f32; 4],
-    pub emissive: [f32; 4],
-    pub specular: [f32; 4],
-    /// x: alpha cutoff (0: opaque).
-    pub alpha: [f32; 4],
-}
-const _: () = assert!(std::mem::size_of::<MaterialUniform>() == 64);
-
-impl MaterialUniform {
-    pub fn new(m: &Material, has_texture: bool, has_emissive_texture: bool, occlusion_strength: f32) -> Self {
-        let spec: Vec3 = m.specular;
-        MaterialUniform {
-            base_color: m.base_color.to_array(),
-            emissive: [m.emissive.x, m.emissive.y, m.emissive.z, if has_texture { 1.0 } else { 0.0 }],
-            specular: [
-                (spec.x + spec.y + spec.z) / 3.0,
-                m.shininess.clamp(1.0, 4096.0),
-                if has_emissive_texture { 1.0 } else { 0.0 },
-                occlusion_strength,
-            ],
-            alpha: [
-                if m.alpha_cutoff.is_finite() { m.alpha_cutoff.clamp(0.0, 1.0) } else { 0.0 },
-                if m.emissive_uv1 { 1.0 } else { 0.0 },
-                if m.occlusion_uv1 { 1.0 } else { 0.0 },
-                0.0,
-            ],
-        }
-    }
 }

@@ -18,10 +18,10 @@
 
 use wgpu::util::DeviceExt;
 
-use super::vpl_gather::storage_rw_entry;
+use crate::gpu::bind::{storage_entry, storage_rw_entry, uniform_entry};
+use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
 use crate::shaders;
-use crate::technique::{storage_entry, uniform_entry, GrowableBuffer};
 use crate::timing::PassTimer;
 
 /// Pixels per tile side (`TILE_SIZE` in the WGSL files).
@@ -89,14 +89,15 @@ pub struct TileLists {
 }
 
 impl TileLists {
-    /// `read_layout` is [`crate::renderer::SharedLayouts::light_tiles`].
+    /// `read_layout` is [`crate::renderer::layouts::SharedLayouts::light_tiles`].
     pub fn new(gpu: &GpuContext, screen_layout: &wgpu::BindGroupLayout, read_layout: &wgpu::BindGroupLayout) -> Self {
         let device = &gpu.device;
         let build_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("light tiles (build)"),
             entries: &[uniform_entry(0), storage_entry(1), storage_rw_entry(2)],
         });
-        let module = shaders::create_module(device, "light_tiles_build", shaders::LIGHT_TILES_BUILD);
+        let module =
+            crate::gpu::pipeline::create_module(device, "light_tiles_build", shaders::LIGHT_TILES_BUILD.source);
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("light tiles"),
             bind_group_layouts: &[Some(screen_layout), Some(&build_layout)],
@@ -258,7 +259,7 @@ impl TileLists {
         if capacity == 0 {
             return Ok(Vec::new());
         }
-        let bytes = super::readback::read_buffer(gpu, &self.lists)?;
+        let bytes = crate::gpu::readback::read_buffer(gpu, &self.lists)?;
         let lists: &[u32] = bytemuck::cast_slice(&bytes);
         let tiles = (tiles_x * tiles_y) as usize;
         Ok((0..tiles)

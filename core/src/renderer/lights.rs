@@ -4,10 +4,10 @@
 //! shade from this list; LightCluster clusters it (its step 1) and uploads its lights in cluster order.
 
 use super::gpu_data::GpuLight;
+use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::scene::PointLight;
-use crate::technique::GrowableBuffer;
 
 pub struct VisibleLights {
     /// Indices into the frame's lights of the visible ones, in order.

@@ -7,15 +7,16 @@
 //! advanced a few steps at a time ([`Renderer::begin_frame`], [`Renderer::advance`], [`Renderer::finish_frame`])
 //! so an interactive app stays responsive while a slow technique accumulates.
 
+pub mod cube_params;
 pub mod cube_shadows;
 pub mod exposure;
 pub mod gpu_data;
-pub mod gpu_scene;
+pub mod layouts;
 pub mod light_tiles;
 pub mod lights;
 pub mod overlay;
-pub mod readback;
-pub mod scene_bvh;
+pub mod per_light_shadows;
+pub mod shade_pass;
 pub mod targets;
 pub mod vpl_gather;
 
@@ -24,7 +25,9 @@ use std::time::Instant;
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::accel::gpu_scene::GpuScene;
 use crate::error::GpuError;
+use crate::gpu::readback;
 use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::scene::chunks::merge_draw_ranges;
@@ -32,9 +35,9 @@ use crate::scene::{Camera, PointLight, Scene};
 use crate::shaders;
 use crate::technique::{FrameContext, Technique, TechniqueCounts};
 use crate::timing::{PassTime, PassTimer, TimingSource};
-use crate::vpl::{GpuVpl, VplSet, VplSettings};
+use crate::vpl::{GpuVpl, VplFrame, VplSet, VplSettings};
 use gpu_data::{FrameUniform, MatrixUniform};
-use gpu_scene::GpuScene;
+use layouts::SharedLayouts;
 use targets::FrameTargets;
 
 /// Largest render target side accepted.
@@ -164,119 +167,6 @@ impl RenderSettings {
     }
 }
 
-/// Bind group layouts and formats every technique uses.
-pub struct SharedLayouts {
-    /// Group 0 of full-screen passes: frame uniform + G-buffer (`common.wgsl`).
-    pub screen: wgpu::BindGroupLayout,
-    pub material: wgpu::BindGroupLayout,
-    pub camera: wgpu::BindGroupLayout,
-    /// Group 2 of shading passes that read tile lists (`light_tiles.wgsl`).
-    pub light_tiles: wgpu::BindGroupLayout,
-}
-
-impl SharedLayouts {
-    pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-    pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-    pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-    pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-    pub const EMISSIVE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-    pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-    fn new(device: &wgpu::Device) -> SharedLayouts {
-        let tex = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let uniform = |binding, visibility| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let unfilterable = wgpu::TextureSampleType::Float { filterable: false };
-        let screen = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("screen"),
-            entries: &[
-                uniform(0, wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE),
-                tex(1, unfilterable),
-                tex(2, unfilterable),
-                tex(3, unfilterable),
-                // Depth bound as an unfilterable float texture: textureLoad on depth textures has no GLSL form.
-                tex(4, unfilterable),
-            ],
-        });
-        let camera = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("camera"),
-            entries: &[uniform(0, wgpu::ShaderStages::VERTEX)],
-        });
-        SharedLayouts {
-            screen,
-            material: GpuScene::material_layout(device),
-            camera,
-            light_tiles: light_tiles::read_layout(device),
-        }
-    }
-
-    /// A full-screen pipeline: `common.wgsl`'s triangle, `fs_main` of `module`, groups `[screen, extra...]`,
-    /// writing one `format` target, additive when `additive`.
-    pub fn fullscreen_pipeline(
-        &self,
-        device: &wgpu::Device,
-        label: &str,
-        module: &wgpu::ShaderModule,
-        extra_groups: &[&wgpu::BindGroupLayout],
-        format: wgpu::TextureFormat,
-        additive: bool,
-    ) -> wgpu::RenderPipeline {
-        let mut groups: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&self.screen)];
-        groups.extend(extra_groups.iter().map(|g| Some(*g)));
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(label),
-            bind_group_layouts: &groups,
-            immediate_size: 0,
-        });
-        let blend = additive.then_some(wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::One,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent::OVER,
-        });
-        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some("fullscreen_vs"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: Default::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
-    }
-}
-
 /// Counts of a frame.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct FrameCounts {
@@ -391,14 +281,6 @@ pub struct Renderer {
     fixed_vpls: bool,
 }
 
-/// The VPLs of the current frame, on the CPU and the GPU (`array<Vpl>`, `vpl_common.wgsl`).
-pub struct VplFrame {
-    pub set: std::sync::Arc<VplSet>,
-    pub buffer: crate::technique::GrowableBuffer,
-    /// What the set was generated from (lights, settings, scene geometry), so an unchanged frame reuses it.
-    key: Option<(Vec<PointLight>, VplSettings, usize)>,
-}
-
 /// Bytes of the indirect buffer for a `width x height` image.
 fn indirect_bytes(width: u32, height: u32) -> u64 {
     width as u64 * height as u64 * 16
@@ -495,7 +377,7 @@ impl Renderer {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_uniform.as_entire_binding() }],
         });
 
-        let gbuffer_module = shaders::create_module(device, "gbuffer", shaders::GBUFFER);
+        let gbuffer_module = crate::gpu::pipeline::create_module(device, "gbuffer", shaders::GBUFFER.source);
         let gbuffer_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer"),
             bind_group_layouts: &[Some(&layouts.camera), Some(&layouts.material)],
@@ -544,7 +426,7 @@ impl Renderer {
             multiview_mask: None,
             cache: None,
         });
-        let ambient_module = shaders::create_module(device, "ambient", shaders::AMBIENT);
+        let ambient_module = crate::gpu::pipeline::create_module(device, "ambient", shaders::AMBIENT.source);
         let ambient_pipeline =
             layouts.fullscreen_pipeline(device, "ambient", &ambient_module, &[], SharedLayouts::HDR_FORMAT, false);
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -560,11 +442,11 @@ impl Renderer {
                     },
                     count: None,
                 },
-                crate::technique::storage_entry(1),
-                crate::technique::storage_entry(2),
+                crate::gpu::bind::storage_entry(1),
+                crate::gpu::bind::storage_entry(2),
             ],
         });
-        let tonemap_module = shaders::create_module(device, "tonemap", shaders::TONEMAP);
+        let tonemap_module = crate::gpu::pipeline::create_module(device, "tonemap", shaders::TONEMAP.source);
         let tonemap_pipeline = layouts.fullscreen_pipeline(
             device,
             "tonemap",
@@ -604,7 +486,7 @@ impl Renderer {
             indirect_buffer,
             vpls: VplFrame {
                 set: Default::default(),
-                buffer: crate::technique::GrowableBuffer::new(device, "vpls", 48 * 64),
+                buffer: crate::gpu::buffer::GrowableBuffer::new(device, "vpls", 48 * 64),
                 key: None,
             },
             fixed_vpls: false,
@@ -743,7 +625,7 @@ impl Renderer {
 
     /// Create an indirect technique by key on this renderer's device.
     pub fn create_indirect_technique(&self, key: &str) -> Option<Box<dyn Technique>> {
-        crate::technique::create_indirect(key, &self.gpu, &self.layouts)
+        crate::technique::registry::create_indirect(key, &self.gpu, &self.layouts)
     }
 
     /// Use these VPLs instead of generating them from the lights (None: generate again). For tests with
@@ -799,7 +681,7 @@ impl Renderer {
     }
 
     pub fn create_technique(&self, key: &str) -> Option<Box<dyn Technique>> {
-        crate::technique::create(key, &self.gpu, &self.layouts)
+        crate::technique::registry::create(key, &self.gpu, &self.layouts)
     }
 
     fn aspect(&self) -> f32 {

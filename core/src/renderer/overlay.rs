@@ -6,10 +6,10 @@
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
-use super::SharedLayouts;
+use super::layouts::SharedLayouts;
 use crate::gpu::GpuContext;
 use crate::shaders;
-use crate::technique::Overlay;
+use crate::technique::overlay::{index_color, Overlay, MAX_FULL_SPHERES, MAX_SPHERES};
 
 /// Mirrors `View` in `overlay.wgsl`.
 #[repr(C)]
@@ -57,13 +57,8 @@ struct DotVertex {
 
 /// Segments per circle of a wireframe sphere.
 const CIRCLE_SEGMENTS: usize = 48;
-/// Above this many spheres in one draw, each is one horizontal circle of [`CHEAP_SEGMENTS`] instead of three
-/// great circles of [`CIRCLE_SEGMENTS`] (24x fewer vertices): 100,000 range spheres would otherwise be
-/// ~600 MB of line vertices every UI frame.
-pub const MAX_FULL_SPHERES: usize = 2048;
+/// Segments of the one horizontal circle a sphere is drawn as above [`MAX_FULL_SPHERES`].
 const CHEAP_SEGMENTS: usize = 6;
-/// Spheres drawn at all; the rest are left out (the lights' own dots still show where they are).
-pub const MAX_SPHERES: usize = 32_768;
 
 pub struct OverlayRenderer {
     uniform: wgpu::Buffer,
@@ -95,7 +90,7 @@ fn colorize_ids(ids: &[u32], alpha: f32) -> Vec<u8> {
             if id == u32::MAX {
                 [0, 0, 0, 0]
             } else {
-                let c = crate::technique::index_color(id as usize);
+                let c = index_color(id as usize);
                 [
                     (c[0] * 255.0) as u8,
                     (c[1] * 255.0) as u8,
@@ -212,7 +207,7 @@ impl OverlayRenderer {
             layout: &layout,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() }],
         });
-        let module = shaders::create_module(device, "overlay", shaders::OVERLAY);
+        let module = crate::gpu::pipeline::create_module(device, "overlay", shaders::OVERLAY.source);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("overlay"),
             bind_group_layouts: &[Some(&layout)],

@@ -1,6 +1,6 @@
 //! Screen-sized render targets: the G-buffer, the HDR accumulation target and the tone-mapped output.
 
-use super::SharedLayouts;
+use super::layouts::SharedLayouts;
 use crate::gpu::GpuContext;
 
 pub struct FrameTargets {

@@ -12,9 +12,11 @@
 
 use glam::Vec3;
 
+use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::GpuContext;
-use crate::renderer::SharedLayouts;
-use crate::technique::{FrameContext, Overlay, OverlayLayer};
+use crate::renderer::layouts::{compute_pipeline, SharedLayouts};
+use crate::technique::overlay::{index_color, Glyph, HoverPoint, LegendEntry, Overlay, OverlayLayer};
+use crate::technique::FrameContext;
 use crate::vpl::VplSet;
 
 /// Mirrors `GatherBatch` in `vpl_common.wgsl`.
@@ -42,48 +44,6 @@ pub struct VplGatherPass {
     pipeline: wgpu::ComputePipeline,
     gather_layout: wgpu::BindGroupLayout,
     uniform: wgpu::Buffer,
-}
-
-/// A storage-buffer layout entry for compute shaders, read-write.
-pub fn storage_rw_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: false },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// A compute pipeline over `[screen, extra...]` groups with entry point `entry`.
-pub fn compute_pipeline(
-    gpu: &GpuContext,
-    layouts: &SharedLayouts,
-    label: &str,
-    source: &str,
-    entry: &str,
-    extra_groups: &[&wgpu::BindGroupLayout],
-) -> wgpu::ComputePipeline {
-    let device = &gpu.device;
-    let module = crate::shaders::create_module(device, label, source);
-    let mut groups: Vec<Option<&wgpu::BindGroupLayout>> = vec![Some(&layouts.screen)];
-    groups.extend(extra_groups.iter().map(|g| Some(*g)));
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &groups,
-        immediate_size: 0,
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
 }
 
 /// Workgroups of 8x8 covering the image.
@@ -116,7 +76,7 @@ impl VplGatherPass {
         let device = &gpu.device;
         let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl gather"),
-            entries: &[crate::technique::storage_entry(0), crate::technique::uniform_entry(1), storage_rw_entry(2)],
+            entries: &[crate::gpu::bind::storage_entry(0), crate::gpu::bind::uniform_entry(1), storage_rw_entry(2)],
         });
         let pipeline = compute_pipeline(gpu, layouts, label, source, entry, &[visibility_layout, &gather_layout]);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
@@ -185,9 +145,10 @@ impl InterleaveBlur {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> InterleaveBlur {
         let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl blur"),
-            entries: &[crate::technique::storage_entry(0), storage_rw_entry(1)],
+            entries: &[crate::gpu::bind::storage_entry(0), storage_rw_entry(1)],
         });
-        let pipeline = compute_pipeline(gpu, layouts, "vpl_blur", crate::shaders::VPL_BLUR, "blur_main", &[&layout]);
+        let pipeline =
+            compute_pipeline(gpu, layouts, "vpl_blur", crate::shaders::VPL_BLUR.source, "blur_main", &[&layout]);
         InterleaveBlur { pipeline, layout, scratch: None }
     }
 
@@ -254,11 +215,7 @@ pub fn vpl_overlays(set: &VplSet, scene_size: f32, path_light: u32) -> Vec<Overl
         OverlayLayer {
             name: by_light,
             visible_by_default: false,
-            primitives: vpls
-                .iter()
-                .step_by(stride)
-                .map(|v| disc(v, crate::technique::index_color(v.light as usize)))
-                .collect(),
+            primitives: vpls.iter().step_by(stride).map(|v| disc(v, index_color(v.light as usize))).collect(),
         },
         OverlayLayer {
             name: name("vpl normals", "vpl normals (every n-th)"),
@@ -296,13 +253,11 @@ fn vpl_layer_names(count: usize) -> [&'static str; 2] {
 }
 
 /// The hover points of [`vpl_overlays`]: the VPLs its layers draw, indexed by VPL.
-pub fn vpl_hover_points(set: &VplSet) -> Vec<crate::technique::HoverPoint> {
+pub fn vpl_hover_points(set: &VplSet) -> Vec<HoverPoint> {
     let stride = set.vpls.len().div_ceil(OVERLAY_MAX_VPLS).max(1);
     let layers = vpl_layer_names(set.vpls.len());
     let points = set.vpls.iter().enumerate().step_by(stride);
-    points
-        .flat_map(|(index, v)| layers.map(|layer| crate::technique::HoverPoint { layer, position: v.position, index }))
-        .collect()
+    points.flat_map(|(index, v)| layers.map(|layer| HoverPoint { layer, position: v.position, index })).collect()
 }
 
 /// The tooltip of VPL `index` of the set: where its light came from, its flux and normal.
@@ -323,8 +278,7 @@ pub fn is_vpl_layer(set: &VplSet, layer: &str) -> bool {
 }
 
 /// The legend of the layers of [`vpl_overlays`]; None for other layers.
-pub fn vpl_layer_legend(layer: &OverlayLayer) -> Option<Vec<crate::technique::LegendEntry>> {
-    use crate::technique::{Glyph, LegendEntry};
+pub fn vpl_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
     let thinned = if layer.name.contains("every n-th") { " (every n-th VPL, past 4,096)" } else { "" };
     let name = layer.name;
     let entry = match () {
@@ -335,7 +289,7 @@ pub fn vpl_layer_legend(layer: &OverlayLayer) -> Option<Vec<crate::technique::Le
         ),
         _ if name.starts_with("vpls (by light") => LegendEntry::new(
             Glyph::Palette,
-            crate::technique::index_color(0),
+            index_color(0),
             format!("a VPL in the colour of the light it came from{thinned}"),
         ),
         _ if name.starts_with("vpl normals") => {

@@ -34,7 +34,8 @@ pub mod halton;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::renderer::scene_bvh::SceneBvh;
+use crate::accel::scene_bvh::SceneBvh;
+use crate::gpu::buffer::GrowableBuffer;
 use crate::scene::{attenuation, PointLight};
 
 /// The side of each face of a light's reflective shadow map.
@@ -339,4 +340,12 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -
         }
     }
     set
+}
+
+/// The VPLs of the current frame, on the CPU and the GPU (`array<Vpl>`, `vpl_common.wgsl`).
+pub struct VplFrame {
+    pub set: std::sync::Arc<VplSet>,
+    pub buffer: GrowableBuffer,
+    /// What the set was generated from (lights, settings, scene geometry), so an unchanged frame reuses it.
+    pub(crate) key: Option<(Vec<PointLight>, VplSettings, usize)>,
 }

@@ -1,6 +1,6 @@
-//! Algorithms 1 and 2 on the GPU (`fuzzy_kmeans.wgsl`), the twin of [`super::kmeans::cluster`]: one dispatch
+//! Algorithms 1 and 2 on the GPU (`fuzzy/kmeans.wgsl`), the twin of [`super::kmeans::cluster`]: one dispatch
 //! per step over a buffer of points in the `GpuVpl` layout (the frame's VPLs as they are, or the shading points
-//! written from the G-buffer by `fuzzy_points.wgsl`). Its outputs stay on the GPU for the visibility and
+//! written from the G-buffer by `fuzzy/points.wgsl`). Its outputs stay on the GPU for the visibility and
 //! shading passes: `clusters` (the first `K` entries: each cluster as a light / ray endpoint, its
 //! representative's position, normal and the members' flux) and `assignment` (per point, `F` clusters with
 //! inverse distances). [`GpuKMeans::read_clusters`] and [`GpuKMeans::read_assignment`] read them back for the
@@ -10,12 +10,11 @@ use glam::Vec3;
 
 use super::kmeans::{grid_shape, KMeansParams, MAX_F};
 use crate::error::GpuError;
+use crate::gpu::readback;
 use crate::gpu::GpuContext;
-use crate::renderer::readback;
-use crate::shaders;
 use crate::timing::PassTimer;
 
-/// Mirrors `KmParams` in `fuzzy_kmeans.wgsl`.
+/// Mirrors `KmParams` in `fuzzy/kmeans.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct KmParamsUniform {
@@ -153,7 +152,7 @@ impl GpuKMeans {
                 buffer(4, rw),
             ],
         });
-        let module = shaders::create_module(device, "fuzzy_kmeans", shaders::FUZZY_KMEANS);
+        let module = crate::gpu::pipeline::create_module(device, "fuzzy_kmeans", super::KMEANS.source);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("fuzzy kmeans"),
             bind_group_layouts: &[Some(&layout)],

@@ -1,6 +1,6 @@
 //! Colom, Marques, Santos 2022, section 3.2-3.3: K-means of surface points (VPLs or shading points) with the
 //! distance of equation 7, a regular grid over the centroids, and the fuzzy final assignment (Algorithm 2).
-//! The CPU twin of `fuzzy_kmeans.wgsl` (same initial centroids, search, fixed-point means, tie rule), pure and
+//! The CPU twin of `fuzzy/kmeans.wgsl` (same initial centroids, search, fixed-point means, tie rule), pure and
 //! deterministic; the property tests below run on it and a GPU test compares the two.
 //!
 //! Algorithm 1 (symbols of the paper):

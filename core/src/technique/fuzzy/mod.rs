@@ -8,15 +8,15 @@
 //! 2. VPL clustering: `K_vpl` clusters by Algorithm 1 over position and normal ([`kmeans`], on the GPU in
 //!    [`gpu`]); each cluster becomes one light at its representative (the member nearest the centroid) with
 //!    its members' mean normal and summed flux (`I_c` of equation 6).
-//! 3. Shading points: the G-buffer's pixels (position, normal) of the current view (`fuzzy_points.wgsl`).
+//! 3. Shading points: the G-buffer's pixels (position, normal) of the current view (`fuzzy/points.wgsl`).
 //! 4. SP clustering: `K_sp` clusters by Algorithm 1 over every `gamma`-th column and row, then Algorithm 2
 //!    assigns every pixel to its `F` nearest clusters with inverse distances. Both clusterings: initial
 //!    centroids from the data, a regular grid over the centroids rebuilt every iteration and a search from the
 //!    27 cells around a point, fixed-point atomic sums (64-bit, 2^-24 of the scene's bounds), `dist` of
 //!    equation 7 with `n_t`.
 //! 5. Visibility: one shadow ray through the scene BVH from every SP representative to every light (VPL
-//!    cluster or VPL): `K_sp x K_vpl` bits (`fuzzy_visibility.wgsl`).
-//! 6. Shading (equation 6, `fuzzy_shade.wgsl`): every shading point sums the lights with its own BRDF and
+//!    cluster or VPL): `K_sp x K_vpl` bits (`fuzzy/visibility.wgsl`).
+//! 6. Shading (equation 6, `fuzzy/shade.wgsl`): every shading point sums the lights with its own BRDF and
 //!    geometry term toward the light and the visibility `V~`: `hard` (its nearest cluster's), `fuzzy`
 //!    (equation 8, the mean over its `F` clusters) or `weighted` (equations 9-10, inverse-distance weights).
 //!
@@ -41,16 +41,17 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::{
-    check_param, index_color, storage_entry, uniform_entry, FrameContext, Overlay, OverlayLayer, Param, ParamError,
-    ParamKind, ParamValue, Technique, TechniqueCounts,
+    check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
 };
+use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
+use crate::gpu::bind::storage_rw_entry;
+use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::scene_bvh::SceneBvh;
-use crate::renderer::vpl_gather::{
-    compute_pipeline, storage_rw_entry, vpl_overlays, GatherBatchUniform, VplGatherPass,
-};
-use crate::renderer::SharedLayouts;
+use crate::renderer::layouts::compute_pipeline;
+use crate::renderer::layouts::SharedLayouts;
+use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, VplGatherPass};
 use crate::scene::PointLight;
 use crate::shaders;
 use crate::timing::PassTime;
@@ -58,7 +59,20 @@ use crate::vpl::{GpuVpl, VplSet};
 use gpu::{GpuKMeans, GpuPoint};
 use kmeans::{KMeansParams, ShadeMode, MAX_F};
 
-/// Mirrors `VisParams` in `fuzzy_visibility.wgsl`.
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[POINTS, VISIBILITY, SHADE, KMEANS];
+const POINTS: WgslModule =
+    crate::wgsl!("fuzzy_points", ["shaders/common.wgsl", "core/src/technique/fuzzy/points.wgsl"]);
+const VISIBILITY: WgslModule =
+    crate::wgsl!("fuzzy_visibility", ["shaders/raytrace_bvh.wgsl", "core/src/technique/fuzzy/visibility.wgsl"]);
+const SHADE: WgslModule = crate::wgsl!(
+    "fuzzy_shade",
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
+);
+const KMEANS: WgslModule = crate::wgsl!("fuzzy_kmeans", ["core/src/technique/fuzzy/kmeans.wgsl"]);
+
+/// Mirrors `VisParams` in `fuzzy/visibility.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct VisParamsUniform {
@@ -72,7 +86,7 @@ struct VisParamsUniform {
 }
 const _: () = assert!(std::mem::size_of::<VisParamsUniform>() == 48);
 
-/// Mirrors `FuzzyShade` in `fuzzy_shade.wgsl`.
+/// Mirrors `FuzzyShade` in `fuzzy/shade.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ShadeUniform {
@@ -244,16 +258,16 @@ impl FuzzyClustering {
             entries: &[storage_rw_entry(0)],
         });
         let points_pipeline =
-            compute_pipeline(gpu, layouts, "fuzzy_points", shaders::FUZZY_POINTS, "sp_points_main", &[&points_layout]);
+            compute_pipeline(gpu, layouts, "fuzzy_points", POINTS.source, "sp_points_main", &[&points_layout]);
         let bvh_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("fuzzy bvh"),
-            entries: &crate::renderer::scene_bvh::SceneBvh::layout_entries(),
+            entries: &crate::accel::scene_bvh::SceneBvh::layout_entries(),
         });
         let vis_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("fuzzy visibility"),
             entries: &[uniform_entry(0), storage_entry(1), storage_rw_entry(2)],
         });
-        let vis_module = shaders::create_module(device, "fuzzy_visibility", shaders::FUZZY_VISIBILITY);
+        let vis_module = crate::gpu::pipeline::create_module(device, "fuzzy_visibility", VISIBILITY.source);
         let vis_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("fuzzy visibility"),
             bind_group_layouts: &[Some(&vis_layout), Some(&bvh_layout)],
@@ -271,15 +285,10 @@ impl FuzzyClustering {
             label: Some("fuzzy shading"),
             entries: &[uniform_entry(0), storage_entry(1), storage_entry(2)],
         });
-        let shade_pass = VplGatherPass::with_entry(
-            gpu,
-            layouts,
-            "fuzzy_shade",
-            shaders::FUZZY_SHADE,
-            "fuzzy_shade_main",
-            &shade_layout,
-        );
-        let ray_pass = VplGatherPass::new(gpu, layouts, "fuzzy vpl rays", shaders::VPL_GATHER_RAYTRACED, &bvh_layout);
+        let shade_pass =
+            VplGatherPass::with_entry(gpu, layouts, "fuzzy_shade", SHADE.source, "fuzzy_shade_main", &shade_layout);
+        let ray_pass =
+            VplGatherPass::new(gpu, layouts, "fuzzy vpl rays", shaders::VPL_GATHER_RAYTRACED.source, &bvh_layout);
         let uniform = |label, size| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),

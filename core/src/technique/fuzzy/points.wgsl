@@ -1,5 +1,5 @@
 // Step 3 of Colom et al. 2022: the shading points are the G-buffer's pixels (position, normal), written as
-// k-means points (`KmPoint` of fuzzy_kmeans.wgsl: position w = 1 for geometry, 0 for the sky). A normal that
+// k-means points (`KmPoint` of fuzzy/kmeans.wgsl: position w = 1 for geometry, 0 for the sky). A normal that
 // is not a unit vector (a zero or NaN G-buffer normal) is stored as zero: such a point matches no cluster by
 // equation 7 and joins the nearest by position. Composed after common.wgsl.
 

@@ -1,6 +1,6 @@
 // Step 6 of Colom et al. 2022, equation 6: every shading point sums the batch's lights (VPL clusters, or every
 // VPL when VPLs are not clustered) with its own BRDF and geometry term (vpl_term of vpl_common.wgsl) and the
-// approximated visibility V~ of its shading-point clusters' representatives (fuzzy_visibility.wgsl's bits):
+// approximated visibility V~ of its shading-point clusters' representatives (fuzzy/visibility.wgsl's bits):
 // - hard (mode 0): its nearest cluster's visibility;
 // - fuzzy (mode 1, equation 8): the mean over its F nearest clusters;
 // - weighted (mode 2, equations 9-10): the mean weighted by the inverse distances w_f = (1 / R_f) / W.
@@ -19,7 +19,7 @@ struct FuzzyShade {
 }
 
 @group(1) @binding(0) var<uniform> shade: FuzzyShade;
-// Per pixel, F entries of (cluster, bitcast inverse distance), from fuzzy_kmeans.wgsl's km_final.
+// Per pixel, F entries of (cluster, bitcast inverse distance), from fuzzy/kmeans.wgsl's km_final.
 @group(1) @binding(1) var<storage, read> sp_assignment: array<u32>;
 @group(1) @binding(2) var<storage, read> vis_bits: array<u32>;
 

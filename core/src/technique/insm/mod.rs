@@ -4,7 +4,7 @@
 //! 1-2. Render `k` intermediate shadow maps `INSM_j` (depth images of `w x w`) from reference viewpoints `V_j`
 //!      ([`viewpoints`]: the paper's bounding-box placement, an inside placement, or the user's own).
 //! 3.   Reconstruct a triangle mesh `TM_j` from each `INSM_j` on the GPU (Algorithm 2,
-//!      `shaders/insm_triangulate.wgsl`): two triangles per 2x2 neighbourhood, an edge kept only when the
+//!      `core/src/technique/insm/triangulate.wgsl`): two triangles per 2x2 neighbourhood, an edge kept only when the
 //!      second-order depth differences on both its sides are below `epsilon`, background samples dropped.
 //! 4.   Render the scene without shadows: the renderer's G-buffer and ambient pass.
 //! 5-9. For each light `L_i`, render all `TM_j` into its cube shadow map `SM_i` and add its shadowed light, in
@@ -58,22 +58,27 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
-use super::reference::PerLightShadows;
 use super::{
-    check_param, CubeMapParams, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue,
-    Technique, TechniqueCounts,
+    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
 };
 use crate::error::GpuError;
+use crate::gpu::readback::{map_read, read_buffer};
 use crate::gpu::GpuContext;
+use crate::renderer::cube_params::CubeMapParams;
 use crate::renderer::cube_shadows::{CubeGeometry, CubeShadowRenderer};
-use crate::renderer::readback::{map_read, read_buffer};
-use crate::renderer::SharedLayouts;
+use crate::renderer::layouts::SharedLayouts;
+use crate::renderer::per_light_shadows::PerLightShadows;
 use crate::scene::chunks::Chunk;
 use crate::scene::{Aabb, PointLight};
-use crate::shaders;
 use crate::timing::PassTime;
 use triangulate::{GpuTile, MapView, MeshSettings, SampledImage, MAX_TRIANGLES_PER_TILE};
 use viewpoints::{Placement, Viewpoint};
+
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[TRIANGULATE];
+const TRIANGULATE: WgslModule = crate::wgsl!("insm_triangulate", ["core/src/technique/insm/triangulate.wgsl"]);
 
 /// Most intermediate shadow maps (the paper uses 6 to 14).
 pub const MAX_VIEWPOINTS: usize = 16;
@@ -123,7 +128,7 @@ impl Default for InsmParams {
     }
 }
 
-/// Mirrors `Params` in `insm_triangulate.wgsl`.
+/// Mirrors `Params` in `insm/triangulate.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct TriangulateUniform {
@@ -138,7 +143,7 @@ struct TriangulateUniform {
 }
 const _: () = assert!(std::mem::size_of::<TriangulateUniform>() == 32);
 
-/// Mirrors `View` in `insm_triangulate.wgsl`.
+/// Mirrors `View` in `insm/triangulate.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuView {
@@ -234,9 +239,9 @@ impl Insm {
         let triangulate_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("insm triangulate"),
             entries: &[
-                super::uniform_entry(0),
+                crate::gpu::bind::uniform_entry(0),
                 storage(1, true),
-                super::depth_texture_entry(2),
+                crate::gpu::bind::depth_texture_entry(2),
                 storage(3, false),
                 storage(4, false),
                 storage(5, false),
@@ -247,7 +252,7 @@ impl Insm {
             bind_group_layouts: &[Some(&triangulate_layout)],
             immediate_size: 0,
         });
-        let module = shaders::create_module(device, "insm_triangulate", shaders::INSM_TRIANGULATE);
+        let module = crate::gpu::pipeline::create_module(device, "insm_triangulate", TRIANGULATE.source);
         let entry = |label, entry_point| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),

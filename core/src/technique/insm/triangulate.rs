@@ -1,4 +1,4 @@
-//! INSM Algorithm 2 on the CPU: the twin of `shaders/insm_triangulate.wgsl`, run on the vertices the GPU wrote
+//! INSM Algorithm 2 on the CPU: the twin of `core/src/technique/insm/triangulate.wgsl`, run on the vertices the GPU wrote
 //! (world position and inverse depth per sample). The technique uses it for its overlays (the reconstructed
 //! mesh, its samples and the dropped edges); the tests check the GPU against it.
 //!
@@ -8,12 +8,12 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-/// Neighbourhoods per tile side; the workgroup size of `insm_triangulate.wgsl`.
+/// Neighbourhoods per tile side; the workgroup size of `insm/triangulate.wgsl`.
 pub const TILE: u32 = 8;
 /// Triangle slots per tile: two per neighbourhood.
 pub const MAX_TRIANGLES_PER_TILE: u32 = 2 * TILE * TILE;
 
-/// Mirrors `Tile` in `insm_triangulate.wgsl`: the triangles a tile kept and their bounds.
+/// Mirrors `Tile` in `insm/triangulate.wgsl`: the triangles a tile kept and their bounds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTile {
@@ -141,7 +141,7 @@ pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, eps
         .collect()
 }
 
-/// The meshes of all maps (sample indices within each map), as `shaders/insm_triangulate.wgsl` writes them.
+/// The meshes of all maps (sample indices within each map), as `core/src/technique/insm/triangulate.wgsl` writes them.
 pub fn meshes(images: &[SampledImage], views: &[MapView], settings: &MeshSettings) -> Vec<Vec<[u32; 3]>> {
     (0..images.len())
         .map(|j| {

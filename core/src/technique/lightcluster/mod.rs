@@ -27,25 +27,40 @@
 pub mod clustering;
 
 use glam::Vec3;
-use wgpu::util::DeviceExt;
 
-use super::reference::Reference;
 use super::{
-    accumulate_pass, check_param, depth_texture_entry, storage_entry, uniform_entry, CubeMapParams, FrameContext,
-    GrowableBuffer, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
 };
 use crate::error::GpuError;
+use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
+use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
+use crate::renderer::cube_params::CubeMapParams;
 use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
+use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
-use crate::renderer::SharedLayouts;
+use crate::renderer::per_light_shadows::PerLightShadows;
+use crate::renderer::shade_pass::ShadePass;
 use crate::scene::PointLight;
-use crate::shaders;
 use crate::timing::PassTime;
 use clustering::{ClusterParams, Clusterer, Clustering};
 
-/// Mirrors `Batch` in `lightcluster_shade.wgsl`.
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[SHADE];
+const SHADE: WgslModule = crate::wgsl!(
+    "lightcluster_shade",
+    [
+        "shaders/common.wgsl",
+        "shaders/light_tiles.wgsl",
+        "shaders/cube_shadow.wgsl",
+        "core/src/technique/lightcluster/shade.wgsl"
+    ]
+);
+
+/// Mirrors `Batch` in `lightcluster/shade.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ClusterBatchUniform {
@@ -62,12 +77,12 @@ struct ClusterBatchUniform {
     only_cluster: u32,
     _pad: [u32; 3],
 }
-/// Keep in sync with `FLAG_PCSS` and `FLAG_EARLY_OUT` in `lightcluster_shade.wgsl`.
+/// Keep in sync with `FLAG_PCSS` and `FLAG_EARLY_OUT` in `lightcluster/shade.wgsl`.
 const FLAG_PCSS: u32 = 1;
 const FLAG_EARLY_OUT: u32 = 2;
 const _: () = assert!(std::mem::size_of::<ClusterBatchUniform>() == 48);
 
-/// Mirrors `Cluster` in `lightcluster_shade.wgsl`.
+/// Mirrors `Cluster` in `lightcluster/shade.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuCluster {
@@ -128,9 +143,7 @@ pub struct LightCluster {
     clusterer: Clusterer,
     clustering: Clustering,
     cubes: CubeShadowRenderer,
-    pipeline: wgpu::RenderPipeline,
-    group_layout: wgpu::BindGroupLayout,
-    batch_uniform: wgpu::Buffer,
+    shade: ShadePass,
     lights_buffer: GrowableBuffer,
     clusters_buffer: GrowableBuffer,
     bind_group: Option<wgpu::BindGroup>,
@@ -143,39 +156,22 @@ pub struct LightCluster {
     cluster_tiles: TileLists,
     cluster_spheres: Vec<[f32; 4]>,
     /// The reference path, for the worst case.
-    reference: Reference,
+    /// The per-light path of the worst case (every cluster holds one light): the reference's own service.
+    fallback: PerLightShadows,
     using_reference: bool,
 }
 
 impl LightCluster {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> LightCluster {
         let device = &gpu.device;
-        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lightcluster shade"),
-            entries: &[storage_entry(0), storage_entry(1), uniform_entry(2), depth_texture_entry(3)],
-        });
-        let module = shaders::create_module(device, "lightcluster_shade", shaders::LIGHTCLUSTER_SHADE);
-        let pipeline = layouts.fullscreen_pipeline(
-            device,
-            "lightcluster shade",
-            &module,
-            &[&group_layout, &layouts.light_tiles],
-            SharedLayouts::HDR_FORMAT,
-            true,
-        );
-        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lightcluster batch"),
-            contents: bytemuck::bytes_of(&<ClusterBatchUniform as bytemuck::Zeroable>::zeroed()),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let entries = [storage_entry(0), storage_entry(1), uniform_entry(2), depth_texture_entry(3)];
+        let shade = ShadePass::new::<ClusterBatchUniform>(gpu, layouts, "lightcluster shade", &SHADE, &entries, true);
         LightCluster {
             params: LightClusterParams::default(),
             clusterer: Clusterer::default(),
             clustering: Clustering::default(),
             cubes: CubeShadowRenderer::new(gpu),
-            pipeline,
-            group_layout,
-            batch_uniform,
+            shade,
             lights_buffer: GrowableBuffer::new(device, "lightcluster lights", 64 * 32),
             clusters_buffer: GrowableBuffer::new(device, "lightcluster clusters", 64 * 32),
             bind_group: None,
@@ -186,7 +182,7 @@ impl LightCluster {
             clustering_ms: 0.0,
             cluster_tiles: TileLists::new(gpu, &layouts.screen, &layouts.light_tiles),
             cluster_spheres: Vec::new(),
-            reference: Reference::new(gpu, layouts),
+            fallback: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::new(gpu)),
             using_reference: false,
         }
     }
@@ -194,10 +190,6 @@ impl LightCluster {
     /// The clustering of the last frame.
     pub fn clustering(&self) -> &Clustering {
         &self.clustering
-    }
-
-    fn sync_reference_params(&mut self) {
-        self.reference.params = self.params.cube.clone();
     }
 }
 
@@ -320,12 +312,13 @@ impl Technique for LightCluster {
         // Step 2: the worst case goes down the reference path.
         self.using_reference = self.params.fallback && cluster_count > 0 && cluster_count == visible;
         if self.using_reference {
-            self.sync_reference_params();
-            let steps = self.reference.prepare(ctx)?;
+            let steps = self.fallback.prepare(ctx, &self.params.cube);
             self.counts = TechniqueCounts {
+                lights_visible: self.fallback.visible_lights(),
+                batches: steps,
                 clusters: Some(cluster_count),
                 fell_back_to_reference: true,
-                ..self.reference.counts()
+                ..Default::default()
             };
             return Ok(steps);
         }
@@ -359,16 +352,15 @@ impl Technique for LightCluster {
         rebind |= self.cubes.ensure_atlas(ctx.gpu, res, self.batch_size.min(cluster_count));
         if rebind {
             let atlas = self.cubes.atlas().expect("atlas was just ensured");
-            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("lightcluster shade"),
-                layout: &self.group_layout,
-                entries: &[
+            self.bind_group = Some(self.shade.bind_group(
+                ctx.gpu,
+                &[
                     wgpu::BindGroupEntry { binding: 0, resource: self.lights_buffer.buffer.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 1, resource: self.clusters_buffer.buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 2, resource: self.batch_uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 2, resource: self.shade.batch_uniform().as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&atlas.view) },
                 ],
-            }));
+            ));
         }
         Ok(batches)
     }
@@ -380,12 +372,8 @@ impl Technique for LightCluster {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if self.using_reference {
-            self.reference.encode_step(ctx, step, encoder)?;
-            self.counts = TechniqueCounts {
-                clusters: self.counts.clusters,
-                fell_back_to_reference: true,
-                ..self.reference.counts()
-            };
+            let stats = self.fallback.encode_batch(ctx, step, encoder, ctx.scene.cube_geometry(), &self.params.cube);
+            self.counts.add_cube_stats(&stats);
             return Ok(());
         }
         if step == 0 {
@@ -431,9 +419,9 @@ impl Technique for LightCluster {
             only_cluster: self.params.visibility_of.unwrap_or(u32::MAX),
             _pad: [0; 3],
         };
-        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        self.shade.write_batch(ctx.gpu, &uniform);
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, &[group, self.cluster_tiles.bind_group()]);
+        self.shade.encode(ctx, encoder, "shading", group, Some(self.cluster_tiles.bind_group()));
         Ok(())
     }
 
@@ -573,7 +561,10 @@ impl Technique for LightCluster {
 
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
         if self.using_reference {
-            return self.reference.shadow_atlas();
+            return self
+                .fallback
+                .atlas()
+                .map(|a| (a, "cube maps of the last batch, six faces per light (+x -x +y -y +z -z)"));
         }
         self.cubes.atlas().map(|a| (a, "cube maps of the last batch, six faces per cluster (+x -x +y -y +z -z)"))
     }

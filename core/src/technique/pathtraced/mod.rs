@@ -1,7 +1,7 @@
 //! One-bounce path tracing: the truth for one-bounce indirect light itself, so a user sees the VPLs'
 //! discretisation and clamping error apart from their visibility error. Needs no VPLs.
 //!
-//! Per pixel and sample (`pathtrace.wgsl`):
+//! Per pixel and sample (`pathtraced/pathtrace.wgsl`):
 //! 1. a cosine-distributed direction around the receiver's normal (pdf `cos/pi`),
 //! 2. the closest hit `y` through the scene BVH (the renderer's service),
 //! 3. direct light at `y` from one light picked in proportion to its power, with a shadow ray:
@@ -18,20 +18,35 @@ use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
 use super::{
-    check_param, storage_entry, uniform_entry, FrameContext, GrowableBuffer, OverlayLayer, Param, ParamError,
-    ParamKind, ParamValue, Technique, TechniqueCounts,
+    check_param, FrameContext, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
+use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
+use crate::gpu::bind::storage_rw_entry;
+use crate::gpu::bind::{storage_entry, uniform_entry};
+use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
 use crate::renderer::gpu_data::GpuLight;
-use crate::renderer::scene_bvh::SceneBvh;
-use crate::renderer::vpl_gather::{compute_pipeline, pixel_workgroups, storage_rw_entry};
-use crate::renderer::SharedLayouts;
+use crate::renderer::layouts::compute_pipeline;
+use crate::renderer::layouts::SharedLayouts;
+use crate::renderer::vpl_gather::pixel_workgroups;
 use crate::scene::PointLight;
-use crate::shaders;
 use crate::timing::PassTime;
 
-/// Mirrors `PtStep` in `pathtrace.wgsl`.
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[PATHTRACE];
+const PATHTRACE: WgslModule = crate::wgsl!(
+    "pathtrace",
+    [
+        "shaders/common.wgsl",
+        "shaders/raytrace_bvh.wgsl",
+        "shaders/vpl_basis.wgsl",
+        "core/src/technique/pathtraced/pathtrace.wgsl"
+    ]
+);
+
+/// Mirrors `PtStep` in `pathtraced/pathtrace.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct PtStepUniform {
@@ -90,7 +105,7 @@ impl PathTraced {
             gpu,
             layouts,
             "pathtrace",
-            shaders::PATHTRACE,
+            PATHTRACE.source,
             "pathtrace_main",
             &[&group_layout, &output_layout],
         );
@@ -141,20 +156,8 @@ impl Technique for PathTraced {
                 kind: ParamKind::Int { min: 1, max: 1024 },
                 value: ParamValue::Int(p.samples_per_step as i64),
             },
-            Param {
-                key: "bias",
-                label: "Ray offset",
-                help: "Ray origin offset along the normal, world units per metre of camera distance",
-                kind: ParamKind::Float { min: 0.0, max: 0.1 },
-                value: ParamValue::Float(p.bias),
-            },
-            Param {
-                key: "seed",
-                label: "Seed",
-                help: "Seed of the random paths",
-                kind: ParamKind::Int { min: 0, max: u32::MAX as i64 },
-                value: ParamValue::Int(p.seed as i64),
-            },
+            Param::ray_bias(p.bias),
+            Param::seed("Seed of the random paths", p.seed),
         ]
     }
 

@@ -4,11 +4,11 @@
 //! at the light and facing the receiver (what PCSS approximates), visibility being the unoccluded fraction.
 //!
 //! Per frame:
-//! 1. The scene's BVH from the renderer's service ([`GpuScene::bvh`](crate::renderer::gpu_scene::GpuScene::bvh)),
+//! 1. The scene's BVH from the renderer's service ([`GpuScene::bvh`](crate::accel::gpu_scene::GpuScene::bvh)),
 //!    built on the CPU (binned SAH) and uploaded the first time any tracer asks for it.
 //! 2. The lights whose range sphere touches the view frustum: the renderer's culling, shared with the reference.
 //! 3. Per batch of `lights_per_step` lights (one step): a full-screen pass traces every pixel's shadow rays in
-//!    the fragment shader (`raytrace_shadow.wgsl`, stack-based any-hit traversal) and adds the lights' shading
+//!    the fragment shader (`raytraced/shadow.wgsl`, stack-based any-hit traversal) and adds the lights' shading
 //!    (the reference's `shade_light`) times visibility into the HDR target.
 //!
 //! The ray origin is the G-buffer position pushed along the normal by `bias * max(1, camera distance)` (the
@@ -17,30 +17,37 @@
 //! [`occluded_cpu`] is the CPU twin of the GPU traversal and [`gpu_occluded`] runs the GPU traversal on given
 //! rays, so the tests can compare GPU, CPU and brute force.
 
-pub mod bvh;
-
 use std::sync::Arc;
 
-use wgpu::util::DeviceExt;
-
-pub use bvh::{
-    closest_hit_brute_force, closest_hit_cpu, closest_hit_cpu_filtered, occluded_brute_force, occluded_cpu,
-    occluded_cpu_filtered, Bvh, BvhNode, BvhStats, BvhTriangle, Hit, Ray,
-};
 
 use super::{
-    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, Overlay, OverlayLayer, Param, ParamError,
-    ParamKind, ParamValue, Technique, TechniqueCounts,
+    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
 };
+use crate::accel::bvh::BvhStats;
+use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
+use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::scene_bvh::{BvhCutouts, CutoutTextures, SceneBvh};
-use crate::renderer::SharedLayouts;
+use crate::renderer::layouts::SharedLayouts;
+use crate::renderer::shade_pass::ShadePass;
 use crate::scene::PointLight;
-use crate::shaders;
 use crate::timing::PassTime;
 
-/// Mirrors `RtBatch` in `raytrace_shadow.wgsl`.
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[SHADOW];
+const SHADOW: WgslModule = crate::wgsl!(
+    "raytrace_shadow",
+    [
+        "shaders/common.wgsl",
+        "shaders/light_tiles.wgsl",
+        "shaders/raytrace_bvh.wgsl",
+        "core/src/technique/raytraced/shadow.wgsl"
+    ]
+);
+
+/// Mirrors `RtBatch` in `raytraced/shadow.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct RtBatchUniform {
@@ -78,37 +85,9 @@ impl Default for RaytracedParams {
     }
 }
 
-/// A BVH on the GPU (for [`gpu_occluded`], which traces a BVH it is given rather than a scene's).
-struct GpuBvh {
-    nodes: wgpu::Buffer,
-    triangles: wgpu::Buffer,
-    /// No cut-outs (a bare BVH has no materials), bound because the traversal reads them.
-    cutouts: CutoutTextures,
-}
-
-impl GpuBvh {
-    fn upload(gpu: &GpuContext, bvh: &Bvh) -> GpuBvh {
-        let storage = |label, contents: &[u8]| {
-            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let (nodes, triangles) = bvh.gpu_buffers();
-        GpuBvh {
-            nodes: storage("bvh nodes", bytemuck::cast_slice(&nodes)),
-            triangles: storage("bvh triangles", bytemuck::cast_slice(&triangles)),
-            cutouts: CutoutTextures::new(gpu, &BvhCutouts::default()),
-        }
-    }
-}
-
 pub struct Raytraced {
     pub params: RaytracedParams,
-    pipeline: wgpu::RenderPipeline,
-    group_layout: wgpu::BindGroupLayout,
-    batch_uniform: wgpu::Buffer,
+    shade: ShadePass,
     /// The generation of the renderer's light buffer the bind group was made with.
     lights_generation: Option<u64>,
     bind_group: Option<wgpu::BindGroup>,
@@ -124,30 +103,12 @@ pub struct Raytraced {
 
 impl Raytraced {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Raytraced {
-        let device = &gpu.device;
-        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("raytraced shade"),
-            entries: &[SceneBvh::layout_entries(), vec![storage_entry(2), uniform_entry(3)]].concat(),
-        });
-        let module = shaders::create_module(device, "raytrace_shadow", shaders::RAYTRACE_SHADOW);
-        let pipeline = layouts.fullscreen_pipeline(
-            device,
-            "raytraced shade",
-            &module,
-            &[&group_layout, &layouts.light_tiles],
-            SharedLayouts::HDR_FORMAT,
-            true,
-        );
-        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("raytraced batch"),
-            contents: bytemuck::bytes_of(&<RtBatchUniform as bytemuck::Zeroable>::zeroed()),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let _device = &gpu.device;
+        let entries = [SceneBvh::layout_entries(), vec![storage_entry(2), uniform_entry(3)]].concat();
+        let shade = ShadePass::new::<RtBatchUniform>(gpu, layouts, "raytraced shade", &SHADOW, &entries, true);
         Raytraced {
             params: RaytracedParams::default(),
-            pipeline,
-            group_layout,
-            batch_uniform,
+            shade,
             lights_generation: None,
             bind_group: None,
             bvh: None,
@@ -209,20 +170,8 @@ impl Technique for Raytraced {
                 kind: ParamKind::Int { min: 1, max: 4096 },
                 value: ParamValue::Int(p.lights_per_step as i64),
             },
-            Param {
-                key: "bias",
-                label: "Ray offset",
-                help: "Ray origin offset along the normal, world units per metre of camera distance",
-                kind: ParamKind::Float { min: 0.0, max: 0.1 },
-                value: ParamValue::Float(p.bias),
-            },
-            Param {
-                key: "seed",
-                label: "Seed",
-                help: "Seed of the per-pixel rotation of the sample pattern (soft shadows)",
-                kind: ParamKind::Int { min: 0, max: u32::MAX as i64 },
-                value: ParamValue::Int(p.seed as i64),
-            },
+            Param::ray_bias(p.bias),
+            Param::seed("Seed of the per-pixel rotation of the sample pattern (soft shadows)", p.seed),
         ]
     }
 
@@ -268,21 +217,23 @@ impl Technique for Raytraced {
         if rebind {
             let bvh = self.bvh.as_ref().expect("set above");
             self.bind_group = Some(
-                ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("raytraced shade"),
-                    layout: &self.group_layout,
-                    entries: &[
+                self.shade.bind_group(
+                    ctx.gpu,
+                    &[
                         bvh.bind_entries(),
                         vec![
                             wgpu::BindGroupEntry {
                                 binding: 2,
                                 resource: ctx.visible_lights.buffer.buffer.as_entire_binding(),
                             },
-                            wgpu::BindGroupEntry { binding: 3, resource: self.batch_uniform.as_entire_binding() },
+                            wgpu::BindGroupEntry {
+                                binding: 3,
+                                resource: self.shade.batch_uniform().as_entire_binding(),
+                            },
                         ],
                     ]
                     .concat(),
-                }),
+                ),
             );
         }
         Ok(batches)
@@ -308,9 +259,9 @@ impl Technique for Raytraced {
             seed: p.seed,
             _pad: 0,
         };
-        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        self.shade.write_batch(ctx.gpu, &uniform);
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "ray traced shading", &self.pipeline, &[group, ctx.light_tiles.bind_group()]);
+        self.shade.encode(ctx, encoder, "ray traced shading", group, None);
         Ok(())
     }
 
@@ -348,97 +299,4 @@ impl Technique for Raytraced {
         }
         layers
     }
-}
-
-/// Trace `rays` through `bvh` with the GPU traversal (`test_rays` in `raytrace_test.wgsl`): one hit flag per
-/// ray. For tests comparing the GPU with [`occluded_cpu`].
-pub fn gpu_occluded(gpu: &GpuContext, bvh: &Bvh, rays: &[Ray]) -> Result<Vec<bool>, GpuError> {
-    if rays.is_empty() {
-        return Ok(Vec::new());
-    }
-    let device = &gpu.device;
-    let compute_entry = |binding, read_only| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &[] });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("raytrace test"),
-        entries: &[
-            vec![compute_entry(0, true), compute_entry(1, true), compute_entry(2, true), compute_entry(3, false)],
-            CutoutTextures::layout_entries().to_vec(),
-        ]
-        .concat(),
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("raytrace test"),
-        bind_group_layouts: &[Some(&empty), Some(&layout)],
-        immediate_size: 0,
-    });
-    let module = shaders::create_module(device, "raytrace_test", shaders::RAYTRACE_TEST);
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("raytrace test"),
-        layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some("test_rays"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let bvh_gpu = GpuBvh::upload(gpu, bvh);
-    let ray_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("test rays"),
-        contents: bytemuck::cast_slice(rays),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let hits_size = (rays.len() * 4) as u64;
-    let hits = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test hits"),
-        size: hits_size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test hits readback"),
-        size: hits_size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let empty_group =
-        device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &empty, entries: &[] });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("raytrace test"),
-        layout: &layout,
-        entries: &[
-            vec![
-                wgpu::BindGroupEntry { binding: 0, resource: bvh_gpu.nodes.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: bvh_gpu.triangles.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: ray_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: hits.as_entire_binding() },
-            ],
-            bvh_gpu.cutouts.bind_entries().to_vec(),
-        ]
-        .concat(),
-    });
-    let groups = (rays.len() as u32).div_ceil(64);
-    let (x, y) = if groups <= 65_535 { (groups, 1) } else { (65_535, groups.div_ceil(65_535)) };
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("test rays"), timestamp_writes: None });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &empty_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-    }
-    encoder.copy_buffer_to_buffer(&hits, 0, &readback, 0, hits_size);
-    gpu.queue.submit([encoder.finish()]);
-    let data = crate::renderer::readback::map_read(gpu, &readback, hits_size)?;
-    let flags: Vec<bool> = bytemuck::cast_slice::<u8, u32>(&data).iter().map(|&h| h != 0).collect();
-    Ok(flags)
 }

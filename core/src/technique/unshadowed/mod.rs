@@ -6,19 +6,23 @@
 //!    `max_lights_per_step`; the whole frame is one step when unlimited); a pixel loops over the batch's lights
 //!    in its tile's list (the renderer's tiled light lists).
 
-use wgpu::util::DeviceExt;
-
-use super::{
-    accumulate_pass, check_param, storage_entry, uniform_entry, FrameContext, OverlayLayer, Param, ParamError,
-    ParamValue, Technique, TechniqueCounts,
-};
+use super::{check_param, FrameContext, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts};
 use crate::error::GpuError;
+use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::SharedLayouts;
+use crate::renderer::layouts::SharedLayouts;
+use crate::renderer::shade_pass::ShadePass;
 use crate::scene::PointLight;
-use crate::shaders;
 
-/// Mirrors `Batch` in `unshadowed_shade.wgsl`.
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[SHADE];
+const SHADE: WgslModule = crate::wgsl!(
+    "unshadowed_shade",
+    ["shaders/common.wgsl", "shaders/light_tiles.wgsl", "core/src/technique/unshadowed/shade.wgsl"]
+);
+
+/// Mirrors `Batch` in `unshadowed/shade.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct UnshadowedBatchUniform {
@@ -29,9 +33,7 @@ struct UnshadowedBatchUniform {
 const _: () = assert!(std::mem::size_of::<UnshadowedBatchUniform>() == 16);
 
 pub struct Unshadowed {
-    pipeline: wgpu::RenderPipeline,
-    group_layout: wgpu::BindGroupLayout,
-    batch_uniform: wgpu::Buffer,
+    shade: ShadePass,
     bind_group: Option<wgpu::BindGroup>,
     /// The generation of the renderer's light buffer the bind group was made with.
     lights_generation: Option<u64>,
@@ -42,29 +44,9 @@ pub struct Unshadowed {
 
 impl Unshadowed {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Unshadowed {
-        let device = &gpu.device;
-        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("unshadowed shade"),
-            entries: &[storage_entry(0), uniform_entry(1)],
-        });
-        let module = shaders::create_module(device, "unshadowed_shade", shaders::UNSHADOWED_SHADE);
-        let pipeline = layouts.fullscreen_pipeline(
-            device,
-            "unshadowed shade",
-            &module,
-            &[&group_layout, &layouts.light_tiles],
-            SharedLayouts::HDR_FORMAT,
-            true,
-        );
-        let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("unshadowed batch"),
-            contents: bytemuck::bytes_of(&<UnshadowedBatchUniform as bytemuck::Zeroable>::zeroed()),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
+        let entries = [storage_entry(0), uniform_entry(1)];
         Unshadowed {
-            pipeline,
-            group_layout,
-            batch_uniform,
+            shade: ShadePass::new::<UnshadowedBatchUniform>(gpu, layouts, "unshadowed shade", &SHADE, &entries, true),
             bind_group: None,
             lights_generation: None,
             visible_count: 0,
@@ -103,14 +85,13 @@ impl Technique for Unshadowed {
         let generation = Some(ctx.visible_lights.generation);
         if self.lights_generation != generation || self.bind_group.is_none() {
             self.lights_generation = generation;
-            self.bind_group = Some(ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("unshadowed shade"),
-                layout: &self.group_layout,
-                entries: &[
+            self.bind_group = Some(self.shade.bind_group(
+                ctx.gpu,
+                &[
                     wgpu::BindGroupEntry { binding: 0, resource: ctx.visible_lights.buffer.buffer.as_entire_binding() },
-                    wgpu::BindGroupEntry { binding: 1, resource: self.batch_uniform.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 1, resource: self.shade.batch_uniform().as_entire_binding() },
                 ],
-            }));
+            ));
         }
         Ok(batches)
     }
@@ -125,9 +106,9 @@ impl Technique for Unshadowed {
         let last = (first + self.batch_size).min(self.visible_count);
         let uniform =
             UnshadowedBatchUniform { first_light: first as u32, light_count: (last - first) as u32, _pad: [0; 2] };
-        ctx.gpu.queue.write_buffer(&self.batch_uniform, 0, bytemuck::bytes_of(&uniform));
+        self.shade.write_batch(ctx.gpu, &uniform);
         let group = self.bind_group.as_ref().expect("prepare created the bind group");
-        accumulate_pass(ctx, encoder, "shading", &self.pipeline, &[group, ctx.light_tiles.bind_group()]);
+        self.shade.encode(ctx, encoder, "shading", group, None);
         Ok(())
     }
 

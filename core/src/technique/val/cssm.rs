@@ -1,6 +1,6 @@
 //! Convolution soft shadow maps (Annen et al. 2008) as Dong et al. 2009 use them (section 4.1, 6): from the
 //! VALs' paraboloid depth atlas, the Fourier basis textures of the depth test (4 terms, 8 bit) and the basis-z
-//! textures (16-bit float), then a mip chain of each (`val_cssm.wgsl`); `val_gather.wgsl` filters them with
+//! textures (16-bit float), then a mip chain of each (`val/cssm.wgsl`); `val/gather.wgsl` filters them with
 //! one trilinear lookup per texture for the blocker search and one for the penumbra kernel.
 //!
 //! Textures are the atlas's size; the chain stops where a tile's side is no longer even (a power-of-two tile
@@ -9,7 +9,6 @@
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::CubeAtlas;
-use crate::shaders;
 use crate::timing::PassTimer;
 
 const FORMATS: [wgpu::TextureFormat; 4] = [
@@ -70,7 +69,7 @@ impl Cssm {
         let device = &gpu.device;
         let storage: Vec<wgpu::BindGroupLayoutEntry> =
             FORMATS.iter().enumerate().map(|(i, f)| storage_entry(1 + i as u32, *f)).collect();
-        let mut basis_entries = vec![crate::technique::depth_texture_entry(0)];
+        let mut basis_entries = vec![crate::gpu::bind::depth_texture_entry(0)];
         basis_entries.extend(storage.iter().cloned());
         let basis_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cssm basis"),
@@ -91,7 +90,7 @@ impl Cssm {
             label: Some("cssm mip"),
             entries: &mip_entries,
         });
-        let module = shaders::create_module(device, "val_cssm", shaders::VAL_CSSM);
+        let module = crate::gpu::pipeline::create_module(device, "val_cssm", super::CSSM.source);
         let pipeline = |layout: &wgpu::BindGroupLayout, entry: &str| {
             let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(entry),

@@ -9,7 +9,7 @@
 // itself, 16-bit float (the paper: "4 term, 16 bit half float"; the fourth term of basis-z gives way to z,
 // whose mean the blocker average needs, because a stage may write 4 storage textures at most). cssm_mip
 // averages each level into the next. Tiles are powers of two, so no mip texel spans two VALs' maps.
-// Composed alone; the lookups are in val_gather.wgsl.
+// Composed alone; the lookups are in val/gather.wgsl.
 
 @group(0) @binding(0) var cssm_depth: texture_2d<f32>;
 @group(0) @binding(1) var out_a: texture_storage_2d<rgba8unorm, write>;

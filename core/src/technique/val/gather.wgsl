@@ -52,7 +52,7 @@ struct ValParams {
 @group(1) @binding(1) var<storage, read> vals: array<GpuVal>;
 @group(1) @binding(2) var<storage, read> vpl_val: array<u32>;
 @group(1) @binding(3) var<uniform> val_params: ValParams;
-// cssm: the mip-mapped Fourier basis textures of the atlas (val_cssm.wgsl) and a linear sampler.
+// cssm: the mip-mapped Fourier basis textures of the atlas (val/cssm.wgsl) and a linear sampler.
 @group(1) @binding(4) var cssm_a: texture_2d<f32>;
 @group(1) @binding(5) var cssm_b: texture_2d<f32>;
 @group(1) @binding(6) var cssm_za: texture_2d<f32>;
@@ -106,7 +106,7 @@ fn cssm_series(d: f32, t12: vec4<f32>, t34: vec4<f32>, terms: u32) -> f32 {
 fn cssm_visibility(m: u32, t: vec2<f32>, d: f32, dn: f32, search: f32, delta: f32, near: f32, far: f32) -> f32 {
     let res = f32(val_params.resolution);
     let max_lod = f32(val_params.levels) - 1.0;
-    // Half phase, as the basis (val_cssm.wgsl): the step over z - d in (-1/2, 1/2).
+    // Half phase, as the basis (val/cssm.wgsl): the step over z - d in (-1/2, 1/2).
     let ds = 0.5 * (dn - val_params.cssm_offset);
     let region = cssm_fetch(m, t, clamp(log2(search), 0.0, max_lod));
     let lit = clamp(0.5 + 2.0 * cssm_series(ds, region.a, region.b, 4u), 0.0, 1.0);

@@ -1,4 +1,4 @@
-//! The clustering of [`super::kmeans`] on the GPU (`val_kmeans.wgsl`), as the paper does it (section 6): one
+//! The clustering of [`super::kmeans`] on the GPU (`val/kmeans.wgsl`), as the paper does it (section 6): one
 //! dispatch per step over the frame's VPL buffer, fixed-point atomic sums instead of additive blending (WGSL
 //! has no float atomics), the VPL-to-VAL map `C` left on the GPU for the gather, and the VALs read back (M x 48
 //! bytes, plus `C` for the overlays) because their maps are rendered with per-VAL culling on the CPU.
@@ -7,13 +7,12 @@ use glam::Vec3;
 
 use super::kmeans::{Clustering, KMeansParams, Val};
 use crate::error::GpuError;
+use crate::gpu::readback;
 use crate::gpu::GpuContext;
-use crate::renderer::readback;
-use crate::shaders;
 use crate::timing::PassTimer;
 use crate::vpl::Vpl;
 
-/// Mirrors `KmParams` in `val_kmeans.wgsl`.
+/// Mirrors `KmParams` in `val/kmeans.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct KmParamsUniform {
@@ -29,7 +28,7 @@ struct KmParamsUniform {
 }
 const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 64);
 
-/// Mirrors `ValState` in `val_kmeans.wgsl`.
+/// Mirrors `ValState` in `val/kmeans.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ValState {
@@ -101,7 +100,7 @@ impl GpuKMeans {
                 entry(4, buffer(false)),
             ],
         });
-        let module = shaders::create_module(device, "val_kmeans", shaders::VAL_KMEANS);
+        let module = crate::gpu::pipeline::create_module(device, "val_kmeans", super::KMEANS.source);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("val kmeans"),
             bind_group_layouts: &[Some(&layout)],

@@ -10,7 +10,7 @@
 //!    their projection on the plane perpendicular to the mean normal (section 6), and the map `C`.
 //! 3. One paraboloid shadow map per VAL, all in one atlas and one render pass
 //!    (`CubeShadowRenderer::render_paraboloids`), facing the VAL's normal.
-//! 4. Soft visibility per VAL and pixel (`val_gather.wgsl`): `cssm` (the paper's, below), `pcss` (blocker search over the VAL's angular
+//! 4. Soft visibility per VAL and pixel (`val/gather.wgsl`): `cssm` (the paper's, below), `pcss` (blocker search over the VAL's angular
 //!    size, the paper's penumbra `p cos(beta) = (d - z_avg) Delta / z_avg`, `alpha = arctan(p cos(beta) / d)`,
 //!    kernel width `alpha / pi` of the map, percentage-closer filtering) or `hard` (one test, for teaching).
 //! 5. Shading (the shared VPL gather's terms): each pixel computes its M visibilities once, then sums all
@@ -18,11 +18,11 @@
 //!    interleaving. Receivers in a VAL's negative half-space see it fully (section 5.1).
 //!
 //! Deviations, and why:
-//! - The clustering runs on the GPU (`clustering = gpu`, [`gpu_kmeans`], `val_kmeans.wgsl`: one dispatch per
+//! - The clustering runs on the GPU (`clustering = gpu`, [`gpu_kmeans`], `val/kmeans.wgsl`: one dispatch per
 //!   step, fixed-point atomic sums where the paper blends) and is read back (M VALs, and `C` for the
 //!   overlays), because the VAL maps are culled per VAL on the CPU. `clustering = cpu` runs the twin
 //!   [`kmeans::cluster`], which is also what the warm-start variant uses.
-//! - Visibility `cssm` is the paper's convolution soft shadow maps ([`cssm`], `val_cssm.wgsl`: 4 Fourier terms,
+//! - Visibility `cssm` is the paper's convolution soft shadow maps ([`cssm`], `val/cssm.wgsl`: 4 Fourier terms,
 //!   8-bit basis and 16-bit basis-z textures, mip-mapped, one trilinear lookup per texture for the blocker
 //!   search and one for the kernel). Two deviations: the phase uses `z / 2` (the series is a square wave of
 //!   period 2 in `z - d`; over [0, 1] a receiver near the VAL under an empty texel sits on the next edge and
@@ -53,27 +53,38 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::{
-    check_param, depth_texture_entry, index_color, storage_entry, uniform_entry, FrameContext, GrowableBuffer, Overlay,
-    OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
+    check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    TechniqueCounts,
 };
 use crate::error::GpuError;
+use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
+use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster};
+use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
-use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
-use crate::shaders;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
 use kmeans::{Clustering, KMeansParams};
 
+use crate::shaders::WgslModule;
+/// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
+pub const SHADERS: &[WgslModule] = &[GATHER, CSSM, KMEANS];
+const GATHER: WgslModule = crate::wgsl!(
+    "val_gather",
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_basis.wgsl", "core/src/technique/val/gather.wgsl"]
+);
+const CSSM: WgslModule = crate::wgsl!("val_cssm", ["core/src/technique/val/cssm.wgsl"]);
+const KMEANS: WgslModule = crate::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl", "core/src/technique/val/kmeans.wgsl"]);
+
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
 const NEAR_FRACTION: f32 = 0.1;
 
-/// Most VALs per frame (the per-pixel visibility array of `val_gather.wgsl`).
+/// Most VALs per frame (the per-pixel visibility array of `val/gather.wgsl`).
 pub const MAX_VALS: usize = 256;
 
-/// Mirrors `GpuVal` in `val_gather.wgsl`.
+/// Mirrors `GpuVal` in `val/gather.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuVal {
@@ -83,7 +94,7 @@ struct GpuVal {
 }
 const _: () = assert!(std::mem::size_of::<GpuVal>() == 48);
 
-/// Mirrors `ValParams` in `val_gather.wgsl`.
+/// Mirrors `ValParams` in `val/gather.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 struct ValParamsUniform {
@@ -126,7 +137,7 @@ pub struct ValParams {
     pub vpls_per_step: u32,
     /// Show one VAL's contribution alone (its VPLs with its soft visibility; -1 = all VALs).
     pub solo: i32,
-    /// `gpu` (the paper's GPU k-means, `val_kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
+    /// `gpu` (the paper's GPU k-means, `val/kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
     pub clustering: String,
     /// CSSM: the receiver's normalised depth is moved toward the VAL by this share of the map's depth range.
     pub cssm_offset: f32,
@@ -209,8 +220,7 @@ impl VirtualAreaLights {
                 },
             ],
         });
-        let pass =
-            VplGatherPass::with_entry(gpu, layouts, "val_gather", shaders::VAL_GATHER, "val_gather_main", &layout);
+        let pass = VplGatherPass::with_entry(gpu, layouts, "val_gather", GATHER.source, "val_gather_main", &layout);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("val params"),
             size: std::mem::size_of::<ValParamsUniform>() as u64,

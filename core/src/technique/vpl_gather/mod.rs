@@ -22,15 +22,15 @@
 use std::sync::Arc;
 
 use super::{
-    check_param, depth_texture_entry, FrameContext, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
-    TechniqueCounts,
+    check_param, FrameContext, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
+use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
+use crate::gpu::bind::depth_texture_entry;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster, MAX_CUBES_PER_BATCH};
-use crate::renderer::scene_bvh::SceneBvh;
+use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
-use crate::renderer::SharedLayouts;
 use crate::scene::PointLight;
 use crate::shaders;
 use crate::timing::PassTime;
@@ -111,7 +111,7 @@ impl VplGather {
         let device = &gpu.device;
         let entries: Vec<wgpu::BindGroupLayoutEntry> = match visibility {
             Visibility::ShadowMaps => vec![depth_texture_entry(0)],
-            Visibility::RayTraced => crate::renderer::scene_bvh::SceneBvh::layout_entries(),
+            Visibility::RayTraced => crate::accel::scene_bvh::SceneBvh::layout_entries(),
             Visibility::None => vec![],
         };
         let visibility_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -119,9 +119,9 @@ impl VplGather {
             entries: &entries,
         });
         let (label, source) = match visibility {
-            Visibility::ShadowMaps => ("vpl_gather_paraboloid", shaders::VPL_GATHER_PARABOLOID),
-            Visibility::RayTraced => ("vpl_gather_raytraced", shaders::VPL_GATHER_RAYTRACED),
-            Visibility::None => ("vpl_gather_unshadowed", shaders::VPL_GATHER_UNSHADOWED),
+            Visibility::ShadowMaps => ("vpl_gather_paraboloid", shaders::VPL_GATHER_PARABOLOID.source),
+            Visibility::RayTraced => ("vpl_gather_raytraced", shaders::VPL_GATHER_RAYTRACED.source),
+            Visibility::None => ("vpl_gather_unshadowed", shaders::VPL_GATHER_UNSHADOWED.source),
         };
         let pass = VplGatherPass::new(gpu, layouts, label, source, &visibility_layout);
         VplGather {

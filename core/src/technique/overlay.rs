@@ -1,0 +1,279 @@
+//! What a technique draws over the 3D view (overlay primitives and layers, legends, hover points) and what it
+//! teaches (Explain steps). Plain data: the overlay renderer draws it, the app lists and toggles it.
+
+use glam::{Mat4, Vec3};
+
+use crate::scene::PointLight;
+
+/// Above this many spheres in one draw, the overlay renderer draws each as one horizontal circle instead of
+/// three great circles (24x fewer vertices): 100,000 range spheres would otherwise be ~600 MB of line vertices
+/// every UI frame. Here, with the primitives, because a layer's legend says which form it is drawn in.
+pub const MAX_FULL_SPHERES: usize = 2048;
+/// Spheres drawn at all; the rest are left out (the lights' own dots still show where they are).
+pub const MAX_SPHERES: usize = 32_768;
+
+/// A primitive drawn over the 3D view (by the app), in world space unless noted.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Overlay {
+    /// A dot of `radius_px` screen pixels.
+    Point {
+        position: Vec3,
+        color: [f32; 4],
+        radius_px: f32,
+    },
+    Line {
+        from: Vec3,
+        to: Vec3,
+        color: [f32; 4],
+    },
+    /// A wireframe sphere.
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        color: [f32; 4],
+    },
+    /// The frustum of a camera, given by its clip-from-world matrix.
+    Frustum {
+        clip_from_world: Mat4,
+        color: [f32; 4],
+    },
+    /// A rectangle outline: `center ± half_u ± half_v` (image planes, rectangular lights).
+    Rect {
+        center: Vec3,
+        half_u: Vec3,
+        half_v: Vec3,
+        color: [f32; 4],
+    },
+    /// A per-pixel ID map over the whole view (e.g. the cluster of each pixel): `ids` row-major at
+    /// `width x height`, `u32::MAX` = no ID; each ID gets a distinct colour, blended with `alpha`.
+    IdMap {
+        width: u32,
+        height: u32,
+        ids: std::sync::Arc<Vec<u32>>,
+        alpha: f32,
+    },
+    /// A per-pixel colour map over the whole view (e.g. a blend of the clusters a pixel belongs to): `rgba`
+    /// row-major at `width x height`, straight (not premultiplied) alpha.
+    ColorMap {
+        width: u32,
+        height: u32,
+        rgba: std::sync::Arc<Vec<[u8; 4]>>,
+    },
+}
+
+/// A distinct, stable colour per index, for clusters and ID maps: a golden-ratio walk of the hue (neighbouring
+/// indices far apart on the colour wheel), with saturation and brightness stepping through three levels every
+/// 16 indices, so hundreds of clusters stay distinguishable from their neighbours.
+pub fn index_color(index: usize) -> [f32; 4] {
+    let h = (index as f64 * 0.618_033_988_75).fract() as f32;
+    let (saturation, value) = [(0.85, 1.0), (0.55, 0.95), (0.95, 0.7)][(index / 16) % 3];
+    let k = |n: f32| {
+        let k = (n + h * 6.0) % 6.0;
+        value * (1.0 - (k.min(4.0 - k).clamp(0.0, 1.0)) * saturation)
+    };
+    [k(5.0), k(3.0), k(1.0), 1.0]
+}
+
+/// What a legend line shows next to its text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Glyph {
+    Dot,
+    Line,
+    Circle,
+    Frustum,
+    Rect,
+    /// Coloured pixels over the view (ID maps).
+    Pixels,
+    /// Many colours: one per cluster (or per index).
+    Palette,
+}
+
+/// One line of an overlay layer's legend: what a glyph of a colour means.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendEntry {
+    pub glyph: Glyph,
+    pub color: [f32; 4],
+    pub text: String,
+}
+
+impl LegendEntry {
+    pub fn new(glyph: Glyph, color: [f32; 4], text: impl Into<String>) -> LegendEntry {
+        LegendEntry { glyph, color, text: text.into() }
+    }
+}
+
+impl OverlayLayer {
+    /// Counts per primitive kind, with the first colour of each, and the cheaper forms the overlay renderer
+    /// switches to for this many primitives: a legend any layer has without describing itself.
+    pub fn summary(&self) -> Vec<LegendEntry> {
+        // Per glyph: its first colour, its count, and its distinct colours (up to 64, as 8-bit RGB).
+        type Kind = (Glyph, [f32; 4], usize, Vec<[u32; 3]>);
+        let mut counts: Vec<Kind> = Vec::new();
+        for p in &self.primitives {
+            let (glyph, color) = match p {
+                Overlay::Point { color, .. } => (Glyph::Dot, *color),
+                Overlay::Line { color, .. } => (Glyph::Line, *color),
+                Overlay::Sphere { color, .. } => (Glyph::Circle, *color),
+                Overlay::Frustum { color, .. } => (Glyph::Frustum, *color),
+                Overlay::Rect { color, .. } => (Glyph::Rect, *color),
+                Overlay::IdMap { .. } | Overlay::ColorMap { .. } => (Glyph::Pixels, [1.0; 4]),
+            };
+            let key = [color[0], color[1], color[2]].map(|c| (c * 255.0) as u32);
+            match counts.iter_mut().find(|(g, ..)| *g == glyph) {
+                Some((_, _, n, colors)) => {
+                    *n += 1;
+                    if colors.len() < 64 && !colors.contains(&key) {
+                        colors.push(key);
+                    }
+                }
+                None => counts.push((glyph, color, 1, vec![key])),
+            }
+        }
+        let mut out: Vec<LegendEntry> = counts
+            .into_iter()
+            .map(|(glyph, color, n, colors)| {
+                let what = match glyph {
+                    Glyph::Dot => "dots",
+                    Glyph::Line => "lines",
+                    Glyph::Circle => "spheres",
+                    Glyph::Frustum => "frusta",
+                    Glyph::Rect => "rectangles",
+                    Glyph::Pixels | Glyph::Palette => "per-pixel maps",
+                };
+                let many = colors.len() > 1;
+                let text =
+                    format!("{n} {what}{}", if many { format!(", {} colours", colors.len()) } else { String::new() });
+                LegendEntry::new(if many && glyph != Glyph::Pixels { Glyph::Palette } else { glyph }, color, text)
+            })
+            .collect();
+        let spheres = self.primitives.iter().filter(|p| matches!(p, Overlay::Sphere { .. })).count();
+        if spheres > MAX_SPHERES {
+            out.push(LegendEntry::new(
+                Glyph::Circle,
+                [1.0; 4],
+                format!("cheaper form: the first {} as one circle each", MAX_SPHERES),
+            ));
+        } else if spheres > MAX_FULL_SPHERES {
+            out.push(LegendEntry::new(
+                Glyph::Circle,
+                [1.0; 4],
+                format!("cheaper form: over {} spheres, each is one horizontal circle", MAX_FULL_SPHERES),
+            ));
+        }
+        out
+    }
+}
+
+/// What a technique knows of one light of the last frame, for the app's hover tooltip: lines of text, and the
+/// lights of the light's group (e.g. its cluster, the light itself included) to highlight when it is selected.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightDetails {
+    pub lines: Vec<String>,
+    pub group: Vec<usize>,
+}
+
+/// Something a technique's overlays draw that the app's view gives a hover tooltip (a VAL, a VPL, a cluster's
+/// representative): where it is, the overlay layer that draws it (the app offers only those of visible
+/// layers), and an index the technique understands in `Technique::hover_details`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoverPoint {
+    pub layer: &'static str,
+    pub position: Vec3,
+    pub index: usize,
+}
+
+/// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
+/// overlay layers to switch on (the technique's others are switched off), whether its maps show it (and which:
+/// `maps` 0 is `Technique::shadow_atlas`, `i` ≥ 1 the i-th of `Technique::depth_images`), and parameter
+/// values that make the image show the step (e.g. one cluster's visibility alone), as text the parameter's kind
+/// parses; the app sets them while the step is chosen and restores the user's values for the other steps.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExplainStep {
+    pub title: &'static str,
+    pub text: &'static str,
+    pub layers: &'static [&'static str],
+    pub shows_shadow_maps: bool,
+    pub maps: usize,
+    pub params: &'static [(&'static str, &'static str)],
+}
+
+/// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.
+pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
+    let white = [1.0, 1.0, 1.0, 1.0];
+    Some(match layer.name {
+        "lights" => vec![LegendEntry::new(Glyph::Dot, white, "a light, in its colour; size grows with √intensity")],
+        "light ranges" => vec![LegendEntry::new(Glyph::Circle, white, "L_att: where the light's falloff reaches 0")],
+        "spot cones" => vec![LegendEntry::new(Glyph::Line, white, "a spot light's axis and cone, ¼ of L_att long")],
+        _ => return None,
+    })
+}
+
+/// An overlay layer a technique offers; the app toggles layers individually.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OverlayLayer {
+    pub name: &'static str,
+    pub visible_by_default: bool,
+    pub primitives: Vec<Overlay>,
+}
+
+/// A light's overlay colour: its colour normalised to full brightness.
+pub fn light_overlay_color(l: &PointLight) -> [f32; 4] {
+    let c = l.color / l.color.max_element().max(1e-6);
+    [c.x, c.y, c.z, 1.0]
+}
+
+/// The overlays every technique offers for its lights: dots sized by intensity, and range spheres (`L_att`).
+pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
+    let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
+    let mut layers = vec![
+        OverlayLayer {
+            name: "lights",
+            visible_by_default: true,
+            primitives: lights
+                .iter()
+                .map(|l| Overlay::Point {
+                    position: l.position,
+                    color: light_overlay_color(l),
+                    radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
+                })
+                .collect(),
+        },
+        OverlayLayer {
+            name: "light ranges",
+            visible_by_default: false,
+            primitives: lights
+                .iter()
+                .map(|l| {
+                    let [r, g, b, _] = light_overlay_color(l);
+                    Overlay::Sphere { center: l.position, radius: l.range, color: [r, g, b, 0.35] }
+                })
+                .collect(),
+        },
+    ];
+    // Only scenes with spot lights get the layer, so the layer list of the others stays as it was.
+    if lights.iter().any(|l| l.spot.is_some()) {
+        layers.push(OverlayLayer {
+            name: "spot cones",
+            visible_by_default: true,
+            primitives: lights
+                .iter()
+                .filter_map(|l| l.spot.map(|s| (l, s)))
+                .flat_map(|(l, s)| {
+                    // The cone's axis and four edges, a quarter of the range long.
+                    let len = l.range * 0.25;
+                    let (u, v) = s.direction.any_orthonormal_pair();
+                    let (sin, cos) = s.outer_angle.sin_cos();
+                    let [r, g, b, _] = light_overlay_color(l);
+                    let color = [r, g, b, 0.8];
+                    let mut lines = vec![Overlay::Line { from: l.position, to: l.position + s.direction * len, color }];
+                    for side in [u, -u, v, -v] {
+                        let edge = s.direction * cos + side * sin;
+                        lines.push(Overlay::Line { from: l.position, to: l.position + edge * len, color });
+                    }
+                    lines
+                })
+                .collect(),
+        });
+    }
+    layers
+}
