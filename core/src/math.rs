@@ -2,7 +2,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::scene::Aabb;
+use serde::{Deserialize, Serialize};
 
 /// Right-handed view matrix looking along `dir` (view space: X right, Y up, -Z forward).
 pub fn look_to_rh(eye: Vec3, dir: Vec3, up: Vec3) -> Mat4 {
@@ -201,6 +201,49 @@ impl SphereGrid {
             &self.items[0..0]
         };
         cell.iter().chain(self.big.iter()).copied()
+    }
+}
+
+/// An axis-aligned box. `Aabb::EMPTY` grows with [`Aabb::extend`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        for p in points {
+            b.extend(p);
+        }
+        b
+    }
+    pub fn extend(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn size(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.length_squared()
+    }
+    pub fn intersects_sphere(&self, center: Vec3, radius: f32) -> bool {
+        self.distance_squared(center) <= radius * radius
     }
 }
 

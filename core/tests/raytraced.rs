@@ -7,10 +7,10 @@ mod common;
 use common::analytic::{self, camera_ray, cast, ground_visibility, Hit, AMBIENT, H, W};
 use common::*;
 use glam::{Vec2, Vec3, Vec4};
-use shadowlab_core::scene::chunks::ChunkedGeometry;
-use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
 use shadowlab_core::accel::bvh::{occluded_brute_force, occluded_cpu, Bvh, Ray};
 use shadowlab_core::accel::gpu_trace::gpu_occluded;
+use shadowlab_core::scene::chunks::ChunkedGeometry;
+use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
 use shadowlab_core::technique::{ParamError, ParamValue};
 use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
 

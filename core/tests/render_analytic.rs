@@ -390,9 +390,9 @@ fn cut_out_casters_cast_cut_out_shadows() {
 fn the_cpu_traversal_alpha_tests_cut_outs() {
     // The CPU twin of the tracers' alpha test (what VPL tracing and fuzzy's probe use): a ray down through the
     // plate's cut half passes, through its opaque half it stops; with the cutoff off both stop.
+    use shadowlab_core::accel::bvh::{occluded_cpu_filtered, Bvh};
     use shadowlab_core::accel::scene_bvh::{cutout_alpha, BvhCutouts};
     use shadowlab_core::scene::chunks::ChunkedGeometry;
-    use shadowlab_core::accel::bvh::{occluded_cpu_filtered, Bvh};
     for (cutoff, cut_half_blocks) in [(0.5, false), (0.0, true)] {
         let scene = half_cut_plate(cutoff);
         let geometry = ChunkedGeometry::build(&scene);

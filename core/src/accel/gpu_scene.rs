@@ -1,10 +1,13 @@
 //! A scene uploaded to the GPU: one vertex and one index buffer for all chunks, a bind group per material
 //! (uniform, base-colour texture with mipmaps generated on the CPU, sampler).
 
+use std::sync::Arc;
+
 use wgpu::util::DeviceExt;
 
 use glam::Vec3;
 
+use super::scene_bvh::{cutout_alpha, CutoutAlpha, SceneBvh};
 use crate::gpu::GpuContext;
 use crate::scene::chunks::{Chunk, ChunkedGeometry};
 use crate::scene::{Material, Scene, TextureImage};
@@ -27,11 +30,11 @@ pub struct GpuScene {
     /// factor or texture): the depth passes alpha-test its chunks.
     pub material_cutout: Vec<bool>,
     /// Per material, its alpha for the ray tracers' alpha test when it cuts out (`material_cutout`).
-    pub cutout_alpha: Vec<Option<super::scene_bvh::CutoutAlpha>>,
+    pub cutout_alpha: Vec<Option<CutoutAlpha>>,
     /// Per material, the mean linear albedo (factor times the texture's mean): what a ray hit reflects.
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
-    pub(crate) bvh_cell: std::sync::OnceLock<std::sync::Arc<super::scene_bvh::SceneBvh>>,
+    pub(crate) bvh_cell: std::sync::OnceLock<Arc<SceneBvh>>,
 }
 
 impl GpuScene {
@@ -147,7 +150,7 @@ impl GpuScene {
             })
             .collect();
         let material_albedo = scene.materials.iter().map(|m| mean_albedo(scene, m)).collect();
-        let cutout_alpha = super::scene_bvh::cutout_alpha(scene);
+        let cutout_alpha = cutout_alpha(scene);
         let material_cutout = cutout_alpha.iter().map(Option::is_some).collect();
         GpuScene {
             cutout_alpha,
@@ -235,6 +238,20 @@ fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::Tex
         );
     }
     texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+impl GpuScene {
+    /// The scene's BVH, built the first time it is asked for; the second value is its build time when this
+    /// call built it.
+    pub fn bvh(&self, gpu: &GpuContext) -> (Arc<SceneBvh>, Option<f64>) {
+        let mut built = None;
+        let bvh = self.bvh_cell.get_or_init(|| {
+            let b = Arc::new(SceneBvh::build(gpu, &self.geometry, &self.material_albedo, &self.cutout_alpha));
+            built = Some(b.cpu.stats.build_ms);
+            b
+        });
+        (bvh.clone(), built)
+    }
 }
 
 /// Mirrors `Material` in `material.wgsl` (the G-buffer and the alpha-tested depth passes).

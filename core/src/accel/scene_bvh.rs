@@ -1,7 +1,7 @@
 //! The scene's BVH as a renderer service: built once per scene on the CPU (binned SAH,
 //! [`crate::accel::bvh`]), uploaded once, and shared by everything that traces rays: the
 //! ray-traced shadows, the VPL generator (closest hits on the CPU), the VPL ray-traced gather and the path
-//! tracer (closest hits on the GPU). It lives in [`GpuScene`] behind a `OnceLock`, so a scene that never
+//! tracer (closest hits on the GPU). It lives in `GpuScene` behind a `OnceLock`, so a scene that never
 //! traces a ray never pays for it.
 //!
 //! Besides the traversal layout (`raytrace_bvh.wgsl`) it keeps, per BVH triangle, what a hit needs to shade:
@@ -11,18 +11,15 @@
 //! a GPU hit shader cannot sample an arbitrary material's texture without bindless textures, and the CPU VPL
 //! generator and the path tracer must agree. Receivers (the G-buffer) keep their textured albedo.
 //!
-//! Cut-out materials (a cutoff and alpha below it, [`GpuScene::material_cutout`]) are alpha-tested by every
+//! Cut-out materials (a cutoff and alpha below it, `GpuScene::material_cutout`) are alpha-tested by every
 //! traversal, on the GPU and on the CPU alike ([`BvhCutouts`]): a hit on a cut-out texel is no hit, as in the
 //! shadow maps' alpha-tested depth passes. Without bindless textures, the masks are copied into one
 //! `R8Unorm` array (one layer per cut-out material, resampled to a common size of at most
 //! [`MASK_SIZE`] texels) and bound with the BVH as textures, so no pass needs another storage buffer.
 
-use std::sync::Arc;
-
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::gpu_scene::GpuScene;
 use crate::accel::bvh::{self, Bvh, Hit};
 use crate::gpu::GpuContext;
 use crate::scene::chunks::ChunkedGeometry;
@@ -456,19 +453,5 @@ impl SceneBvh {
             normal: if n.dot(dir) > 0.0 { -n } else { n },
             albedo: Vec3::from_slice(&s.albedo[..3]),
         })
-    }
-}
-
-impl GpuScene {
-    /// The scene's BVH, built the first time it is asked for; the second value is its build time when this
-    /// call built it.
-    pub fn bvh(&self, gpu: &GpuContext) -> (Arc<SceneBvh>, Option<f64>) {
-        let mut built = None;
-        let bvh = self.bvh_cell.get_or_init(|| {
-            let b = Arc::new(SceneBvh::build(gpu, &self.geometry, &self.material_albedo, &self.cutout_alpha));
-            built = Some(b.cpu.stats.build_ms);
-            b
-        });
-        (bvh.clone(), built)
     }
 }

@@ -9,6 +9,7 @@
 
 pub mod cube_params;
 pub mod cube_shadows;
+mod display;
 pub mod exposure;
 pub mod gpu_data;
 pub mod layouts;
@@ -16,236 +17,32 @@ pub mod light_tiles;
 pub mod lights;
 pub mod overlay;
 pub mod per_light_shadows;
+mod read;
+pub mod report;
+pub mod settings;
+mod setup;
 pub mod shade_pass;
 pub mod targets;
 pub mod vpl_gather;
 
 use std::time::Instant;
 
-use glam::Vec3;
-use serde::Serialize;
-
 use crate::accel::gpu_scene::GpuScene;
 use crate::error::GpuError;
-use crate::gpu::readback;
 use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::scene::chunks::merge_draw_ranges;
 use crate::scene::{Camera, PointLight, Scene};
 use crate::shaders;
-use crate::technique::{FrameContext, Technique, TechniqueCounts};
-use crate::timing::{PassTime, PassTimer, TimingSource};
-use crate::vpl::{GpuVpl, VplFrame, VplSet, VplSettings};
+use crate::technique::{FrameContext, Technique};
+use crate::timing::{PassTime, PassTimer};
+use crate::vpl::{GpuVpl, VplFrame, VplSet};
 use gpu_data::{FrameUniform, MatrixUniform};
 use layouts::SharedLayouts;
 use targets::FrameTargets;
 
-/// Largest render target side accepted.
-pub const MAX_RENDER_SIZE: u32 = 8192;
-
-/// How the HDR image becomes display colours.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ToneMap {
-    Aces,
-    Reinhard,
-    /// Exposure then clamp: radiance 1 maps to white.
-    Linear,
-}
-
-/// Settings of the renderer (not of a technique).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct RenderSettings {
-    pub width: u32,
-    pub height: u32,
-    pub exposure: f32,
-    /// Multiply `exposure` by the scale that maps the image's log-average luminance to middle grey (metered on
-    /// the GPU each complete frame, [`exposure`]); `exposure` is then a compensation. On in the app, off in
-    /// the CLI (`--auto-exposure`), so renders of the same scene stay comparable.
-    pub auto_exposure: AutoExposure,
-    pub tonemap: ToneMap,
-    /// Ambient radiance factor: ambient term = `ambient * albedo`.
-    pub ambient: Vec3,
-    pub background: Vec3,
-    /// Blinn-Phong specular on top of Lambert.
-    pub specular: bool,
-    /// At most this many lights (cube maps) per step; 0 = as many as the technique's memory budget allows.
-    /// The app lowers it on slow adapters so each UI frame does a bounded amount of work.
-    pub max_lights_per_step: usize,
-    /// The VPLs every indirect technique of a frame shares.
-    pub vpl: VplSettings,
-    /// Which part of the light the output, `read_hdr` and so every comparison show.
-    pub component: Component,
-    /// Display gain of the indirect part when [`Component::Indirect`] is shown (not applied to `read_hdr`).
-    pub indirect_gain: f32,
-    /// Tiled light lists ([`light_tiles`]): shading passes visit only the lights (clusters) that reach their
-    /// pixel's 16x16 tile. The image is the same either way; off loops over every light of a batch.
-    pub light_tiles: bool,
-}
-
-/// Whether the tone mapping scales the exposure by a metered one ([`exposure`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum AutoExposure {
-    /// The exposure as set.
-    #[default]
-    Off,
-    /// Meter every complete frame (and a preview before the first), and scale by it.
-    Meter,
-    /// Scale by the last metered value without metering (the app's fast preview while the user drags, so the
-    /// brightness does not jump between the preview and the full image).
-    Hold,
-}
-
-/// A part of the image: everything, the ambient + direct part, or the indirect part alone.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum Component {
-    /// Ambient + emission + direct + indirect.
-    #[default]
-    Total,
-    /// Ambient + emission + direct (the whole image without an indirect technique).
-    Direct,
-    /// Indirect light only (zero without an indirect technique).
-    Indirect,
-}
-
-impl Component {
-    pub const NAMES: &'static [&'static str] = &["total", "direct", "indirect"];
-    pub fn parse(text: &str) -> Option<Component> {
-        match text.trim() {
-            "total" => Some(Component::Total),
-            "direct" => Some(Component::Direct),
-            "indirect" => Some(Component::Indirect),
-            _ => None,
-        }
-    }
-    pub fn name(self) -> &'static str {
-        Component::NAMES[self as usize]
-    }
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        RenderSettings {
-            width: 640,
-            height: 360,
-            exposure: 1.0,
-            auto_exposure: AutoExposure::Off,
-            tonemap: ToneMap::Aces,
-            ambient: Vec3::splat(0.03),
-            background: Vec3::new(0.05, 0.06, 0.08),
-            specular: false,
-            max_lights_per_step: 0,
-            vpl: VplSettings::default(),
-            component: Component::Total,
-            indirect_gain: 1.0,
-            light_tiles: true,
-        }
-    }
-}
-
-impl RenderSettings {
-    pub fn validate(&self) -> Result<(), GpuError> {
-        if self.width == 0 || self.height == 0 || self.width > MAX_RENDER_SIZE || self.height > MAX_RENDER_SIZE {
-            return Err(GpuError::InvalidSettings(format!(
-                "image size {}x{} must be between 1x1 and {MAX_RENDER_SIZE}x{MAX_RENDER_SIZE}",
-                self.width, self.height
-            )));
-        }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
-            return Err(GpuError::InvalidSettings(format!("exposure {} must be > 0", self.exposure)));
-        }
-        if !(self.ambient.is_finite() && self.background.is_finite()) {
-            return Err(GpuError::InvalidSettings("ambient and background must be finite".into()));
-        }
-        if !(self.indirect_gain.is_finite() && self.indirect_gain > 0.0 && self.indirect_gain <= 1e6) {
-            return Err(GpuError::InvalidSettings(format!("indirect gain {} must be in (0, 1e6]", self.indirect_gain)));
-        }
-        self.vpl.validate().map_err(GpuError::InvalidSettings)?;
-        Ok(())
-    }
-}
-
-/// Counts of a frame.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct FrameCounts {
-    pub lights_total: usize,
-    pub scene_triangles: u64,
-    /// Triangles the G-buffer pass drew after view-frustum culling of chunks.
-    pub gbuffer_triangles: u64,
-    #[serde(flatten)]
-    pub technique: TechniqueCounts,
-}
-
-/// What one frame cost and did.
-#[derive(Clone, Debug, Serialize)]
-pub struct FrameReport {
-    pub technique: String,
-    pub width: u32,
-    pub height: u32,
-    pub timing_source: TimingSource,
-    /// Per pass, in the order they ran; passes of one name (batches) are summed.
-    pub passes: Vec<PassTime>,
-    /// Sum of the passes.
-    pub gpu_total_ms: f64,
-    /// CPU stages of the technique (e.g. clustering), milliseconds.
-    pub cpu_stages: Vec<PassTime>,
-    /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
-    pub wall_ms: f64,
-    pub counts: FrameCounts,
-    /// The indirect technique of the frame, when there is one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub indirect: Option<IndirectReport>,
-}
-
-/// What the indirect technique of a frame did.
-#[derive(Clone, Debug, Serialize)]
-pub struct IndirectReport {
-    pub technique: String,
-    /// VPLs used (0 for techniques that use none, e.g. the path tracer).
-    pub vpls: usize,
-    pub vpl_source: crate::vpl::VplSource,
-    /// VPL samples (texels or particles) that hit nothing.
-    pub vpl_misses: u32,
-    /// True when the frame reused the previous frame's VPLs (same lights, settings and scene), so the
-    /// "vpl generation" stage timed only the check.
-    pub vpls_reused: bool,
-    pub counts: TechniqueCounts,
-    /// CPU stages (VPL generation, the technique's own), milliseconds.
-    pub cpu_stages: Vec<PassTime>,
-    /// The frame's passes that the indirect technique ran (also in the frame's `passes`), and their sum.
-    pub passes: Vec<PassTime>,
-    pub gpu_ms: f64,
-}
-
-/// A frame in progress.
-pub struct FrameJob {
-    pub steps_total: usize,
-    pub steps_done: usize,
-    started: Instant,
-    camera: Camera,
-    lights: Vec<PointLight>,
-    gbuffer_triangles: u64,
-    /// Steps of the direct technique; the indirect technique's follow.
-    direct_steps: usize,
-    vpl_ms: f64,
-    vpls_reused: bool,
-}
-
-impl FrameJob {
-    pub fn is_done(&self) -> bool {
-        self.steps_done >= self.steps_total
-    }
-    /// 0..1
-    pub fn progress(&self) -> f32 {
-        if self.steps_total == 0 {
-            1.0
-        } else {
-            self.steps_done as f32 / self.steps_total as f32
-        }
-    }
-}
+pub use report::{FrameCounts, FrameJob, FrameReport, IndirectReport};
+pub use settings::{AutoExposure, Component, RenderSettings, ToneMap, MAX_RENDER_SIZE};
 
 pub struct Renderer {
     gpu: GpuContext,
@@ -351,188 +148,6 @@ impl Renderer {
         self.scene = scene;
     }
 
-    fn with_scene(
-        gpu: &GpuContext,
-        gpu_scene: std::sync::Arc<GpuScene>,
-        layouts: std::sync::Arc<SharedLayouts>,
-        settings: RenderSettings,
-    ) -> Result<Renderer, GpuError> {
-        let device = &gpu.device;
-        let targets = FrameTargets::new(gpu, settings.width, settings.height);
-        let frame_uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame"),
-            size: std::mem::size_of::<FrameUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let camera_uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("camera"),
-            size: std::mem::size_of::<MatrixUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("camera"),
-            layout: &layouts.camera,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: camera_uniform.as_entire_binding() }],
-        });
-
-        let gbuffer_module = crate::gpu::pipeline::create_module(device, "gbuffer", shaders::GBUFFER.source);
-        let gbuffer_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer"),
-            bind_group_layouts: &[Some(&layouts.camera), Some(&layouts.material)],
-            immediate_size: 0,
-        });
-        let gbuffer_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer"),
-            layout: Some(&gbuffer_layout),
-            vertex: wgpu::VertexState {
-                module: &gbuffer_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
-                    }),
-                    // The second UV channel, a stream of its own (the depth passes never read it).
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 8,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![3 => Float32x2],
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: SharedLayouts::DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &gbuffer_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(SharedLayouts::ALBEDO_FORMAT.into()),
-                    Some(SharedLayouts::NORMAL_FORMAT.into()),
-                    Some(SharedLayouts::EMISSIVE_FORMAT.into()),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let ambient_module = crate::gpu::pipeline::create_module(device, "ambient", shaders::AMBIENT.source);
-        let ambient_pipeline =
-            layouts.fullscreen_pipeline(device, "ambient", &ambient_module, &[], SharedLayouts::HDR_FORMAT, false);
-        let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("tonemap"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                crate::gpu::bind::storage_entry(1),
-                crate::gpu::bind::storage_entry(2),
-            ],
-        });
-        let tonemap_module = crate::gpu::pipeline::create_module(device, "tonemap", shaders::TONEMAP.source);
-        let tonemap_pipeline = layouts.fullscreen_pipeline(
-            device,
-            "tonemap",
-            &tonemap_module,
-            &[&tonemap_layout],
-            SharedLayouts::OUTPUT_FORMAT,
-            false,
-        );
-        let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets);
-        let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
-        let exposure = exposure::ExposureMeter::new(gpu, &layouts, &targets, &indirect_buffer);
-        let tonemap_bind_group =
-            Self::tonemap_bind_group(device, &tonemap_layout, &targets, &indirect_buffer, &exposure.result);
-        let timer = PassTimer::new(gpu)?;
-        let light_tiles = light_tiles::TileLists::new(gpu, &layouts.screen, &layouts.light_tiles);
-        Ok(Renderer {
-            gpu: gpu.clone(),
-            layouts,
-            settings,
-            scene: gpu_scene,
-            targets,
-            frame_uniform,
-            camera_uniform,
-            camera_bind_group,
-            screen_bind_group,
-            gbuffer_pipeline,
-            ambient_pipeline,
-            tonemap_pipeline,
-            tonemap_layout,
-            tonemap_bind_group,
-            exposure,
-            timer,
-            draw_ranges: Vec::new(),
-            overlay: None,
-            overlay_style: Default::default(),
-            indirect: None,
-            indirect_buffer,
-            vpls: VplFrame {
-                set: Default::default(),
-                buffer: crate::gpu::buffer::GrowableBuffer::new(device, "vpls", 48 * 64),
-                key: None,
-            },
-            fixed_vpls: false,
-            visible_lights: lights::VisibleLights::new(gpu),
-            light_tiles,
-            light_spheres: Vec::new(),
-        })
-    }
-
-    fn screen_bind_group(
-        device: &wgpu::Device,
-        layouts: &SharedLayouts,
-        frame_uniform: &wgpu::Buffer,
-        t: &FrameTargets,
-    ) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("screen"),
-            layout: &layouts.screen,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame_uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&t.albedo) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&t.normal) },
-                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&t.emissive) },
-                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&t.depth) },
-            ],
-        })
-    }
-
-    fn tonemap_bind_group(
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-        t: &FrameTargets,
-        indirect: &wgpu::Buffer,
-        exposure: &wgpu::Buffer,
-    ) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("tonemap"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&t.hdr) },
-                wgpu::BindGroupEntry { binding: 1, resource: indirect.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: exposure.as_entire_binding() },
-            ],
-        })
-    }
-
     pub fn gpu(&self) -> &GpuContext {
         &self.gpu
     }
@@ -565,39 +180,6 @@ impl Renderer {
         }
         self.settings = settings;
         Ok(())
-    }
-
-    fn rebind_tonemap(&mut self) {
-        self.exposure.rebind(&self.gpu, &self.targets, &self.indirect_buffer);
-        self.tonemap_bind_group = Self::tonemap_bind_group(
-            &self.gpu.device,
-            &self.tonemap_layout,
-            &self.targets,
-            &self.indirect_buffer,
-            &self.exposure.result,
-        );
-    }
-
-    /// Tone-map with this auto-exposure scale (and its log-average luminance) from now on in
-    /// [`AutoExposure::Hold`]: what a view compared with another shows at the other's exposure (the app's
-    /// reference view, the panes of a figure), so equal radiance looks equal side by side.
-    pub fn set_held_exposure(&mut self, scale: f32, average: f32) -> Result<(), GpuError> {
-        if !(scale.is_finite() && scale > 0.0) {
-            return Err(GpuError::InvalidSettings(format!("auto-exposure scale {scale} must be > 0")));
-        }
-        self.gpu.check_lost()?;
-        self.exposure.hold(&self.gpu, scale, average);
-        Ok(())
-    }
-
-    /// The auto-exposure scale and the log-average luminance it was metered from, as of the last complete
-    /// frame (`None` while [`RenderSettings::auto_exposure`] is off). A small blocking readback.
-    pub fn auto_exposure(&self) -> Result<Option<(f32, f32)>, GpuError> {
-        if self.settings.auto_exposure == AutoExposure::Off {
-            return Ok(None);
-        }
-        let gpu = self.gpu.clone();
-        gpu.guarded(|| self.exposure.read(&self.gpu).map(Some))
     }
 
     /// Choose the indirect technique (None: direct light only, the default). Its steps run after the direct
@@ -1037,98 +619,6 @@ impl Renderer {
         self.timer.finish_frame(&self.gpu).map(|_| ())
     }
 
-    /// Tone-map the HDR target into the output texture (timed as the frame's "tonemap" pass).
-    pub fn tonemap(&mut self) -> Result<(), GpuError> {
-        self.encode_tonemap(true)
-    }
-
-    /// Tone-map what has been accumulated so far, for progressive display; not counted in the frame's timings.
-    pub fn preview_tonemap(&mut self) -> Result<(), GpuError> {
-        self.encode_tonemap(false)
-    }
-
-    fn encode_tonemap(&mut self, timed: bool) -> Result<(), GpuError> {
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        // A complete frame is metered; a progressive preview keeps the last scale unless none was metered yet.
-        let meter = match self.settings.auto_exposure {
-            AutoExposure::Off => false,
-            AutoExposure::Meter => timed || !self.exposure.metered,
-            AutoExposure::Hold => !self.exposure.metered,
-        };
-        if meter {
-            self.exposure.encode(&mut encoder, &self.screen_bind_group, self.settings.width, self.settings.height);
-        }
-        let desc = wgpu::RenderPassDescriptor {
-            label: Some("tonemap"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.targets.output,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        };
-        let record = |pass: &mut wgpu::RenderPass<'_>| {
-            pass.set_pipeline(&self.tonemap_pipeline);
-            pass.set_bind_group(0, &self.screen_bind_group, &[]);
-            pass.set_bind_group(1, &self.tonemap_bind_group, &[]);
-            pass.draw(0..3, 0..1);
-        };
-        if timed {
-            self.timer.render_pass(&mut encoder, "tonemap", desc, record);
-            self.timer.submit(&self.gpu, encoder, "tonemap")
-        } else {
-            record(&mut encoder.begin_render_pass(&desc));
-            self.gpu.queue.submit([encoder.finish()]);
-            Ok(())
-        }
-    }
-
-    /// Draw overlay primitives over the output (call after [`Renderer::tonemap`]). Depth-tested against the
-    /// G-buffer of the last frame, unless `x_ray`.
-    pub fn draw_overlays(
-        &mut self,
-        camera: &Camera,
-        primitives: &[crate::technique::Overlay],
-        x_ray: bool,
-    ) -> Result<(), GpuError> {
-        if primitives.is_empty() {
-            return Ok(());
-        }
-        // wgpu's buffer helpers panic on a lost device.
-        self.gpu.check_lost()?;
-        let overlay = self.overlay.get_or_insert_with(|| overlay::OverlayRenderer::new(&self.gpu));
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let t = &self.targets;
-        overlay.draw(
-            &self.gpu,
-            &mut encoder,
-            &t.output,
-            &t.depth,
-            camera.clip_from_world(self.settings.width as f32 / self.settings.height as f32),
-            (t.width, t.height),
-            primitives,
-            x_ray,
-            self.overlay_style,
-        );
-        self.gpu.queue.submit([encoder.finish()]);
-        Ok(())
-    }
-
-    /// How many times [`Renderer::draw_overlays`] tessellated and uploaded primitives (it reuses the last upload
-    /// while they stay the same).
-    pub fn overlay_uploads(&self) -> u64 {
-        self.overlay.as_ref().map_or(0, |o| o.uploads)
-    }
-
-    /// Line width and the fading of occluded parts for [`Renderer::draw_overlays`].
-    pub fn set_overlay_style(&mut self, style: overlay::OverlayStyle) {
-        self.overlay_style = style;
-    }
-
     /// Render a whole frame; `progress(done, total)` is called after each step.
     pub fn render_frame(
         &mut self,
@@ -1146,80 +636,5 @@ impl Renderer {
             progress(job.steps_done, job.steps_total);
         }
         self.finish_frame(job, technique)
-    }
-
-    /// The tone-mapped output as an sRGB RGBA8 image.
-    pub fn read_output(&self) -> Result<image::RgbaImage, GpuError> {
-        let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.output_texture, t.width, t.height, 4)?;
-        image::RgbaImage::from_raw(t.width, t.height, bytes).ok_or_else(|| GpuError::Readback("size mismatch".into()))
-    }
-
-    /// Per pixel, true where the G-buffer holds geometry (not background): the pixels comparisons count.
-    pub fn read_geometry_mask(&self) -> Result<Vec<bool>, GpuError> {
-        let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
-        Ok(bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]]) < 1.0).collect())
-    }
-
-    /// World position of every pixel of the last frame (None for background), from the G-buffer depth.
-    pub fn read_world_positions(&self, camera: &Camera) -> Result<Vec<Option<Vec3>>, GpuError> {
-        let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
-        let world_from_clip = camera.clip_from_world(t.width as f32 / t.height as f32).inverse();
-        Ok(bytes
-            .chunks_exact(4)
-            .enumerate()
-            .map(|(i, d)| {
-                let depth = f32::from_le_bytes([d[0], d[1], d[2], d[3]]);
-                if depth >= 1.0 {
-                    return None;
-                }
-                let (x, y) = ((i as u32 % t.width) as f32 + 0.5, (i as u32 / t.width) as f32 + 0.5);
-                let ndc = glam::Vec4::new(x / t.width as f32 * 2.0 - 1.0, 1.0 - y / t.height as f32 * 2.0, depth, 1.0);
-                let w = world_from_clip * ndc;
-                Some(w.truncate() / w.w)
-            })
-            .collect())
-    }
-
-    /// The HDR radiance of the chosen [`RenderSettings::component`], linear RGBA, row-major (no gain).
-    pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, GpuError> {
-        self.read_component(self.settings.component)
-    }
-
-    /// The HDR radiance of one component, linear RGBA, row-major (no gain).
-    pub fn read_component(&self, component: Component) -> Result<Vec<[f32; 4]>, GpuError> {
-        let t = &self.targets;
-        let direct = || -> Result<Vec<[f32; 4]>, GpuError> {
-            let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 8)?;
-            Ok(bytes
-                .chunks_exact(8)
-                .map(|p| {
-                    let h = |i: usize| readback::f16_to_f32(u16::from_le_bytes([p[i], p[i + 1]]));
-                    [h(0), h(2), h(4), h(6)]
-                })
-                .collect())
-        };
-        let indirect = || -> Result<Vec<[f32; 4]>, GpuError> {
-            let bytes = readback::read_buffer(&self.gpu, &self.indirect_buffer)?;
-            let values: &[f32] = bytemuck::cast_slice(&bytes);
-            Ok(values.chunks_exact(4).map(|v| [v[0], v[1], v[2], 1.0]).collect())
-        };
-        let pixels = (t.width * t.height) as usize;
-        match (component, self.indirect.is_some()) {
-            (Component::Direct, _) | (Component::Total, false) => direct(),
-            (Component::Indirect, false) => Ok(vec![[0.0, 0.0, 0.0, 1.0]; pixels]),
-            (Component::Indirect, true) => indirect(),
-            (Component::Total, true) => {
-                let mut d = direct()?;
-                for (p, i) in d.iter_mut().zip(indirect()?) {
-                    for c in 0..3 {
-                        p[c] += i[c];
-                    }
-                }
-                Ok(d)
-            }
-        }
     }
 }

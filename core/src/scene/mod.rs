@@ -5,9 +5,12 @@
 
 pub mod builtin;
 pub mod chunks;
+mod gltf_data;
 pub mod gltf_loader;
 pub mod layout;
 pub mod obj_loader;
+pub mod random;
+mod shapes;
 pub mod texture;
 
 use std::path::{Path, PathBuf};
@@ -16,55 +19,13 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use serde::{Deserialize, Serialize};
 
 use crate::error::LoadError;
+pub use crate::math::Aabb;
 
 /// Where a scene came from, so a scene file can re-create it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum SceneSource {
     Builtin(String),
     File { path: PathBuf, unit_scale: f32 },
-}
-
-/// An axis-aligned box. `Aabb::EMPTY` grows with [`Aabb::extend`].
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Aabb {
-    pub min: Vec3,
-    pub max: Vec3,
-}
-
-impl Aabb {
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
-
-    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for p in points {
-            b.extend(p);
-        }
-        b
-    }
-    pub fn extend(&mut self, p: Vec3) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-    pub fn union(&self, o: &Aabb) -> Aabb {
-        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
-    }
-    pub fn is_empty(&self) -> bool {
-        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
-    }
-    pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
-    }
-    pub fn size(&self) -> Vec3 {
-        self.max - self.min
-    }
-    /// Squared distance from `p` to the box (0 inside).
-    pub fn distance_squared(&self, p: Vec3) -> f32 {
-        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
-        d.length_squared()
-    }
-    pub fn intersects_sphere(&self, center: Vec3, radius: f32) -> bool {
-        self.distance_squared(center) <= radius * radius
-    }
 }
 
 /// A triangle mesh in world space. `normals` and `uvs` have one entry per position.

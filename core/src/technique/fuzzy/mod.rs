@@ -35,13 +35,15 @@
 
 pub mod gpu;
 pub mod kmeans;
+mod overlays;
+pub mod params;
 
 use std::sync::Arc;
 
 use glam::Vec3;
 
 use super::{
-    check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
+    check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamValue, Technique,
     TechniqueCounts,
 };
 use crate::accel::scene_bvh::SceneBvh;
@@ -57,7 +59,8 @@ use crate::shaders;
 use crate::timing::PassTime;
 use crate::vpl::{GpuVpl, VplSet};
 use gpu::{GpuKMeans, GpuPoint};
-use kmeans::{KMeansParams, ShadeMode, MAX_F};
+use kmeans::{KMeansParams, MAX_F};
+pub use params::{ClusterMode, FuzzyParams};
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
@@ -95,103 +98,6 @@ struct ShadeUniform {
     words_per_row: u32,
     _pad: u32,
 }
-
-/// Which side is clustered (section 4's ablation).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ClusterMode {
-    /// Shading points clustered, every VPL a light.
-    ShadingPoints,
-    /// VPLs clustered, every pixel its own rays.
-    Vpls,
-    Both,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct FuzzyParams {
-    /// `K_sp`; 0: `k_sp_percent` of the pixels.
-    pub k_sp: u32,
-    pub k_sp_percent: f32,
-    pub k_vpl: u32,
-    /// `F`.
-    pub fuzziness: u32,
-    /// `gamma`.
-    pub gamma: u32,
-    pub iterations: u32,
-    pub n_t: f32,
-    /// `hard`, `fuzzy` or `weighted`.
-    pub mode: String,
-    /// `both`, `sp` or `vpl`.
-    pub cluster: String,
-    /// Ray offset along the normals, world units per metre of camera distance.
-    pub ray_bias: f32,
-    /// Read the clusters back every frame for the overlays (costs a readback of the per-pixel clusters).
-    pub inspect: bool,
-    /// The pixel whose clusters and visibility rays the probe overlay shows (-1: none).
-    pub probe_x: i32,
-    pub probe_y: i32,
-    /// Shadow rays one visibility step traces at most.
-    pub rays_per_step: u32,
-    /// `exact` (the search grows until it holds the F nearest) or `paper` (the 27 cells around a point).
-    pub search: String,
-    /// Lights one shading step sums.
-    pub lights_per_step: u32,
-}
-
-impl Default for FuzzyParams {
-    fn default() -> Self {
-        FuzzyParams {
-            k_sp: 0,
-            // The paper's sweet spot: "increasing the number of clusters to more than ~1 % of the total shading
-            // points brings relatively small reductions in terms of MSE" (section 4.2).
-            k_sp_percent: 1.0,
-            k_vpl: 256,
-            fuzziness: 6,
-            gamma: 4,
-            iterations: 8,
-            n_t: 3f32.sqrt() / 2.0,
-            mode: "weighted".into(),
-            cluster: "both".into(),
-            ray_bias: 0.001,
-            inspect: true,
-            probe_x: -1,
-            probe_y: -1,
-            rays_per_step: 1 << 22,
-            search: "exact".into(),
-            lights_per_step: super::MAX_LIGHT_WORK_PER_PASS as u32,
-        }
-    }
-}
-
-impl FuzzyParams {
-    pub fn cluster_mode(&self) -> ClusterMode {
-        match self.cluster.as_str() {
-            "sp" => ClusterMode::ShadingPoints,
-            "vpl" => ClusterMode::Vpls,
-            _ => ClusterMode::Both,
-        }
-    }
-
-    pub fn shade_mode(&self) -> ShadeMode {
-        match self.mode.as_str() {
-            "hard" => ShadeMode::Hard,
-            "fuzzy" => ShadeMode::Fuzzy,
-            _ => ShadeMode::Weighted,
-        }
-    }
-
-    /// `K_sp` for an image of `pixels`.
-    pub fn sp_clusters(&self, pixels: usize) -> usize {
-        if self.k_sp > 0 {
-            self.k_sp as usize
-        } else {
-            ((pixels as f64 * self.k_sp_percent as f64 / 100.0).round() as usize).max(1)
-        }
-    }
-}
-
-const MODE_CHOICES: &[&str] = &["weighted", "fuzzy", "hard"];
-const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
-const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
 
 /// What the last frame's clusterings left on the CPU (for counts and overlays).
 #[derive(Default)]
@@ -447,149 +353,12 @@ impl Technique for FuzzyClustering {
     }
 
     fn params(&self) -> Vec<Param> {
-        let p = &self.params;
-        vec![
-            Param {
-                key: "cluster",
-                label: "Clustered",
-                help: "both: shading points and VPLs (the method); sp: shading points only, every VPL a light; \
-                       vpl: VPLs only, every pixel traces its own rays (section 4's ablations)",
-                kind: ParamKind::Choice(CLUSTER_CHOICES),
-                value: ParamValue::Choice(p.cluster.clone()),
-            },
-            Param {
-                key: "mode",
-                label: "Visibility",
-                help: "weighted: inverse-distance mean over the F nearest clusters (eq. 9-10); fuzzy: plain mean \
-                       (eq. 8); hard: the nearest cluster's only",
-                kind: ParamKind::Choice(MODE_CHOICES),
-                value: ParamValue::Choice(p.mode.clone()),
-            },
-            Param {
-                key: "k_sp",
-                label: "K_sp (0: share)",
-                help: "Shading-point clusters; 0 uses 'K_sp share' of the pixels",
-                kind: ParamKind::Int { min: 0, max: gpu::MAX_CLUSTERS as i64 },
-                value: ParamValue::Int(p.k_sp as i64),
-            },
-            Param {
-                key: "k_sp_percent",
-                label: "K_sp share (% of pixels)",
-                help: "Shading-point clusters as a share of the pixels, when K_sp is 0 (the paper: 0.3 to 4 %)",
-                kind: ParamKind::Float { min: 0.001, max: 100.0 },
-                value: ParamValue::Float(p.k_sp_percent),
-            },
-            Param {
-                key: "k_vpl",
-                label: "K_vpl",
-                help: "VPL clusters (clamped to the VPL count)",
-                kind: ParamKind::Int { min: 1, max: gpu::MAX_CLUSTERS as i64 },
-                value: ParamValue::Int(p.k_vpl as i64),
-            },
-            Param {
-                key: "f",
-                label: "F (clusters per point)",
-                help: "The nearest shading-point clusters each pixel interpolates visibility from (paper: 6)",
-                kind: ParamKind::Int { min: 1, max: MAX_F as i64 },
-                value: ParamValue::Int(p.fuzziness as i64),
-            },
-            Param {
-                key: "gamma",
-                label: "gamma (downsampling)",
-                help: "Every gamma-th column and row of the image takes part in the k-means iterations",
-                kind: ParamKind::Int { min: 1, max: 64 },
-                value: ParamValue::Int(p.gamma as i64),
-            },
-            Param {
-                key: "iterations",
-                label: "k-means iterations",
-                help: "Assignment and update rounds of both clusterings",
-                kind: ParamKind::Int { min: 0, max: 100 },
-                value: ParamValue::Int(p.iterations as i64),
-            },
-            Param {
-                key: "n_t",
-                label: "n_t (normal threshold)",
-                help: "Points whose normals' cosine is at most n_t never share a cluster (eq. 7; paper: sqrt(3)/2)",
-                kind: ParamKind::Float { min: -1.0, max: 1.0 },
-                value: ParamValue::Float(p.n_t),
-            },
-            Param {
-                key: "search",
-                label: "Cluster search",
-                help: "exact: the grid search grows until it holds the F nearest clusters; paper: the 27 cells \
-                       around a point only (faster; a far cluster can be missed)",
-                kind: ParamKind::Choice(SEARCH_CHOICES),
-                value: ParamValue::Choice(p.search.clone()),
-            },
-            Param {
-                key: "bias",
-                label: "Ray offset",
-                help: "Ray ends offset along their normals, world units per metre of camera distance",
-                kind: ParamKind::Float { min: 0.0, max: 0.1 },
-                value: ParamValue::Float(p.ray_bias),
-            },
-            Param {
-                key: "inspect",
-                label: "Read clusters back",
-                help: "Read the per-pixel clusters back every frame for the overlays (off for timing)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.inspect),
-            },
-            Param {
-                key: "probe_x",
-                label: "Probe pixel x",
-                help: "The pixel whose F clusters and visibility rays the probe overlay shows (-1: none; in the app, \
-                       Alt+click a pixel)",
-                kind: ParamKind::Int { min: -1, max: 16_384 },
-                value: ParamValue::Int(p.probe_x as i64),
-            },
-            Param {
-                key: "probe_y",
-                label: "Probe pixel y",
-                help: "The probe's row (-1: none)",
-                kind: ParamKind::Int { min: -1, max: 16_384 },
-                value: ParamValue::Int(p.probe_y as i64),
-            },
-            Param {
-                key: "rays_per_step",
-                label: "Rays per step",
-                help: "Shadow rays one visibility step traces at most (the image does not change)",
-                kind: ParamKind::Int { min: 1024, max: 1 << 28 },
-                value: ParamValue::Int(p.rays_per_step as i64),
-            },
-            Param {
-                key: "lights_per_step",
-                label: "Lights per step",
-                help: "Lights one shading step sums (the image does not change)",
-                kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
-                value: ParamValue::Int(p.lights_per_step as i64),
-            },
-        ]
+        self.params.describe()
     }
 
     fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
         check_param(self.key(), &self.params(), key, value)?;
-        let p = &mut self.params;
-        match (key, value) {
-            ("cluster", ParamValue::Choice(v)) => p.cluster = v.clone(),
-            ("mode", ParamValue::Choice(v)) => p.mode = v.clone(),
-            ("k_sp", ParamValue::Int(v)) => p.k_sp = *v as u32,
-            ("k_sp_percent", ParamValue::Float(v)) => p.k_sp_percent = *v,
-            ("k_vpl", ParamValue::Int(v)) => p.k_vpl = *v as u32,
-            ("f", ParamValue::Int(v)) => p.fuzziness = *v as u32,
-            ("gamma", ParamValue::Int(v)) => p.gamma = *v as u32,
-            ("iterations", ParamValue::Int(v)) => p.iterations = *v as u32,
-            ("n_t", ParamValue::Float(v)) => p.n_t = *v,
-            ("bias", ParamValue::Float(v)) => p.ray_bias = *v,
-            ("search", ParamValue::Choice(v)) => p.search = v.clone(),
-            ("inspect", ParamValue::Bool(v)) => p.inspect = *v,
-            ("probe_x", ParamValue::Int(v)) => p.probe_x = *v as i32,
-            ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
-            ("rays_per_step", ParamValue::Int(v)) => p.rays_per_step = *v as u32,
-            ("lights_per_step", ParamValue::Int(v)) => p.lights_per_step = *v as u32,
-            _ => unreachable!("check_param accepted an unknown key"),
-        }
+        self.params.set(key, value);
         Ok(())
     }
 
@@ -602,93 +371,23 @@ impl Technique for FuzzyClustering {
     }
 
     fn explain(&self) -> Vec<super::ExplainStep> {
-        use super::ExplainStep;
-        vec![
-            ExplainStep {
-                title: "1. VPLs",
-                text:
-                    "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
-                layers: &["vpls (flux)", "vpls (flux, every n-th)"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "2. VPL clusters",
-                text: "K_vpl clusters by k-means over position and normal (equation 7: no two normals more than 30 \
-                       degrees apart); each becomes one light at its representative with its members' flux.",
-                layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "3-4. Shading-point clusters",
-                text: "The pixels' positions and normals clustered the same way (every gamma-th pixel in the \
-                       iterations), then every pixel assigned to its F nearest clusters.",
-                layers: &["shading-point clusters", "shading-point centroids"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "5. Visibility between representatives",
-                text: "One shadow ray from each shading-point cluster's representative to each light: K_sp x K_vpl \
-                       rays instead of one per pixel and VPL. Alt+click a pixel to see its clusters' rays (green \
-                       visible, red blocked).",
-                layers: &[
-                    "probe: clusters and visibility rays (green visible, red blocked)",
-                    "vpl cluster representatives",
-                ],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "6. Weighted visibility",
-                text: "Each pixel shades every light with its own BRDF and geometry term and the visibility of its F \
-                       clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
-                layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-        ]
+        self.explain_steps()
     }
 
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        use super::{Glyph, LegendEntry};
-        let palette = index_color(0);
-        let mut legend = match layer.name {
-            "vpls by cluster" | "vpls by cluster (every n-th)" => {
-                vec![LegendEntry::new(Glyph::Palette, palette, "a VPL, in its cluster's colour")]
-            }
-            "vpl cluster representatives" => vec![LegendEntry::new(
-                Glyph::Palette,
-                palette,
-                "a VPL cluster's representative: the light it becomes (members' flux, mean normal)",
-            )],
-            "shading-point clusters" => {
-                vec![LegendEntry::new(
-                    Glyph::Pixels,
-                    palette,
-                    "each pixel in its nearest shading-point cluster's colour",
-                )]
-            }
-            "shading-point clusters (blended as the visibility mode weighs them)" => vec![LegendEntry::new(
-                Glyph::Pixels,
-                palette,
-                "each pixel: its F clusters' colours blended by the visibility weights",
-            )],
-            "shading-point centroids" => {
-                vec![LegendEntry::new(Glyph::Palette, palette, "a shading-point cluster's centroid")]
-            }
-            "probe: clusters and visibility rays (green visible, red blocked)" => vec![
-                LegendEntry::new(Glyph::Dot, palette, "the probed pixel's F clusters' representatives"),
-                LegendEntry::new(Glyph::Line, [0.2, 1.0, 0.3, 0.8], "a shadow ray that reaches its light"),
-                LegendEntry::new(Glyph::Line, [1.0, 0.2, 0.2, 0.8], "a shadow ray that is blocked"),
-            ],
-            _ => crate::renderer::vpl_gather::vpl_layer_legend(layer)
-                .or_else(|| super::light_layer_legend(layer))
-                .unwrap_or_default(),
-        };
-        legend.extend(layer.summary());
-        legend
+        self.legend_of(layer)
+    }
+
+    fn hover_points(&self) -> Vec<super::HoverPoint> {
+        self.hover_list()
+    }
+
+    fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {
+        self.hover_text(layer, index)
+    }
+
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        self.overlay_layers(lights)
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
@@ -951,147 +650,5 @@ impl Technique for FuzzyClustering {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         vec![PassTime { name: "fuzzy clustering + readback".into(), ms: self.readback_ms, count: 1 }]
-    }
-
-    fn hover_points(&self) -> Vec<super::HoverPoint> {
-        let ins = &self.inspection;
-        let clusters = |layer: &'static str, points: &[GpuPoint]| -> Vec<super::HoverPoint> {
-            let live = points.iter().enumerate().filter(|(_, c)| c.exists());
-            live.map(|(index, c)| super::HoverPoint { layer, position: c.position(), index }).collect()
-        };
-        let mut points = clusters("vpl cluster representatives", &ins.vpl_clusters);
-        points.extend(clusters("shading-point centroids", &ins.sp_centroids));
-        // The VPLs of the "vpls by cluster" layer (every n-th past 4,096, as it draws them), then the shared layers'.
-        let vpls = &self.vpls.vpls;
-        let stride = vpls.len().div_ceil(4096).max(1);
-        let layer = if stride > 1 { "vpls by cluster (every n-th)" } else { "vpls by cluster" };
-        let assigned =
-            vpls.iter().zip(&ins.vpl_assignment).enumerate().step_by(stride).filter(|(_, (_, &k))| k != u32::MAX);
-        points.extend(assigned.map(|(index, (v, _))| super::HoverPoint { layer, position: v.position, index }));
-        points.extend(crate::renderer::vpl_gather::vpl_hover_points(&self.vpls));
-        points
-    }
-
-    fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {
-        let ins = &self.inspection;
-        let cluster = |what: &str, points: &[GpuPoint]| -> Vec<String> {
-            let Some(c) = points.get(index).filter(|c| c.exists()) else { return Vec::new() };
-            let live = points.iter().filter(|c| c.exists()).count();
-            let n = c.normal();
-            vec![
-                format!("{what} {index} ({live} with members)"),
-                format!("{} members", c.members()),
-                format!("normal ({:.2}, {:.2}, {:.2})", n.x, n.y, n.z),
-            ]
-        };
-        match layer {
-            "vpl cluster representatives" => cluster("VPL cluster", &ins.vpl_clusters),
-            "shading-point centroids" => cluster("shading-point cluster", &ins.sp_centroids),
-            // A pixel's cluster in the per-pixel map: the cluster's representative.
-            "shading-point clusters" => cluster("shading-point cluster", &ins.sp_clusters),
-            l if l.starts_with("vpls by cluster") || crate::renderer::vpl_gather::is_vpl_layer(&self.vpls, l) => {
-                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
-                if let Some(k) = ins.vpl_assignment.get(index).filter(|k| **k != u32::MAX) {
-                    lines.push(format!("in VPL cluster {k}"));
-                }
-                lines
-            }
-            _ => Vec::new(),
-        }
-    }
-
-    fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let ins = &self.inspection;
-        let half = self.scene_size * 0.004;
-        let vpls = &self.vpls.vpls;
-        let stride = vpls.len().div_ceil(4096).max(1);
-        let mut layers = Vec::new();
-        if !ins.vpl_assignment.is_empty() {
-            layers.push(OverlayLayer {
-                name: if stride > 1 { "vpls by cluster (every n-th)" } else { "vpls by cluster" },
-                visible_by_default: true,
-                primitives: vpls
-                    .iter()
-                    .zip(&ins.vpl_assignment)
-                    .step_by(stride)
-                    .filter(|(_, &k)| k != u32::MAX)
-                    .map(|(v, &k)| {
-                        let (t, b) = v.normal.any_orthonormal_pair();
-                        Overlay::Rect {
-                            center: v.position,
-                            half_u: t * half,
-                            half_v: b * half,
-                            color: index_color(k as usize),
-                        }
-                    })
-                    .collect(),
-            });
-        }
-        if !ins.vpl_clusters.is_empty() {
-            layers.push(OverlayLayer {
-                name: "vpl cluster representatives",
-                visible_by_default: true,
-                primitives: ins
-                    .vpl_clusters
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| c.exists())
-                    .map(|(k, c)| Overlay::Point { position: c.position(), color: index_color(k), radius_px: 5.0 })
-                    .collect(),
-            });
-        }
-        let (w, h) = ins.size;
-        if let Some(ids) = &ins.hard_map {
-            layers.push(OverlayLayer {
-                name: "shading-point clusters",
-                visible_by_default: false,
-                primitives: vec![Overlay::IdMap { width: w, height: h, ids: ids.clone(), alpha: 0.5 }],
-            });
-        }
-        if let Some(rgba) = &ins.blend_map {
-            layers.push(OverlayLayer {
-                name: "shading-point clusters (blended as the visibility mode weighs them)",
-                visible_by_default: false,
-                primitives: vec![Overlay::ColorMap { width: w, height: h, rgba: rgba.clone() }],
-            });
-        }
-        if !ins.sp_centroids.is_empty() {
-            layers.push(OverlayLayer {
-                name: "shading-point centroids",
-                visible_by_default: false,
-                primitives: ins
-                    .sp_centroids
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| c.exists())
-                    .map(|(k, c)| Overlay::Point { position: c.position(), color: index_color(k), radius_px: 3.0 })
-                    .collect(),
-            });
-        }
-        layers.push(OverlayLayer {
-            name: "probe: clusters and visibility rays (green visible, red blocked)",
-            visible_by_default: true,
-            primitives: ins.probe.clone(),
-        });
-        layers.extend(vpl_overlays(&self.vpls, self.scene_size, 0).into_iter().map(|mut l| {
-            l.visible_by_default = false;
-            l
-        }));
-        layers
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn k_sp_share_and_modes() {
-        let p = FuzzyParams::default();
-        assert_eq!(p.sp_clusters(100_000), 1000);
-        assert_eq!(FuzzyParams { k_sp: 77, ..p.clone() }.sp_clusters(100_000), 77);
-        assert_eq!(FuzzyParams { k_sp_percent: 0.001, ..p.clone() }.sp_clusters(10), 1);
-        assert_eq!(p.shade_mode(), ShadeMode::Weighted);
-        assert_eq!(p.cluster_mode(), ClusterMode::Both);
     }
 }

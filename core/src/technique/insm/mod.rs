@@ -50,6 +50,8 @@
 //! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
 //! `k+1..` are the light batches (the first reads the tile list back).
 
+mod overlays;
+mod passes;
 pub mod triangulate;
 pub mod viewpoints;
 
@@ -352,164 +354,6 @@ impl Insm {
         }
         Ok((samples, triangles))
     }
-
-    fn ensure_mesh(&mut self, gpu: &GpuContext, k: u32, resolution: u32) {
-        if self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == resolution) {
-            return;
-        }
-        let device = &gpu.device;
-        let samples = k as u64 * resolution as u64 * resolution as u64;
-        let tps = triangulate::tiles_per_side(resolution) as u64;
-        let tiles = k as u64 * tps * tps;
-        let vertex_bytes = samples * MESH_VERTEX_BYTES;
-        let buffer = |label, size: u64, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(16),
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        let vertices = buffer(
-            "insm vertices",
-            vertex_bytes,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
-        );
-        let indices = buffer(
-            "insm indices",
-            tiles * MAX_TRIANGLES_PER_TILE as u64 * 12,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
-        );
-        let tile_bytes = tiles * std::mem::size_of::<GpuTile>() as u64;
-        let tiles_buffer = buffer("insm tiles", tile_bytes, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-        let readback = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
-        let tiles_readback = buffer("insm tiles readback", tile_bytes, readback);
-        let vertices_readback =
-            (vertex_bytes <= OVERLAY_READBACK_LIMIT).then(|| buffer("insm vertices readback", vertex_bytes, readback));
-        // `prepare` ensured the depth atlas first, and rebuilds this bind group when the atlas changes.
-        self.mesh = Some(MeshBuffers {
-            k,
-            resolution,
-            bind_group: self.bind_group_for(gpu, &vertices, &indices, &tiles_buffer),
-            vertices,
-            indices,
-            tiles: tiles_buffer,
-            tiles_readback,
-            vertices_readback,
-        });
-    }
-
-    fn bind_group_for(
-        &self,
-        gpu: &GpuContext,
-        vertices: &wgpu::Buffer,
-        indices: &wgpu::Buffer,
-        tiles: &wgpu::Buffer,
-    ) -> wgpu::BindGroup {
-        let atlas = self.images.atlas().expect("the depth atlas is ensured before the mesh");
-        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("insm triangulate"),
-            layout: &self.triangulate_layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: self.views_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
-                wgpu::BindGroupEntry { binding: 3, resource: vertices.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: indices.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 5, resource: tiles.as_entire_binding() },
-            ],
-        })
-    }
-
-    /// Steps `0..k`: Algorithm 1 line 2 for viewpoint `j`, one map per step so that a slow scene never holds the
-    /// app for all `k` at once. The first step clears the atlas, the others draw into their own tile.
-    fn encode_intermediate_map(&mut self, ctx: &FrameContext, j: usize, encoder: &mut wgpu::CommandEncoder) {
-        let stats = self.images.render_views(
-            ctx.gpu,
-            ctx.scene.cube_geometry(),
-            ctx.timer,
-            encoder,
-            "intermediate shadow maps",
-            &self.view_matrices[j..j + 1],
-            j,
-            j == 0,
-        );
-        self.counts.add_cube_stats(&stats);
-    }
-
-    /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
-    fn encode_triangulation(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
-        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
-        let tps = triangulate::tiles_per_side(mesh.resolution);
-        let (pipeline, group, k) = (&self.triangulate_pipeline, &mesh.bind_group, self.views.len() as u32);
-        let classify = &self.classify_pipeline;
-        ctx.timer.compute_pass(encoder, "triangulation", |pass| {
-            // Without `adaptive`, `classify` only clears the flags.
-            pass.set_pipeline(classify);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(tps, tps, k);
-            pass.set_pipeline(pipeline);
-            pass.dispatch_workgroups(tps, tps, k);
-        });
-        let tile_bytes = (k * tps * tps) as u64 * std::mem::size_of::<GpuTile>() as u64;
-        encoder.copy_buffer_to_buffer(&mesh.tiles, 0, &mesh.tiles_readback, 0, tile_bytes);
-        self.tiles_ready = false;
-    }
-
-    /// Before the first light batch: read the tiles back and make the tile list the lights cull against (the
-    /// samples stay on the GPU until an overlay asks for them).
-    fn read_tiles(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
-        let start = std::time::Instant::now();
-        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
-        let k = self.views.len() as u64;
-        let tps = triangulate::tiles_per_side(mesh.resolution) as u64;
-        let tile_bytes = k * tps * tps * std::mem::size_of::<GpuTile>() as u64;
-        let tiles: Vec<GpuTile> = bytemuck::cast_slice(&map_read(gpu, &mesh.tiles_readback, tile_bytes)?).to_vec();
-        self.tiles.clear();
-        self.mesh_triangles = 0;
-        for (i, t) in tiles.iter().enumerate() {
-            let count = t.count.min(MAX_TRIANGLES_PER_TILE);
-            if count == 0 {
-                continue;
-            }
-            self.mesh_triangles += count as u64;
-            let min = Vec3::from_slice(&t.bounds_min[..3]);
-            let max = Vec3::from_slice(&t.bounds_max[..3]);
-            // Bounds that are not finite (never, unless the depth atlas holds garbage) make the tile always drawn.
-            let bounds = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
-                Aabb { min, max }
-            } else {
-                Aabb { min: Vec3::splat(-f32::MAX), max: Vec3::splat(f32::MAX) }
-            };
-            self.tiles.push(Chunk {
-                first_index: i as u32 * MAX_TRIANGLES_PER_TILE * 3,
-                index_count: count * 3,
-                material: 0,
-                bounds,
-            });
-        }
-        self.snapshot = MeshSnapshot {
-            resolution: mesh.resolution,
-            settings: self.mesh_settings(),
-            views: self.map_views(),
-            source: mesh.vertices_readback.as_ref().map(|rb| SampleSource {
-                gpu: gpu.clone(),
-                vertices: mesh.vertices.clone(),
-                readback: rb.clone(),
-                bytes: k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES,
-            }),
-            samples: Default::default(),
-            layers: Default::default(),
-        };
-        self.tiles_ready = true;
-        self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
-        self.cpu_times.push(PassTime {
-            name: "mesh readback".into(),
-            ms: start.elapsed().as_secs_f64() * 1e3,
-            count: 1,
-        });
-        Ok(())
-    }
 }
 
 /// The scene's bounds from its chunks.
@@ -620,6 +464,18 @@ impl Technique for Insm {
             }
         }
         Ok(())
+    }
+
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        self.explain_steps()
+    }
+
+    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
+        self.legend_of(layer)
+    }
+
+    fn overlays_shown(&self, lights: &[PointLight], shown: &dyn Fn(&str, bool) -> bool) -> Vec<OverlayLayer> {
+        self.overlay_layers(lights, shown)
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
@@ -760,81 +616,6 @@ impl Technique for Insm {
         }
     }
 
-    fn explain(&self) -> Vec<super::ExplainStep> {
-        use super::ExplainStep;
-        vec![
-            ExplainStep {
-                title: "1. Viewpoints",
-                text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom).",
-                layers: &["INSM viewpoints"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "2. Intermediate depth images",
-                text: "One depth image of the scene per viewpoint (insm_res²); each sample is a point on a surface. \
-                       The Shadow maps panel shows the images.",
-                layers: &["INSM viewpoints", "INSM samples"],
-                shows_shadow_maps: true,
-                maps: 1,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "3. Their meshes",
-                text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge kept \
-                       only where the second difference of depth is below ε. Red: dropped edges. Beyond the paper, \
-                       planar tiles are merged (adaptive) and a map leaves out what another map reconstructs more \
-                       finely (drop_covered).",
-                layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "4. Cube maps from the meshes",
-                text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
-                       light and face in tiles (the Shadow maps panel shows the last batch's).",
-                layers: &["lights"],
-                shows_shadow_maps: true,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "5. Final image",
-                text: "Shaded as the reference; the only difference is the geometry in the cube maps (light leaks \
-                       where thin geometry eroded).",
-                layers: &[],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-        ]
-    }
-
-    fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        use super::{Glyph, LegendEntry};
-        let palette = super::index_color(0);
-        let mut legend = match layer.name {
-            "INSM viewpoints" => vec![
-                LegendEntry::new(Glyph::Dot, [1.0, 0.85, 0.2, 1.0], "a viewpoint of an intermediate depth image"),
-                LegendEntry::new(Glyph::Frustum, palette, "its frustum, one colour per viewpoint"),
-            ],
-            "INSM samples" => {
-                vec![LegendEntry::new(Glyph::Palette, palette, "a depth sample, in its viewpoint's colour")]
-            }
-            "INSM mesh (wireframe)" => vec![LegendEntry::new(
-                Glyph::Palette,
-                palette,
-                "kept edges of the mesh triangulated from the samples (Algorithm 2)",
-            )],
-            "INSM dropped edges" => vec![LegendEntry::new(
-                Glyph::Line,
-                [1.0, 0.2, 0.2, 1.0],
-                "edges dropped by the ε test: depth discontinuities",
-            )],
-            _ => super::light_layer_legend(layer).unwrap_or_default(),
-        };
-        legend.extend(layer.summary());
-        legend
-    }
-
     fn uses_light_tiles(&self) -> bool {
         true
     }
@@ -850,133 +631,5 @@ impl Technique for Insm {
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         self.overlays_shown(lights, &|_, _| true)
-    }
-
-    fn overlays_shown(&self, lights: &[PointLight], shown: &dyn Fn(&str, bool) -> bool) -> Vec<OverlayLayer> {
-        let mut layers = super::light_overlays(lights);
-        let frustum_color = [1.0, 0.85, 0.2, 1.0];
-        layers.push(OverlayLayer {
-            name: "INSM viewpoints",
-            visible_by_default: true,
-            primitives: self
-                .views
-                .iter()
-                .enumerate()
-                .flat_map(|(i, v)| {
-                    let color = super::index_color(i);
-                    [
-                        Overlay::Point { position: v.position, color: frustum_color, radius_px: 5.0 },
-                        Overlay::Line { from: v.position, to: v.target, color: [color[0], color[1], color[2], 0.6] },
-                    ]
-                })
-                .chain(self.views.iter().enumerate().map(|(i, v)| {
-                    // Frusta drawn to an eighth of the scene's size: their far planes enclose the whole scene.
-                    let (near, _) = v.depth_range(&self.bounds);
-                    let depth = (self.bounds.size().length() * 0.125).max(near * 2.0);
-                    Overlay::Frustum {
-                        clip_from_world: v.clip_from_world_range(near, depth),
-                        color: super::index_color(i),
-                    }
-                }))
-                .collect(),
-        });
-        if MESH_LAYERS.iter().any(|name| shown(name, false)) {
-            layers.extend(self.snapshot.layers.get_or_init(|| self.snapshot.build_layers()).iter().cloned());
-        } else if self.snapshot.source.is_some() {
-            // Named for the layer list, not built: nothing is read back.
-            layers.extend(MESH_LAYERS.iter().map(|&name| OverlayLayer {
-                name,
-                visible_by_default: false,
-                primitives: Vec::new(),
-            }));
-        }
-        for layer in &mut layers {
-            if !shown(layer.name, layer.visible_by_default) {
-                layer.primitives.clear();
-            }
-        }
-        layers
-    }
-}
-
-impl MeshSnapshot {
-    /// Overlay layers of the reconstructed meshes: samples, wireframe and dropped edges, each capped.
-    /// The samples, read back the first time they are asked for (empty when they cannot be).
-    fn samples(&self) -> &[Vec4] {
-        self.samples.get_or_init(|| {
-            let Some(s) = &self.source else { return Arc::default() };
-            let read = || -> Result<Vec<Vec4>, GpuError> {
-                s.gpu.check_lost()?;
-                let mut encoder = s.gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_buffer_to_buffer(&s.vertices, 0, &s.readback, 0, s.bytes);
-                s.gpu.queue.submit([encoder.finish()]);
-                Ok(bytemuck::cast_slice(&map_read(&s.gpu, &s.readback, s.bytes)?).to_vec())
-            };
-            match read() {
-                Ok(samples) => Arc::new(samples),
-                Err(e) => {
-                    log::warn!("INSM overlays: the samples could not be read back: {e}");
-                    Arc::default()
-                }
-            }
-        })
-    }
-
-    fn build_layers(&self) -> Vec<OverlayLayer> {
-        let snap = self;
-        let mut layers = Vec::new();
-        let samples = snap.samples();
-        if samples.is_empty() || snap.resolution == 0 {
-            return layers;
-        }
-        let r = snap.resolution as usize;
-        let images: Vec<SampledImage> =
-            samples.chunks(r * r).map(|s| SampledImage { resolution: snap.resolution, samples: s }).collect();
-
-        // Point cloud of the valid samples, every `stride`-th.
-        let valid: usize = images.iter().map(|i| i.valid_samples()).sum();
-        let stride = valid.div_ceil(MAX_OVERLAY_POINTS).max(1);
-        let points = samples
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.w > 0.0)
-            .step_by(stride)
-            .map(|(i, s)| Overlay::Point {
-                position: s.truncate(),
-                color: super::index_color(i / (r * r)),
-                radius_px: 1.5,
-            })
-            .collect();
-        layers.push(OverlayLayer { name: MESH_LAYERS[0], visible_by_default: false, primitives: points });
-
-        // Wireframe of the reconstructed triangles (the CPU twin's mesh): every `stride`-th when large.
-        let mut wire = Vec::new();
-        let meshes = triangulate::meshes(&images, &snap.views, &snap.settings);
-        let total: usize = meshes.iter().map(Vec::len).sum();
-        let stride = total.div_ceil(MAX_WIREFRAME_TRIANGLES).max(1);
-        for (j, (img, mesh)) in images.iter().zip(&meshes).enumerate() {
-            let [cr, cg, cb, _] = super::index_color(j);
-            let color = [cr, cg, cb, 0.8];
-            for t in mesh.iter().step_by(stride) {
-                let p = t.map(|i| img.samples[i as usize].truncate());
-                wire.push(Overlay::Line { from: p[0], to: p[1], color });
-                wire.push(Overlay::Line { from: p[1], to: p[2], color });
-                wire.push(Overlay::Line { from: p[2], to: p[0], color });
-            }
-        }
-        layers.push(OverlayLayer { name: MESH_LAYERS[1], visible_by_default: false, primitives: wire });
-
-        // Dropped edges: the depth discontinuities, in red.
-        let mut dropped: Vec<Overlay> = Vec::new();
-        for img in &images {
-            for e in img.dropped_edges(snap.settings.epsilon) {
-                if dropped.len() >= MAX_DROPPED_EDGES {
-                    break;
-                }
-                dropped.push(Overlay::Line { from: e.from, to: e.to, color: [1.0, 0.1, 0.1, 1.0] });
-            }
-        }
-        layers.push(OverlayLayer { name: MESH_LAYERS[2], visible_by_default: false, primitives: dropped });
-        layers
     }
 }

@@ -25,6 +25,7 @@
 //! samples.
 
 pub mod clustering;
+pub mod grid;
 
 use glam::Vec3;
 

@@ -19,7 +19,6 @@
 
 use std::sync::Arc;
 
-
 use super::{
     check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
     TechniqueCounts,

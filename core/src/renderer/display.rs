@@ -1,0 +1,130 @@
+//! Showing a frame: tone mapping (with the metered or held exposure) and the overlays drawn over it.
+
+use super::*;
+
+impl Renderer {
+    pub(super) fn rebind_tonemap(&mut self) {
+        self.exposure.rebind(&self.gpu, &self.targets, &self.indirect_buffer);
+        self.tonemap_bind_group = Self::tonemap_bind_group(
+            &self.gpu.device,
+            &self.tonemap_layout,
+            &self.targets,
+            &self.indirect_buffer,
+            &self.exposure.result,
+        );
+    }
+
+    /// Tone-map with this auto-exposure scale (and its log-average luminance) from now on in
+    /// [`AutoExposure::Hold`]: what a view compared with another shows at the other's exposure (the app's
+    /// reference view, the panes of a figure), so equal radiance looks equal side by side.
+    pub fn set_held_exposure(&mut self, scale: f32, average: f32) -> Result<(), GpuError> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(GpuError::InvalidSettings(format!("auto-exposure scale {scale} must be > 0")));
+        }
+        self.gpu.check_lost()?;
+        self.exposure.hold(&self.gpu, scale, average);
+        Ok(())
+    }
+
+    /// The auto-exposure scale and the log-average luminance it was metered from, as of the last complete
+    /// frame (`None` while [`RenderSettings::auto_exposure`] is off). A small blocking readback.
+    pub fn auto_exposure(&self) -> Result<Option<(f32, f32)>, GpuError> {
+        if self.settings.auto_exposure == AutoExposure::Off {
+            return Ok(None);
+        }
+        let gpu = self.gpu.clone();
+        gpu.guarded(|| self.exposure.read(&self.gpu).map(Some))
+    }
+
+    /// Tone-map the HDR target into the output texture (timed as the frame's "tonemap" pass).
+    pub fn tonemap(&mut self) -> Result<(), GpuError> {
+        self.encode_tonemap(true)
+    }
+
+    /// Tone-map what has been accumulated so far, for progressive display; not counted in the frame's timings.
+    pub fn preview_tonemap(&mut self) -> Result<(), GpuError> {
+        self.encode_tonemap(false)
+    }
+
+    pub(super) fn encode_tonemap(&mut self, timed: bool) -> Result<(), GpuError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        // A complete frame is metered; a progressive preview keeps the last scale unless none was metered yet.
+        let meter = match self.settings.auto_exposure {
+            AutoExposure::Off => false,
+            AutoExposure::Meter => timed || !self.exposure.metered,
+            AutoExposure::Hold => !self.exposure.metered,
+        };
+        if meter {
+            self.exposure.encode(&mut encoder, &self.screen_bind_group, self.settings.width, self.settings.height);
+        }
+        let desc = wgpu::RenderPassDescriptor {
+            label: Some("tonemap"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.targets.output,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        };
+        let record = |pass: &mut wgpu::RenderPass<'_>| {
+            pass.set_pipeline(&self.tonemap_pipeline);
+            pass.set_bind_group(0, &self.screen_bind_group, &[]);
+            pass.set_bind_group(1, &self.tonemap_bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        };
+        if timed {
+            self.timer.render_pass(&mut encoder, "tonemap", desc, record);
+            self.timer.submit(&self.gpu, encoder, "tonemap")
+        } else {
+            record(&mut encoder.begin_render_pass(&desc));
+            self.gpu.queue.submit([encoder.finish()]);
+            Ok(())
+        }
+    }
+
+    /// Draw overlay primitives over the output (call after [`Renderer::tonemap`]). Depth-tested against the
+    /// G-buffer of the last frame, unless `x_ray`.
+    pub fn draw_overlays(
+        &mut self,
+        camera: &Camera,
+        primitives: &[crate::technique::Overlay],
+        x_ray: bool,
+    ) -> Result<(), GpuError> {
+        if primitives.is_empty() {
+            return Ok(());
+        }
+        // wgpu's buffer helpers panic on a lost device.
+        self.gpu.check_lost()?;
+        let overlay = self.overlay.get_or_insert_with(|| overlay::OverlayRenderer::new(&self.gpu));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let t = &self.targets;
+        overlay.draw(
+            &self.gpu,
+            &mut encoder,
+            &t.output,
+            &t.depth,
+            camera.clip_from_world(self.settings.width as f32 / self.settings.height as f32),
+            (t.width, t.height),
+            primitives,
+            x_ray,
+            self.overlay_style,
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// How many times [`Renderer::draw_overlays`] tessellated and uploaded primitives (it reuses the last upload
+    /// while they stay the same).
+    pub fn overlay_uploads(&self) -> u64 {
+        self.overlay.as_ref().map_or(0, |o| o.uploads)
+    }
+
+    /// Line width and the fading of occluded parts for [`Renderer::draw_overlays`].
+    pub fn set_overlay_style(&mut self, style: overlay::OverlayStyle) {
+        self.overlay_style = style;
+    }
+}

@@ -1,0 +1,227 @@
+//! What fuzzy clustering shows and teaches: its overlay layers (clusters of shading points and of VPLs, the
+//! probe's memberships), their legends and hover texts, and the Explain steps of the paper.
+
+use super::*;
+
+impl FuzzyClustering {
+    pub(super) fn explain_steps(&self) -> Vec<crate::technique::ExplainStep> {
+        use crate::technique::ExplainStep;
+        vec![
+            ExplainStep {
+                title: "1. VPLs",
+                text:
+                    "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
+                layers: &["vpls (flux)", "vpls (flux, every n-th)"],
+                shows_shadow_maps: false,
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "2. VPL clusters",
+                text: "K_vpl clusters by k-means over position and normal (equation 7: no two normals more than 30 \
+                       degrees apart); each becomes one light at its representative with its members' flux.",
+                layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
+                shows_shadow_maps: false,
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "3-4. Shading-point clusters",
+                text: "The pixels' positions and normals clustered the same way (every gamma-th pixel in the \
+                       iterations), then every pixel assigned to its F nearest clusters.",
+                layers: &["shading-point clusters", "shading-point centroids"],
+                shows_shadow_maps: false,
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "5. Visibility between representatives",
+                text: "One shadow ray from each shading-point cluster's representative to each light: K_sp x K_vpl \
+                       rays instead of one per pixel and VPL. Alt+click a pixel to see its clusters' rays (green \
+                       visible, red blocked).",
+                layers: &[
+                    "probe: clusters and visibility rays (green visible, red blocked)",
+                    "vpl cluster representatives",
+                ],
+                shows_shadow_maps: false,
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "6. Weighted visibility",
+                text: "Each pixel shades every light with its own BRDF and geometry term and the visibility of its F \
+                       clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
+                layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
+                shows_shadow_maps: false,
+                ..Default::default()
+            },
+        ]
+    }
+
+    pub(super) fn legend_of(&self, layer: &OverlayLayer) -> Vec<crate::technique::LegendEntry> {
+        use crate::technique::{Glyph, LegendEntry};
+        let palette = index_color(0);
+        let mut legend = match layer.name {
+            "vpls by cluster" | "vpls by cluster (every n-th)" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a VPL, in its cluster's colour")]
+            }
+            "vpl cluster representatives" => vec![LegendEntry::new(
+                Glyph::Palette,
+                palette,
+                "a VPL cluster's representative: the light it becomes (members' flux, mean normal)",
+            )],
+            "shading-point clusters" => {
+                vec![LegendEntry::new(
+                    Glyph::Pixels,
+                    palette,
+                    "each pixel in its nearest shading-point cluster's colour",
+                )]
+            }
+            "shading-point clusters (blended as the visibility mode weighs them)" => vec![LegendEntry::new(
+                Glyph::Pixels,
+                palette,
+                "each pixel: its F clusters' colours blended by the visibility weights",
+            )],
+            "shading-point centroids" => {
+                vec![LegendEntry::new(Glyph::Palette, palette, "a shading-point cluster's centroid")]
+            }
+            "probe: clusters and visibility rays (green visible, red blocked)" => vec![
+                LegendEntry::new(Glyph::Dot, palette, "the probed pixel's F clusters' representatives"),
+                LegendEntry::new(Glyph::Line, [0.2, 1.0, 0.3, 0.8], "a shadow ray that reaches its light"),
+                LegendEntry::new(Glyph::Line, [1.0, 0.2, 0.2, 0.8], "a shadow ray that is blocked"),
+            ],
+            _ => crate::renderer::vpl_gather::vpl_layer_legend(layer)
+                .or_else(|| crate::technique::light_layer_legend(layer))
+                .unwrap_or_default(),
+        };
+        legend.extend(layer.summary());
+        legend
+    }
+
+    pub(super) fn hover_list(&self) -> Vec<crate::technique::HoverPoint> {
+        let ins = &self.inspection;
+        let clusters = |layer: &'static str, points: &[GpuPoint]| -> Vec<crate::technique::HoverPoint> {
+            let live = points.iter().enumerate().filter(|(_, c)| c.exists());
+            live.map(|(index, c)| crate::technique::HoverPoint { layer, position: c.position(), index }).collect()
+        };
+        let mut points = clusters("vpl cluster representatives", &ins.vpl_clusters);
+        points.extend(clusters("shading-point centroids", &ins.sp_centroids));
+        // The VPLs of the "vpls by cluster" layer (every n-th past 4,096, as it draws them), then the shared layers'.
+        let vpls = &self.vpls.vpls;
+        let stride = vpls.len().div_ceil(4096).max(1);
+        let layer = if stride > 1 { "vpls by cluster (every n-th)" } else { "vpls by cluster" };
+        let assigned =
+            vpls.iter().zip(&ins.vpl_assignment).enumerate().step_by(stride).filter(|(_, (_, &k))| k != u32::MAX);
+        points.extend(assigned.map(|(index, (v, _))| crate::technique::HoverPoint {
+            layer,
+            position: v.position,
+            index,
+        }));
+        points.extend(crate::renderer::vpl_gather::vpl_hover_points(&self.vpls));
+        points
+    }
+
+    pub(super) fn hover_text(&self, layer: &str, index: usize) -> Vec<String> {
+        let ins = &self.inspection;
+        let cluster = |what: &str, points: &[GpuPoint]| -> Vec<String> {
+            let Some(c) = points.get(index).filter(|c| c.exists()) else { return Vec::new() };
+            let live = points.iter().filter(|c| c.exists()).count();
+            let n = c.normal();
+            vec![
+                format!("{what} {index} ({live} with members)"),
+                format!("{} members", c.members()),
+                format!("normal ({:.2}, {:.2}, {:.2})", n.x, n.y, n.z),
+            ]
+        };
+        match layer {
+            "vpl cluster representatives" => cluster("VPL cluster", &ins.vpl_clusters),
+            "shading-point centroids" => cluster("shading-point cluster", &ins.sp_centroids),
+            // A pixel's cluster in the per-pixel map: the cluster's representative.
+            "shading-point clusters" => cluster("shading-point cluster", &ins.sp_clusters),
+            l if l.starts_with("vpls by cluster") || crate::renderer::vpl_gather::is_vpl_layer(&self.vpls, l) => {
+                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
+                if let Some(k) = ins.vpl_assignment.get(index).filter(|k| **k != u32::MAX) {
+                    lines.push(format!("in VPL cluster {k}"));
+                }
+                lines
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    pub(super) fn overlay_layers(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
+        let ins = &self.inspection;
+        let half = self.scene_size * 0.004;
+        let vpls = &self.vpls.vpls;
+        let stride = vpls.len().div_ceil(4096).max(1);
+        let mut layers = Vec::new();
+        if !ins.vpl_assignment.is_empty() {
+            layers.push(OverlayLayer {
+                name: if stride > 1 { "vpls by cluster (every n-th)" } else { "vpls by cluster" },
+                visible_by_default: true,
+                primitives: vpls
+                    .iter()
+                    .zip(&ins.vpl_assignment)
+                    .step_by(stride)
+                    .filter(|(_, &k)| k != u32::MAX)
+                    .map(|(v, &k)| {
+                        let (t, b) = v.normal.any_orthonormal_pair();
+                        Overlay::Rect {
+                            center: v.position,
+                            half_u: t * half,
+                            half_v: b * half,
+                            color: index_color(k as usize),
+                        }
+                    })
+                    .collect(),
+            });
+        }
+        if !ins.vpl_clusters.is_empty() {
+            layers.push(OverlayLayer {
+                name: "vpl cluster representatives",
+                visible_by_default: true,
+                primitives: ins
+                    .vpl_clusters
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| c.exists())
+                    .map(|(k, c)| Overlay::Point { position: c.position(), color: index_color(k), radius_px: 5.0 })
+                    .collect(),
+            });
+        }
+        let (w, h) = ins.size;
+        if let Some(ids) = &ins.hard_map {
+            layers.push(OverlayLayer {
+                name: "shading-point clusters",
+                visible_by_default: false,
+                primitives: vec![Overlay::IdMap { width: w, height: h, ids: ids.clone(), alpha: 0.5 }],
+            });
+        }
+        if let Some(rgba) = &ins.blend_map {
+            layers.push(OverlayLayer {
+                name: "shading-point clusters (blended as the visibility mode weighs them)",
+                visible_by_default: false,
+                primitives: vec![Overlay::ColorMap { width: w, height: h, rgba: rgba.clone() }],
+            });
+        }
+        if !ins.sp_centroids.is_empty() {
+            layers.push(OverlayLayer {
+                name: "shading-point centroids",
+                visible_by_default: false,
+                primitives: ins
+                    .sp_centroids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| c.exists())
+                    .map(|(k, c)| Overlay::Point { position: c.position(), color: index_color(k), radius_px: 3.0 })
+                    .collect(),
+            });
+        }
+        layers.push(OverlayLayer {
+            name: "probe: clusters and visibility rays (green visible, red blocked)",
+            visible_by_default: true,
+            primitives: ins.probe.clone(),
+        });
+        layers.extend(vpl_overlays(&self.vpls, self.scene_size, 0).into_iter().map(|mut l| {
+            l.visible_by_default = false;
+            l
+        }));
+        layers
+    }
+}

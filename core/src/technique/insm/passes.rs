@@ -1,0 +1,164 @@
+//! INSM's GPU passes, one function each: the intermediate maps (rendered as the reference renders a view),
+//! Algorithm 2's triangulation on the GPU, and reading the tiles back; and the mesh buffers they share.
+
+use super::*;
+
+impl Insm {
+    pub(super) fn ensure_mesh(&mut self, gpu: &GpuContext, k: u32, resolution: u32) {
+        if self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == resolution) {
+            return;
+        }
+        let device = &gpu.device;
+        let samples = k as u64 * resolution as u64 * resolution as u64;
+        let tps = triangulate::tiles_per_side(resolution) as u64;
+        let tiles = k as u64 * tps * tps;
+        let vertex_bytes = samples * MESH_VERTEX_BYTES;
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let vertices = buffer(
+            "insm vertices",
+            vertex_bytes,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
+        );
+        let indices = buffer(
+            "insm indices",
+            tiles * MAX_TRIANGLES_PER_TILE as u64 * 12,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
+        );
+        let tile_bytes = tiles * std::mem::size_of::<GpuTile>() as u64;
+        let tiles_buffer = buffer("insm tiles", tile_bytes, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let readback = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
+        let tiles_readback = buffer("insm tiles readback", tile_bytes, readback);
+        let vertices_readback =
+            (vertex_bytes <= OVERLAY_READBACK_LIMIT).then(|| buffer("insm vertices readback", vertex_bytes, readback));
+        // `prepare` ensured the depth atlas first, and rebuilds this bind group when the atlas changes.
+        self.mesh = Some(MeshBuffers {
+            k,
+            resolution,
+            bind_group: self.bind_group_for(gpu, &vertices, &indices, &tiles_buffer),
+            vertices,
+            indices,
+            tiles: tiles_buffer,
+            tiles_readback,
+            vertices_readback,
+        });
+    }
+
+    pub(super) fn bind_group_for(
+        &self,
+        gpu: &GpuContext,
+        vertices: &wgpu::Buffer,
+        indices: &wgpu::Buffer,
+        tiles: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        let atlas = self.images.atlas().expect("the depth atlas is ensured before the mesh");
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("insm triangulate"),
+            layout: &self.triangulate_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: self.views_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&atlas.view) },
+                wgpu::BindGroupEntry { binding: 3, resource: vertices.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: indices.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: tiles.as_entire_binding() },
+            ],
+        })
+    }
+
+    /// Steps `0..k`: Algorithm 1 line 2 for viewpoint `j`, one map per step so that a slow scene never holds the
+    /// app for all `k` at once. The first step clears the atlas, the others draw into their own tile.
+    pub(super) fn encode_intermediate_map(&mut self, ctx: &FrameContext, j: usize, encoder: &mut wgpu::CommandEncoder) {
+        let stats = self.images.render_views(
+            ctx.gpu,
+            ctx.scene.cube_geometry(),
+            ctx.timer,
+            encoder,
+            "intermediate shadow maps",
+            &self.view_matrices[j..j + 1],
+            j,
+            j == 0,
+        );
+        self.counts.add_cube_stats(&stats);
+    }
+
+    /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
+    pub(super) fn encode_triangulation(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
+        let tps = triangulate::tiles_per_side(mesh.resolution);
+        let (pipeline, group, k) = (&self.triangulate_pipeline, &mesh.bind_group, self.views.len() as u32);
+        let classify = &self.classify_pipeline;
+        ctx.timer.compute_pass(encoder, "triangulation", |pass| {
+            // Without `adaptive`, `classify` only clears the flags.
+            pass.set_pipeline(classify);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(tps, tps, k);
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(tps, tps, k);
+        });
+        let tile_bytes = (k * tps * tps) as u64 * std::mem::size_of::<GpuTile>() as u64;
+        encoder.copy_buffer_to_buffer(&mesh.tiles, 0, &mesh.tiles_readback, 0, tile_bytes);
+        self.tiles_ready = false;
+    }
+
+    /// Before the first light batch: read the tiles back and make the tile list the lights cull against (the
+    /// samples stay on the GPU until an overlay asks for them).
+    pub(super) fn read_tiles(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
+        let start = std::time::Instant::now();
+        let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
+        let k = self.views.len() as u64;
+        let tps = triangulate::tiles_per_side(mesh.resolution) as u64;
+        let tile_bytes = k * tps * tps * std::mem::size_of::<GpuTile>() as u64;
+        let tiles: Vec<GpuTile> = bytemuck::cast_slice(&map_read(gpu, &mesh.tiles_readback, tile_bytes)?).to_vec();
+        self.tiles.clear();
+        self.mesh_triangles = 0;
+        for (i, t) in tiles.iter().enumerate() {
+            let count = t.count.min(MAX_TRIANGLES_PER_TILE);
+            if count == 0 {
+                continue;
+            }
+            self.mesh_triangles += count as u64;
+            let min = Vec3::from_slice(&t.bounds_min[..3]);
+            let max = Vec3::from_slice(&t.bounds_max[..3]);
+            // Bounds that are not finite (never, unless the depth atlas holds garbage) make the tile always drawn.
+            let bounds = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+                Aabb { min, max }
+            } else {
+                Aabb { min: Vec3::splat(-f32::MAX), max: Vec3::splat(f32::MAX) }
+            };
+            self.tiles.push(Chunk {
+                first_index: i as u32 * MAX_TRIANGLES_PER_TILE * 3,
+                index_count: count * 3,
+                material: 0,
+                bounds,
+            });
+        }
+        self.snapshot = MeshSnapshot {
+            resolution: mesh.resolution,
+            settings: self.mesh_settings(),
+            views: self.map_views(),
+            source: mesh.vertices_readback.as_ref().map(|rb| SampleSource {
+                gpu: gpu.clone(),
+                vertices: mesh.vertices.clone(),
+                readback: rb.clone(),
+                bytes: k * (mesh.resolution as u64).pow(2) * MESH_VERTEX_BYTES,
+            }),
+            samples: Default::default(),
+            layers: Default::default(),
+        };
+        self.tiles_ready = true;
+        self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
+        self.cpu_times.push(PassTime {
+            name: "mesh readback".into(),
+            ms: start.elapsed().as_secs_f64() * 1e3,
+            count: 1,
+        });
+        Ok(())
+    }
+}
