@@ -86,6 +86,7 @@ const RECOVERED_ENV: &str = "SHADOWLAB_RECOVERED";
 /// texture and buffer limits (cube-map atlases are large).
 pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.native_adapter_selector = Some(Arc::new(select_adapter));
     setup.device_descriptor = Arc::new(|adapter| {
         let base = if adapter.get_info().backend == wgpu::Backend::Gl {
             wgpu::Limits::downlevel_webgl2_defaults()
@@ -107,6 +108,35 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
         }
     });
     egui_wgpu::WgpuSetup::CreateNew(setup)
+}
+
+/// The adapter the app runs on, among those `WGPU_BACKEND` allows: the one `WGPU_ADAPTER_NAME` names when set,
+/// else a real GPU before a software one and any backend before GL. The renderer needs compute shaders, which
+/// the GL backend's WebGL2 limits lack; where Mesa offers both lavapipe (Vulkan) and llvmpipe (GL), wgpu's own
+/// choice can fall on GL.
+fn select_adapter(adapters: &[wgpu::Adapter], surface: Option<&wgpu::Surface<'_>>) -> Result<wgpu::Adapter, String> {
+    let usable: Vec<&wgpu::Adapter> =
+        adapters.iter().filter(|a| surface.is_none_or(|s| a.is_surface_supported(s))).collect();
+    if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
+        let wanted = wanted.to_lowercase();
+        return usable
+            .iter()
+            .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
+            .map(|a| (*a).clone())
+            .ok_or_else(|| format!("no adapter named like WGPU_ADAPTER_NAME={wanted}"));
+    }
+    let rank = |a: &&wgpu::Adapter| {
+        let info = a.get_info();
+        let kind = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        (info.backend == wgpu::Backend::Gl, kind)
+    };
+    usable.into_iter().min_by_key(rank).cloned().ok_or_else(|| "no graphics adapter found".to_string())
 }
 
 /// The window size when none is given: 1400x860, or 1024x640 on a software rasterizer (`software`), where
