@@ -3,6 +3,7 @@
 
 pub mod bind;
 pub mod buffer;
+pub mod kernels;
 pub mod pipeline;
 pub mod readback;
 

@@ -227,6 +227,11 @@ pub fn indirect_targets() -> impl Iterator<Item = &'static TechniqueEntry> {
     INDIRECT_REGISTRY.iter().filter(|e| e.role.is_target())
 }
 
+/// The direct technique the app previews with while a light or the camera moves (the one of role `Preview`).
+pub fn preview() -> &'static TechniqueEntry {
+    REGISTRY.iter().find(|e| e.role == Role::Preview).expect("the registry has a preview technique")
+}
+
 /// Create an indirect technique by key.
 pub fn create_indirect(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> Option<Box<dyn Technique>> {
     indirect_entry(key).map(|e| (e.create)(gpu, layouts))
@@ -273,6 +278,8 @@ mod tests {
             assert_eq!(list.iter().filter(|e| e.role == Role::Reference).count(), 1, "one reference per registry");
         }
         assert_eq!(entry(REFERENCE).map(|e| e.role), Some(Role::Reference));
+        assert_eq!(preview().role, Role::Preview);
+        assert!(targets().all(|e| e.role.is_target()) && targets().any(|e| e.key == REFERENCE));
         assert_eq!(indirect_entry(INDIRECT_REFERENCE).map(|e| e.role), Some(Role::Reference));
     }
 }

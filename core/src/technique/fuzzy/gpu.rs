@@ -10,6 +10,7 @@ use glam::Vec3;
 
 use super::kmeans::{grid_shape, KMeansParams, MAX_F};
 use crate::error::GpuError;
+use crate::gpu::kernels::Kernels;
 use crate::gpu::readback;
 use crate::gpu::GpuContext;
 use crate::timing::PassTimer;
@@ -82,9 +83,7 @@ pub struct RunShape {
 
 pub struct GpuKMeans {
     label: &'static str,
-    layout: wgpu::BindGroupLayout,
-    pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    uniform: wgpu::Buffer,
+    kernels: Kernels,
     /// `2 K` points: the clusters as lights / endpoints, then the working centroids.
     pub clusters: Option<wgpu::Buffer>,
     work: Option<wgpu::Buffer>,
@@ -134,64 +133,21 @@ const ENTRIES: &[&str] = &[
 
 impl GpuKMeans {
     pub fn new(gpu: &GpuContext, label: &'static str) -> GpuKMeans {
-        let device = &gpu.device;
-        let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None },
-            count: None,
-        };
-        let rw = wgpu::BufferBindingType::Storage { read_only: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("fuzzy kmeans"),
-            entries: &[
-                buffer(0, wgpu::BufferBindingType::Uniform),
-                buffer(1, wgpu::BufferBindingType::Storage { read_only: true }),
-                buffer(2, rw),
-                buffer(3, rw),
-                buffer(4, rw),
-            ],
-        });
-        let module = crate::gpu::pipeline::create_module(device, "fuzzy_kmeans", super::KMEANS.source);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("fuzzy kmeans"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipelines = ENTRIES
-            .iter()
-            .map(|&entry| {
-                let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                });
-                (entry, pipeline)
-            })
-            .collect();
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("fuzzy kmeans params"),
-            size: std::mem::size_of::<KmParamsUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        GpuKMeans {
-            label,
-            layout,
-            pipelines,
-            uniform,
-            clusters: None,
-            work: None,
-            assignment: None,
-            shape: RunShape::default(),
-        }
+        let uniform_bytes = std::mem::size_of::<KmParamsUniform>() as u64;
+        // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment.
+        let kernels = Kernels::new(
+            gpu,
+            "fuzzy kmeans",
+            super::KMEANS.source,
+            ENTRIES,
+            uniform_bytes,
+            &[true, false, false, false],
+        );
+        GpuKMeans { label, kernels, clusters: None, work: None, assignment: None, shape: RunShape::default() }
     }
 
     fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
-        &self.pipelines.iter().find(|(e, _)| *e == entry).expect("every entry point has a pipeline").1
+        self.kernels.pipeline(entry)
     }
 
     /// Encode Algorithm 1 (and 2 as its last line) over the `params.width x params.height` points of `points`.
@@ -258,18 +214,8 @@ impl GpuKMeans {
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
         };
-        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("fuzzy kmeans"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: points.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: clusters.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: work.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: assignment.as_entire_binding() },
-            ],
-        });
+        self.kernels.write_uniform(gpu, &uniform);
+        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment]);
         let over_k = groups(k);
         let over_cells = groups(cells as usize);
         let over_samples = groups(samples);

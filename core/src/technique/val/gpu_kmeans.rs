@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::kmeans::{Clustering, KMeansParams, Val};
 use crate::error::GpuError;
+use crate::gpu::kernels::Kernels;
 use crate::gpu::readback;
 use crate::gpu::GpuContext;
 use crate::timing::PassTimer;
@@ -42,14 +43,7 @@ const _: () = assert!(std::mem::size_of::<ValState>() == 48);
 const ACC: u64 = 12;
 
 pub struct GpuKMeans {
-    layout: wgpu::BindGroupLayout,
-    init: wgpu::ComputePipeline,
-    clear: wgpu::ComputePipeline,
-    assign: wgpu::ComputePipeline,
-    update: wgpu::ComputePipeline,
-    finalize: wgpu::ComputePipeline,
-    finish: wgpu::ComputePipeline,
-    uniform: wgpu::Buffer,
+    kernels: Kernels,
     vals: Option<wgpu::Buffer>,
     acc: Option<wgpu::Buffer>,
     /// `C`, one u32 per VPL (bound by the gather).
@@ -71,70 +65,18 @@ fn storage(gpu: &GpuContext, label: &str, size: u64, copy_src: bool) -> wgpu::Bu
 
 impl GpuKMeans {
     pub fn new(gpu: &GpuContext) -> GpuKMeans {
-        let device = &gpu.device;
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
-        let buffer = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("val kmeans"),
-            entries: &[
-                entry(
-                    0,
-                    wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                ),
-                entry(1, buffer(true)),
-                entry(2, buffer(false)),
-                entry(3, buffer(false)),
-                entry(4, buffer(false)),
-            ],
-        });
-        let module = crate::gpu::pipeline::create_module(device, "val_kmeans", super::KMEANS.source);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("val kmeans"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("val kmeans params"),
-            size: std::mem::size_of::<KmParamsUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        GpuKMeans {
-            init: pipeline("km_init"),
-            clear: pipeline("km_clear"),
-            assign: pipeline("km_assign"),
-            update: pipeline("km_update"),
-            finalize: pipeline("km_final"),
-            finish: pipeline("km_finish"),
-            layout,
-            uniform,
-            vals: None,
-            acc: None,
-            assignment: None,
-        }
+        let entries = ["km_init", "km_clear", "km_assign", "km_update", "km_final", "km_finish"];
+        let uniform_bytes = std::mem::size_of::<KmParamsUniform>() as u64;
+        // Binding 1: the VPLs (read); 2-4: the VALs, the fixed-point sums, the assignment.
+        let kernels = Kernels::new(
+            gpu,
+            "val kmeans",
+            super::KMEANS.source,
+            &entries,
+            uniform_bytes,
+            &[true, false, false, false],
+        );
+        GpuKMeans { kernels, vals: None, acc: None, assignment: None }
     }
 
     /// Cluster the `vpls` held in `vpl_buffer` (`GpuVpl`s) on the GPU and read the result back.
@@ -174,43 +116,33 @@ impl GpuKMeans {
             bounds_min: bounds_min.extend(0.0).to_array(),
             bounds_extent: bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
         };
-        gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
+        self.kernels.write_uniform(gpu, &uniform);
         let (vals, acc, assignment) = (
             self.vals.as_ref().expect("grown"),
             self.acc.as_ref().expect("grown"),
             self.assignment.as_ref().expect("grown"),
         );
-        let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("val kmeans"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: vpl_buffer.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: vals.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 3, resource: acc.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: assignment.as_entire_binding() },
-            ],
-        });
+        let group = self.kernels.bind_group(gpu, &[vpl_buffer, vals, acc, assignment]);
         let over_vals = (m as u32).div_ceil(64);
         let over_vpls = (n as u32).div_ceil(64);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         timer.compute_pass(&mut encoder, "val clustering", |pass| {
             pass.set_bind_group(0, &group, &[]);
-            pass.set_pipeline(&self.init);
+            pass.set_pipeline(self.kernels.pipeline("km_init"));
             pass.dispatch_workgroups(over_vals, 1, 1);
             for _ in 0..params.iterations {
-                pass.set_pipeline(&self.clear);
+                pass.set_pipeline(self.kernels.pipeline("km_clear"));
                 pass.dispatch_workgroups(over_vals, 1, 1);
-                pass.set_pipeline(&self.assign);
+                pass.set_pipeline(self.kernels.pipeline("km_assign"));
                 pass.dispatch_workgroups(over_vpls, 1, 1);
-                pass.set_pipeline(&self.update);
+                pass.set_pipeline(self.kernels.pipeline("km_update"));
                 pass.dispatch_workgroups(over_vals, 1, 1);
             }
-            pass.set_pipeline(&self.clear);
+            pass.set_pipeline(self.kernels.pipeline("km_clear"));
             pass.dispatch_workgroups(over_vals, 1, 1);
-            pass.set_pipeline(&self.finalize);
+            pass.set_pipeline(self.kernels.pipeline("km_final"));
             pass.dispatch_workgroups(over_vpls, 1, 1);
-            pass.set_pipeline(&self.finish);
+            pass.set_pipeline(self.kernels.pipeline("km_finish"));
             pass.dispatch_workgroups(over_vals, 1, 1);
         });
         gpu.queue.submit([encoder.finish()]);
