@@ -3,6 +3,10 @@
 #![allow(dead_code)]
 
 pub mod analytic;
+pub mod render;
+
+#[allow(unused_imports)] // not every test uses the render helpers
+pub use render::*;
 
 use std::path::PathBuf;
 
@@ -89,8 +93,8 @@ pub fn save_hdr(name: &str, w: u32, h: u32, pixels: &[[f32; 4]], scale: f32) -> 
     path
 }
 
-/// Write `<name>-actual.png`, `<name>-expected.png` and `<name>-difference.png` (red where wrong) and
-/// return the folder, for a failing image test to show its pictures.
+/// Write `<name>-actual.png`, `<name>-expected.png` and `<name>-difference.png` (red where wrong) to
+/// [`output_dir`] and return the difference image's path, for a failing image test to show its pictures.
 pub fn write_failure_images(
     name: &str,
     w: u32,
