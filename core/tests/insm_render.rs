@@ -12,25 +12,9 @@ use shadowlab_core::technique::insm::triangulate::{self, SampledImage};
 use shadowlab_core::technique::insm::viewpoints::Viewpoint;
 use shadowlab_core::technique::insm::Insm;
 use shadowlab_core::technique::{ParamValue, Technique};
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
 
 const W: u32 = 160;
 const H: u32 = 120;
-
-fn renderer(scene: &Scene) -> Renderer {
-    let settings = RenderSettings { width: W, height: H, tonemap: ToneMap::Linear, ..Default::default() };
-    Renderer::new(&gpu(), scene, settings).unwrap()
-}
-
-fn render(
-    renderer: &mut Renderer,
-    technique: &mut dyn Technique,
-    scene: &Scene,
-    lights: &[PointLight],
-) -> (Vec<[f32; 4]>, FrameReport) {
-    let report = renderer.render_frame(technique, &scene.camera, lights, &mut |_, _| {}).unwrap();
-    (renderer.read_hdr().unwrap(), report)
-}
 
 fn lights_above() -> Vec<PointLight> {
     (0..6)
@@ -50,7 +34,7 @@ fn share_over(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> f32 {
 #[test]
 fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
     let scene = plane_and_occluder();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.set_param("insm_res", &ParamValue::Int(64)).unwrap();
     insm.set_param("k", &ParamValue::Int(6)).unwrap();
@@ -61,7 +45,7 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
     for (adaptive, drop_covered) in [(false, false), (true, false), (true, true)] {
         insm.set_param("adaptive", &ParamValue::Bool(adaptive)).unwrap();
         insm.set_param("drop_covered", &ParamValue::Bool(drop_covered)).unwrap();
-        let (_, report) = render(&mut r, &mut insm, &scene, &lights);
+        let (_, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
         let (samples, gpu_triangles) = insm.read_meshes(r.gpu()).unwrap();
         assert_eq!(samples.len(), 6 * 64 * 64);
         assert!(!gpu_triangles.is_empty(), "the intermediate maps see the plane and the plate");
@@ -126,17 +110,17 @@ fn viewpoints_over_the_plate() -> Vec<Viewpoint> {
 fn insm_shadows_match_the_reference_and_improve_with_resolution() {
     let scene = plane_and_occluder();
     let lights = lights_above();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut reference = r.create_technique("reference").unwrap();
     reference.set_param("shadow_res", &ParamValue::Int(512)).unwrap();
-    let (expected, _) = render(&mut r, reference.as_mut(), &scene, &lights);
+    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.custom_viewpoints = viewpoints_over_the_plate();
     insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
     let mut shares = Vec::new();
     for res in [16, 128] {
         insm.set_param("insm_res", &ParamValue::Int(res)).unwrap();
-        let (actual, _) = render(&mut r, &mut insm, &scene, &lights);
+        let (actual, _) = frame(&mut r, &mut insm, &scene.camera, &lights);
         shares.push(share_over(&actual, &expected, 0.05));
         // The reconstruction erodes the plate by 1.5 samples (the edge next to a discontinuity fails the paper's
         // test), which moves shadow edges: about 1.4 % of pixels here.
@@ -156,7 +140,7 @@ fn insm_shadows_match_the_reference_and_improve_with_resolution() {
 
     // With epsilon 0 no edge is connected: no mesh, no shadows, the image brightens where the plate shadowed.
     insm.set_param("epsilon", &ParamValue::Float(0.0)).unwrap();
-    let (unshadowed, report) = render(&mut r, &mut insm, &scene, &lights);
+    let (unshadowed, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
     assert_eq!(report.counts.technique.insm_mesh_triangles, Some(0));
     let brighter = unshadowed.iter().zip(&expected).filter(|(p, q)| p[0] > q[0] * 1.05 + 1e-4).count();
     let share_brighter = brighter as f32 / (W * H) as f32;
@@ -170,13 +154,13 @@ fn insm_shadows_match_the_reference_and_improve_with_resolution() {
 fn the_papers_box_placement_stays_close_to_the_reference_on_cornell() {
     let scene = Scene::builtin("cornell").unwrap();
     let lights = scene.lights.clone();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut reference = r.create_technique("reference").unwrap();
     reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (expected, _) = render(&mut r, reference.as_mut(), &scene, &lights);
+    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = r.create_technique("insm").unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (actual, report) = render(&mut r, insm.as_mut(), &scene, &lights);
+    let (actual, report) = frame(&mut r, insm.as_mut(), &scene.camera, &lights);
     let share = share_over(&actual, &expected, 0.05);
     assert!(share < 0.15, "{:.2}% of pixels differ by more than 5%", share * 100.0);
     assert!(report.counts.technique.insm_mesh_triangles.unwrap() > 10_000);
@@ -185,7 +169,7 @@ fn the_papers_box_placement_stays_close_to_the_reference_on_cornell() {
 #[test]
 fn many_lights_run_in_bounded_batches_and_bad_settings_are_errors() {
     let scene = plane_and_occluder();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.set_param("shadow_res", &ParamValue::Int(16)).unwrap();
     insm.set_param("atlas_mib", &ParamValue::Int(1)).unwrap();
@@ -196,14 +180,14 @@ fn many_lights_run_in_bounded_batches_and_bad_settings_are_errors() {
             white_light(Vec3::new(a.cos() * 3.0, 2.0 + (i % 7) as f32 * 0.1, a.sin() * 3.0), 0.01, 4.0)
         })
         .collect();
-    let (_, report) = render(&mut r, &mut insm, &scene, &lights);
+    let (_, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
     let c = &report.counts.technique;
     assert_eq!(c.shadow_maps, 1100);
     // 1 MiB holds 170 cube maps of 16² texels: 7 batches after the intermediate maps.
     assert!(c.batches >= 7, "{} batches", c.batches);
 
     // No lights: nothing to do, not even the intermediate maps.
-    let (_, report) = render(&mut r, &mut insm, &scene, &[]);
+    let (_, report) = frame(&mut r, &mut insm, &scene.camera, &[]);
     assert_eq!(report.counts.technique.batches, 0);
 
     // Out-of-range parameters are refused with the range in the message.
@@ -230,13 +214,13 @@ fn culling_changes_the_triangles_drawn_but_not_the_image() {
     // `cull = off` is the conventional shadow mapping the paper compares with: every triangle into every face.
     let scene = plane_and_occluder();
     let lights = lights_above();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     for key in ["reference", "insm"] {
         let mut t = r.create_technique(key).unwrap();
         t.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
-        let (culled, a) = render(&mut r, t.as_mut(), &scene, &lights);
+        let (culled, a) = frame(&mut r, t.as_mut(), &scene.camera, &lights);
         t.set_param("cull", &ParamValue::Bool(false)).unwrap();
-        let (all, b) = render(&mut r, t.as_mut(), &scene, &lights);
+        let (all, b) = frame(&mut r, t.as_mut(), &scene.camera, &lights);
         let (a, b) = (&a.counts.technique, &b.counts.technique);
         assert!(b.shadow_triangles_submitted > a.shadow_triangles_submitted, "{key}: {a:?} vs {b:?}");
         // Only INSM's intermediate maps still cull (against their view frusta).
@@ -253,12 +237,12 @@ fn mesh_overlays_are_built_only_when_shown() {
     // The app asks for every technique's layers every UI frame; INSM's mesh layers (samples read back from the
     // GPU) are built only for a layer that is shown, and otherwise only named for the layer list.
     let scene = plane_and_occluder();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(64)).unwrap();
     let lights = lights_above();
-    render(&mut r, &mut insm, &scene, &lights);
+    frame(&mut r, &mut insm, &scene.camera, &lights);
     let names = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
     let hidden = insm.overlays_shown(&lights, &|_, _| false);
     for name in names {
@@ -282,17 +266,17 @@ fn dropping_covered_triangles_shrinks_the_mesh_and_keeps_the_image() {
     // all of its 30k); the image stays as close to the reference as with every copy.
     let scene = Scene::builtin("cornell").unwrap();
     let lights = scene.lights.clone();
-    let mut r = renderer(&scene);
+    let mut r = renderer(&scene, linear_settings(W, H));
     let mut reference = r.create_technique("reference").unwrap();
     reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (expected, _) = render(&mut r, reference.as_mut(), &scene, &lights);
+    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = r.create_technique("insm").unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
     insm.set_param("placement", &ParamValue::Choice("inside".into())).unwrap();
     let mut results = Vec::new();
     for drop_covered in [false, true] {
         insm.set_param("drop_covered", &ParamValue::Bool(drop_covered)).unwrap();
-        let (actual, report) = render(&mut r, insm.as_mut(), &scene, &lights);
+        let (actual, report) = frame(&mut r, insm.as_mut(), &scene.camera, &lights);
         results.push((share_over(&actual, &expected, 0.05), report.counts.technique.insm_mesh_triangles.unwrap()));
     }
     let [(share_all, all), (share_dropped, dropped)] = results[..] else { unreachable!() };

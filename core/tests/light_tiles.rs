@@ -24,22 +24,16 @@ fn settings(light_tiles: bool, max_lights_per_step: usize) -> RenderSettings {
     }
 }
 
-fn render(renderer: &mut Renderer, scene: &Scene, lights: &[PointLight], technique: &str) -> Vec<[f32; 4]> {
-    let mut t = renderer.create_technique(technique).unwrap();
-    let params: &[(&str, ParamValue)] = match technique {
+/// The parameters each technique renders with here (small maps: the images are compared with each other).
+fn params(technique: &str) -> Params<'static> {
+    match technique {
         "lightcluster" => &[("d_init", ParamValue::Float(0.6)), ("shadow_res", ParamValue::Int(64))],
         "insm" => &[("insm_res", ParamValue::Int(32)), ("k", ParamValue::Int(2)), ("shadow_res", ParamValue::Int(64))],
         // Soft shadows: the per-light random rotation must follow the light's index, not its place in the list.
         "raytraced" => &[("soft", ParamValue::Bool(true)), ("samples", ParamValue::Int(4))],
+        "unshadowed" => &[],
         _ => &[("shadow_res", ParamValue::Int(64))],
-    };
-    for (k, v) in params {
-        if t.params().iter().any(|p| p.key == *k) {
-            t.set_param(k, v).unwrap();
-        }
     }
-    renderer.render_frame(t.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
-    renderer.read_hdr().unwrap()
 }
 
 fn max_abs_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
@@ -71,16 +65,16 @@ fn tiled_shading_gives_the_same_image_for_every_technique_and_batching() {
         };
         for &technique in techniques {
             renderer.set_settings(settings(false, 0)).unwrap();
-            let untiled = render(&mut renderer, &scene, &lights, technique);
+            let untiled = frame_of(&mut renderer, technique, params(technique), &scene.camera, &lights).0;
             // Batches of 7 lights (clusters): a pixel's tile list intersected with each batch's range.
             for max_per_step in [0, 7] {
                 renderer.set_settings(settings(true, max_per_step)).unwrap();
-                let tiled = render(&mut renderer, &scene, &lights, technique);
+                let tiled = frame_of(&mut renderer, technique, params(technique), &scene.camera, &lights).0;
                 let reference = if max_per_step == 0 {
                     untiled.clone()
                 } else {
                     renderer.set_settings(settings(false, max_per_step)).unwrap();
-                    render(&mut renderer, &scene, &lights, technique)
+                    frame_of(&mut renderer, technique, params(technique), &scene.camera, &lights).0
                 };
                 let diff = max_abs_difference(&tiled, &reference);
                 if diff > 1e-5 {
@@ -103,7 +97,7 @@ fn every_light_that_reaches_a_pixel_is_in_its_tile_list_in_order() {
     let scene = builtin::build("arcade").unwrap();
     let lights = layout::generate(&layout::parse("random:500:1.0:5").unwrap(), &scene).unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, settings(true, 0)).unwrap();
-    render(&mut renderer, &scene, &lights, "unshadowed");
+    frame_of(&mut renderer, "unshadowed", params("unshadowed"), &scene.camera, &lights);
     let tiles = renderer.read_light_tiles().unwrap();
     let positions = renderer.read_world_positions(&scene.camera).unwrap();
     let tiles_x = W.div_ceil(16) as usize;
@@ -148,11 +142,11 @@ fn tiles_whose_lists_overflow_loop_over_the_whole_batch_with_the_same_image() {
     // 300 lights in a 2 m box: most reach most tiles, far more than 16 per tile.
     let lights = layout::generate(&layout::parse("random:300:1.0:9").unwrap(), &scene).unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, settings(false, 0)).unwrap();
-    let untiled = render(&mut renderer, &scene, &lights, "unshadowed");
+    let untiled = frame_of(&mut renderer, "unshadowed", params("unshadowed"), &scene.camera, &lights).0;
     renderer.set_settings(settings(true, 0)).unwrap();
     // The smallest capacity: 16 lights per tile.
     renderer.set_light_tile_budget(0);
-    let tiled = render(&mut renderer, &scene, &lights, "unshadowed");
+    let tiled = frame_of(&mut renderer, "unshadowed", params("unshadowed"), &scene.camera, &lights).0;
     let tiles = renderer.read_light_tiles().unwrap();
     let overflowed = tiles.iter().filter(|t| t.is_none()).count();
     assert!(overflowed > 0 && overflowed < tiles.len(), "{overflowed} of {} tiles overflowed", tiles.len());
@@ -166,6 +160,6 @@ fn tiles_off_builds_no_lists() {
     let gpu = gpu();
     let scene = builtin::build("cornell").unwrap();
     let mut renderer = Renderer::new(&gpu, &scene, settings(false, 0)).unwrap();
-    render(&mut renderer, &scene, &scene.lights, "reference");
+    frame_of(&mut renderer, "reference", params("reference"), &scene.camera, &scene.lights);
     assert!(renderer.read_light_tiles().unwrap().is_empty());
 }

@@ -4,30 +4,14 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::scene::PointLight;
 use shadowlab_core::technique::ParamValue;
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
 
 const W: u32 = 160;
 const H: u32 = 120;
 
-fn render(
-    scene: &Scene,
-    lights: &[PointLight],
-    technique: &str,
-    params: &[(&str, ParamValue)],
-) -> (Vec<[f32; 4]>, FrameReport) {
-    let gpu = gpu();
-    let settings = RenderSettings { width: W, height: H, tonemap: ToneMap::Linear, ..Default::default() };
-    let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
-    let mut t = renderer.create_technique(technique).unwrap();
-    t.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    for (k, v) in params {
-        t.set_param(k, v).unwrap();
-    }
-    let report = renderer.render_frame(t.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
-    (renderer.read_hdr().unwrap(), report)
-}
+/// The cube-map resolution every image here is rendered with, before the test's own parameters.
+const MAPS: Params = &[("shadow_res", ParamValue::Int(256))];
 
 /// Largest per-channel relative difference and the share of pixels differing by more than `tol` (relative).
 fn compare(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> (f32, f32) {
@@ -61,18 +45,16 @@ fn lights_around_occluder() -> Vec<PointLight> {
 fn one_cluster_per_light_with_zero_radius_equals_the_reference() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
     for filter in ["pcf", "pcss"] {
-        let (lc, report) = render(
-            &scene,
-            &lights,
-            "lightcluster",
-            &[
+        let (lc, report) = Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+            .params(MAPS)
+            .params(&[
                 ("d_init", ParamValue::Float(0.0)),
                 ("fallback", ParamValue::Bool(false)),
                 ("filter", ParamValue::Choice(filter.into())),
-            ],
-        );
+            ])
+            .render();
         let c = &report.counts.technique;
         assert_eq!(c.clusters, Some(lights.len()), "{filter}");
         assert!(!c.fell_back_to_reference);
@@ -86,13 +68,11 @@ fn one_cluster_per_light_with_zero_radius_equals_the_reference() {
 fn a_tiny_radius_stays_within_a_tight_threshold_of_the_reference() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (reference, _) = render(&scene, &lights, "reference", &[]);
-    let (lc, report) = render(
-        &scene,
-        &lights,
-        "lightcluster",
-        &[("d_init", ParamValue::Float(0.001)), ("fallback", ParamValue::Bool(false))],
-    );
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
+    let (lc, report) = Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+        .params(MAPS)
+        .params(&[("d_init", ParamValue::Float(0.001)), ("fallback", ParamValue::Bool(false))])
+        .render();
     assert_eq!(report.counts.technique.clusters, Some(lights.len()));
     let (_, share) = compare(&lc, &reference, 0.01);
     assert!(share < 0.002, "{:.3}% of pixels differ by more than 1%", share * 100.0);
@@ -102,8 +82,11 @@ fn a_tiny_radius_stays_within_a_tight_threshold_of_the_reference() {
 fn the_worst_case_falls_back_to_the_reference_path() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (reference, _) = render(&scene, &lights, "reference", &[]);
-    let (lc, report) = render(&scene, &lights, "lightcluster", &[("d_init", ParamValue::Float(0.01))]);
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
+    let (lc, report) = Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+        .params(MAPS)
+        .params(&[("d_init", ParamValue::Float(0.01))])
+        .render();
     let c = &report.counts.technique;
     assert!(c.fell_back_to_reference, "clusters == visible lights must take the reference path");
     assert_eq!(c.clusters, Some(lights.len()));
@@ -115,14 +98,12 @@ fn the_worst_case_falls_back_to_the_reference_path() {
 fn clustering_reduces_shadow_maps_and_softens_shadows_with_a_bounded_error() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
     for filter in ["pcf", "pcss"] {
-        let (lc, report) = render(
-            &scene,
-            &lights,
-            "lightcluster",
-            &[("d_init", ParamValue::Float(0.5)), ("filter", ParamValue::Choice(filter.into()))],
-        );
+        let (lc, report) = Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+            .params(MAPS)
+            .params(&[("d_init", ParamValue::Float(0.5)), ("filter", ParamValue::Choice(filter.into()))])
+            .render();
         let c = &report.counts.technique;
         assert_eq!(c.clusters, Some(3), "{filter}: three groups of lights make three clusters");
         assert_eq!(c.shadow_maps, 3);
@@ -143,10 +124,13 @@ fn visibility_of_one_cluster_draws_its_visibility_alone_in_grey() {
     let lights = lights_around_occluder();
     let base = [("d_init", ParamValue::Float(0.5)), ("filter", ParamValue::Choice("pcf".into()))];
     let with = |k: i64| [base[0].clone(), base[1].clone(), ("visibility_of", ParamValue::Int(k))];
-    let (one, report) = render(&scene, &lights, "lightcluster", &with(0));
+    let (one, report) =
+        Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster").params(MAPS).params(&with(0)).render();
     assert_eq!(report.counts.technique.clusters, Some(3));
-    let (ambient, _) = render(&scene, &lights, "lightcluster", &with(1000));
-    let (all, _) = render(&scene, &lights, "lightcluster", &base);
+    let (ambient, _) =
+        Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster").params(MAPS).params(&with(1000)).render();
+    let (all, _) =
+        Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster").params(MAPS).params(&base).render();
     let mut lit = 0;
     let mut penumbra = 0;
     for (p, a) in one.iter().zip(&ambient) {
@@ -173,7 +157,7 @@ fn pcss_early_out_changes_only_penumbrae_and_pcf_not_at_all() {
             ("filter", ParamValue::Choice(filter.into())),
             ("early_out", ParamValue::Bool(early_out)),
         ];
-        render(&scene, &lights, "lightcluster", &params).0
+        Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster").params(MAPS).params(&params).render().0
     };
     // PCF keeps the paper's fixed samples whatever the switch.
     assert_eq!(image("pcf", true), image("pcf", false), "early_out must not change PCF");
@@ -182,7 +166,7 @@ fn pcss_early_out_changes_only_penumbrae_and_pcf_not_at_all() {
     let (on, off) = (image("pcss", true), image("pcss", false));
     let (_, share) = compare(&on, &off, 0.01);
     assert!(share < 0.02, "{:.2}% of pixels changed by more than 1% with the early out", share * 100.0);
-    let (reference, _) = render(&scene, &lights, "reference", &[]);
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
     let (_, share_on) = compare(&on, &reference, 0.05);
     let (_, share_off) = compare(&off, &reference, 0.05);
     assert!(share_on <= share_off * 1.1 + 1e-3, "early out moved away from the reference: {share_on} vs {share_off}");
@@ -191,12 +175,12 @@ fn pcss_early_out_changes_only_penumbrae_and_pcf_not_at_all() {
 #[test]
 fn zero_and_out_of_view_lights_give_no_clusters() {
     let scene = plane_and_occluder();
-    let (img, report) = render(&scene, &[], "lightcluster", &[]);
+    let (img, report) = Shot::direct(&scene, &[], linear_settings(W, H), "lightcluster").params(MAPS).render();
     assert_eq!(report.counts.technique.clusters, Some(0));
-    let (reference, _) = render(&scene, &[], "reference", &[]);
+    let (reference, _) = Shot::direct(&scene, &[], linear_settings(W, H), "reference").params(MAPS).render();
     assert_eq!(img, reference);
     let behind = [white_light(Vec3::new(0.0, 6.0, 40.0), 10.0, 2.0)];
-    let (_, report) = render(&scene, &behind, "lightcluster", &[]);
+    let (_, report) = Shot::direct(&scene, &behind, linear_settings(W, H), "lightcluster").params(MAPS).render();
     assert_eq!(report.counts.technique.lights_visible, 0);
     assert_eq!(report.counts.technique.shadow_maps, 0);
 }

@@ -12,7 +12,7 @@ use shadowlab_core::accel::gpu_trace::gpu_occluded;
 use shadowlab_core::scene::chunks::ChunkedGeometry;
 use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
 use shadowlab_core::technique::{ParamError, ParamValue};
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::{RenderSettings, Renderer, ToneMap};
 
 /// The ray offset the image tests set ("bias": world units per metre of camera distance).
 const BIAS: f32 = 0.001;
@@ -60,28 +60,8 @@ fn settings() -> RenderSettings {
     }
 }
 
-fn render(
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[PointLight],
-    technique: &str,
-    params: &[(&str, ParamValue)],
-) -> (Vec<[f32; 4]>, FrameReport) {
-    let gpu = gpu();
-    let mut renderer = Renderer::new(&gpu, scene, settings()).unwrap();
-    let mut t = renderer.create_technique(technique).unwrap();
-    for (k, v) in params {
-        t.set_param(k, v).unwrap();
-    }
-    let report = renderer.render_frame(t.as_mut(), camera, lights, &mut |_, _| {}).unwrap();
-    (renderer.read_hdr().unwrap(), report)
-}
-
-fn raytraced(scene: &Scene, lights: &[PointLight], params: &[(&str, ParamValue)]) -> (Vec<[f32; 4]>, FrameReport) {
-    let mut all = vec![("bias", ParamValue::Float(BIAS))];
-    all.extend(params.iter().cloned());
-    render(scene, &scene.camera, lights, "raytraced", &all)
-}
+/// What the image tests set on the ray tracer before their own parameters.
+const TRACED: Params = &[("bias", ParamValue::Float(BIAS))];
 
 /// Share of pixels whose largest per-channel relative difference exceeds `tol`, and the largest difference.
 fn compare(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> (f32, f32) {
@@ -237,8 +217,10 @@ fn lights_around_occluder() -> Vec<PointLight> {
 fn hard_shadows_match_the_reference_at_1024() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (reference, _) = render(&scene, &scene.camera, &lights, "reference", &[("shadow_res", ParamValue::Int(1024))]);
-    let (traced, report) = raytraced(&scene, &lights, &[]);
+    let (reference, _) = Shot::direct(&scene, &lights, settings(), "reference")
+        .params(&[("shadow_res", ParamValue::Int(1024))])
+        .render();
+    let (traced, report) = Shot::direct(&scene, &lights, settings(), "raytraced").params(TRACED).render();
     let c = &report.counts.technique;
     assert_eq!((c.lights_visible, c.shadow_maps, c.batches), (3, 0, 1));
     let (over, worst) = compare(&traced, &reference, 0.02);
@@ -261,7 +243,7 @@ fn expected(camera: &Camera, lights: &[PointLight], px: u32, py: u32, margin: f3
 fn hard_shadows_match_the_analytic_answer() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (hdr, _) = raytraced(&scene, &lights, &[]);
+    let (hdr, _) = Shot::direct(&scene, &lights, settings(), "raytraced").params(TRACED).render();
     let mut exp = vec![None; (W * H) as usize];
     let mut bad = vec![false; (W * H) as usize];
     let (mut checked, mut wrong, mut umbra) = (0, 0, 0);
@@ -294,12 +276,15 @@ fn hard_shadows_match_the_analytic_answer() {
 fn soft_shadows_of_a_zero_radius_light_are_the_hard_shadows() {
     let scene = plane_and_occluder();
     let lights = lights_around_occluder();
-    let (hard, _) = raytraced(&scene, &lights, &[]);
-    let (soft, _) = raytraced(
-        &scene,
-        &lights,
-        &[("soft", ParamValue::Bool(true)), ("light_radius", ParamValue::Float(0.0)), ("samples", ParamValue::Int(3))],
-    );
+    let (hard, _) = Shot::direct(&scene, &lights, settings(), "raytraced").params(TRACED).render();
+    let (soft, _) = Shot::direct(&scene, &lights, settings(), "raytraced")
+        .params(TRACED)
+        .params(&[
+            ("soft", ParamValue::Bool(true)),
+            ("light_radius", ParamValue::Float(0.0)),
+            ("samples", ParamValue::Int(3)),
+        ])
+        .render();
     assert_eq!(hard, soft);
 }
 
@@ -314,8 +299,14 @@ fn batches_and_culling_change_counts_not_the_image() {
         .collect();
     // Out of view: culled.
     lights.push(white_light(Vec3::new(0.0, 6.0, 30.0), 100.0, 2.0));
-    let (one, r1) = raytraced(&scene, &lights, &[("lights_per_step", ParamValue::Int(1))]);
-    let (all, r32) = raytraced(&scene, &lights, &[("lights_per_step", ParamValue::Int(32))]);
+    let (one, r1) = Shot::direct(&scene, &lights, settings(), "raytraced")
+        .params(TRACED)
+        .params(&[("lights_per_step", ParamValue::Int(1))])
+        .render();
+    let (all, r32) = Shot::direct(&scene, &lights, settings(), "raytraced")
+        .params(TRACED)
+        .params(&[("lights_per_step", ParamValue::Int(32))])
+        .render();
     assert_eq!(r1.counts.technique.lights_visible, 12);
     assert_eq!(r1.counts.technique.batches, 12);
     assert_eq!(r32.counts.technique.batches, 1);
@@ -327,10 +318,10 @@ fn batches_and_culling_change_counts_not_the_image() {
 #[test]
 fn zero_lights_render_ambient_only() {
     let scene = plane_and_occluder();
-    let (traced, report) = raytraced(&scene, &[], &[]);
+    let (traced, report) = Shot::direct(&scene, &[], settings(), "raytraced").params(TRACED).render();
     let c = &report.counts.technique;
     assert_eq!((c.lights_visible, c.batches, c.shadow_maps), (0, 0, 0));
-    let (reference, _) = render(&scene, &scene.camera, &[], "reference", &[]);
+    let (reference, _) = Shot::direct(&scene, &[], settings(), "reference").render();
     assert_eq!(traced, reference);
     for y in 0..H {
         for x in 0..W {
@@ -428,17 +419,16 @@ fn soft_penumbra_follows_the_visible_fraction_of_the_disc() {
     let light = white_light(Vec3::new(0.1, 3.0, 0.0), 20.0, 12.0);
     let radius = 0.5;
     let samples = 128;
-    let (hdr, _) = raytraced(
-        &scene,
-        &[light],
-        &[
+    let (hdr, _) = Shot::direct(&scene, &[light], settings(), "raytraced")
+        .params(TRACED)
+        .params(&[
             ("soft", ParamValue::Bool(true)),
             ("light_radius", ParamValue::Float(radius)),
             ("samples", ParamValue::Int(samples)),
-        ],
-    );
+        ])
+        .render();
     // The albedo as the GPU sees it (8-bit sRGB: 0.5 becomes 0.497), from the ambient term alone.
-    let (ambient_only, _) = raytraced(&scene, &[], &[]);
+    let (ambient_only, _) = Shot::direct(&scene, &[], settings(), "raytraced").params(TRACED).render();
     let camera = &scene.camera;
     let mut measured = vec![[0.0f32; 4]; hdr.len()];
     let mut analytic = vec![None; hdr.len()];

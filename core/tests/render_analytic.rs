@@ -8,7 +8,7 @@ use common::*;
 use glam::Vec3;
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::ParamValue;
-use shadowlab_core::{AutoExposure, FrameReport, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::{AutoExposure, RenderSettings, Renderer, ToneMap};
 
 fn settings() -> RenderSettings {
     RenderSettings {
@@ -21,32 +21,9 @@ fn settings() -> RenderSettings {
     }
 }
 
-struct Rendered {
-    hdr: Vec<[f32; 4]>,
-    report: FrameReport,
-}
-
-fn render_with(scene: &Scene, lights: &[PointLight], shadow_res: i64, atlas_mib: i64) -> Rendered {
-    render_on(gpu(), scene, lights, shadow_res, atlas_mib)
-}
-
-fn render_on(
-    gpu: shadowlab_core::GpuContext,
-    scene: &Scene,
-    lights: &[PointLight],
-    shadow_res: i64,
-    atlas_mib: i64,
-) -> Rendered {
-    let mut renderer = Renderer::new(&gpu, scene, settings()).unwrap();
-    let mut technique = renderer.create_technique("reference").unwrap();
-    technique.set_param("shadow_res", &ParamValue::Int(shadow_res)).unwrap();
-    technique.set_param("atlas_mib", &ParamValue::Int(atlas_mib)).unwrap();
-    let report = renderer.render_frame(technique.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
-    Rendered { hdr: renderer.read_hdr().unwrap(), report }
-}
-
-fn render(scene: &Scene, lights: &[PointLight]) -> Rendered {
-    render_with(scene, lights, 256, 128)
+/// The reference's cube-map resolution and batch memory (MiB).
+fn maps(shadow_res: i64, atlas_mib: i64) -> [(&'static str, ParamValue); 2] {
+    [("shadow_res", ParamValue::Int(shadow_res)), ("atlas_mib", ParamValue::Int(atlas_mib))]
 }
 
 /// The reference is exact up to shadow-map texels: 6 cm around each shadow boundary is left out.
@@ -98,7 +75,7 @@ fn assert_matches_analytic(name: &str, camera: &Camera, lights: &[PointLight], h
 fn umbra_is_unlit_and_lit_pixels_follow_the_attenuation() {
     let scene = plane_and_occluder();
     let light = white_light(Vec3::new(-1.5, 3.0, 0.2), 20.0, 8.0);
-    let r = render(&scene, &[light]);
+    let r = Shot::direct(&scene, &[light], settings(), "reference").params(&maps(256, 128)).render_keeping();
     assert_matches_analytic("umbra", &scene.camera, &[light], &r.hdr);
     // The test must have seen both umbra and lit ground pixels.
     let (mut umbra, mut lit) = (0, 0);
@@ -123,9 +100,9 @@ fn two_lights_add_up() {
     let scene = plane_and_occluder();
     let a = white_light(Vec3::new(-1.0, 2.5, 0.0), 12.0, 6.0);
     let b = PointLight::new(Vec3::new(1.5, 2.0, 1.0), Vec3::new(1.0, 0.5, 0.25), 15.0, 5.0);
-    let ra = render(&scene, &[a]);
-    let rb = render(&scene, &[b]);
-    let rab = render(&scene, &[a, b]);
+    let ra = Shot::direct(&scene, &[a], settings(), "reference").params(&maps(256, 128)).render_keeping();
+    let rb = Shot::direct(&scene, &[b], settings(), "reference").params(&maps(256, 128)).render_keeping();
+    let rab = Shot::direct(&scene, &[a, b], settings(), "reference").params(&maps(256, 128)).render_keeping();
     assert_matches_analytic("two-lights", &scene.camera, &[a, b], &rab.hdr);
     let mut compared = 0;
     for i in 0..(W * H) as usize {
@@ -151,13 +128,13 @@ fn a_light_out_of_range_contributes_nothing() {
     let scene = plane_and_occluder();
     // In view, but 3 m above the plate with a 2.5 m range: it reaches no surface.
     let far_light = white_light(Vec3::new(0.0, 4.0, 0.5), 1000.0, 2.5);
-    let r = render(&scene, &[far_light]);
-    let none = render(&scene, &[]);
+    let r = Shot::direct(&scene, &[far_light], settings(), "reference").params(&maps(256, 128)).render_keeping();
+    let none = Shot::direct(&scene, &[], settings(), "reference").params(&maps(256, 128)).render_keeping();
     assert_eq!(r.report.counts.technique.lights_visible, 1, "the light's sphere is in view");
     assert_eq!(r.hdr, none.hdr, "a light beyond its range must not change a pixel");
     // Its range sphere is outside the view: culled before any shadow map.
     let behind = white_light(Vec3::new(0.0, 6.0, 30.0), 1000.0, 2.0);
-    let r = render(&scene, &[behind]);
+    let r = Shot::direct(&scene, &[behind], settings(), "reference").params(&maps(256, 128)).render_keeping();
     assert_eq!(r.report.counts.technique.lights_visible, 0);
     assert_eq!(r.report.counts.technique.shadow_maps, 0);
     assert_eq!(r.hdr, none.hdr);
@@ -166,7 +143,7 @@ fn a_light_out_of_range_contributes_nothing() {
 #[test]
 fn zero_lights_render_ambient_only() {
     let scene = plane_and_occluder();
-    let r = render(&scene, &[]);
+    let r = Shot::direct(&scene, &[], settings(), "reference").params(&maps(256, 128)).render_keeping();
     assert_matches_analytic("ambient-only", &scene.camera, &[], &r.hdr);
     assert_eq!(r.report.counts.technique.shadow_maps, 0);
     assert_eq!(r.report.counts.lights_total, 0);
@@ -185,8 +162,8 @@ fn a_thousand_lights_render_in_bounded_batches_with_the_same_result() {
         })
         .collect();
     // 1 MiB per batch at 32 texels per face: 42 cube maps per batch.
-    let small = render_with(&scene, &lights, 32, 1);
-    let big = render_with(&scene, &lights, 32, 64);
+    let small = Shot::direct(&scene, &lights, settings(), "reference").params(&maps(32, 1)).render_keeping();
+    let big = Shot::direct(&scene, &lights, settings(), "reference").params(&maps(32, 64)).render_keeping();
     let c = &small.report.counts.technique;
     assert_eq!(c.lights_visible, 1000);
     assert_eq!(c.shadow_maps, 1000);
@@ -213,7 +190,7 @@ fn the_gl_backend_renders_the_same_analytic_image() {
     assert_eq!(gl.adapter_info.backend, wgpu::Backend::Gl);
     let scene = plane_and_occluder();
     let light = white_light(Vec3::new(-1.5, 3.0, 0.2), 20.0, 8.0);
-    let r = render_on(gl, &scene, &[light], 256, 128);
+    let r = Shot::direct(&scene, &[light], settings(), "reference").params(&maps(256, 128)).on(gl).render_keeping();
     assert_matches_analytic("gl-umbra", &scene.camera, &[light], &r.hdr);
     assert_eq!(r.report.counts.technique.shadow_maps, 1);
 }
@@ -228,12 +205,9 @@ fn a_gltf_emissive_texture_modulates_the_emission_instead_of_a_flat_glow() {
         let path = std::env::temp_dir().join(name);
         std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
         let scene = Scene::load(&path, 1.0).unwrap();
-        let gpu = gpu();
         let s = RenderSettings { width: 64, height: 64, ambient: Vec3::ZERO, ..settings() };
-        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
-        let mut t = renderer.create_technique("unshadowed").unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
-        (scene, renderer.read_hdr().unwrap())
+        let (hdr, _) = Shot::direct(&scene, &[], s, "unshadowed").render();
+        (scene, hdr)
     };
     let distinct = |img: &[[f32; 4]]| {
         let mut colours: Vec<[u32; 3]> =
@@ -268,12 +242,8 @@ fn a_gltf_occlusion_texture_darkens_the_ambient_term_only() {
         let path = std::env::temp_dir().join(name);
         std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
         let scene = Scene::load(&path, 1.0).unwrap();
-        let gpu = gpu();
         let s = RenderSettings { width: 64, height: 64, ambient: Vec3::splat(1.0), ..settings() };
-        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
-        let mut t = renderer.create_technique("unshadowed").unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
-        renderer.read_hdr().unwrap()
+        Shot::direct(&scene, &[], s, "unshadowed").render().0
     };
     let plain = render(&doc, "shadowlab-ao-none.gltf");
     // A 2x2 occlusion texture, red 255 (unoccluded) in one column and 0 (fully occluded) in the other.
@@ -310,12 +280,8 @@ fn gltf_alpha_modes_cut_out_only_masked_materials() {
         let path = std::env::temp_dir().join(name);
         std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
         let scene = Scene::load(&path, 1.0).unwrap();
-        let gpu = gpu();
         let s = RenderSettings { width: 48, height: 48, background: Vec3::ZERO, ..settings() };
-        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
-        let mut t = renderer.create_technique("unshadowed").unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
-        let img = renderer.read_hdr().unwrap();
+        let (img, _) = Shot::direct(&scene, &[], s, "unshadowed").render();
         (scene, img.iter().filter(|p| p[0] + p[1] + p[2] > 1e-4).count())
     };
     doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 0.2]);
@@ -364,12 +330,8 @@ fn cut_out_casters_cast_cut_out_shadows() {
     for technique in ["reference", "raytraced"] {
         let render = |cutoff: f32| -> (Vec<[f32; 4]>, Scene) {
             let scene = half_cut_plate(cutoff);
-            let gpu = gpu();
-            let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
-            let mut t = renderer.create_technique(technique).unwrap();
             let light = [white_light(Vec3::new(0.0, 4.0, 0.0), 10.0, 20.0)];
-            renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
-            (renderer.read_hdr().unwrap(), scene)
+            (Shot::direct(&scene, &light, settings(), technique).render().0, scene)
         };
         let (opaque, _) = render(0.0);
         let (cut, scene) = render(0.5);
@@ -422,18 +384,14 @@ fn auto_exposure_meters_the_log_average_and_cancels_light_scale() {
     // (nearly) the same displayed geometry, where a fixed exposure does not.
     let scene = plane_and_occluder();
     let render = |k: f32, auto: bool| {
-        let gpu = gpu();
         let s = RenderSettings {
             auto_exposure: if auto { AutoExposure::Meter } else { AutoExposure::Off },
             tonemap: ToneMap::Aces,
             ambient: Vec3::splat(AMBIENT * k),
             ..settings()
         };
-        let mut renderer = Renderer::new(&gpu, &scene, s).unwrap();
-        let mut t = renderer.create_technique("reference").unwrap();
         let light = [white_light(Vec3::new(0.5, 3.0, 0.5), 2.0 * k, 20.0)];
-        renderer.render_frame(t.as_mut(), &scene.camera, &light, &mut |_, _| {}).unwrap();
-        let hdr = renderer.read_hdr().unwrap();
+        let Rendered { renderer, hdr, .. } = Shot::direct(&scene, &light, s, "reference").render_keeping();
         let mask = renderer.read_geometry_mask().unwrap();
         let metered = renderer.auto_exposure().unwrap();
         (renderer.read_output().unwrap(), hdr, mask, metered)
@@ -513,11 +471,7 @@ fn an_emissive_texture_on_the_second_uv_channel_is_sampled_with_it() {
         plate.uvs = vec![glam::Vec2::new(0.25, 0.5); n];
         plate.uvs1 = vec![glam::Vec2::new(0.75, 0.5); n];
         scene.finalize(std::path::Path::new("test")).unwrap();
-        let gpu = gpu();
-        let mut renderer = Renderer::new(&gpu, &scene, settings()).unwrap();
-        let mut t = renderer.create_technique("reference").unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &[], &mut |_, _| {}).unwrap();
-        (renderer.read_hdr().unwrap(), scene)
+        (Shot::direct(&scene, &[], settings(), "reference").render().0, scene)
     };
     for (uv1, lo, hi) in [(false, 0.0, 0.1), (true, 0.9, 1.2)] {
         let (hdr, scene) = render(uv1);
