@@ -6,52 +6,20 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::scene::PointLight;
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::VplSettings;
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::RenderSettings;
 
 const W: u32 = 80;
 const H: u32 = 60;
 
 fn settings(vpls: u32) -> RenderSettings {
-    RenderSettings {
-        width: W,
-        height: H,
-        tonemap: ToneMap::Linear,
-        ambient: Vec3::ZERO,
-        background: Vec3::ZERO,
-        component: Component::Indirect,
-        vpl: VplSettings { count: vpls, ..Default::default() },
-        ..Default::default()
-    }
+    indirect_settings(W, H, VplSettings { count: vpls, ..Default::default() })
 }
 
 fn lights() -> Vec<PointLight> {
     vec![white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)]
-}
-
-fn render(scene: &Scene, vpls: u32, key: &str, params: &[(&str, ParamValue)]) -> (Vec<[f32; 4]>, FrameReport) {
-    render_with(scene, settings(vpls), key, params)
-}
-
-fn render_with(
-    scene: &Scene,
-    settings: RenderSettings,
-    key: &str,
-    params: &[(&str, ParamValue)],
-) -> (Vec<[f32; 4]>, FrameReport) {
-    let gpu = gpu();
-    let mut renderer = Renderer::new(&gpu, scene, settings).unwrap();
-    let mut t = renderer.create_indirect_technique(key).unwrap();
-    for (k, v) in params {
-        t.set_param(k, v).unwrap_or_else(|e| panic!("{k}: {e}"));
-    }
-    renderer.set_indirect(Some(t)).unwrap();
-    let mut direct = renderer.create_technique("unshadowed").unwrap();
-    let report = renderer.render_frame(direct.as_mut(), &scene.camera, &lights(), &mut |_, _| {}).unwrap();
-    (renderer.read_hdr().unwrap(), report)
 }
 
 /// MSE of the green channel, as the paper reports it (over linear radiance).
@@ -79,13 +47,13 @@ fn one_cluster_per_vpl_and_per_pixel_is_vpl_raytraced() {
     // Traced particles: no two VPLs coincide (RSM texels drawn twice would share a cluster).
     let mut s = settings(n);
     s.vpl.source = shadowlab_core::vpl::VplSource::Traced;
-    let (truth, _) = render_with(&scene, s.clone(), "vpl-raytraced", &[]);
+    let (truth, _) = Shot::indirect(&scene, &lights(), s.clone(), "vpl-raytraced").render();
     let exact =
         [int("k_vpl", n as i64), int("k_sp", (W * H) as i64), int("gamma", 1), int("f", 1), choice("mode", "hard")];
     for cluster in ["both", "sp", "vpl"] {
         let mut params = exact.to_vec();
         params.push(choice("cluster", cluster));
-        let (img, report) = render_with(&scene, s.clone(), "fuzzy", &params);
+        let (img, report) = Shot::indirect(&scene, &lights(), s.clone(), "fuzzy").params(&params).render();
         let err = rel_rmse(&img, &truth);
         if err >= 2e-3 {
             let expected: Vec<Option<[f32; 4]>> = truth.iter().map(|&p| Some(p)).collect();
@@ -110,7 +78,7 @@ fn one_cluster_per_vpl_and_per_pixel_is_vpl_raytraced() {
 fn weighted_visibility_beats_hard_and_the_error_falls_with_k_sp() {
     let scene = room();
     let n = 128;
-    let (truth, _) = render(&scene, n, "vpl-raytraced", &[]);
+    let (truth, _) = Shot::indirect(&scene, &lights(), settings(n), "vpl-raytraced").render();
     let at = |percent: f32, mode: &str| {
         let params = [
             choice("cluster", "sp"),
@@ -118,7 +86,7 @@ fn weighted_visibility_beats_hard_and_the_error_falls_with_k_sp() {
             ("k_sp_percent", ParamValue::Float(percent)),
             int("gamma", 2),
         ];
-        let (img, report) = render(&scene, n, "fuzzy", &params);
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(n), "fuzzy").params(&params).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{mode} at {percent} %: NaN");
         let k = report.indirect.unwrap().counts.figures["k_sp"];
         (mse(&img, &truth), k)
@@ -140,10 +108,12 @@ fn weighted_visibility_beats_hard_and_the_error_falls_with_k_sp() {
 fn clustered_vpls_approach_the_reference_as_k_vpl_grows() {
     let scene = room();
     let n = 256;
-    let (truth, _) = render(&scene, n, "vpl-raytraced", &[]);
+    let (truth, _) = Shot::indirect(&scene, &lights(), settings(n), "vpl-raytraced").render();
     let mut errors = Vec::new();
     for k in [4i64, 32, 256] {
-        let (img, report) = render(&scene, n, "fuzzy", &[choice("cluster", "vpl"), int("k_vpl", k)]);
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(n), "fuzzy")
+            .params(&[choice("cluster", "vpl"), int("k_vpl", k)])
+            .render();
         let figures = &report.indirect.unwrap().counts.figures;
         assert!(figures["k_vpl"] >= 1.0 && figures["k_vpl"] <= k as f64);
         errors.push(rel_rmse(&img, &truth));
@@ -163,24 +133,26 @@ fn bad_parameters_and_a_sky_only_view_give_defined_images() {
         vec![int("gamma", 64)],                // one sample
         vec![int("rays_per_step", 1024), int("lights_per_step", 7)],
     ] {
-        let (img, report) = render(&scene, 64, "fuzzy", &params);
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(64), "fuzzy").params(&params).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{params:?}: NaN");
         assert!(img.iter().any(|p| p[1] > 0.0), "{params:?}: no indirect light");
         let figures = &report.indirect.unwrap().counts.figures;
         assert!(figures["k_vpl"] <= 64.0 && figures["k_sp"] <= (W * H) as f64, "{params:?}: {figures:?}");
     }
     // Steps change nothing.
-    let (a, _) = render(&scene, 64, "fuzzy", &[]);
-    let (b, _) = render(&scene, 64, "fuzzy", &[int("rays_per_step", 1024), int("lights_per_step", 5)]);
+    let (a, _) = Shot::indirect(&scene, &lights(), settings(64), "fuzzy").render();
+    let (b, _) = Shot::indirect(&scene, &lights(), settings(64), "fuzzy")
+        .params(&[int("rays_per_step", 1024), int("lights_per_step", 5)])
+        .render();
     assert!(rel_rmse(&a, &b) < 1e-6);
     // No VPLs.
-    let (img, _) = render(&scene, 0, "fuzzy", &[]);
+    let (img, _) = Shot::indirect(&scene, &lights(), settings(0), "fuzzy").render();
     assert!(img.iter().all(|p| p[1] == 0.0));
     // A view of the sky only: no shading point, nothing lit, no error.
     let mut sky = room();
     sky.camera =
         shadowlab_core::scene::Camera::look_at(Vec3::new(0.0, 50.0, 0.0), Vec3::new(0.3, 100.0, 0.0), 0.8, 0.1, 100.0);
-    let (img, report) = render(&sky, 64, "fuzzy", &[]);
+    let (img, report) = Shot::indirect(&sky, &lights(), settings(64), "fuzzy").render();
     assert!(img.iter().all(|p| p[1] == 0.0));
     assert_eq!(report.indirect.unwrap().counts.figures["k_sp"], 0.0);
 }
@@ -269,12 +241,7 @@ fn the_explain_steps_of_fuzzy_and_val_name_layers_they_have() {
     // layer has a legend line of its own beyond the primitive counts.
     let scene = room();
     for key in ["fuzzy", "val"] {
-        let gpu = gpu();
-        let mut renderer = Renderer::new(&gpu, &scene, settings(64)).unwrap();
-        let t = renderer.create_indirect_technique(key).unwrap();
-        renderer.set_indirect(Some(t)).unwrap();
-        let mut direct = renderer.create_technique("unshadowed").unwrap();
-        renderer.render_frame(direct.as_mut(), &scene.camera, &lights(), &mut |_, _| {}).unwrap();
+        let renderer = Shot::indirect(&scene, &lights(), settings(64), key).render_keeping().renderer;
         let technique = renderer.indirect().unwrap();
         let layers = technique.overlays(&lights());
         let names: Vec<&str> = layers.iter().map(|l| l.name).collect();

@@ -71,33 +71,6 @@ fn inward_sphere(r: f32, stacks: u32, slices: u32) -> Mesh {
     Mesh { name: "sphere".into(), positions, normals, uvs, uvs1: Vec::new(), indices, material: 0 }
 }
 
-/// Render `direct` + `indirect` with the given settings; returns the chosen component's HDR image.
-fn render(
-    scene: &Scene,
-    lights: &[PointLight],
-    s: RenderSettings,
-    indirect: Option<&str>,
-    params: &[(&str, ParamValue)],
-    fixed: Option<VplSet>,
-) -> (Renderer, Vec<[f32; 4]>, shadowlab_core::FrameReport) {
-    let gpu = gpu();
-    let mut renderer = Renderer::new(&gpu, scene, s).unwrap();
-    let mut direct = renderer.create_technique("unshadowed").unwrap();
-    if let Some(key) = indirect {
-        let mut t = renderer.create_indirect_technique(key).unwrap();
-        for (k, v) in params {
-            t.set_param(k, v).unwrap();
-        }
-        renderer.set_indirect(Some(t)).unwrap();
-    }
-    if fixed.is_some() {
-        renderer.set_fixed_vpls(fixed);
-    }
-    let report = renderer.render_frame(direct.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
-    let hdr = renderer.read_hdr().unwrap();
-    (renderer, hdr, report)
-}
-
 // --- VPL generation -------------------------------------------------------------------------------------------
 
 /// Flux a point light at height `h` above the centre of a square of side `side` sends onto it, by midpoint
@@ -233,7 +206,8 @@ fn closed_sphere_gives_rho_squared_e0_over_pi_everywhere() {
         ("pathtraced", vec![("samples", ParamValue::Int(256)), ("samples_per_step", ParamValue::Int(64))]),
     ];
     for (key, params) in cases {
-        let (_, hdr, report) = render(&scene, &lights, settings(Component::Indirect, vpl), Some(key), &params, None);
+        let (hdr, report) =
+            Shot::indirect(&scene, &lights, settings(Component::Indirect, vpl), key).params(&params).render();
         let indirect = report.indirect.as_ref().expect("the report has the indirect technique");
         assert_eq!(indirect.technique, key);
         let mean: f32 = hdr.iter().map(|p| p[0]).sum::<f32>() / hdr.len() as f32;
@@ -272,8 +246,10 @@ fn one_vpl_over_an_occluder_matches_a_cpu_gather() {
     let vs = VplSettings { clamp_world: clamp, ..Default::default() };
     for (key, tolerance, bad_share) in [("vpl-raytraced", 0.01, 0.005), ("vpl-shadowmaps", 0.02, 0.03)] {
         let params = if key == "vpl-shadowmaps" { vec![("shadow_res", ParamValue::Int(512))] } else { vec![] };
-        let (renderer, hdr, _) =
-            render(&scene, &[], settings(Component::Indirect, vs), Some(key), &params, Some(set.clone()));
+        let Rendered { renderer, hdr, .. } = Shot::indirect(&scene, &[], settings(Component::Indirect, vs), key)
+            .params(&params)
+            .fixed_vpls(Some(set.clone()))
+            .render_keeping();
         let positions = renderer.read_world_positions(&scene.camera).unwrap();
         let (mut checked, mut bad, mut shadowed) = (0, 0, 0);
         let mut expected_img = vec![None; hdr.len()];
@@ -324,8 +300,8 @@ fn batched_gathers_equal_one_batch() {
     let one = [("vpls_per_step", ParamValue::Int(1024))];
     let many = [("vpls_per_step", ParamValue::Int(37))];
     for key in ["vpl-raytraced", "vpl-unshadowed"] {
-        let (_, a, ra) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &one, None);
-        let (_, b, rb) = render(&scene, &lights, settings(Component::Indirect, vs), Some(key), &many, None);
+        let (a, ra) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(&one).render();
+        let (b, rb) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(&many).render();
         assert_eq!(ra.indirect.as_ref().unwrap().counts.batches, 1);
         // The report separates the indirect technique's passes from the direct one's.
         let names: Vec<&str> = ra.indirect.as_ref().unwrap().passes.iter().map(|p| p.name.as_str()).collect();
@@ -352,8 +328,7 @@ fn direct_light_is_bit_identical_with_or_without_an_indirect_technique() {
     let s = settings(Component::Total, VplSettings { count: 64, ..Default::default() });
     let mut renderer = Renderer::new(&gpu, &scene, s.clone()).unwrap();
     let mut reference = renderer.create_technique("reference").unwrap();
-    renderer.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
-    let alone = renderer.read_hdr().unwrap();
+    let (alone, _) = frame(&mut renderer, reference.as_mut(), &scene.camera, &lights);
     let output_alone = renderer.read_output().unwrap();
     let t = renderer.create_indirect_technique("vpl-unshadowed").unwrap();
     renderer.set_indirect(Some(t)).unwrap();
@@ -383,7 +358,8 @@ fn zero_vpls_and_a_light_on_a_surface_give_a_defined_image() {
         for count in [0, 64] {
             let vs = VplSettings { count, clamp_world: 0.0, ..Default::default() };
             let params = if key == "pathtraced" { vec![("samples", ParamValue::Int(4))] } else { vec![] };
-            let (_, hdr, report) = render(&scene, &lights, settings(Component::Total, vs), Some(key), &params, None);
+            let (hdr, report) =
+                Shot::indirect(&scene, &lights, settings(Component::Total, vs), key).params(&params).render();
             assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key} with {count} VPLs: NaN pixel");
             if count == 0 && key != "pathtraced" {
                 assert_eq!(report.indirect.unwrap().vpls, 0);
@@ -411,10 +387,11 @@ fn spot_lights_light_their_cone_only_in_every_direct_technique() {
     assert!((cone.outer_angle - 30f32.to_radians()).abs() < 1e-6 && cone.inner_angle < cone.outer_angle);
     let gpu = gpu();
     for key in ["reference", "unshadowed", "raytraced", "lightcluster", "insm"] {
-        let mut renderer = Renderer::new(&gpu, &scene, settings(Component::Total, VplSettings::default())).unwrap();
-        let mut t = renderer.create_technique(key).unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &[spot], &mut |_, _| {}).unwrap();
-        let hdr = renderer.read_hdr().unwrap();
+        let spots = [spot];
+        let Rendered { renderer, hdr, .. } =
+            Shot::direct(&scene, &spots, settings(Component::Total, VplSettings::default()), key)
+                .on(gpu.clone())
+                .render_keeping();
         let positions = renderer.read_world_positions(&scene.camera).unwrap();
         let (mut inside, mut outside) = (0, 0);
         for (p, px) in positions.iter().zip(&hdr) {
@@ -481,8 +458,8 @@ fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
     let zero = spot_over_plane(0.0);
     let set = vpl::generate(&bvh, &[zero], &VplSettings::default());
     assert!(set.vpls.iter().all(|v| v.flux.max_element() < 1e-6 * spot.intensity));
-    let (_, hdr, _) =
-        render(&scene, &[zero], settings(Component::Total, VplSettings::default()), Some("vpl-raytraced"), &[], None);
+    let (hdr, _) =
+        Shot::indirect(&scene, &[zero], settings(Component::Total, VplSettings::default()), "vpl-raytraced").render();
     assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite()) && p[0] < 1e-4), "a zero cone lit something");
 }
 
@@ -492,9 +469,9 @@ fn interleaved_sampling_with_the_blur_stays_close_to_the_full_gather() {
     let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
     let vs = VplSettings { count: 1024, ..Default::default() };
     let s = RenderSettings { width: 128, height: 96, ..settings(Component::Indirect, vs) };
-    let (_, full, _) = render(&scene, &lights, s.clone(), Some("vpl-raytraced"), &[], None);
+    let (full, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").render();
     let on = [("interleave", ParamValue::Bool(true)), ("vpls_per_step", ParamValue::Int(100))];
-    let (_, inter, report) = render(&scene, &lights, s, Some("vpl-raytraced"), &on, None);
+    let (inter, report) = Shot::indirect(&scene, &lights, s, "vpl-raytraced").params(&on).render();
     let c = &report.indirect.as_ref().unwrap().counts;
     let n = report.indirect.as_ref().unwrap().vpls;
     assert_eq!(c.batches, n.div_ceil(100), "the blur is a step of its own, not a batch");
@@ -527,8 +504,7 @@ fn views_of_one_scene_share_its_gpu_copy_and_bvh_and_render_the_same() {
         let t = r.create_indirect_technique("vpl-raytraced").unwrap();
         r.set_indirect(Some(t)).unwrap();
         let mut reference = r.create_technique("reference").unwrap();
-        r.render_frame(reference.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
-        images.push(r.read_hdr().unwrap());
+        images.push(frame(r, reference.as_mut(), &scene.camera, &lights).0);
     }
     assert!(images[0] == images[1], "two views of one scene render differently");
 }
@@ -544,10 +520,8 @@ fn a_light_exactly_on_a_surface_gives_no_nan_in_any_direct_technique() {
     ];
     let gpu = gpu();
     for key in ["reference", "unshadowed", "raytraced", "lightcluster", "insm"] {
-        let mut renderer = Renderer::new(&gpu, &scene, settings(Component::Total, VplSettings::default())).unwrap();
-        let mut t = renderer.create_technique(key).unwrap();
-        renderer.render_frame(t.as_mut(), &scene.camera, &lights, &mut |_, _| {}).unwrap();
-        let hdr = renderer.read_hdr().unwrap();
+        let settings = settings(Component::Total, VplSettings::default());
+        let (hdr, _) = Shot::direct(&scene, &lights, settings, key).on(gpu.clone()).render();
         assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key}: a NaN or infinite pixel");
         assert!(hdr.iter().any(|p| p[0] > 0.0), "{key}: nothing lit");
     }

@@ -6,45 +6,16 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::scene::PointLight;
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::VplSettings;
-use shadowlab_core::{FrameReport, RenderSettings, Renderer, ToneMap};
+use shadowlab_core::RenderSettings;
 
 const W: u32 = 80;
 const H: u32 = 60;
 
 fn settings(vpls: u32) -> RenderSettings {
-    RenderSettings {
-        width: W,
-        height: H,
-        tonemap: ToneMap::Linear,
-        ambient: Vec3::ZERO,
-        background: Vec3::ZERO,
-        component: Component::Indirect,
-        vpl: VplSettings { count: vpls, ..Default::default() },
-        ..Default::default()
-    }
-}
-
-fn render(
-    scene: &Scene,
-    lights: &[PointLight],
-    vpls: u32,
-    key: &str,
-    params: &[(&str, ParamValue)],
-) -> (Vec<[f32; 4]>, FrameReport) {
-    let gpu = gpu();
-    let mut renderer = Renderer::new(&gpu, scene, settings(vpls)).unwrap();
-    let mut t = renderer.create_indirect_technique(key).unwrap();
-    for (k, v) in params {
-        t.set_param(k, v).unwrap();
-    }
-    renderer.set_indirect(Some(t)).unwrap();
-    let mut direct = renderer.create_technique("unshadowed").unwrap();
-    let report = renderer.render_frame(direct.as_mut(), &scene.camera, lights, &mut |_, _| {}).unwrap();
-    (renderer.read_hdr().unwrap(), report)
+    indirect_settings(W, H, VplSettings { count: vpls, ..Default::default() })
 }
 
 fn lights() -> Vec<PointLight> {
@@ -60,14 +31,16 @@ fn rel_rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
 #[test]
 fn one_val_per_vpl_with_hard_visibility_is_per_vpl_shadow_mapping() {
     let scene = room();
-    let (sm, _) = render(&scene, &lights(), 200, "vpl-shadowmaps", &[("shadow_res", ParamValue::Int(128))]);
+    let (sm, _) = Shot::indirect(&scene, &lights(), settings(200), "vpl-shadowmaps")
+        .params(&[("shadow_res", ParamValue::Int(128))])
+        .render();
     let n = 200;
     let params = [
         ("vals", ParamValue::Int(n)),
         ("visibility", ParamValue::Choice("hard".into())),
         ("shadow_res", ParamValue::Int(128)),
     ];
-    let (val, report) = render(&scene, &lights(), 200, "val", &params);
+    let (val, report) = Shot::indirect(&scene, &lights(), settings(200), "val").params(&params).render();
     let ind = report.indirect.unwrap();
     assert_eq!(ind.counts.figures["vals"] as usize, ind.vpls, "M = N: every VAL holds one VPL");
     let err = rel_rmse(&val, &sm);
@@ -77,10 +50,11 @@ fn one_val_per_vpl_with_hard_visibility_is_per_vpl_shadow_mapping() {
 #[test]
 fn the_error_against_exact_vpl_visibility_falls_as_m_grows() {
     let scene = room();
-    let (truth, _) = render(&scene, &lights(), 256, "vpl-raytraced", &[]);
+    let (truth, _) = Shot::indirect(&scene, &lights(), settings(256), "vpl-raytraced").render();
     let mut errors = Vec::new();
     for m in [1i64, 8, 64] {
-        let (img, report) = render(&scene, &lights(), 256, "val", &[("vals", ParamValue::Int(m))]);
+        let (img, report) =
+            Shot::indirect(&scene, &lights(), settings(256), "val").params(&[("vals", ParamValue::Int(m))]).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())));
         let ind = report.indirect.unwrap();
         assert!(ind.counts.figures["vals"] >= 1.0 && ind.counts.figures["vals"] <= m as f64);
@@ -98,14 +72,14 @@ fn degenerate_parameters_give_defined_images() {
         vec![("iterations", ParamValue::Int(0))],
         vec![("vals", ParamValue::Int(1)), ("interleave", ParamValue::Bool(true))],
     ] {
-        let (img, report) = render(&scene, &lights(), 64, "val", &params);
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(64), "val").params(&params).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{params:?}: NaN");
         assert!(img.iter().any(|p| p[1] > 0.0), "{params:?}: no indirect light");
         let ind = report.indirect.unwrap();
         assert!(ind.counts.figures["vals"] <= ind.vpls as f64);
     }
     // No VPLs at all.
-    let (img, _) = render(&scene, &lights(), 0, "val", &[]);
+    let (img, _) = Shot::indirect(&scene, &lights(), settings(0), "val").render();
     assert!(img.iter().all(|p| p[1] == 0.0));
 }
 
@@ -159,11 +133,13 @@ fn gpu_kmeans_matches_its_cpu_twin() {
 fn the_vals_contributions_alone_add_up_to_the_whole() {
     let scene = room();
     let m = 4;
-    let (all, _) = render(&scene, &lights(), 128, "val", &[("vals", ParamValue::Int(m))]);
+    let (all, _) =
+        Shot::indirect(&scene, &lights(), settings(128), "val").params(&[("vals", ParamValue::Int(m))]).render();
     let mut sum = vec![[0.0f32; 4]; all.len()];
     for k in 0..m {
-        let (one, _) =
-            render(&scene, &lights(), 128, "val", &[("vals", ParamValue::Int(m)), ("solo", ParamValue::Int(k))]);
+        let (one, _) = Shot::indirect(&scene, &lights(), settings(128), "val")
+            .params(&[("vals", ParamValue::Int(m)), ("solo", ParamValue::Int(k))])
+            .render();
         assert!(one.iter().any(|p| p[1] > 0.0), "VAL {k} lights nothing");
         for (s, p) in sum.iter_mut().zip(&one) {
             s[1] += p[1];
@@ -178,15 +154,15 @@ fn cssm_shadows_like_the_exact_visibility_and_more_than_none() {
     // The paper's convolution soft shadow maps (4 Fourier terms, mip-mapped): closer to exact VPL visibility
     // than no visibility at all, finite, and the offset trades darkening for leaking as documented.
     let scene = room();
-    let (truth, _) = render(&scene, &lights(), 256, "vpl-raytraced", &[]);
-    let (none, _) = render(&scene, &lights(), 256, "vpl-unshadowed", &[]);
+    let (truth, _) = Shot::indirect(&scene, &lights(), settings(256), "vpl-raytraced").render();
+    let (none, _) = Shot::indirect(&scene, &lights(), settings(256), "vpl-unshadowed").render();
     let cssm = |offset: f32| {
         let params = [
             ("vals", ParamValue::Int(16)),
             ("visibility", ParamValue::Choice("cssm".into())),
             ("cssm_offset", ParamValue::Float(offset)),
         ];
-        render(&scene, &lights(), 256, "val", &params).0
+        Shot::indirect(&scene, &lights(), settings(256), "val").params(&params).render().0
     };
     // Measured relative RMSE against exact visibility by offset: 0: 0.099, 0.06: 0.055, 0.12: ~0.047, 0.25:
     // 0.052; no visibility: 0.053 (4 terms blur the step over a quarter of the map's depth range).
