@@ -49,8 +49,10 @@ pub struct TechniqueEntry {
     /// The key (in the same registry) of the technique this one is compared with by default: the per-light
     /// reference for approximations, the ground truth for a reference, itself for a ground truth.
     pub target: &'static str,
-    /// Tolerances of the test harness against `target` on its small scenes: mean absolute error of the
-    /// display-referred image (0..1) and the largest share of pixels more than 0.1 off.
+    /// Tolerances of the test harness (`core/tests/harness.rs`) on its small scenes: mean absolute error of the
+    /// display-referred image (0..1) and the largest share of pixels more than 0.1 off, against `target`; a
+    /// ground truth (its own target) is held against the registry's other ground truth where one exists (the
+    /// path tracer against `vpl-raytraced`) and is otherwise not checked (zero tolerances, unused).
     pub tolerance: Tolerance,
     pub create: fn(&GpuContext, &SharedLayouts) -> Box<dyn Technique>,
     /// The VPL source an indirect technique's paper uses, taken when the user chose none (`--vpl-source auto`).
