@@ -15,6 +15,9 @@ use shadowlab_core::technique::{self, Technique};
 use shadowlab_core::vpl::{VplSettings, VplSource};
 use shadowlab_core::{AutoExposure, FrameReport, GpuContext, RenderSettings, Renderer, ToneMap};
 
+use crate::files::{check_output_path, encode_png, write_atomic};
+use crate::measure::apply_params;
+
 #[derive(Parser, Debug)]
 #[command(
     name = "shadowlab",
@@ -427,32 +430,6 @@ fn camera_from_args(scene: &Scene, args: &FrameArgs) -> Result<Camera> {
     Ok(camera)
 }
 
-/// Apply `--shadow-res` and `--param key=value` to a technique.
-pub fn apply_params(technique: &mut dyn Technique, shadow_res: Option<u32>, params: &[String]) -> Result<()> {
-    let mut all: Vec<(String, String)> = Vec::new();
-    // `--shadow-res` applies to the techniques that have cube maps (not to the ray-traced truth, say).
-    if let Some(r) = shadow_res.filter(|_| technique.params().iter().any(|p| p.key == "shadow_res")) {
-        all.push(("shadow_res".into(), r.to_string()));
-    }
-    for p in params {
-        let (k, v) = p.split_once('=').ok_or_else(|| anyhow!("--param '{p}': expected KEY=VALUE"))?;
-        all.push((k.trim().to_string(), v.trim().to_string()));
-    }
-    let specs = technique.params();
-    for (key, text) in all {
-        let spec = specs.iter().find(|s| s.key == key).ok_or_else(|| {
-            anyhow!(
-                "technique '{}' has no parameter '{key}' (it has: {})",
-                technique.key(),
-                specs.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
-            )
-        })?;
-        let value = spec.kind.parse(&key, &text)?;
-        technique.set_param(&key, &value)?;
-    }
-    Ok(())
-}
-
 #[derive(Serialize)]
 struct RenderReport<'a> {
     adapter: String,
@@ -523,27 +500,6 @@ impl Progress {
             }
         }
     }
-}
-
-fn check_output_path(path: &Path, ext: &str) -> Result<()> {
-    let ok = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(ext));
-    if !ok {
-        bail!("{}: the file name must end in .{ext}", path.display());
-    }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            bail!("{}: the folder {} does not exist", path.display(), dir.display());
-        }
-    }
-    Ok(())
-}
-
-/// Write a file atomically: a temporary file beside it, then a rename, so a failure never leaves half a file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("out")));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(())
 }
 
 /// Settings, scene, lights, camera and a renderer for the frame arguments.
@@ -618,12 +574,6 @@ fn check_technique(key: &str) -> Result<()> {
         bail!("unknown technique '{key}' (choose one of: {})", technique::keys());
     }
     Ok(())
-}
-
-fn encode_png(image: &image::RgbaImage) -> Result<Vec<u8>> {
-    let mut png = Vec::new();
-    image.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).context("cannot encode the PNG")?;
-    Ok(png)
 }
 
 fn render(args: RenderArgs) -> Result<()> {

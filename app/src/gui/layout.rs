@@ -145,7 +145,7 @@ impl Layout {
     pub fn save(&mut self, dir: &Path) -> Result<()> {
         let file = LayoutFile { version: LAYOUT_VERSION, tree: self.tree.clone(), full_view: self.full_view };
         std::fs::create_dir_all(dir)?;
-        crate::cli::write_atomic(&Self::path(dir), ron::to_string(&file)?.as_bytes())?;
+        crate::files::write_atomic(&Self::path(dir), ron::to_string(&file)?.as_bytes())?;
         self.dirty = false;
         Ok(())
     }

@@ -1971,7 +1971,7 @@ fn load_recent(dir: &Path) -> Vec<PathBuf> {
 fn save_recent(dir: &Path, recent: &[PathBuf]) {
     let write = || -> Result<()> {
         std::fs::create_dir_all(dir)?;
-        crate::cli::write_atomic(&recent_path(dir), ron::to_string(recent)?.as_bytes())
+        crate::files::write_atomic(&recent_path(dir), ron::to_string(recent)?.as_bytes())
     };
     if let Err(e) = write() {
         log::warn!("cannot save the recent files list: {e:#}");
