@@ -23,30 +23,30 @@ fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
 
 impl ShadowLabApp {
     fn indirect_choice(&self) -> IndirectChoice {
-        match &self.indirect.technique {
-            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.indirect.params.get(k)) },
+        match &self.session.indirect.technique {
+            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.session.indirect.params.get(k)) },
             None => IndirectChoice::none(),
         }
     }
 
     /// A renderer of its own at the view's full render resolution.
     fn capture_renderer(&self) -> Result<Renderer> {
-        let settings = self.render_settings(self.last_view_pixels, false);
+        let settings = self.session.render_settings(self.last_view_pixels, false);
         let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
         Ok(gpu.main.renderer.new_view(settings)?)
     }
 
     /// The figure as an image: three panes of the view's render size (see [`figure::figure_size`]).
     pub fn figure_image(&mut self) -> Result<image::RgbaImage> {
-        let camera = self.camera.camera();
-        let lights = self.animated_lights();
+        let camera = self.session.camera.camera();
+        let lights = self.session.animated_lights();
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
         let no_progress = &mut |_: &str| {};
-        let params = param_strings(self.params.get(&self.technique));
+        let params = param_strings(self.session.params.get(&self.session.technique));
         let tech = measure::render_technique(
             &mut renderer,
-            &self.technique,
+            &self.session.technique,
             None,
             &params,
             &camera,
@@ -66,8 +66,8 @@ impl ShadowLabApp {
             renderer.set_settings(held)?;
             renderer.set_held_exposure(scale, average)?;
         }
-        let against = self.view.compare_against.clone();
-        let against_params = param_strings(self.params.get(&against));
+        let against = self.session.view.compare_against.clone();
+        let against_params = param_strings(self.session.params.get(&against));
         let target = measure::render_technique(
             &mut renderer,
             &against,
@@ -82,7 +82,7 @@ impl ShadowLabApp {
         )?;
         let target_image = renderer.read_output()?;
         let inputs = measure::compare_inputs(&mut renderer, &camera, &lights)?;
-        let gain = self.view.diff_gain;
+        let gain = self.session.view.diff_gain;
         let (metrics, diff) = measure::compare_images(
             &tech.image,
             &target.image,
@@ -90,13 +90,13 @@ impl ShadowLabApp {
             DiffKind::Absolute,
             gain,
             true,
-            self.view.exposure,
+            self.session.view.exposure,
         )?;
-        let indirect_key = self.indirect.technique.as_deref();
+        let indirect_key = self.session.indirect.technique.as_deref();
         let (w, h) = (renderer.settings().width, renderer.settings().height);
         let title = format!(
             "{} · {} lights · {w}x{h} · {}",
-            self.scene.name,
+            self.session.scene.name,
             lights.len(),
             renderer.gpu().adapter_description()
         );
@@ -106,7 +106,7 @@ impl ShadowLabApp {
             FigurePane {
                 image: tech_image,
                 caption: vec![
-                    technique_pair(&self.technique, indirect_key),
+                    technique_pair(&self.session.technique, indirect_key),
                     shown(&params),
                     format!("GPU {:.1} ms", tech.report.gpu_total_ms),
                 ],
@@ -148,21 +148,22 @@ impl ShadowLabApp {
         let period_secs = match motion {
             Motion::Orbit => None,
             Motion::Lights => Some(
-                self.animation
+                self.session
+                    .animation
                     .period_secs()
                     .ok_or_else(|| anyhow!("the light animation is off: choose one in the Lights panel"))?,
             ),
         };
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
-        let params = param_strings(self.params.get(&self.technique));
+        let params = param_strings(self.session.params.get(&self.session.technique));
         let name = self.screenshot_name(match motion {
             Motion::Orbit => "orbit",
             Motion::Lights => "lights",
         });
         let dir = name.with_extension("");
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let mut orbit = self.camera.clone();
+        let mut orbit = self.session.camera.clone();
         orbit.set_mode(CameraMode::Orbit);
         let start_yaw = orbit.yaw;
         let mut paths = Vec::with_capacity(frames);
@@ -181,14 +182,14 @@ impl ShadowLabApp {
             line_width_px: (2.0 * render_pixels_per_point).max(1.0),
             occluded_alpha: 0.25,
         });
-        let x_ray = self.view.x_ray;
+        let x_ray = self.session.view.x_ray;
         for i in 0..frames {
             let share = i as f32 / frames as f32;
             let lights = match period_secs {
-                Some(p) => self.lights_at(self.animation_time + p * share),
+                Some(p) => self.session.lights_at(self.session.animation_time + p * share),
                 None => {
                     orbit.yaw = start_yaw + std::f32::consts::TAU * share;
-                    self.animated_lights()
+                    self.session.animated_lights()
                 }
             };
             let camera = orbit.camera();
@@ -211,7 +212,7 @@ impl ShadowLabApp {
             };
             measure::render_technique_then(
                 &mut renderer,
-                &self.technique,
+                &self.session.technique,
                 None,
                 &params,
                 &camera,

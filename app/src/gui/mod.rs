@@ -12,6 +12,7 @@ pub mod inspector;
 pub mod layout;
 pub mod legend;
 pub mod panels;
+pub mod session;
 pub mod sweep;
 pub mod viewport;
 
@@ -25,15 +26,16 @@ use eframe::{egui, egui_wgpu};
 use glam::Vec3;
 use shadowlab_core::renderer::overlay::OverlayStyle;
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::layout::{self as light_layout, LightLayout};
 use shadowlab_core::scene::{PointLight, Scene, SceneSource};
-use shadowlab_core::technique::{CameraPose, LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
+use shadowlab_core::technique::{LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
 use shadowlab_core::timing::PassTime;
-use shadowlab_core::{AutoExposure, GpuContext, RenderSettings, ToneMap};
+use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
 
-use camera::{CameraController, CameraInput, CameraMode};
-use document::{History, IndirectSettings, SceneFile, ViewMode, ViewSettings, FILE_VERSION};
+use camera::{CameraInput, CameraMode};
+use document::{SceneFile, ViewMode};
 use gizmo::{Handle, Projection};
+pub use session::Animation;
+use session::{DragTarget, Session};
 use viewport::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
 
 /// What to open at start.
@@ -144,28 +146,6 @@ struct Toast {
     until: Instant,
 }
 
-/// Light animation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Animation {
-    Off,
-    Orbit,
-    Bob,
-}
-
-impl Animation {
-    const ORBIT_RAD_PER_SEC: f32 = 0.8;
-    const BOB_RAD_PER_SEC: f32 = 1.5;
-
-    /// Seconds after which every light is back where it started (none when off).
-    pub fn period_secs(self) -> Option<f32> {
-        match self {
-            Animation::Off => None,
-            Animation::Orbit => Some(std::f32::consts::TAU / Self::ORBIT_RAD_PER_SEC),
-            Animation::Bob => Some(std::f32::consts::TAU / Self::BOB_RAD_PER_SEC),
-        }
-    }
-}
-
 /// GPU state, created from eframe's render state.
 /// The difference view's image and metrics, for one pair of converged frames.
 pub struct Difference {
@@ -193,17 +173,6 @@ pub struct Gpu {
 /// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
 pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
 
-/// What the gizmo moves.
-#[derive(Clone, Debug, PartialEq)]
-enum DragTarget {
-    Light(usize),
-    /// Camera `index` of the current technique's `ParamKind::Cameras` parameter `key` (INSM's viewpoints).
-    Camera {
-        key: String,
-        index: usize,
-    },
-}
-
 /// A drag of the gizmo in progress.
 #[derive(Clone, Debug)]
 struct GizmoDrag {
@@ -215,22 +184,9 @@ struct GizmoDrag {
 }
 
 pub struct ShadowLabApp {
-    pub scene: Scene,
-    pub lights: Vec<PointLight>,
-    pub camera: CameraController,
-    pub technique: String,
-    /// Parameters the user set, per technique.
-    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
-    /// The indirect technique, its parameters, the VPL settings and the component shown.
-    pub indirect: IndirectSettings,
-    pub view: ViewSettings,
-    pub history: History,
-    pub selected: Option<usize>,
-    /// A selected technique camera (parameter key, index), e.g. an INSM viewpoint; exclusive with `selected`.
-    pub selected_camera: Option<(String, usize)>,
+    /// The scene, lights, camera, techniques and settings the user edits (what a scene file saves).
+    pub session: Session,
     pub gpu: Option<Gpu>,
-    pub animation: Animation,
-    animation_time: f32,
     drag: Option<GizmoDrag>,
     toasts: Vec<Toast>,
     pub recent: Vec<PathBuf>,
@@ -241,7 +197,6 @@ pub struct ShadowLabApp {
     started: Instant,
     last_interaction: Option<Instant>,
     pub last_viewport_rect: Option<egui::Rect>,
-    pub scene_file: Option<PathBuf>,
     pub status: String,
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub ui_frame_ms: VecDeque<f64>,
@@ -306,19 +261,8 @@ impl ShadowLabApp {
         let data_dir = startup.data_dir.clone().unwrap_or_else(default_data_dir);
         let layout = layout::Layout::load(&data_dir);
         let mut app = ShadowLabApp {
-            lights: scene.lights.clone(),
-            camera: CameraController::from_camera(&scene.camera, &scene.bounds),
-            scene,
-            technique: "reference".into(),
-            params: BTreeMap::new(),
-            indirect: IndirectSettings::default(),
-            view: ViewSettings::default(),
-            history: History::default(),
-            selected: None,
-            selected_camera: None,
+            session: Session::new(scene),
             gpu: None,
-            animation: Animation::Off,
-            animation_time: 0.0,
             drag: None,
             toasts: Vec::new(),
             recent: load_recent(&data_dir),
@@ -327,7 +271,6 @@ impl ShadowLabApp {
             started: Instant::now(),
             last_interaction: None,
             last_viewport_rect: None,
-            scene_file: None,
             status: String::new(),
             window_shot: Default::default(),
             ui_frame_ms: VecDeque::new(),
@@ -373,7 +316,7 @@ impl ShadowLabApp {
         }
         if let Some(t) = startup.technique {
             if shadowlab_core::technique::REGISTRY.iter().any(|e| e.key == t) {
-                app.technique = t;
+                app.session.technique = t;
             } else {
                 app.error(format!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()));
             }
@@ -381,9 +324,9 @@ impl ShadowLabApp {
         if let Some(k) = startup.indirect {
             if shadowlab_core::technique::INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
                 if let Some(source) = shadowlab_core::technique::preferred_vpl_source(&k) {
-                    app.indirect.vpl.source = source;
+                    app.session.indirect.vpl.source = source;
                 }
-                app.indirect.technique = Some(k);
+                app.session.indirect.technique = Some(k);
             } else {
                 app.error(format!(
                     "unknown indirect technique '{k}' (choose one of: {})",
@@ -393,10 +336,10 @@ impl ShadowLabApp {
         }
         match startup.view.as_deref() {
             None => {}
-            Some("single") => app.view.mode = ViewMode::Single,
-            Some("side") => app.view.mode = ViewMode::SideBySide,
-            Some("split") => app.view.mode = ViewMode::Split,
-            Some("difference") => app.view.mode = ViewMode::Difference,
+            Some("single") => app.session.view.mode = ViewMode::Single,
+            Some("side") => app.session.view.mode = ViewMode::SideBySide,
+            Some("split") => app.session.view.mode = ViewMode::Split,
+            Some("difference") => app.session.view.mode = ViewMode::Difference,
             Some(other) => app.error(format!("unknown view '{other}' (single, side, split, difference)")),
         }
         Ok(app)
@@ -415,7 +358,7 @@ impl ShadowLabApp {
             }
         }));
         let ctx = GpuContext::from_device(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
-        let main = View::new(&ctx, &rs, &self.scene)?;
+        let main = View::new(&ctx, &rs, &self.session.scene)?;
         let reference = View::sharing(&ctx, &rs, &main)?;
         // A real GPU renders a whole frame in one step; a software one starts small and adapts, and starts at
         // half resolution with 256-texel cube faces (lavapipe is ~100x slower; the user can raise both).
@@ -423,9 +366,9 @@ impl ShadowLabApp {
         let sizer =
             if software { StepSizer::default() } else { StepSizer { max_lights_per_step: 256, ..Default::default() } };
         if software {
-            self.view.resolution_scale = 0.5;
+            self.session.view.resolution_scale = 0.5;
             for key in ["reference", "lightcluster"] {
-                self.params.entry(key.into()).or_default().insert("shadow_res".into(), ParamValue::Int(256));
+                self.session.params.entry(key.into()).or_default().insert("shadow_res".into(), ParamValue::Int(256));
             }
         }
         self.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });
@@ -447,7 +390,7 @@ impl ShadowLabApp {
         let file = self.data_dir.join("recovery.ron");
         let saved = std::fs::create_dir_all(&self.data_dir)
             .map_err(anyhow::Error::from)
-            .and_then(|_| self.scene_file_data().save(&file));
+            .and_then(|_| self.session.scene_file_data().save(&file));
         let relaunch_allowed = self.relaunch_on_device_loss && std::env::var_os(RECOVERED_ENV).is_none();
         let mut recovery = Recovery { reason: reason.clone(), file: None, relaunch: None, message: String::new() };
         recovery.message = match saved {
@@ -512,41 +455,20 @@ impl ShadowLabApp {
 
     /// Replace the scene (and its lights and camera). The previous scene stays when `scene` failed to load.
     pub fn set_scene(&mut self, scene: Scene) {
-        for w in &scene.warnings {
-            self.toasts.push(Toast {
-                text: format!("warning: {w}"),
-                error: false,
-                until: Instant::now() + std::time::Duration::from_secs(6),
-            });
-        }
-        self.lights = scene.lights.clone();
-        if self.lights.is_empty() {
-            // Most OBJ files and many glTF models come without lights: start lit, and say so.
-            let layout = light_layout::default_for_unlit(&scene);
-            if let Ok(lights) = light_layout::generate(&layout, &scene) {
-                self.lights = lights;
-                self.toasts.push(Toast {
-                    text: format!("{} has no lights: placed {layout} (Lights panel to change)", scene.name),
-                    error: false,
-                    until: Instant::now() + std::time::Duration::from_secs(6),
-                });
-            }
-        }
-        self.camera = CameraController::from_camera(&scene.camera, &scene.bounds);
-        self.selected = None;
-        self.history.clear();
         if let Some(gpu) = &mut self.gpu {
             gpu.main.set_scene(&scene);
             gpu.reference.share_scene_of(&gpu.main);
         }
-        self.scene = scene;
+        for text in self.session.set_scene(scene) {
+            self.toasts.push(Toast { text, error: false, until: Instant::now() + std::time::Duration::from_secs(6) });
+        }
     }
 
     pub fn load_builtin(&mut self, name: &str) {
         match Scene::builtin(name) {
             Ok(s) => {
                 self.set_scene(s);
-                self.scene_file = None;
+                self.session.scene_file = None;
             }
             Err(e) => self.error(e.to_string()),
         }
@@ -568,26 +490,13 @@ impl ShadowLabApp {
     fn load_model(&mut self, path: &Path, scale: f32) -> Result<()> {
         let scene = Scene::load(path, scale)?;
         self.set_scene(scene);
-        self.scene_file = None;
+        self.session.scene_file = None;
         Ok(())
     }
 
-    pub fn scene_file_data(&self) -> SceneFile {
-        SceneFile {
-            version: FILE_VERSION,
-            scene: self.scene.source.clone(),
-            lights: self.lights.clone(),
-            camera: self.camera.camera(),
-            technique: self.technique.clone(),
-            params: self.params.clone(),
-            view: self.view.clone(),
-            indirect: self.indirect.clone(),
-        }
-    }
-
     pub fn save_scene_file(&mut self, path: &Path) -> Result<()> {
-        self.scene_file_data().save(path)?;
-        self.scene_file = Some(path.to_path_buf());
+        self.session.scene_file_data().save(path)?;
+        self.session.scene_file = Some(path.to_path_buf());
         self.remember_recent(path);
         Ok(())
     }
@@ -632,13 +541,8 @@ impl ShadowLabApp {
             }
         }
         self.set_scene(scene);
-        self.lights = file.lights;
-        self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
-        self.technique = file.technique;
-        self.params = file.params;
-        self.indirect = file.indirect;
-        self.view = file.view;
-        self.scene_file = Some(path.to_path_buf());
+        self.session.apply_file(file);
+        self.session.scene_file = Some(path.to_path_buf());
         for w in warnings {
             self.toast(format!("{}: {w}", path.display()));
         }
@@ -655,153 +559,19 @@ impl ShadowLabApp {
 
     // ----- lights -----
 
-    /// Record the current lights for undo; call before every light edit.
-    pub fn begin_edit(&mut self) {
-        self.history.record(&self.lights);
-    }
-
-    pub fn undo(&mut self) {
-        if self.history.undo(&mut self.lights) {
-            self.fix_selection();
-        }
-    }
-
-    pub fn redo(&mut self) {
-        if self.history.redo(&mut self.lights) {
-            self.fix_selection();
-        }
-    }
-
-    fn fix_selection(&mut self) {
-        if self.selected.is_some_and(|i| i >= self.lights.len()) {
-            self.selected = None;
-        }
-    }
-
-    pub fn delete_selected(&mut self) {
-        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
-            self.begin_edit();
-            self.lights.remove(i);
-            self.selected = None;
-        }
-    }
-
-    pub fn duplicate_selected(&mut self) {
-        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
-            self.begin_edit();
-            let mut l = self.lights[i];
-            l.position += Vec3::new(0.1, 0.0, 0.1) * l.range.min(10.0);
-            self.lights.push(l);
-            self.selected = Some(self.lights.len() - 1);
-        }
-    }
-
-    /// Add a light at a surface point (slightly off the surface along its normal).
-    pub fn add_light_at(&mut self, point: Vec3, normal: Vec3) {
-        let template = self.selected.and_then(|i| self.lights.get(i).copied()).unwrap_or_else(|| {
-            let range = (self.scene.bounds.size().length() * 0.15).max(0.5);
-            PointLight::new(
-                Vec3::ZERO,
-                Vec3::new(1.0, 0.9, 0.8),
-                light_layout::default_intensity_for_range(range),
-                range,
-            )
-        });
-        self.begin_edit();
-        let offset = (template.range * 0.05).clamp(0.02, 0.5);
-        self.lights.push(PointLight { position: point + normal * offset, ..template });
-        self.selected = Some(self.lights.len() - 1);
-    }
-
     pub fn apply_layout(&mut self, spec: &str) {
-        match light_layout::parse(spec).and_then(|l: LightLayout| light_layout::generate(&l, &self.scene)) {
-            Ok(lights) => {
-                self.begin_edit();
-                self.lights = lights;
-                self.selected = None;
-                self.toast(format!("{} lights from '{spec}'", self.lights.len()));
-            }
+        match self.session.apply_layout(spec) {
+            Ok(n) => self.toast(format!("{n} lights from '{spec}'")),
             Err(e) => self.error(e.to_string()),
-        }
-    }
-
-    /// Lights as rendered this frame (animated when animation is on).
-    pub fn animated_lights(&self) -> Vec<PointLight> {
-        self.lights_at(self.animation_time)
-    }
-
-    /// Lights at time `t_secs` of the light animation (as they are when it is off).
-    pub fn lights_at(&self, t_secs: f32) -> Vec<PointLight> {
-        let t = t_secs;
-        match self.animation {
-            Animation::Off => self.lights.clone(),
-            Animation::Orbit => self
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    let r = (l.range * 0.1).min(1.0);
-                    let a = t * Animation::ORBIT_RAD_PER_SEC + i as f32 * 0.7;
-                    PointLight { position: l.position + Vec3::new(a.cos() * r, 0.0, a.sin() * r), ..*l }
-                })
-                .collect(),
-            Animation::Bob => self
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| {
-                    let h = (l.range * 0.05).min(0.5);
-                    PointLight {
-                        position: l.position + Vec3::Y * (t * Animation::BOB_RAD_PER_SEC + i as f32).sin() * h,
-                        ..*l
-                    }
-                })
-                .collect(),
         }
     }
 
     // ----- rendering -----
 
-    pub fn render_settings(&self, size: egui::Vec2, preview: bool) -> RenderSettings {
-        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.35 } else { 1.0 };
-        RenderSettings {
-            width: ((size.x * scale) as u32).clamp(16, 4096),
-            height: ((size.y * scale) as u32).clamp(16, 4096),
-            exposure: self.view.exposure,
-            // The preview holds the full image's metered exposure, so dragging does not change the brightness.
-            auto_exposure: match (self.view.auto_exposure, preview) {
-                (false, _) => AutoExposure::Off,
-                (true, false) => AutoExposure::Meter,
-                (true, true) => AutoExposure::Hold,
-            },
-            tonemap: ToneMap::Aces,
-            specular: self.view.specular,
-            vpl: self.indirect.vpl,
-            // The preview has no indirect light: show all of what it has.
-            component: if preview { Component::Total } else { self.indirect.component },
-            indirect_gain: self
-                .indirect
-                .gain
-                .clamp(*IndirectSettings::GAIN_RANGE.start(), *IndirectSettings::GAIN_RANGE.end()),
-            ..Default::default()
-        }
-    }
-
-    /// The indirect technique of the views (None while the preview renders) and the parameters the user set.
-    fn indirect_inputs(&self, preview: bool) -> (Option<String>, BTreeMap<String, ParamValue>) {
-        match self.indirect.technique.clone().filter(|_| !preview) {
-            Some(key) => {
-                let params = self.indirect.params.get(&key).cloned().unwrap_or_default();
-                (Some(key), params)
-            }
-            None => (None, BTreeMap::new()),
-        }
-    }
-
     /// Alt+click: hand the clicked pixel to the indirect technique's probe (the parameters it names), so its
     /// probe overlay shows that pixel; the app knows no technique, only `probe_params`.
     fn probe_at(&mut self, pos: egui::Pos2, rect: egui::Rect) {
-        let (Some(key), Some(gpu)) = (self.indirect.technique.clone(), &mut self.gpu) else { return };
+        let (Some(key), Some(gpu)) = (self.session.indirect.technique.clone(), &mut self.gpu) else { return };
         let size = gpu.main.size;
         let Ok(technique) = gpu.main.indirect_technique(&key) else { return };
         let Some((px, py)) = technique.borrow().probe_params() else { return };
@@ -809,7 +579,7 @@ impl ShadowLabApp {
         let v = ((pos.y - rect.min.y) / rect.height().max(1.0)).clamp(0.0, 1.0);
         let x = ((u * size.0 as f32) as i64).min(size.0 as i64 - 1);
         let y = ((v * size.1 as f32) as i64).min(size.1 as i64 - 1);
-        let params = self.indirect.params.entry(key).or_default();
+        let params = self.session.indirect.params.entry(key).or_default();
         params.insert(px.to_string(), ParamValue::Int(x));
         params.insert(py.to_string(), ParamValue::Int(y));
         self.status = format!("probe at pixel ({x}, {y})");
@@ -817,7 +587,9 @@ impl ShadowLabApp {
 
     /// The overlay layers of the indirect technique, from the instance the main view renders with.
     fn indirect_overlay_layers(&mut self, lights: &[PointLight]) -> Vec<shadowlab_core::technique::OverlayLayer> {
-        let (Some(key), Some(gpu)) = (self.indirect.technique.clone(), &mut self.gpu) else { return Vec::new() };
+        let (Some(key), Some(gpu)) = (self.session.indirect.technique.clone(), &mut self.gpu) else {
+            return Vec::new();
+        };
         match gpu.main.indirect_technique(&key) {
             Ok(t) => t.borrow().overlays(lights),
             Err(_) => Vec::new(),
@@ -829,7 +601,7 @@ impl ShadowLabApp {
     fn overlay_primitives(&mut self, lights: &[PointLight]) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
         let mut out = Vec::new();
         let mut legends = Vec::new();
-        let overlays = &self.view.overlays;
+        let overlays = &self.session.view.overlays;
         let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
         let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>| {
             for layer in layers.into_iter().filter(|l| is_on(l)) {
@@ -839,18 +611,18 @@ impl ShadowLabApp {
         };
         let shown = |name: &str, default: bool| *overlays.get(name).unwrap_or(&default);
         let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
-        if let Ok(technique) = gpu.main.technique(&self.technique) {
+        if let Ok(technique) = gpu.main.technique(&self.session.technique) {
             // Only the shown layers are built (INSM's meshes cost a readback).
             let layers = technique.overlays_shown(lights, &shown);
             take(technique.as_ref(), layers, &mut out);
         }
-        if self.technique != "reference" {
+        if self.session.technique != "reference" {
             if let Ok(reference) = gpu.main.technique("reference") {
                 let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
                 take(reference.as_ref(), layers, &mut out);
             }
         }
-        if let Some(key) = self.indirect.technique.clone() {
+        if let Some(key) = self.session.indirect.technique.clone() {
             if let Ok(t) = gpu.main.indirect_technique(&key) {
                 let t = t.borrow();
                 let layers = t.overlays_shown(lights, &shown);
@@ -858,7 +630,8 @@ impl ShadowLabApp {
             }
         }
         // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
-        if let Some(group) = self.selected.and_then(|i| self.light_details(i)).map(|d| d.group).filter(|g| g.len() > 1)
+        if let Some(group) =
+            self.session.selected.and_then(|i| self.light_details(i)).map(|d| d.group).filter(|g| g.len() > 1)
         {
             let at: Vec<Vec3> = group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position).collect();
             let member = |p: &Vec3| at.contains(p);
@@ -878,7 +651,7 @@ impl ShadowLabApp {
                 }
             }
         }
-        if let Some(l) = self.selected.and_then(|i| lights.get(i)) {
+        if let Some(l) = self.session.selected.and_then(|i| lights.get(i)) {
             out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
             out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
         }
@@ -892,9 +665,9 @@ impl ShadowLabApp {
         let Some(step) = steps.get(index) else { return };
         for (name, _) in self.overlay_layers() {
             let on = step.layers.contains(&name.as_str());
-            self.view.overlays.insert(name, on);
+            self.session.view.overlays.insert(name, on);
         }
-        let indirect = key != self.technique;
+        let indirect = key != self.session.technique;
         if step.shows_shadow_maps {
             self.inspector.source = inspector::MapSource { indirect, set: step.maps };
             self.layout.request_focus(layout::Pane::Maps);
@@ -931,7 +704,7 @@ impl ShadowLabApp {
                     None => continue,
                 },
             };
-            let params = if indirect { &mut self.indirect.params } else { &mut self.params };
+            let params = if indirect { &mut self.session.indirect.params } else { &mut self.session.params };
             params.entry(key.to_string()).or_default().insert(name.to_string(), value);
         }
         for e in errors {
@@ -958,9 +731,9 @@ impl ShadowLabApp {
                 .map(|(i, name)| (MapSource { indirect, set: i + shadow }, format!("{} ({who}): {name}", t.label())))
                 .collect()
         }
-        let key = self.technique.clone();
-        let indirect_key = self.indirect.technique.clone();
-        let selected = self.selected;
+        let key = self.session.technique.clone();
+        let indirect_key = self.session.indirect.technique.clone();
+        let selected = self.session.selected;
         let mut sources = Vec::new();
         let mut follow: Option<(usize, Vec<Vec3>)> = None;
         if let Some(gpu) = &mut self.gpu {
@@ -1003,7 +776,7 @@ impl ShadowLabApp {
             }
         }
         if let Some(i) = selected {
-            let lights = self.animated_lights();
+            let lights = self.session.animated_lights();
             if let Some(light) = lights.get(i) {
                 let mut positions = vec![light.position];
                 let group = self.light_details(i).map(|d| d.group).unwrap_or_default();
@@ -1020,12 +793,12 @@ impl ShadowLabApp {
     /// What the current technique made of light `index` in its last frame (its cluster, say).
     pub fn light_details(&mut self, index: usize) -> Option<shadowlab_core::technique::LightDetails> {
         let gpu = self.gpu.as_mut()?;
-        gpu.main.technique(&self.technique).ok()?.light_details(index)
+        gpu.main.technique(&self.session.technique).ok()?.light_details(index)
     }
 
     /// The tooltip of a light in the view: its fields, and what the technique made of it.
     pub fn light_tooltip(&mut self, index: usize) -> Vec<String> {
-        let Some(l) = self.lights.get(index).copied() else { return Vec::new() };
+        let Some(l) = self.session.lights.get(index).copied() else { return Vec::new() };
         let mut lines = vec![
             format!("light {index}{}", if l.spot.is_some() { " (spot)" } else { "" }),
             format!("position ({:.2}, {:.2}, {:.2})", l.position.x, l.position.y, l.position.z),
@@ -1040,7 +813,7 @@ impl ShadowLabApp {
     /// The tooltip of a camera the technique used (a `Cameras` parameter's, e.g. an INSM viewpoint) under `pos`.
     pub fn camera_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
-        let Ok(technique) = gpu.main.technique(&self.technique) else { return Vec::new() };
+        let Ok(technique) = gpu.main.technique(&self.session.technique) else { return Vec::new() };
         for p in technique.params() {
             if let shadowlab_core::technique::ParamKind::Cameras { .. } = p.kind {
                 let cameras = technique.cameras_in_use(p.key);
@@ -1066,7 +839,7 @@ impl ShadowLabApp {
     pub fn overlay_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
         use shadowlab_core::technique::Technique;
         let visible: Vec<String> = self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(n, _)| n).collect();
-        let indirect_key = self.indirect.technique.clone();
+        let indirect_key = self.session.indirect.technique.clone();
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
         let pick = |t: &dyn Technique| {
             let points: Vec<_> =
@@ -1074,7 +847,7 @@ impl ShadowLabApp {
             let i = gizmo::pick_point(projection, points.iter().map(|p| p.position), pos, 8.0)?;
             Some(points[i]).map(|p| t.hover_details(p.layer, p.index)).filter(|lines| !lines.is_empty())
         };
-        if let Some(lines) = gpu.main.technique(&self.technique).ok().and_then(|t| pick(t.as_ref())) {
+        if let Some(lines) = gpu.main.technique(&self.session.technique).ok().and_then(|t| pick(t.as_ref())) {
             return lines;
         }
         let indirect = indirect_key.and_then(|k| gpu.main.indirect_technique(&k).ok());
@@ -1084,7 +857,7 @@ impl ShadowLabApp {
         // A visible per-pixel ID map (a cluster per pixel) under the pointer: the ID there, and what the
         // technique says of that ID as a hover index of the map's layer. Only in the single view, which the
         // render target fills.
-        let Some(rect) = self.last_viewport_rect.filter(|_| self.view.mode == ViewMode::Single) else {
+        let Some(rect) = self.last_viewport_rect.filter(|_| self.session.view.mode == ViewMode::Single) else {
             return Vec::new();
         };
         // (layer, size, ids, from the indirect technique)
@@ -1113,7 +886,7 @@ impl ShadowLabApp {
             let details = if from_indirect {
                 indirect.as_ref().map(|t| t.borrow().hover_details(name, id as usize))
             } else {
-                gpu.main.technique(&self.technique).ok().map(|t| t.hover_details(name, id as usize))
+                gpu.main.technique(&self.session.technique).ok().map(|t| t.hover_details(name, id as usize))
             };
             lines.extend(details.unwrap_or_default());
             return lines;
@@ -1127,32 +900,34 @@ impl ShadowLabApp {
         let mut names: Vec<(String, bool)> = Vec::new();
         // Only the names are needed: asking with no lights builds (almost) no primitives, every UI frame; one spot
         // light, when the scene has one, brings the layers that only spot lights have.
-        let probe: Vec<PointLight> = self.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
-        if let Ok(t) = gpu.main.technique(&self.technique) {
+        let probe: Vec<PointLight> =
+            self.session.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
+        if let Ok(t) = gpu.main.technique(&self.session.technique) {
             let layers = t.overlays_shown(&probe, &|_, _| false);
             names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         }
-        if self.technique != "reference" {
+        if self.session.technique != "reference" {
             names.push(("light ranges".into(), false));
         }
-        if let Ok(t) = gpu.main.technique(&self.technique) {
+        if let Ok(t) = gpu.main.technique(&self.session.technique) {
             if let Some((name, _)) = t.pixel_ids(&[]) {
                 names.push((name.to_string(), false));
             }
         }
         names.extend(self.indirect_overlay_layers(&[]).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
-        names.into_iter().map(|(n, d)| (n.clone(), *self.view.overlays.get(&n).unwrap_or(&d))).collect()
+        names.into_iter().map(|(n, d)| (n.clone(), *self.session.view.overlays.get(&n).unwrap_or(&d))).collect()
     }
 
     fn render_views(&mut self, size: egui::Vec2, pixels_per_point: f32, interacting: bool) -> Result<()> {
-        let lights = self.animated_lights();
-        let camera = self.camera.camera();
+        let lights = self.session.animated_lights();
+        let camera = self.session.camera.camera();
         let (mut overlays, legends) = self.overlay_primitives(&lights);
         self.legends = legends;
-        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.technique.clone() };
-        let two = self.view.mode != ViewMode::Single;
-        let per_view = if self.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
-        let settings = self.render_settings(per_view, interacting);
+        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.session.technique.clone() };
+        let two = self.session.view.mode != ViewMode::Single;
+        let per_view =
+            if self.session.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
+        let settings = self.session.render_settings(per_view, interacting);
         // Dot sizes are in screen points; the render target may be smaller or larger than the view.
         let render_pixels_per_point = pixels_per_point * settings.width as f32 / per_view.x.max(1.0);
         for o in &mut overlays {
@@ -1162,10 +937,10 @@ impl ShadowLabApp {
         }
         // Lines about 2 points wide on screen, whatever the render resolution; occluded parts faded.
         let style = OverlayStyle { line_width_px: (2.0 * render_pixels_per_point).max(1.0), occluded_alpha: 0.25 };
-        let params = self.params.get(&technique).cloned().unwrap_or_default();
+        let params = self.session.params.get(&technique).cloned().unwrap_or_default();
         // Both views get the same indirect technique and parameters, so a comparison compares the same light.
-        let (indirect, indirect_params) = self.indirect_inputs(interacting);
-        let x_ray = self.view.x_ray;
+        let (indirect, indirect_params) = self.session.indirect_inputs(interacting);
+        let x_ray = self.session.view.x_ray;
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
         let main_inputs = FrameInputs {
             camera,
@@ -1191,7 +966,7 @@ impl ShadowLabApp {
         if gpu.main.is_converged() {
             let key = gpu.main.frame_key();
             let technique_key = main_inputs.technique.clone();
-            let view_overlays = &self.view.overlays;
+            let view_overlays = &self.session.view.overlays;
             let technique = gpu.main.technique(&technique_key)?;
             let layer = technique.pixel_ids(&[]).map(|(name, _)| name);
             let wanted = layer.is_some_and(|name| *view_overlays.get(name).unwrap_or(&false));
@@ -1214,13 +989,13 @@ impl ShadowLabApp {
         let mut total_spent = spent;
         let mut total_steps = steps;
         if two {
-            let against = self.view.compare_against.clone();
+            let against = self.session.view.compare_against.clone();
             let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { against.as_str() };
             let reference_inputs = FrameInputs {
                 camera,
                 lights,
                 technique: reference_technique.into(),
-                params: self.params.get(reference_technique).cloned().unwrap_or_default(),
+                params: self.session.params.get(reference_technique).cloned().unwrap_or_default(),
                 indirect,
                 indirect_params,
                 settings: RenderSettings {
@@ -1257,7 +1032,7 @@ impl ShadowLabApp {
         };
         if std::mem::take(&mut gpu.reference.new_report) {
             if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
-                let p = describe_report(r, &self.params.get(&r.technique).cloned().unwrap_or_default());
+                let p = describe_report(r, &self.session.params.get(&r.technique).cloned().unwrap_or_default());
                 self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
             }
         }
@@ -1281,8 +1056,8 @@ impl ShadowLabApp {
 
     /// Recompute the difference image when both views have converged on new frames.
     fn update_difference(&mut self, ctx: &egui::Context) -> Result<()> {
-        let camera = self.camera.camera();
-        let lights = self.animated_lights();
+        let camera = self.session.camera.camera();
+        let lights = self.session.animated_lights();
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
         if !(gpu.main.is_converged() && gpu.reference.is_converged()) {
             return Ok(());
@@ -1290,9 +1065,9 @@ impl ShadowLabApp {
         let key = (
             gpu.main.frame_key(),
             gpu.reference.frame_key(),
-            self.view.diff_signed,
-            self.view.diff_visibility,
-            self.view.diff_gain.to_bits(),
+            self.session.view.diff_signed,
+            self.session.view.diff_visibility,
+            self.session.view.diff_gain.to_bits(),
         );
         if self.difference.as_ref().is_some_and(|d| d.key == key) {
             return Ok(());
@@ -1323,7 +1098,7 @@ impl ShadowLabApp {
         // Shadow factors are those of the direct light, whatever component the views show; otherwise the
         // component shown is compared.
         let read = |renderer: &shadowlab_core::Renderer| {
-            if self.view.diff_visibility {
+            if self.session.view.diff_visibility {
                 renderer.read_component(Component::Direct)
             } else {
                 renderer.read_hdr()
@@ -1332,11 +1107,11 @@ impl ShadowLabApp {
         let technique = Image::new(w, h, read(&gpu.main.renderer)?)?;
         let reference = Image::new(w, h, read(&gpu.reference.renderer)?)?;
         let mask = gpu.main.renderer.read_geometry_mask()?;
-        let mode = if self.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
-        let gain = self.view.diff_gain;
+        let mode = if self.session.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
+        let gain = self.session.view.diff_gain;
         // The GPU part (readbacks, and for shadow factors the unshadowed and ambient-only images of the same
         // view) here; the CPU part (metrics with FLIP, the colour map) on a worker thread unless synchronous.
-        let lit_ambient = if self.view.diff_visibility {
+        let lit_ambient = if self.session.view.diff_visibility {
             let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
             let mut aux = gpu.main.renderer.new_view(settings)?;
             let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
@@ -1388,21 +1163,22 @@ impl ShadowLabApp {
         let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
         let settings = gpu.main.renderer.settings().clone();
         let fixed: Vec<(String, ParamValue)> = self
+            .session
             .params
-            .get(&self.technique)
+            .get(&self.session.technique)
             .map(|p| p.iter().filter(|(k, _)| k.as_str() != key).map(|(k, v)| (k.clone(), v.clone())).collect())
             .unwrap_or_default();
         self.sweep = Some(sweep::Sweep::start(sweep::SweepJob {
             gpu: gpu.ctx.clone(),
             scene: gpu.main.renderer.shared_scene(),
             layouts: gpu.main.renderer.shared_layouts(),
-            lights: self.animated_lights(),
-            camera: self.camera.camera(),
+            lights: self.session.animated_lights(),
+            camera: self.session.camera.camera(),
             settings,
-            technique: self.technique.clone(),
+            technique: self.session.technique.clone(),
             fixed,
-            indirect: self.indirect.technique.clone().map(|k| {
-                let params = self.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
+            indirect: self.session.indirect.technique.clone().map(|k| {
+                let params = self.session.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
                 (k, params)
             }),
             key: key.to_string(),
@@ -1415,15 +1191,18 @@ impl ShadowLabApp {
 
     fn screenshot_name(&self, what: &str) -> PathBuf {
         let params: String = self
+            .session
             .params
-            .get(&self.technique)
+            .get(&self.session.technique)
             .map(|p| p.iter().map(|(k, v)| format!("-{k}{v}")).collect())
             .unwrap_or_default();
         let stamp = chrono_like_stamp();
-        let indirect = self.indirect.technique.as_ref().map(|k| format!("+{k}")).unwrap_or_default();
-        let name =
-            format!("shadowlab-{}-{}{}{}-{}-{}.png", self.scene.name, self.technique, params, indirect, what, stamp)
-                .replace(['/', '\\', ' ', ':'], "_");
+        let indirect = self.session.indirect.technique.as_ref().map(|k| format!("+{k}")).unwrap_or_default();
+        let name = format!(
+            "shadowlab-{}-{}{}{}-{}-{}.png",
+            self.session.scene.name, self.session.technique, params, indirect, what, stamp
+        )
+        .replace(['/', '\\', ' ', ':'], "_");
         self.data_dir.join("screenshots").join(name)
     }
 
@@ -1482,25 +1261,25 @@ impl ShadowLabApp {
             ctx.input_mut(|i| {
                 (
                     i.consume_key(egui::Modifiers::NONE, egui::Key::Delete),
-                    i.consume_key(egui::Modifiers::NONE, egui::Key::F) && self.camera.mode == CameraMode::Orbit,
+                    i.consume_key(egui::Modifiers::NONE, egui::Key::F) && self.session.camera.mode == CameraMode::Orbit,
                 )
             })
         };
         if undo {
-            self.undo();
+            self.session.undo();
         }
         if redo {
-            self.redo();
+            self.session.redo();
         }
         if delete {
-            self.delete_selected();
+            self.session.delete_selected();
         }
         if duplicate {
-            self.duplicate_selected();
+            self.session.duplicate_selected();
         }
         if frame {
-            let b = self.scene.bounds;
-            self.camera.frame(&b);
+            let b = self.session.scene.bounds;
+            self.session.camera.frame(&b);
         }
         if f12 {
             match self.save_view_screenshot() {
@@ -1570,7 +1349,7 @@ impl ShadowLabApp {
         if response.hovered() {
             input.zoom = ctx.input(|i| i.smooth_scroll_delta.y);
         }
-        if self.camera.mode == CameraMode::Fly && !ctx.egui_wants_keyboard_input() {
+        if self.session.camera.mode == CameraMode::Fly && !ctx.egui_wants_keyboard_input() {
             ctx.input(|i| {
                 let axis = |pos: egui::Key, neg: egui::Key| (i.key_down(pos) as i32 - i.key_down(neg) as i32) as f32;
                 input.movement = Vec3::new(
@@ -1582,56 +1361,6 @@ impl ShadowLabApp {
             });
         }
         input
-    }
-
-    /// The current technique's first camera-list parameter as the user set it: (key, cameras).
-    fn technique_cameras(&self) -> Option<(String, Vec<CameraPose>)> {
-        self.params.get(&self.technique)?.iter().find_map(|(k, v)| match v {
-            ParamValue::Cameras(c) => Some((k.clone(), c.clone())),
-            _ => None,
-        })
-    }
-
-    /// What the gizmo is attached to: the selected light, else the selected technique camera.
-    fn gizmo_target(&self) -> Option<DragTarget> {
-        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
-            return Some(DragTarget::Light(i));
-        }
-        let (key, index) = self.selected_camera.clone()?;
-        let (k, cameras) = self.technique_cameras()?;
-        (k == key && index < cameras.len()).then_some(DragTarget::Camera { key, index })
-    }
-
-    fn target_position(&self, target: &DragTarget) -> Option<Vec3> {
-        match target {
-            DragTarget::Light(i) => self.lights.get(*i).map(|l| l.position),
-            DragTarget::Camera { key, index } => match self.params.get(&self.technique)?.get(key)? {
-                ParamValue::Cameras(c) => c.get(*index).map(|c| c.position),
-                _ => None,
-            },
-        }
-    }
-
-    /// Move a light, or a technique camera (its target moves along, so it keeps looking the same way).
-    fn set_target_position(&mut self, target: &DragTarget, position: Vec3) {
-        match target {
-            DragTarget::Light(i) => {
-                if let Some(l) = self.lights.get_mut(*i) {
-                    l.position = position;
-                }
-            }
-            DragTarget::Camera { key, index } => {
-                let Some(ParamValue::Cameras(c)) = self.params.get_mut(&self.technique).and_then(|p| p.get_mut(key))
-                else {
-                    return;
-                };
-                if let Some(c) = c.get_mut(*index) {
-                    let offset = c.target - c.position;
-                    c.position = position;
-                    c.target = position + offset;
-                }
-            }
-        }
     }
 
     /// The central 3D view: image(s), gizmo, picking, camera.
@@ -1647,23 +1376,23 @@ impl ShadowLabApp {
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
         self.last_viewport_rect = Some(rect);
-        let projection_rect = if self.view.mode == ViewMode::SideBySide {
+        let projection_rect = if self.session.view.mode == ViewMode::SideBySide {
             egui::Rect::from_min_size(rect.min, egui::vec2(rect.width() * 0.5, rect.height()))
         } else {
             rect
         };
-        let camera = self.camera.camera();
+        let camera = self.session.camera.camera();
         let projection = Projection::new(&camera, projection_rect);
 
         // Gizmo and picking: a light, or a camera of the technique (INSM's viewpoints).
         let pointer = response.interact_pointer_pos().or(response.hover_pos());
-        let selected_target = self.gizmo_target();
-        let selected_pos = selected_target.as_ref().and_then(|t| self.target_position(t));
+        let selected_target = self.session.gizmo_target();
+        let selected_pos = selected_target.as_ref().and_then(|t| self.session.target_position(t));
         if response.drag_started_by(egui::PointerButton::Primary) {
             if let (Some(pos), Some(at), Some(target)) = (pointer, selected_pos, selected_target.clone()) {
                 if let Some(handle) = gizmo::hit_handle(&projection, at, pos) {
                     if matches!(target, DragTarget::Light(_)) {
-                        self.begin_edit();
+                        self.session.begin_edit();
                     }
                     self.drag = Some(GizmoDrag { handle, target, start: at, accumulated: egui::Vec2::ZERO });
                 }
@@ -1673,7 +1402,7 @@ impl ShadowLabApp {
             if response.dragged_by(egui::PointerButton::Primary) {
                 let accumulated = drag.accumulated + response.drag_delta();
                 let delta = gizmo::drag_delta(&projection, drag.start, drag.handle, accumulated);
-                self.set_target_position(&drag.target, drag.start + delta);
+                self.session.set_target_position(&drag.target, drag.start + delta);
                 if let Some(d) = &mut self.drag {
                     d.accumulated = accumulated;
                 }
@@ -1692,14 +1421,14 @@ impl ShadowLabApp {
                     self.probe_at(pos, projection.rect);
                 } else if ctrl {
                     let (o, d) = projection.ray(pos);
-                    if let Some((t, n)) = gizmo::pick_surface(&self.scene, o, d) {
-                        self.add_light_at(o + d * t, n);
+                    if let Some((t, n)) = gizmo::pick_surface(&self.session.scene, o, d) {
+                        self.session.add_light_at(o + d * t, n);
                     }
                 } else if selected_pos.and_then(|at| gizmo::hit_handle(&projection, at, pos)).is_none() {
-                    self.selected = gizmo::pick_light(&projection, &self.animated_lights(), pos, 12.0);
-                    self.selected_camera = None;
-                    if self.selected.is_none() {
-                        self.selected_camera = self.technique_cameras().and_then(|(key, cameras)| {
+                    self.session.selected = gizmo::pick_light(&projection, &self.session.animated_lights(), pos, 12.0);
+                    self.session.selected_camera = None;
+                    if self.session.selected.is_none() {
+                        self.session.selected_camera = self.session.technique_cameras().and_then(|(key, cameras)| {
                             gizmo::pick_point(&projection, cameras.iter().map(|c| c.position), pos, 12.0)
                                 .map(|i| (key, i))
                         });
@@ -1711,8 +1440,8 @@ impl ShadowLabApp {
             if ui.button("Add light here").clicked() {
                 if let Some(pos) = ui.ctx().input(|i| i.pointer.interact_pos()) {
                     let (o, d) = projection.ray(pos);
-                    if let Some((t, n)) = gizmo::pick_surface(&self.scene, o, d) {
-                        self.add_light_at(o + d * t, n);
+                    if let Some((t, n)) = gizmo::pick_surface(&self.session.scene, o, d) {
+                        self.session.add_light_at(o + d * t, n);
                     }
                 }
                 ui.close();
@@ -1725,7 +1454,7 @@ impl ShadowLabApp {
             input.rotate.x += 40.0 * input.dt_secs;
             ui.ctx().request_repaint();
         }
-        if self.camera.update(&input) {
+        if self.session.camera.update(&input) {
             self.last_interaction = Some(Instant::now());
         }
         let interacting = gizmo_active
@@ -1737,7 +1466,7 @@ impl ShadowLabApp {
         if let Err(e) = self.render_views(rect.size() * ppp, ppp, interacting) {
             self.status = format!("render error: {e:#}");
         }
-        if self.view.mode == ViewMode::Difference {
+        if self.session.view.mode == ViewMode::Difference {
             if let Err(e) = self.update_difference(ui.ctx()) {
                 self.status = format!("difference: {e:#}");
             }
@@ -1745,10 +1474,10 @@ impl ShadowLabApp {
 
         // Show the images.
         let painter = ui.painter_at(rect);
-        let indirect = self.indirect.technique.as_deref();
+        let indirect = self.session.indirect.technique.as_deref();
         let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
         if let Some(gpu) = &self.gpu {
-            match self.view.mode {
+            match self.session.view.mode {
                 ViewMode::Single => {
                     painter.image(gpu.main.texture_id, rect, uv, egui::Color32::WHITE);
                 }
@@ -1757,8 +1486,8 @@ impl ShadowLabApp {
                     painter.image(gpu.main.texture_id, l, uv, egui::Color32::WHITE);
                     painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
                     painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
-                    label(&painter, l.left_top(), &technique_pair(&self.technique, indirect));
-                    label(&painter, r.left_top(), &technique_pair(&self.view.compare_against, indirect));
+                    label(&painter, l.left_top(), &technique_pair(&self.session.technique, indirect));
+                    label(&painter, r.left_top(), &technique_pair(&self.session.view.compare_against, indirect));
                 }
                 ViewMode::Difference => match &self.difference {
                     Some(d) => {
@@ -1769,8 +1498,8 @@ impl ShadowLabApp {
                             rect.left_top(),
                             &format!(
                                 "{} vs {}: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
-                                technique_pair(&self.technique, indirect),
-                                technique_pair(&self.view.compare_against, indirect),
+                                technique_pair(&self.session.technique, indirect),
+                                technique_pair(&self.session.view.compare_against, indirect),
                                 m.rmse,
                                 m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
                                 m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
@@ -1779,7 +1508,7 @@ impl ShadowLabApp {
                                     .unwrap_or_else(|| "-".into()),
                             ),
                         );
-                        legend(&painter, rect, self.view.diff_signed, self.view.diff_gain);
+                        legend(&painter, rect, self.session.view.diff_signed, self.session.view.diff_gain);
                     }
                     None => {
                         painter.image(gpu.main.texture_id, rect, uv, egui::Color32::from_gray(90));
@@ -1787,8 +1516,8 @@ impl ShadowLabApp {
                     }
                 },
                 ViewMode::Split => {
-                    let x = rect.left() + rect.width() * self.view.split.clamp(0.0, 1.0);
-                    let s = self.view.split.clamp(0.0, 1.0);
+                    let x = rect.left() + rect.width() * self.session.view.split.clamp(0.0, 1.0);
+                    let s = self.session.view.split.clamp(0.0, 1.0);
                     let left = egui::Rect::from_min_max(rect.min, egui::pos2(x, rect.bottom()));
                     let right = egui::Rect::from_min_max(egui::pos2(x, rect.top()), rect.max);
                     painter.image(
@@ -1807,20 +1536,27 @@ impl ShadowLabApp {
                         [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
                         egui::Stroke::new(2.0, egui::Color32::WHITE),
                     );
-                    label(&painter, rect.left_top(), &technique_pair(&self.technique, indirect));
-                    label(&painter, egui::pos2(x, rect.top()), &technique_pair(&self.view.compare_against, indirect));
+                    label(&painter, rect.left_top(), &technique_pair(&self.session.technique, indirect));
+                    label(
+                        &painter,
+                        egui::pos2(x, rect.top()),
+                        &technique_pair(&self.session.view.compare_against, indirect),
+                    );
                     // The split line is draggable from a handle at its middle.
                     let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
                     let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());
                     painter.rect_filled(handle, 3.0, egui::Color32::from_white_alpha(200));
                     if h.dragged() {
-                        self.view.split = ((x + h.drag_delta().x - rect.left()) / rect.width()).clamp(0.0, 1.0);
+                        self.session.view.split = ((x + h.drag_delta().x - rect.left()) / rect.width()).clamp(0.0, 1.0);
                     }
                 }
             }
             // Progress of the frame being refined.
-            let progress =
-                gpu.main.progress.min(if self.view.mode == ViewMode::Single { 1.0 } else { gpu.reference.progress });
+            let progress = gpu.main.progress.min(if self.session.view.mode == ViewMode::Single {
+                1.0
+            } else {
+                gpu.reference.progress
+            });
             if progress < 1.0 {
                 let bar = egui::Rect::from_min_size(
                     rect.left_bottom() - egui::vec2(0.0, 4.0),
@@ -1830,17 +1566,17 @@ impl ShadowLabApp {
                 ui.ctx().request_repaint();
             }
         }
-        if let Some(at) = self.gizmo_target().and_then(|t| self.target_position(&t)) {
+        if let Some(at) = self.session.gizmo_target().and_then(|t| self.session.target_position(&t)) {
             let hover = pointer.and_then(|p| gizmo::hit_handle(&projection, at, p));
             gizmo::paint(&painter, &projection, at, self.drag.as_ref().map(|d| d.handle).or(hover));
         }
-        if self.view.legend {
+        if self.session.view.legend {
             legend::paint_in_view(&painter, rect, &self.legends);
         }
         // A light under the pointer: its details in a tooltip.
         if self.drag.is_none() && !interacting {
             if let Some(pos) = response.hover_pos() {
-                let lines = match gizmo::pick_light(&projection, &self.animated_lights(), pos, 10.0) {
+                let lines = match gizmo::pick_light(&projection, &self.session.animated_lights(), pos, 10.0) {
                     Some(i) => self.light_tooltip(i),
                     None => {
                         let camera = self.camera_tooltip(&projection, pos);
@@ -1860,7 +1596,7 @@ impl ShadowLabApp {
                 }
             }
         }
-        if interacting || self.animation != Animation::Off {
+        if interacting || self.session.animation != Animation::Off {
             ui.ctx().request_repaint();
         }
     }
@@ -1989,8 +1725,8 @@ impl eframe::App for ShadowLabApp {
         if self.ui_frame_ms.len() > 120 {
             self.ui_frame_ms.pop_front();
         }
-        if self.animation != Animation::Off {
-            self.animation_time += ctx.input(|i| i.stable_dt).min(0.1);
+        if self.session.animation != Animation::Off {
+            self.session.animation_time += ctx.input(|i| i.stable_dt).min(0.1);
         }
         // wgpu reports a lost device from its poll: poll (without waiting) before touching the device this
         // frame, so a loss is handled before anything is created on it (wgpu's buffer helpers panic then).
@@ -2023,11 +1759,11 @@ impl eframe::App for ShadowLabApp {
         }
         self.handle_dropped_files(&ctx);
         self.handle_shortcuts(&ctx);
-        if self.selected != self.last_selected {
-            if self.selected.is_some() {
+        if self.session.selected != self.last_selected {
+            if self.session.selected.is_some() {
                 self.layout.focus(layout::Pane::Lights);
             }
-            self.last_selected = self.selected;
+            self.last_selected = self.session.selected;
         }
         if self.layout.full_view {
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| {

@@ -51,7 +51,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     }
                     ui.close();
                 }
-                if let Some(path) = app.scene_file.clone() {
+                if let Some(path) = app.session.scene_file.clone() {
                     if ui
                         .button(format!("Save to {}", path.file_name().unwrap_or_default().to_string_lossy()))
                         .clicked()
@@ -83,7 +83,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     app.export_figure();
                     ui.close();
                 }
-                let animated = app.animation.period_secs().is_some();
+                let animated = app.session.animation.period_secs().is_some();
                 let sequences = [
                     (
                         Motion::Orbit,
@@ -126,27 +126,30 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 }
             });
             ui.menu_button("Edit", |ui| {
-                if ui.add_enabled(app.history.can_undo(), egui::Button::new("Undo (Ctrl+Z)")).clicked() {
-                    app.undo();
+                if ui.add_enabled(app.session.history.can_undo(), egui::Button::new("Undo (Ctrl+Z)")).clicked() {
+                    app.session.undo();
                 }
-                if ui.add_enabled(app.history.can_redo(), egui::Button::new("Redo (Ctrl+Shift+Z)")).clicked() {
-                    app.redo();
+                if ui.add_enabled(app.session.history.can_redo(), egui::Button::new("Redo (Ctrl+Shift+Z)")).clicked() {
+                    app.session.redo();
                 }
                 ui.separator();
-                if ui.add_enabled(app.selected.is_some(), egui::Button::new("Duplicate light (Ctrl+D)")).clicked() {
-                    app.duplicate_selected();
+                if ui
+                    .add_enabled(app.session.selected.is_some(), egui::Button::new("Duplicate light (Ctrl+D)"))
+                    .clicked()
+                {
+                    app.session.duplicate_selected();
                 }
-                if ui.add_enabled(app.selected.is_some(), egui::Button::new("Delete light (Del)")).clicked() {
-                    app.delete_selected();
+                if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Delete light (Del)")).clicked() {
+                    app.session.delete_selected();
                 }
             });
             ui.menu_button("View", |ui| {
-                ui.radio_value(&mut app.view.mode, ViewMode::Single, "Single view");
-                ui.radio_value(&mut app.view.mode, ViewMode::SideBySide, "Side by side with the reference");
-                ui.radio_value(&mut app.view.mode, ViewMode::Split, "Split view with the reference");
-                ui.radio_value(&mut app.view.mode, ViewMode::Difference, "Difference against the reference");
+                ui.radio_value(&mut app.session.view.mode, ViewMode::Single, "Single view");
+                ui.radio_value(&mut app.session.view.mode, ViewMode::SideBySide, "Side by side with the reference");
+                ui.radio_value(&mut app.session.view.mode, ViewMode::Split, "Split view with the reference");
+                ui.radio_value(&mut app.session.view.mode, ViewMode::Difference, "Difference against the reference");
                 ui.separator();
-                ui.checkbox(&mut app.view.x_ray, "X-ray overlays");
+                ui.checkbox(&mut app.session.view.x_ray, "X-ray overlays");
             });
             ui.menu_button("Panels", |ui| super::layout::panels_menu(app, ui));
         });
@@ -298,22 +301,30 @@ fn params_panel(
 
 fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Shadows");
-    egui::ComboBox::from_label("Technique").selected_text(app.technique.clone()).width(150.0).truncate().show_ui(
-        ui,
-        |ui| {
+    egui::ComboBox::from_label("Technique")
+        .selected_text(app.session.technique.clone())
+        .width(150.0)
+        .truncate()
+        .show_ui(ui, |ui| {
             for e in REGISTRY {
-                ui.selectable_value(&mut app.technique, e.key.to_string(), e.label);
+                ui.selectable_value(&mut app.session.technique, e.key.to_string(), e.label);
             }
-        },
-    );
-    let key = app.technique.clone();
-    let view_camera = app.camera.camera();
+        });
+    let key = app.session.technique.clone();
+    let view_camera = app.session.camera.camera();
     let Some(gpu) = &mut app.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
-    let user = app.params.entry(key.clone()).or_default();
-    params_panel(ui, technique.as_mut(), user, &view_camera, &mut app.selected_camera, &mut app.selected);
+    let user = app.session.params.entry(key.clone()).or_default();
+    params_panel(
+        ui,
+        technique.as_mut(),
+        user,
+        &view_camera,
+        &mut app.session.selected_camera,
+        &mut app.session.selected,
+    );
     if ui.button("Reset parameters").clicked() {
-        app.params.remove(&key);
+        app.session.params.remove(&key);
         gpu.main.reset_technique(&key);
     }
 }
@@ -322,7 +333,7 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 /// the views show.
 fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Indirect light");
-    let mut choice = app.indirect.technique.clone();
+    let mut choice = app.session.indirect.technique.clone();
     egui::ComboBox::from_label("Indirect")
         .selected_text(choice.clone().unwrap_or_else(|| "none".into()))
         .width(150.0)
@@ -335,33 +346,33 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         });
     // A change restarts the views' frames: the indirect key is part of what a frame depends on. A technique
     // whose paper uses another VPL source switches to it (the user can switch back below).
-    if choice != app.indirect.technique {
+    if choice != app.session.indirect.technique {
         if let Some(source) = choice.as_deref().and_then(shadowlab_core::technique::preferred_vpl_source) {
-            app.indirect.vpl.source = source;
+            app.session.indirect.vpl.source = source;
         }
     }
-    app.indirect.technique = choice;
+    app.session.indirect.technique = choice;
     let mut uses_vpls = false;
-    if let (Some(key), Some(gpu)) = (app.indirect.technique.clone(), &mut app.gpu) {
+    if let (Some(key), Some(gpu)) = (app.session.indirect.technique.clone(), &mut app.gpu) {
         match gpu.main.indirect_technique(&key) {
             Ok(shared) => {
                 let mut technique = shared.borrow_mut();
                 uses_vpls = technique.uses_vpls();
-                let user = app.indirect.params.entry(key.clone()).or_default();
-                let view_camera = app.camera.camera();
+                let user = app.session.indirect.params.entry(key.clone()).or_default();
+                let view_camera = app.session.camera.camera();
                 ui.push_id("indirect parameters", |ui| {
                     params_panel(
                         ui,
                         technique.as_mut(),
                         user,
                         &view_camera,
-                        &mut app.selected_camera,
-                        &mut app.selected,
+                        &mut app.session.selected_camera,
+                        &mut app.session.selected,
                     );
                 });
                 drop(technique);
                 if ui.button("Reset indirect parameters").clicked() {
-                    app.indirect.params.remove(&key);
+                    app.session.indirect.params.remove(&key);
                     // Both views, so a comparison keeps comparing the same indirect light.
                     for view in [&mut gpu.main, &mut gpu.reference] {
                         if let Err(e) = view.reset_indirect(&key) {
@@ -375,18 +386,18 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
     }
-    ui.add_enabled_ui(uses_vpls, |ui| vpl_ui(&mut app.indirect, ui));
+    ui.add_enabled_ui(uses_vpls, |ui| vpl_ui(&mut app.session.indirect, ui));
     ui.horizontal(|ui| {
         ui.label("show");
         for c in [Component::Total, Component::Direct, Component::Indirect] {
-            ui.selectable_value(&mut app.indirect.component, c, c.name());
+            ui.selectable_value(&mut app.session.indirect.component, c, c.name());
         }
     })
     .response
     .on_hover_text("The part of the light the views, the difference and the screenshots show");
-    ui.add_enabled_ui(app.indirect.component == Component::Indirect, |ui| {
+    ui.add_enabled_ui(app.session.indirect.component == Component::Indirect, |ui| {
         ui.add(
-            egui::Slider::new(&mut app.indirect.gain, IndirectSettings::GAIN_RANGE)
+            egui::Slider::new(&mut app.session.indirect.gain, IndirectSettings::GAIN_RANGE)
                 .logarithmic(true)
                 .text("indirect gain"),
         )
@@ -427,66 +438,67 @@ fn vpl_ui(indirect: &mut IndirectSettings, ui: &mut egui::Ui) {
 
 fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Render");
-    ui.add(egui::Slider::new(&mut app.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
+    ui.add(egui::Slider::new(&mut app.session.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
     ui.horizontal(|ui| {
-        ui.checkbox(&mut app.view.auto_exposure, "auto exposure").on_hover_text(
+        ui.checkbox(&mut app.session.view.auto_exposure, "auto exposure").on_hover_text(
             "Scale the exposure so the image's log-average luminance (over the geometry) is middle grey; the \
              slider then compensates. Each view meters its own complete image; the preview while dragging keeps \
              the last one.",
         );
     });
-    if let (true, Some((scale, average))) = (app.view.auto_exposure, app.metered_exposure) {
+    if let (true, Some((scale, average))) = (app.session.view.auto_exposure, app.metered_exposure) {
         ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"));
     }
-    let label = if app.view.auto_exposure { "compensation" } else { "exposure" };
-    ui.add(egui::Slider::new(&mut app.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
-    ui.checkbox(&mut app.view.specular, "Blinn-Phong specular");
+    let label = if app.session.view.auto_exposure { "compensation" } else { "exposure" };
+    ui.add(egui::Slider::new(&mut app.session.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
+    ui.checkbox(&mut app.session.view.specular, "Blinn-Phong specular");
     ui.horizontal(|ui| {
         ui.label("Animate lights");
-        ui.radio_value(&mut app.animation, Animation::Off, "off");
-        ui.radio_value(&mut app.animation, Animation::Orbit, "orbit");
-        ui.radio_value(&mut app.animation, Animation::Bob, "bob");
+        ui.radio_value(&mut app.session.animation, Animation::Off, "off");
+        ui.radio_value(&mut app.session.animation, Animation::Orbit, "orbit");
+        ui.radio_value(&mut app.session.animation, Animation::Bob, "bob");
     });
     ui.heading("Camera");
     ui.horizontal(|ui| {
-        let mut mode = app.camera.mode;
+        let mut mode = app.session.camera.mode;
         ui.radio_value(&mut mode, CameraMode::Orbit, "orbit");
         ui.radio_value(&mut mode, CameraMode::Fly, "fly (WASD QE)");
-        app.camera.set_mode(mode);
+        app.session.camera.set_mode(mode);
     });
     ui.horizontal(|ui| {
         if ui.button("Frame scene (F)").clicked() {
-            let b = app.scene.bounds;
-            app.camera.frame(&b);
+            let b = app.session.scene.bounds;
+            app.session.camera.frame(&b);
         }
         if ui.button("Reset").clicked() {
-            app.camera = super::camera::CameraController::from_camera(&app.scene.camera, &app.scene.bounds);
+            app.session.camera =
+                super::camera::CameraController::from_camera(&app.session.scene.camera, &app.session.scene.bounds);
         }
     });
-    let near = app.camera.near;
-    ui.add(egui::Slider::new(&mut app.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
-    ui.add(egui::Slider::new(&mut app.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
+    let near = app.session.camera.near;
+    ui.add(egui::Slider::new(&mut app.session.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
+    ui.add(egui::Slider::new(&mut app.session.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
     ui.heading("Compare");
     ui.horizontal(|ui| {
-        ui.selectable_value(&mut app.view.mode, ViewMode::Single, "single");
-        ui.selectable_value(&mut app.view.mode, ViewMode::SideBySide, "side by side");
-        ui.selectable_value(&mut app.view.mode, ViewMode::Split, "split");
-        ui.selectable_value(&mut app.view.mode, ViewMode::Difference, "difference");
+        ui.selectable_value(&mut app.session.view.mode, ViewMode::Single, "single");
+        ui.selectable_value(&mut app.session.view.mode, ViewMode::SideBySide, "side by side");
+        ui.selectable_value(&mut app.session.view.mode, ViewMode::Split, "split");
+        ui.selectable_value(&mut app.session.view.mode, ViewMode::Difference, "difference");
     });
     ui.horizontal(|ui| {
         ui.label("against");
-        ui.selectable_value(&mut app.view.compare_against, "reference".to_string(), "reference");
-        ui.selectable_value(&mut app.view.compare_against, "raytraced".to_string(), "ray traced");
+        ui.selectable_value(&mut app.session.view.compare_against, "reference".to_string(), "reference");
+        ui.selectable_value(&mut app.session.view.compare_against, "raytraced".to_string(), "ray traced");
     });
-    if app.view.mode == ViewMode::Difference {
+    if app.session.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {
-            ui.checkbox(&mut app.view.diff_signed, "signed");
-            ui.checkbox(&mut app.view.diff_visibility, "shadow factors");
+            ui.checkbox(&mut app.session.view.diff_signed, "signed");
+            ui.checkbox(&mut app.session.view.diff_visibility, "shadow factors");
         });
         ui.horizontal(|ui| {
             ui.label("gain");
             for g in [1.0, 5.0, 10.0] {
-                ui.selectable_value(&mut app.view.diff_gain, g, format!("×{g}"));
+                ui.selectable_value(&mut app.session.view.diff_gain, g, format!("×{g}"));
             }
         });
         if let Some(d) = &app.difference {
@@ -517,14 +529,14 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 
 fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Overlays");
-    ui.checkbox(&mut app.view.x_ray, "X-ray (through geometry)")
+    ui.checkbox(&mut app.session.view.x_ray, "X-ray (through geometry)")
         .on_hover_text("Off: the parts behind surfaces are drawn faded; on: everything is drawn in full on top");
-    ui.checkbox(&mut app.view.legend, "Legend over the view");
+    ui.checkbox(&mut app.session.view.legend, "Legend over the view");
     ui.label("Hover a light for its details; click it to select it (and its cluster, when it has one).");
     for (name, on) in app.overlay_layers() {
         let mut x = on;
         if ui.checkbox(&mut x, &name).changed() {
-            app.view.overlays.insert(name.clone(), x);
+            app.session.view.overlays.insert(name.clone(), x);
         }
         // The legend of the layers drawn in the last frame.
         if let Some((_, entries)) = app.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
@@ -536,7 +548,7 @@ fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 }
 
 fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    ui.heading(format!("Lights ({})", app.lights.len()));
+    ui.heading(format!("Lights ({})", app.session.lights.len()));
     ui.label("Click a light to select it; drag the gizmo to move it. Ctrl+click on a surface adds one.");
     thread_local! {
         static SPEC: std::cell::RefCell<String> = std::cell::RefCell::new("circles:10:8:7".to_string());
@@ -551,17 +563,17 @@ fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         SPEC.with(|s| *s.borrow_mut() = spec);
     });
     ui.horizontal(|ui| {
-        if ui.add_enabled(app.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
-            app.duplicate_selected();
+        if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
+            app.session.duplicate_selected();
         }
-        if ui.add_enabled(app.selected.is_some(), egui::Button::new("Delete")).clicked() {
-            app.delete_selected();
+        if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Delete")).clicked() {
+            app.session.delete_selected();
         }
     });
-    if let Some(i) = app.selected.filter(|&i| i < app.lights.len()) {
+    if let Some(i) = app.session.selected.filter(|&i| i < app.session.lights.len()) {
         ui.separator();
         ui.label(format!("Light {i}"));
-        let mut l = app.lights[i];
+        let mut l = app.session.lights[i];
         let mut changed = false;
         let mut committed = false;
         let track = |r: egui::Response, changed: &mut bool, committed: &mut bool| {
@@ -617,29 +629,29 @@ fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         }
         l.color = Vec3::from_array(rgb);
         if committed {
-            app.begin_edit();
+            app.session.begin_edit();
         }
         if changed && l.is_valid() {
-            app.lights[i] = l;
+            app.session.lights[i] = l;
         }
     }
 }
 
 fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Scene");
-    let b = app.scene.bounds;
+    let b = app.session.scene.bounds;
     egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
         ui.label("name");
-        ui.label(&app.scene.name);
+        ui.label(&app.session.scene.name);
         ui.end_row();
         ui.label("triangles");
-        ui.label(format!("{}", app.scene.triangle_count()));
+        ui.label(format!("{}", app.session.scene.triangle_count()));
         ui.end_row();
         ui.label("materials");
-        ui.label(format!("{}", app.scene.materials.len()));
+        ui.label(format!("{}", app.session.scene.materials.len()));
         ui.end_row();
         ui.label("lights");
-        ui.label(format!("{}", app.lights.len()));
+        ui.label(format!("{}", app.session.lights.len()));
         ui.end_row();
         ui.label("bounds");
         ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
@@ -792,7 +804,7 @@ pub fn figures_text(figures: &BTreeMap<String, f64>) -> String {
 /// Sweep one numeric parameter of the current technique against the reference, plotted live.
 fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Sweep");
-    let key = app.technique.clone();
+    let key = app.session.technique.clone();
     let Some(gpu) = &mut app.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
     let numeric: Vec<_> = technique
@@ -908,10 +920,10 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     let mut sections: Vec<(String, &'static str, Vec<shadowlab_core::technique::ExplainStep>)> = Vec::new();
     {
         let Some(gpu) = &mut app.gpu else { return };
-        if let Ok(technique) = gpu.main.technique(&app.technique) {
-            sections.push((app.technique.clone(), technique.label(), technique.explain()));
+        if let Ok(technique) = gpu.main.technique(&app.session.technique) {
+            sections.push((app.session.technique.clone(), technique.label(), technique.explain()));
         }
-        if let Some(key) = app.indirect.technique.clone() {
+        if let Some(key) = app.session.indirect.technique.clone() {
             if let Ok(shared) = gpu.main.indirect_technique(&key) {
                 let technique = shared.borrow();
                 let steps = technique.explain();
