@@ -6,9 +6,9 @@ use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use shadowlab_core::scene::PointLight;
 
-use super::args::{parse_step, FrameArgs, SceneArgs};
+use super::args::{check_technique, parse_step, FrameArgs, SceneArgs};
 use super::progress::Progress;
-use super::setup::{check_technique, setup};
+use super::setup::setup;
 use crate::files::{check_output_path, write_atomic};
 use crate::measure::apply_params;
 

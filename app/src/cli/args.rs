@@ -1,9 +1,13 @@
 //! The argument groups several subcommands flatten into theirs: the scene and its lights, the frame (image
-//! size, camera, shading, indirect light, timing).
+//! size, camera, shading, indirect light, timing), the technique and its comparison target; and the checks of
+//! technique keys.
 
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use glam::Vec3;
+use shadowlab_core::technique;
+
+use crate::measure::IndirectChoice;
 
 #[derive(Args, Debug, Clone)]
 pub struct SceneArgs {
@@ -97,9 +101,63 @@ pub struct FrameArgs {
 
 impl FrameArgs {
     /// The indirect technique of the technique side.
-    pub fn indirect_choice(&self) -> crate::measure::IndirectChoice {
-        crate::measure::IndirectChoice { key: self.indirect.clone(), params: self.indirect_params.clone() }
+    pub fn indirect_choice(&self) -> IndirectChoice {
+        IndirectChoice { key: self.indirect.clone(), params: self.indirect_params.clone() }
     }
+}
+
+/// The technique and its comparison target, shared by `compare` and `sweep`.
+#[derive(Args, Debug)]
+pub struct TargetArgs {
+    #[arg(long, default_value = "lightcluster")]
+    pub technique: String,
+    /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
+    #[arg(long, default_value = "reference")]
+    pub against: String,
+    /// A parameter of the comparison target, `key=value`; repeatable.
+    #[arg(long = "against-param", value_name = "KEY=VALUE")]
+    pub against_params: Vec<String>,
+    /// The comparison target's indirect technique (default: the same as `--indirect`).
+    #[arg(long = "against-indirect", value_name = "KEY")]
+    pub against_indirect: Option<String>,
+    /// A parameter of the target's indirect technique, `key=value`; repeatable.
+    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
+    pub against_indirect_params: Vec<String>,
+}
+
+impl TargetArgs {
+    /// Both technique keys are registered.
+    pub fn check(&self) -> Result<()> {
+        check_technique(&self.technique)?;
+        check_technique(&self.against)
+    }
+
+    /// The target's indirect technique: `--against-indirect` (with its parameters) or the technique side's.
+    pub fn against_indirect(&self, same: &IndirectChoice) -> Result<IndirectChoice> {
+        match &self.against_indirect {
+            Some(k) => {
+                check_indirect(k)?;
+                Ok(IndirectChoice { key: k.clone(), params: self.against_indirect_params.to_vec() })
+            }
+            None if self.against_indirect_params.is_empty() => Ok(same.clone()),
+            None => bail!("--against-indirect-param needs --against-indirect"),
+        }
+    }
+}
+
+/// `none` or a key of the indirect registry.
+pub fn check_indirect(key: &str) -> Result<()> {
+    if key != "none" && technique::INDIRECT_REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown indirect technique '{key}' (choose none or one of: {})", technique::indirect_keys());
+    }
+    Ok(())
+}
+
+pub fn check_technique(key: &str) -> Result<()> {
+    if technique::REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown technique '{key}' (choose one of: {})", technique::keys());
+    }
+    Ok(())
 }
 
 /// `--step DX,DY,DZ`.

@@ -6,8 +6,8 @@ use anyhow::{bail, Result};
 use clap::Args;
 use serde::Serialize;
 
-use super::args::{FrameArgs, SceneArgs};
-use super::setup::{check_indirect, check_technique, setup};
+use super::args::{FrameArgs, SceneArgs, TargetArgs};
+use super::setup::setup;
 use crate::files::{check_output_path, encode_png, write_atomic};
 
 #[derive(Args, Debug)]
@@ -16,23 +16,11 @@ pub struct CompareArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    #[arg(long, default_value = "lightcluster")]
-    pub technique: String,
+    #[command(flatten)]
+    pub target: TargetArgs,
     /// A technique parameter, `key=value`; repeatable.
     #[arg(long = "param", value_name = "KEY=VALUE")]
     pub params: Vec<String>,
-    /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
-    #[arg(long, default_value = "reference")]
-    pub against: String,
-    /// A parameter of the comparison target, `key=value`; repeatable.
-    #[arg(long = "against-param", value_name = "KEY=VALUE")]
-    pub against_params: Vec<String>,
-    /// The comparison target's indirect technique (default: the same as `--indirect`).
-    #[arg(long = "against-indirect", value_name = "KEY")]
-    pub against_indirect: Option<String>,
-    /// A parameter of the target's indirect technique, `key=value`; repeatable.
-    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
-    pub against_indirect_params: Vec<String>,
     /// Difference image mode.
     #[arg(long, value_enum, default_value = "absolute")]
     pub mode: crate::measure::DiffKind,
@@ -83,22 +71,6 @@ struct CompareReport<'a> {
     against_report_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
 }
 
-/// The target's indirect technique: `--against-indirect` (with its parameters) or the technique side's.
-pub fn against_indirect(
-    key: &Option<String>,
-    params: &[String],
-    same: &crate::measure::IndirectChoice,
-) -> Result<crate::measure::IndirectChoice> {
-    match key {
-        Some(k) => {
-            check_indirect(k)?;
-            Ok(crate::measure::IndirectChoice { key: k.clone(), params: params.to_vec() })
-        }
-        None if params.is_empty() => Ok(same.clone()),
-        None => bail!("--against-indirect-param needs --against-indirect"),
-    }
-}
-
 pub fn run(args: CompareArgs) -> Result<()> {
     check_output_path(&args.out, "png")?;
     if let Some(r) = &args.report {
@@ -110,8 +82,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if let Some(r) = &args.figure {
         check_output_path(r, "png")?;
     }
-    check_technique(&args.technique)?;
-    check_technique(&args.against)?;
+    args.target.check()?;
     if !(args.gain.is_finite() && args.gain > 0.0) {
         bail!("--gain {}: must be a number > 0", args.gain);
     }
@@ -124,12 +95,12 @@ pub fn run(args: CompareArgs) -> Result<()> {
         }
     };
     let indirect = f.indirect_choice();
-    let against_indirect = against_indirect(&args.against_indirect, &args.against_indirect_params, &indirect)?;
+    let against_indirect = args.target.against_indirect(&indirect)?;
     let target = crate::measure::render_technique(
         &mut renderer,
-        &args.against,
+        &args.target.against,
         f.shadow_res,
-        &args.against_params,
+        &args.target.against_params,
         &camera,
         &lights,
         &against_indirect,
@@ -140,7 +111,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let target_image = args.figure.as_ref().map(|_| renderer.read_output()).transpose()?;
     let tech = crate::measure::render_technique(
         &mut renderer,
-        &args.technique,
+        &args.target.technique,
         f.shadow_res,
         &args.params,
         &camera,
@@ -183,7 +154,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 FigurePane {
                     image: tech_image,
                     caption: vec![
-                        args.technique.clone(),
+                        args.target.technique.clone(),
                         params(&args.params),
                         format!("{:.1} ms (median of {}), ×{speedup:.2}", tech.timing.median_ms, tech.timing.frames),
                     ],
@@ -191,8 +162,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 FigurePane {
                     image: target_image,
                     caption: vec![
-                        args.against.clone(),
-                        params(&args.against_params),
+                        args.target.against.clone(),
+                        params(&args.target.against_params),
                         format!("{:.1} ms (median of {})", target.timing.median_ms, target.timing.frames),
                     ],
                 },
@@ -212,8 +183,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if !quiet {
         eprintln!(
             "{} vs {} on {} ({}x{}): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over {:.0}%",
-            args.technique,
-            args.against,
+            args.target.technique,
+            args.target.against,
             scene.name,
             f.width,
             f.height,
@@ -226,7 +197,12 @@ pub fn run(args: CompareArgs) -> Result<()> {
         );
         eprintln!(
             "time (median of {}): {} {:.2} ms, {} {:.2} ms, speedup x{:.2}",
-            tech.timing.frames, args.technique, tech.timing.median_ms, args.against, target.timing.median_ms, speedup
+            tech.timing.frames,
+            args.target.technique,
+            tech.timing.median_ms,
+            args.target.against,
+            target.timing.median_ms,
+            speedup
         );
         eprintln!("wrote {}", args.out.display());
     }
@@ -237,9 +213,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
             lights: lights.len(),
             width: f.width,
             height: f.height,
-            technique: &args.technique,
+            technique: &args.target.technique,
             technique_parameters: &tech.parameters,
-            against: &args.against,
+            against: &args.target.against,
             against_parameters: &target.parameters,
             metrics: &metrics,
             technique_timing: &tech.timing,

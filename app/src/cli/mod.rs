@@ -18,13 +18,13 @@ pub mod setup;
 pub mod sweep;
 
 pub use animate::AnimateArgs;
-pub use args::{FrameArgs, SceneArgs};
+pub use args::{check_indirect, FrameArgs, SceneArgs, TargetArgs};
 pub use bench::BenchArgs;
 pub use compare::CompareArgs;
 pub use progress::Progress;
 pub use render::RenderArgs;
 pub use sequence::SequenceArgs;
-pub use setup::{check_indirect, load_scene};
+pub use setup::load_scene;
 pub use sweep::SweepArgs;
 
 #[derive(Parser, Debug)]

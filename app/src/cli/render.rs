@@ -8,9 +8,9 @@ use serde::Serialize;
 use shadowlab_core::scene::Camera;
 use shadowlab_core::FrameReport;
 
-use super::args::{FrameArgs, SceneArgs};
+use super::args::{check_technique, FrameArgs, SceneArgs};
 use super::progress::Progress;
-use super::setup::{check_technique, draw_overlays, setup};
+use super::setup::{draw_overlays, setup};
 use crate::files::{check_output_path, encode_png, write_atomic};
 use crate::measure::apply_params;
 

@@ -8,9 +8,9 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use shadowlab_core::scene::PointLight;
 
-use super::args::{parse_step, FrameArgs, SceneArgs};
+use super::args::{check_technique, parse_step, FrameArgs, SceneArgs};
 use super::progress::Progress;
-use super::setup::{check_technique, draw_overlays, parse_vec3s, setup};
+use super::setup::{draw_overlays, parse_vec3s, setup};
 use crate::files::{check_output_path, encode_png, write_atomic};
 use crate::measure::apply_params;
 

@@ -12,7 +12,7 @@ use shadowlab_core::technique::{self, Technique};
 use shadowlab_core::vpl::{VplSettings, VplSource};
 use shadowlab_core::{AutoExposure, GpuContext, RenderSettings, Renderer, ToneMap};
 
-use super::args::{FrameArgs, SceneArgs};
+use super::args::{check_indirect, FrameArgs, SceneArgs};
 
 /// Load the scene and its lights as the arguments say.
 pub fn load_scene(args: &SceneArgs) -> Result<(Scene, Vec<PointLight>)> {
@@ -125,21 +125,6 @@ pub fn setup(
     let gpu = GpuContext::headless()?;
     let renderer = Renderer::new(&gpu, &scene, settings)?;
     Ok((gpu, renderer, scene, lights, camera))
-}
-
-/// `none` or a key of the indirect registry.
-pub fn check_indirect(key: &str) -> Result<()> {
-    if key != "none" && technique::INDIRECT_REGISTRY.iter().all(|e| e.key != key) {
-        bail!("unknown indirect technique '{key}' (choose none or one of: {})", technique::indirect_keys());
-    }
-    Ok(())
-}
-
-pub fn check_technique(key: &str) -> Result<()> {
-    if technique::REGISTRY.iter().all(|e| e.key != key) {
-        bail!("unknown technique '{key}' (choose one of: {})", technique::keys());
-    }
-    Ok(())
 }
 
 /// Draw the overlay layers of the technique and the indirect technique over the last frame: the layers

@@ -9,10 +9,9 @@ use shadowlab_core::scene::layout::{self, LightLayout};
 use shadowlab_core::scene::PointLight;
 use shadowlab_core::Renderer;
 
-use super::args::{FrameArgs, SceneArgs};
-use super::compare::against_indirect;
+use super::args::{FrameArgs, SceneArgs, TargetArgs};
 use super::progress::Progress;
-use super::setup::{check_technique, setup};
+use super::setup::setup;
 use crate::files::{check_output_path, write_atomic};
 use crate::measure::apply_params;
 
@@ -22,23 +21,13 @@ pub struct SweepArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    #[arg(long, default_value = "lightcluster")]
-    pub technique: String,
+    #[command(flatten)]
+    pub target: TargetArgs,
     /// A swept parameter: `key=START:END:STEP`, `key=v1,v2,...` or `key=value`; repeatable (all combinations).
     /// `lights=N1,N2,...` sweeps the number of lights of a `--lights random:...` layout (put it first to plot
     /// time against the light count, the comparison target's time included).
     #[arg(long = "param", value_name = "KEY=VALUES")]
     pub params: Vec<String>,
-    #[arg(long, default_value = "reference")]
-    pub against: String,
-    #[arg(long = "against-param", value_name = "KEY=VALUE")]
-    pub against_params: Vec<String>,
-    /// The comparison target's indirect technique (default: the same as `--indirect`).
-    #[arg(long = "against-indirect", value_name = "KEY")]
-    pub against_indirect: Option<String>,
-    /// A parameter of the target's indirect technique, `key=value`; repeatable.
-    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
-    pub against_indirect_params: Vec<String>,
     /// Skip the FLIP metric.
     #[arg(long)]
     pub no_flip: bool,
@@ -84,8 +73,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if let Some(m) = &args.markdown {
         check_output_path(m, "md")?;
     }
-    check_technique(&args.technique)?;
-    check_technique(&args.against)?;
+    args.target.check()?;
     if let Some(p) = &args.plot {
         check_output_path(p, "png")?;
     }
@@ -109,14 +97,15 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let no_progress = &mut |_: &str| {};
     // Check every setting before the first (slow) render.
     {
-        let mut probe = renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique"))?;
+        let mut probe =
+            renderer.create_technique(&args.target.technique).ok_or_else(|| anyhow!("unknown technique"))?;
         for setting in &settings {
             apply_params(probe.as_mut(), f.shadow_res, &technique_params(setting))?;
             crate::measure::apply_indirect(&mut renderer, &indirect_for(setting, &f.indirect))?;
         }
     }
     let same_indirect = f.indirect_choice();
-    let target_indirect = against_indirect(&args.against_indirect, &args.against_indirect_params, &same_indirect)?;
+    let target_indirect = args.target.against_indirect(&same_indirect)?;
     // `--param lights=N1,N2,...` sweeps the light count of a `random:` layout: the comparison target is rendered
     // again for each count.
     let layout: LightLayout = layout::parse(&args.scene.lights)?;
@@ -136,9 +125,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let render_target = |renderer: &mut Renderer, lights: &[PointLight]| -> Result<_> {
         let target = crate::measure::render_technique(
             renderer,
-            &args.against,
+            &args.target.against,
             f.shadow_res,
-            &args.against_params,
+            &args.target.against_params,
             &camera,
             lights,
             &target_indirect,
@@ -193,7 +182,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     // Named figures the techniques report (`vpls`, `samples`, ...), one column each after the fixed ones.
     let mut row_figures: Vec<std::collections::BTreeMap<String, f64>> = Vec::new();
     let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
-    let mut progress = Progress::new(&format!("sweep {}", args.technique), quiet).with_unit("setting");
+    let mut progress = Progress::new(&format!("sweep {}", args.target.technique), quiet).with_unit("setting");
     progress.update(0, settings.len());
     let mut plotted_counts: Vec<usize> = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
@@ -208,7 +197,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 plotted_counts.push(lights.len());
                 plot_rows.push(crate::plot::PlotRow {
                     x: lights.len() as f64,
-                    series: format!("{} (against)", args.against),
+                    series: format!("{} (against)", args.target.against),
                     ms: target.timing.median_ms,
                     rmse: None,
                 });
@@ -217,7 +206,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         let strings = technique_params(setting);
         let r = crate::measure::render_technique(
             &mut renderer,
-            &args.technique,
+            &args.target.technique,
             f.shadow_res,
             &strings,
             &camera,
@@ -309,12 +298,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if !quiet {
         eprintln!(
             "{} on {} ({} lights, {}x{}), against {} at {:.2} ms:",
-            args.technique,
+            args.target.technique,
             scene.name,
             lights.len(),
             f.width,
             f.height,
-            args.against,
+            args.target.against,
             target.timing.median_ms
         );
         eprint!("{md}");
@@ -335,8 +324,8 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 format!("{direct} + {indirect}")
             }
         };
-        let technique_name = with(&args.technique, &f.indirect);
-        let against_name = with(&args.against, &target_indirect.key);
+        let technique_name = with(&args.target.technique, &f.indirect);
+        let against_name = with(&args.target.against, &target_indirect.key);
         let component = if f.component == "total" { String::new() } else { format!(", {} light", f.component) };
         let title = if lights_swept {
             format!("{technique_name} and {against_name} on {} ({}x{}{component})", scene.name, f.width, f.height)
