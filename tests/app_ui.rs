@@ -62,7 +62,7 @@ fn move_to(h: &mut Harness<'static, ShadowLabApp>, pos: egui::Pos2) {
 
 fn projection(h: &Harness<'static, ShadowLabApp>) -> Projection {
     let app = h.state();
-    Projection::new(&app.session.camera.camera(), app.last_viewport_rect.expect("the view was laid out"))
+    Projection::new(&app.session.camera.camera(), app.views.last_viewport_rect.expect("the view was laid out"))
 }
 
 #[test]
@@ -72,7 +72,7 @@ fn main_window_on_a_builtin_scene() {
     h.get_by_label("Technique");
     // The lights' panel is a tab of the left column.
     h.get_by_label("Lights");
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     assert_eq!(report.counts.technique.shadow_maps, 32);
     snapshot(&mut h, "main_window_cornell");
 }
@@ -208,7 +208,7 @@ fn view_screenshot_writes_a_png_at_render_resolution() {
     let mut h = start("shot", "cornell");
     let path = h.state_mut().save_view_screenshot().unwrap();
     let img = image::open(&path).unwrap();
-    let (w, _) = h.state().gpu.as_ref().unwrap().main.size;
+    let (w, _) = h.state().views.gpu.as_ref().unwrap().main.size;
     assert_eq!(img.width(), w);
     let name = path.file_name().unwrap().to_string_lossy().to_string();
     assert!(name.contains("cornell") && name.contains("reference"), "{name}");
@@ -221,19 +221,19 @@ fn difference_view_measures_the_technique_against_the_reference() {
     let mut h = start("difference", "cornell");
     h.state_mut().session.view.mode = ViewMode::Difference;
     h.run_steps(4);
-    let d = h.state().difference.as_ref().expect("a difference once both images are complete");
+    let d = h.state().views.difference.as_ref().expect("a difference once both images are complete");
     assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
     let app = h.state_mut();
     app.session.technique = "lightcluster".into();
     app.session.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
     h.run_steps(4);
-    let m = &h.state().difference.as_ref().unwrap().metrics;
+    let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
     h.state_mut().layout.focus(Pane::Render);
     h.run_steps(1);
     h.get_by_label("RMSE");
     // The session's comparison table has both techniques.
-    let times = &h.state().session_times;
+    let times = &h.state().views.session_times;
     assert!(times.contains_key("reference") && times.contains_key("lightcluster"), "{times:?}");
     assert!(times["lightcluster"].1.contains("d_init=0.6"));
     h.get_by_label("technique (this session)");
@@ -242,9 +242,9 @@ fn difference_view_measures_the_technique_against_the_reference() {
     app.session.technique = "reference".into();
     app.session.view.compare_against = "raytraced".into();
     h.run_steps(4);
-    let m = &h.state().difference.as_ref().unwrap().metrics;
+    let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.share_over_threshold < 0.05, "reference vs ray traced: {m:?}");
-    assert!(h.state().session_times.contains_key("raytraced"));
+    assert!(h.state().views.session_times.contains_key("raytraced"));
 }
 
 #[test]
@@ -256,12 +256,12 @@ fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
     let values: Vec<ParamValue> = [0.3f32, 0.45, 0.6].iter().map(|v| ParamValue::Float(*v)).collect();
     h.state_mut().start_sweep("d_init", values).unwrap();
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
-    while h.state_mut().sweep.as_mut().unwrap().poll() {
+    while h.state_mut().views.sweep.as_mut().unwrap().poll() {
         assert!(std::time::Instant::now() < deadline, "the sweep did not finish");
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    let s = h.state().sweep.as_ref().unwrap();
+    let s = h.state().views.sweep.as_ref().unwrap();
     assert!(s.error.is_none(), "{:?}", s.error);
     assert_eq!(s.rows.len(), 3);
     assert!(s.rows.windows(2).all(|w| w[0].value < w[1].value));
@@ -269,12 +269,12 @@ fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
     // Cancelled right away, a long sweep stops early.
     let many: Vec<ParamValue> = (0..40).map(|i| ParamValue::Float(0.1 + i as f32 * 0.05)).collect();
     h.state_mut().start_sweep("d_init", many).unwrap();
-    h.state().sweep.as_ref().unwrap().cancel();
-    while h.state_mut().sweep.as_mut().unwrap().poll() {
+    h.state().views.sweep.as_ref().unwrap().cancel();
+    while h.state_mut().views.sweep.as_mut().unwrap().poll() {
         assert!(std::time::Instant::now() < deadline + std::time::Duration::from_secs(60));
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    assert!(h.state().sweep.as_ref().unwrap().rows.len() < 40);
+    assert!(h.state().views.sweep.as_ref().unwrap().rows.len() < 40);
 }
 
 #[test]
@@ -285,11 +285,11 @@ fn lightcluster_offers_a_per_pixel_cluster_id_map() {
     assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "cluster per pixel" && !on));
     h.state_mut().session.view.overlays.insert("cluster per pixel".into(), true);
     h.run_steps(3);
-    let (_, name, ids, (w, hgt)) = h.state().pixel_ids.clone().expect("an ID map once the frame is complete");
+    let (_, name, ids, (w, hgt)) = h.state().views.pixel_ids.clone().expect("an ID map once the frame is complete");
     assert_eq!(name, "cluster per pixel");
     assert_eq!(ids.len(), (w * hgt) as usize);
     let clusters =
-        h.state().gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().counts.technique.clusters.unwrap();
+        h.state().views.gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().counts.technique.clusters.unwrap();
     let distinct: std::collections::BTreeSet<u32> = ids.iter().copied().filter(|&i| i != u32::MAX).collect();
     assert!(distinct.len() > 1 && distinct.iter().all(|&i| (i as usize) < clusters), "{distinct:?} of {clusters}");
 }
@@ -334,7 +334,7 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
 
     // Select a viewpoint that is on screen by clicking it, then move it along x with the gizmo.
     let p = projection(&h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(70.0);
     let (index, pos) = cameras(&h)
         .iter()
         .enumerate()
@@ -396,7 +396,10 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     use shadowlab_core::technique::{ParamValue, INDIRECT_REGISTRY};
     let dir = data_dir("indirect");
     let mut h = start("indirect", "cornell");
-    assert!(h.state().gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().indirect.is_none(), "none at start");
+    assert!(
+        h.state().views.gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().indirect.is_none(),
+        "none at start"
+    );
     h.state_mut().session.indirect.vpl.count = 48;
     // Choose it in the selector, by the registry's label.
     let entry = INDIRECT_REGISTRY.iter().find(|e| e.key == "vpl-unshadowed").expect("registered");
@@ -405,7 +408,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     h.get_by_label(entry.label).click();
     h.run_steps(4);
     assert_eq!(h.state().session.indirect.technique.as_deref(), Some(entry.key));
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     let indirect = report.indirect.expect("the report has the indirect technique");
     assert_eq!(indirect.technique, entry.key);
     assert!(indirect.vpls > 0 && indirect.vpls <= 48, "{} VPLs", indirect.vpls);
@@ -428,7 +431,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
         .insert("vpls_per_step".into(), ParamValue::Int(16));
     app.session.view.mode = ViewMode::SideBySide;
     h.run_steps(6);
-    let gpu = h.state().gpu.as_ref().unwrap();
+    let gpu = h.state().views.gpu.as_ref().unwrap();
     let main = gpu.main.last_report.as_ref().unwrap().indirect.clone().unwrap();
     let reference = gpu.reference.last_report.as_ref().unwrap().indirect.clone().expect("the reference view too");
     assert_eq!((reference.technique.as_str(), reference.vpls), (entry.key, main.vpls));
@@ -438,7 +441,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     assert!(hdr.iter().any(|p| p[0] + p[1] + p[2] > 0.0), "some indirect light");
 
     // While the camera moves the preview has no indirect light; once it settles the same instance is back.
-    let centre = h.state().last_viewport_rect.unwrap().center();
+    let centre = h.state().views.last_viewport_rect.unwrap().center();
     move_to(&mut h, centre);
     h.event(egui::Event::MouseWheel {
         unit: egui::MouseWheelUnit::Point,
@@ -449,13 +452,13 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     });
     h.step();
     h.step();
-    let preview = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+    let preview = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
     assert!(preview.technique == "unshadowed" && preview.indirect.is_none(), "{}", preview.technique);
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
     let settled = loop {
         std::thread::sleep(std::time::Duration::from_millis(50));
         h.step();
-        let r = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+        let r = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
         if r.technique != "unshadowed" || std::time::Instant::now() > deadline {
             break r;
         }
@@ -475,7 +478,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     });
     fresh.run_steps(3);
     assert_eq!(fresh.state().session.indirect, saved);
-    let report = fresh.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+    let report = fresh.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
     assert_eq!(report.indirect.map(|i| i.technique), Some(entry.key.to_string()));
     let text = std::fs::read_to_string(&file).unwrap();
     let bad = dir.join("indirect-bad.ron");
@@ -516,7 +519,7 @@ fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
     h.state_mut().session.indirect.vpl.count = 64;
     h.state_mut().session.indirect.technique = Some("fuzzy".into());
     h.run_steps(8);
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     let indirect = report.indirect.expect("fuzzy ran");
     assert_eq!(indirect.technique, "fuzzy");
     let figures = &indirect.counts.figures;
@@ -525,7 +528,7 @@ fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
     let layers = h.state_mut().overlay_layers();
     assert!(layers.iter().any(|(name, _)| name.starts_with("shading-point clusters")), "{layers:?}");
     // Alt+click in the view: the technique's probe parameters get the clicked pixel.
-    let rect = h.state().last_viewport_rect.expect("the view was laid out");
+    let rect = h.state().views.last_viewport_rect.expect("the view was laid out");
     let pos = rect.center();
     h.event(egui::Event::ModifiersChanged(egui::Modifiers::ALT));
     press(&mut h, pos, true, egui::Modifiers::ALT);
@@ -537,7 +540,7 @@ fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
     assert!(matches!(x, Some(ParamValue::Int(v)) if *v > 0), "probe_x {x:?}");
     assert!(matches!(y, Some(ParamValue::Int(v)) if *v > 0), "probe_y {y:?}");
     // The probe layer then holds the pixel's clusters and their rays.
-    let gpu = h.state_mut().gpu.as_mut().unwrap();
+    let gpu = h.state_mut().views.gpu.as_mut().unwrap();
     let technique = gpu.main.indirect_technique("fuzzy").unwrap();
     let layers = technique.borrow().overlays(&[]);
     let probe = layers.iter().find(|l| l.name.starts_with("probe")).expect("a probe layer");
@@ -568,7 +571,7 @@ fn every_techniques_parameter_panel_draws_without_a_panic() {
 
 /// The share of the window the 3D view's rect covers.
 fn view_share(h: &Harness<'static, ShadowLabApp>, size: (f32, f32)) -> f32 {
-    let r = h.state().last_viewport_rect.expect("the view was laid out");
+    let r = h.state().views.last_viewport_rect.expect("the view was laid out");
     r.area() / (size.0 * size.1)
 }
 
@@ -664,13 +667,13 @@ fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
     h.run_steps(2);
     // "lights by cluster" is on by default: its legend is listed under its checkbox.
     h.get_by_label_contains("in its cluster's colour");
-    let names: Vec<String> = h.state().legends.iter().map(|(n, _)| n.clone()).collect();
+    let names: Vec<String> = h.state().views.legends.iter().map(|(n, _)| n.clone()).collect();
     assert!(names.iter().any(|n| n == "lights by cluster"), "{names:?}");
     assert!(!names.iter().any(|n| n == "d_min spheres"), "a hidden layer has no legend: {names:?}");
     assert_eq!(h.query_all_by_label_contains("disc-light radius").count(), 0);
     h.state_mut().session.view.overlays.insert("d_min spheres".into(), true);
     h.run_steps(3);
-    let legends = &h.state().legends;
+    let legends = &h.state().views.legends;
     let d_min = legends.iter().find(|(n, _)| n == "d_min spheres").expect("shown now, with its legend");
     assert!(d_min.1.iter().any(|e| e.text.contains("disc-light radius")), "{:?}", d_min.1);
     // A light's tooltip names its cluster; selecting it selects the cluster's members for highlighting.
@@ -690,7 +693,7 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     app.session.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
     h.run_steps(3);
     let path = h.state_mut().save_figure().unwrap();
-    let (w, hgt) = h.state().gpu.as_ref().unwrap().main.size;
+    let (w, hgt) = h.state().views.gpu.as_ref().unwrap().main.size;
     let img = image::open(&path).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), figure_size(w, hgt, 3), "three panes of the view's render size");
     assert!(path.file_name().unwrap().to_string_lossy().contains("figure"));
@@ -805,7 +808,8 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     assert!(sources.iter().any(|(s, l)| *s == MapSource::DIRECT && l.contains("shadow maps")), "{sources:?}");
     h.state_mut().inspector.source = images;
     h.run_steps(3);
-    let viewpoints = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let viewpoints =
+        h.state_mut().views.gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
     let app = h.state();
     let atlas = app.inspector.atlas.as_ref().expect("the intermediate images were read back");
     assert_eq!(atlas.cubes(), 0, "views, not cube maps");
@@ -856,14 +860,14 @@ fn every_explain_step_of_every_technique_draws_without_a_panic() {
     for entry in shadowlab_core::technique::REGISTRY {
         h.state_mut().session.technique = entry.key.to_string();
         h.run_steps(1);
-        let steps = h.state_mut().gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
+        let steps = h.state_mut().views.gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
         click_all(&mut h, steps.iter().map(|s| s.title).collect());
     }
     h.state_mut().session.technique = "unshadowed".into();
     for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
         h.state_mut().session.indirect.technique = Some(entry.key.to_string());
         h.run_steps(1);
-        let t = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
+        let t = h.state_mut().views.gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
         let titles: Vec<&'static str> = t.borrow().explain().iter().map(|s| s.title).collect();
         click_all(&mut h, titles);
     }
@@ -922,8 +926,9 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     h.state_mut().session.technique = "insm".into();
     h.run_steps(4);
     let p = projection(&h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
-    let cameras = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(70.0);
+    let cameras =
+        h.state_mut().views.gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
     let pos = cameras
         .iter()
         .filter_map(|c| p.to_screen(c.position))
@@ -938,8 +943,8 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
 /// Where a hover point of `layer` of the indirect technique `key` is on screen, inside the view, with its index.
 fn indirect_point_on_screen(h: &mut Harness<'static, ShadowLabApp>, key: &str, layer: &str) -> (egui::Pos2, usize) {
     let p = projection(h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(20.0);
-    let technique = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(20.0);
+    let technique = h.state_mut().views.gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
     let points = technique.borrow().hover_points();
     points
         .iter()
@@ -974,7 +979,7 @@ fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
     // A pixel of the per-pixel shading-point cluster map, once that layer is on: its cluster.
-    let centre = h.state().last_viewport_rect.unwrap().center();
+    let centre = h.state().views.last_viewport_rect.unwrap().center();
     for layer in [
         "vpl cluster representatives",
         "vpls by cluster",
@@ -1006,11 +1011,11 @@ fn the_difference_is_computed_off_the_ui_thread_when_not_synchronous() {
     h.state_mut().load_builtin("cornell");
     h.state_mut().session.view.mode = ViewMode::Difference;
     let start = std::time::Instant::now();
-    while h.state().difference.is_none() && start.elapsed() < std::time::Duration::from_secs(120) {
+    while h.state().views.difference.is_none() && start.elapsed() < std::time::Duration::from_secs(120) {
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let d = h.state().difference.as_ref().expect("the worker's difference arrived");
+    let d = h.state().views.difference.as_ref().expect("the worker's difference arrived");
     assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
 }
 
@@ -1024,7 +1029,7 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
     h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
     let lights = h.state().session.lights.clone();
-    let device = h.state().gpu.as_ref().unwrap().ctx.device.clone();
+    let device = h.state().views.gpu.as_ref().unwrap().ctx.device.clone();
     device.destroy();
     // wgpu reports a destroyed device at the next poll once its queue is empty (a real loss at once).
     let _ = device.poll(wgpu::PollType::wait_indefinitely());
@@ -1032,7 +1037,7 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
     let app = h.state();
     let recovery = app.recovery.clone().expect("the loss was handled");
     assert!(recovery.reason.contains("Destroyed"), "{}", recovery.reason);
-    assert!(app.gpu.is_none(), "nothing renders with the lost device");
+    assert!(app.views.gpu.is_none(), "nothing renders with the lost device");
     let file = recovery.file.expect("the state was saved");
     assert_eq!(file, dir.join("recovery.ron"));
     let (program, args) = recovery.relaunch.expect("the command that goes on");
@@ -1057,23 +1062,23 @@ fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
     assert_eq!(settings.auto_exposure, shadowlab_core::AutoExposure::Meter, "the full image meters");
     let preview = h.state().session.render_settings(egui::vec2(320.0, 200.0), true);
     assert_eq!(preview.auto_exposure, shadowlab_core::AutoExposure::Hold, "the preview holds the metered value");
-    let metered = h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
+    let metered = h.state().views.gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
     let (scale, average) = metered.expect("metered");
     assert!(scale.is_finite() && scale > 0.0 && average > 0.0, "{scale} {average}");
     // Side by side, the reference is shown at the technique's exposure (held, not metered on its own image).
     h.state_mut().session.technique = "lightcluster".into();
     h.state_mut().session.view.mode = shadowlab::gui::document::ViewMode::SideBySide;
     h.run_steps(6);
-    let gpu = h.state().gpu.as_ref().unwrap();
+    let gpu = h.state().views.gpu.as_ref().unwrap();
     let main = gpu.main.renderer.auto_exposure().unwrap().unwrap();
     let reference = gpu.reference.renderer.auto_exposure().unwrap().unwrap();
     assert_eq!(gpu.reference.renderer.settings().auto_exposure, shadowlab_core::AutoExposure::Hold);
     assert_eq!(main.0, reference.0, "one exposure for both views");
-    assert_eq!(h.state().metered_exposure.map(|m| m.0), Some(main.0), "the Render panel's figure is the view's");
+    assert_eq!(h.state().views.metered_exposure.map(|m| m.0), Some(main.0), "the Render panel's figure is the view's");
     h.state_mut().session.view.auto_exposure = false;
     h.run_steps(3);
     assert_eq!(
-        h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap(),
+        h.state().views.gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap(),
         None,
         "off: the exposure as set"
     );

@@ -12,7 +12,8 @@ use shadowlab_core::technique::{Overlay, ParamValue};
 use shadowlab_core::Renderer;
 
 use super::camera::CameraMode;
-use super::{technique_pair, ShadowLabApp};
+use super::views::technique_pair;
+use super::ShadowLabApp;
 use crate::figure::{self, FigurePane};
 use crate::measure::{self, DiffKind, IndirectChoice};
 use crate::sequence::{self, Motion};
@@ -31,8 +32,8 @@ impl ShadowLabApp {
 
     /// A renderer of its own at the view's full render resolution.
     fn capture_renderer(&self) -> Result<Renderer> {
-        let settings = self.session.render_settings(self.last_view_pixels, false);
-        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let settings = self.session.render_settings(self.views.last_view_pixels, false);
+        let gpu = self.views.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
         Ok(gpu.main.renderer.new_view(settings)?)
     }
 
@@ -176,7 +177,7 @@ impl ShadowLabApp {
         } else {
             Vec::new()
         };
-        let view_points = self.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
+        let view_points = self.views.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
         let render_pixels_per_point = renderer.settings().width as f32 / view_points;
         renderer.set_overlay_style(shadowlab_core::renderer::overlay::OverlayStyle {
             line_width_px: (2.0 * render_pixels_per_point).max(1.0),

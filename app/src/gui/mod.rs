@@ -14,7 +14,7 @@ pub mod legend;
 pub mod panels;
 pub mod session;
 pub mod sweep;
-pub mod viewport;
+pub mod views;
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
@@ -24,19 +24,17 @@ use std::time::Instant;
 use anyhow::{anyhow, Context, Result};
 use eframe::{egui, egui_wgpu};
 use glam::Vec3;
-use shadowlab_core::renderer::overlay::OverlayStyle;
-use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{PointLight, Scene, SceneSource};
-use shadowlab_core::technique::{LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
-use shadowlab_core::timing::PassTime;
-use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
+use shadowlab_core::scene::{Scene, SceneSource};
+use shadowlab_core::technique::ParamValue;
+use shadowlab_core::GpuContext;
 
 use camera::{CameraInput, CameraMode};
 use document::{SceneFile, ViewMode};
 use gizmo::{Handle, Projection};
 pub use session::Animation;
 use session::{DragTarget, Session};
-use viewport::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
+use views::view::{StepSizer, View};
+use views::{Gpu, Views};
 
 /// What to open at start.
 #[derive(Clone, Debug, Default)]
@@ -146,33 +144,6 @@ struct Toast {
     until: Instant,
 }
 
-/// GPU state, created from eframe's render state.
-/// The difference view's image and metrics, for one pair of converged frames.
-pub struct Difference {
-    pub texture: egui::TextureHandle,
-    pub metrics: shadowlab_core::compare::Metrics,
-    /// What it was computed from (both views' frame keys and the diff settings).
-    key: (u64, u64, bool, bool, u32),
-}
-
-/// A difference image and its metrics on their way from a worker thread.
-struct PendingDifference {
-    key: (u64, u64, bool, bool, u32),
-    size: (u32, u32),
-    result: std::sync::mpsc::Receiver<Result<(shadowlab_core::compare::Metrics, image::RgbaImage)>>,
-}
-
-pub struct Gpu {
-    pub ctx: GpuContext,
-    pub render_state: egui_wgpu::RenderState,
-    pub main: View,
-    pub reference: View,
-    pub sizer: StepSizer,
-}
-
-/// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
-pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
-
 /// A drag of the gizmo in progress.
 #[derive(Clone, Debug)]
 struct GizmoDrag {
@@ -186,31 +157,18 @@ struct GizmoDrag {
 pub struct ShadowLabApp {
     /// The scene, lights, camera, techniques and settings the user edits (what a scene file saves).
     pub session: Session,
-    pub gpu: Option<Gpu>,
+    /// The renderers and what is derived from their frames (difference, ID maps, legends, timings).
+    pub views: Views,
     drag: Option<GizmoDrag>,
     toasts: Vec<Toast>,
     pub recent: Vec<PathBuf>,
     data_dir: PathBuf,
-    /// Timings of completed frames: (seconds since start, GPU total ms, passes).
-    pub timings: VecDeque<(f64, f64, Vec<PassTime>)>,
-    /// Same-session reference time, for the speedup column.
+    /// When the app started (the time axis of the timings; `quit_after_secs`).
     started: Instant,
     last_interaction: Option<Instant>,
-    pub last_viewport_rect: Option<egui::Rect>,
     pub status: String,
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
     pub ui_frame_ms: VecDeque<f64>,
-    pub difference: Option<Difference>,
-    /// The difference being computed on a worker thread (metrics with FLIP cost seconds on large images).
-    pending_difference: Option<PendingDifference>,
-    /// False in tests (`Startup::synchronous`): the difference is then computed on the UI thread.
-    background_work: bool,
-    pub sweep: Option<sweep::Sweep>,
-    /// Last complete frame time (GPU ms) of every technique seen this session, with its parameters, for the
-    /// comparison table (technique vs reference, same session).
-    pub session_times: BTreeMap<String, (f64, String)>,
-    /// The technique's per-pixel ID map for a converged frame.
-    pub pixel_ids: Option<PixelIds>,
     /// Sweep panel inputs: parameter key, start, end, number of values.
     pub sweep_input: (String, f64, f64, usize),
     last_frame: Instant,
@@ -223,10 +181,6 @@ pub struct ShadowLabApp {
     pub layout: layout::Layout,
     /// The selection of the last UI frame: a new one brings the light inspector forward.
     last_selected: Option<usize>,
-    /// The legends of the overlay layers drawn in the last UI frame: (layer name, entries).
-    pub legends: Vec<(String, Vec<LegendEntry>)>,
-    /// The 3D view's size in physical pixels (captures render at its render resolution).
-    pub last_view_pixels: egui::Vec2,
     /// Frames of an orbit image sequence (File menu).
     pub orbit_frames: usize,
     /// Draw the view's visible overlay layers over the frames of image sequences (File menu).
@@ -240,8 +194,6 @@ pub struct ShadowLabApp {
     relaunch_on_device_loss: bool,
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
-    /// The last complete frame's auto-exposure: (scale, log-average luminance), shown in the Render panel.
-    pub metered_exposure: Option<(f32, f32)>,
     /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
     /// that does not set them is chosen.
     explain_saved: BTreeMap<(String, String), shadowlab_core::technique::ParamValue>,
@@ -260,26 +212,19 @@ impl ShadowLabApp {
         let scene = Scene::builtin("arcade")?;
         let data_dir = startup.data_dir.clone().unwrap_or_else(default_data_dir);
         let layout = layout::Layout::load(&data_dir);
+        let started = Instant::now();
         let mut app = ShadowLabApp {
             session: Session::new(scene),
-            gpu: None,
+            views: Views::new(started, !startup.synchronous),
             drag: None,
             toasts: Vec::new(),
             recent: load_recent(&data_dir),
             data_dir,
-            timings: VecDeque::new(),
-            started: Instant::now(),
+            started,
             last_interaction: None,
-            last_viewport_rect: None,
             status: String::new(),
             window_shot: Default::default(),
             ui_frame_ms: VecDeque::new(),
-            difference: None,
-            pending_difference: None,
-            background_work: !startup.synchronous,
-            sweep: None,
-            pixel_ids: None,
-            session_times: BTreeMap::new(),
             sweep_input: ("d_init".into(), 0.1, 1.6, 6),
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
@@ -289,8 +234,6 @@ impl ShadowLabApp {
             ui_frames: 0,
             layout,
             last_selected: None,
-            legends: Vec::new(),
-            last_view_pixels: egui::vec2(640.0, 360.0),
             orbit_frames: 36,
             sequence_overlays: true,
             inspector: inspector::Inspector::default(),
@@ -298,13 +241,12 @@ impl ShadowLabApp {
             uncaptured_errors: Default::default(),
             relaunch_on_device_loss: startup.relaunch_on_device_loss,
             recovery: None,
-            metered_exposure: None,
             explain_saved: BTreeMap::new(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
         if startup.synchronous {
-            if let Some(gpu) = &mut app.gpu {
+            if let Some(gpu) = &mut app.views.gpu {
                 gpu.sizer = StepSizer { max_lights_per_step: 1 << 20, budget_ms: f64::INFINITY };
             }
         }
@@ -371,7 +313,7 @@ impl ShadowLabApp {
                 self.session.params.entry(key.into()).or_default().insert("shadow_res".into(), ParamValue::Int(256));
             }
         }
-        self.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });
+        self.views.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });
         Ok(())
     }
 
@@ -385,8 +327,8 @@ impl ShadowLabApp {
             return;
         }
         log::error!("GPU device lost: {reason}");
-        self.gpu = None;
-        self.sweep = None;
+        self.views.gpu = None;
+        self.views.sweep = None;
         let file = self.data_dir.join("recovery.ron");
         let saved = std::fs::create_dir_all(&self.data_dir)
             .map_err(anyhow::Error::from)
@@ -455,10 +397,7 @@ impl ShadowLabApp {
 
     /// Replace the scene (and its lights and camera). The previous scene stays when `scene` failed to load.
     pub fn set_scene(&mut self, scene: Scene) {
-        if let Some(gpu) = &mut self.gpu {
-            gpu.main.set_scene(&scene);
-            gpu.reference.share_scene_of(&gpu.main);
-        }
+        self.views.set_scene(&scene);
         for text in self.session.set_scene(scene) {
             self.toasts.push(Toast { text, error: false, until: Instant::now() + std::time::Duration::from_secs(6) });
         }
@@ -521,7 +460,7 @@ impl ShadowLabApp {
         }
         // Every saved parameter is checked against its technique's ranges before anything changes, so a bad
         // value (an edited file, a viewpoint at NaN) is an error here and the current state stays.
-        if let Some(gpu) = &mut self.gpu {
+        if let Some(gpu) = &mut self.views.gpu {
             for (key, values) in &file.params {
                 let technique = gpu.main.technique(key).with_context(|| "the scene file's parameters".to_string())?;
                 let params = technique.params();
@@ -568,96 +507,6 @@ impl ShadowLabApp {
 
     // ----- rendering -----
 
-    /// Alt+click: hand the clicked pixel to the indirect technique's probe (the parameters it names), so its
-    /// probe overlay shows that pixel; the app knows no technique, only `probe_params`.
-    fn probe_at(&mut self, pos: egui::Pos2, rect: egui::Rect) {
-        let (Some(key), Some(gpu)) = (self.session.indirect.technique.clone(), &mut self.gpu) else { return };
-        let size = gpu.main.size;
-        let Ok(technique) = gpu.main.indirect_technique(&key) else { return };
-        let Some((px, py)) = technique.borrow().probe_params() else { return };
-        let u = ((pos.x - rect.min.x) / rect.width().max(1.0)).clamp(0.0, 1.0);
-        let v = ((pos.y - rect.min.y) / rect.height().max(1.0)).clamp(0.0, 1.0);
-        let x = ((u * size.0 as f32) as i64).min(size.0 as i64 - 1);
-        let y = ((v * size.1 as f32) as i64).min(size.1 as i64 - 1);
-        let params = self.session.indirect.params.entry(key).or_default();
-        params.insert(px.to_string(), ParamValue::Int(x));
-        params.insert(py.to_string(), ParamValue::Int(y));
-        self.status = format!("probe at pixel ({x}, {y})");
-    }
-
-    /// The overlay layers of the indirect technique, from the instance the main view renders with.
-    fn indirect_overlay_layers(&mut self, lights: &[PointLight]) -> Vec<shadowlab_core::technique::OverlayLayer> {
-        let (Some(key), Some(gpu)) = (self.session.indirect.technique.clone(), &mut self.gpu) else {
-            return Vec::new();
-        };
-        match gpu.main.indirect_technique(&key) {
-            Ok(t) => t.borrow().overlays(lights),
-            Err(_) => Vec::new(),
-        }
-    }
-
-    /// The overlay primitives of the current technique that the user has switched on, plus the selection, and
-    /// the legend of each of those layers (as the layers describe themselves through their technique).
-    fn overlay_primitives(&mut self, lights: &[PointLight]) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
-        let mut out = Vec::new();
-        let mut legends = Vec::new();
-        let overlays = &self.session.view.overlays;
-        let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
-        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>| {
-            for layer in layers.into_iter().filter(|l| is_on(l)) {
-                legends.push((layer.name.to_string(), technique.overlay_legend(&layer)));
-                out.extend(layer.primitives);
-            }
-        };
-        let shown = |name: &str, default: bool| *overlays.get(name).unwrap_or(&default);
-        let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
-        if let Ok(technique) = gpu.main.technique(&self.session.technique) {
-            // Only the shown layers are built (INSM's meshes cost a readback).
-            let layers = technique.overlays_shown(lights, &shown);
-            take(technique.as_ref(), layers, &mut out);
-        }
-        if self.session.technique != "reference" {
-            if let Ok(reference) = gpu.main.technique("reference") {
-                let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
-                take(reference.as_ref(), layers, &mut out);
-            }
-        }
-        if let Some(key) = self.session.indirect.technique.clone() {
-            if let Ok(t) = gpu.main.indirect_technique(&key) {
-                let t = t.borrow();
-                let layers = t.overlays_shown(lights, &shown);
-                take(t.as_ref(), layers, &mut out);
-            }
-        }
-        // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
-        if let Some(group) =
-            self.session.selected.and_then(|i| self.light_details(i)).map(|d| d.group).filter(|g| g.len() > 1)
-        {
-            let at: Vec<Vec3> = group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position).collect();
-            let member = |p: &Vec3| at.contains(p);
-            for o in &mut out {
-                let keep = match o {
-                    Overlay::Point { position, .. } => member(position),
-                    Overlay::Line { from, to, .. } => member(from) || member(to),
-                    Overlay::Sphere { center, .. } => member(center),
-                    _ => true,
-                };
-                if !keep {
-                    if let Overlay::Point { color, .. } | Overlay::Line { color, .. } | Overlay::Sphere { color, .. } =
-                        o
-                    {
-                        color[3] *= 0.2;
-                    }
-                }
-            }
-        }
-        if let Some(l) = self.session.selected.and_then(|i| lights.get(i)) {
-            out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
-            out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
-        }
-        (out, legends)
-    }
-
     /// Show what step `index` of technique `key`'s Explain `steps` shows: its overlay layers on, the
     /// technique's others off; the shadow-map panel in front with the step's maps when it is about them; the
     /// parameter values it sets, and the values from before for parameters that only other steps set.
@@ -677,7 +526,7 @@ impl ShadowLabApp {
         if named.is_empty() {
             return;
         }
-        let Some(gpu) = &mut self.gpu else { return };
+        let Some(gpu) = &mut self.views.gpu else { return };
         let specs = if indirect {
             gpu.main.indirect_technique(key).map(|t| t.borrow().params())
         } else {
@@ -736,7 +585,7 @@ impl ShadowLabApp {
         let selected = self.session.selected;
         let mut sources = Vec::new();
         let mut follow: Option<(usize, Vec<Vec3>)> = None;
-        if let Some(gpu) = &mut self.gpu {
+        if let Some(gpu) = &mut self.views.gpu {
             if let Ok(t) = gpu.main.technique(&key) {
                 sources.extend(labelled(t.as_ref(), false));
             }
@@ -790,401 +639,36 @@ impl ShadowLabApp {
         self.inspector.ui(ui, sources);
     }
 
+    // ----- the views -----
+
+    /// Names of the overlay layers the current technique offers, with their state.
+    pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
+        self.views.overlay_layers(&self.session)
+    }
+
     /// What the current technique made of light `index` in its last frame (its cluster, say).
     pub fn light_details(&mut self, index: usize) -> Option<shadowlab_core::technique::LightDetails> {
-        let gpu = self.gpu.as_mut()?;
-        gpu.main.technique(&self.session.technique).ok()?.light_details(index)
+        self.views.light_details(&self.session, index)
     }
 
     /// The tooltip of a light in the view: its fields, and what the technique made of it.
     pub fn light_tooltip(&mut self, index: usize) -> Vec<String> {
-        let Some(l) = self.session.lights.get(index).copied() else { return Vec::new() };
-        let mut lines = vec![
-            format!("light {index}{}", if l.spot.is_some() { " (spot)" } else { "" }),
-            format!("position ({:.2}, {:.2}, {:.2})", l.position.x, l.position.y, l.position.z),
-            format!("intensity {:.2} · L_att {:.2}", l.intensity, l.range),
-        ];
-        if let Some(d) = self.light_details(index) {
-            lines.extend(d.lines);
-        }
-        lines
+        self.views.light_tooltip(&self.session, index)
     }
 
     /// The tooltip of a camera the technique used (a `Cameras` parameter's, e.g. an INSM viewpoint) under `pos`.
     pub fn camera_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
-        let Some(gpu) = &mut self.gpu else { return Vec::new() };
-        let Ok(technique) = gpu.main.technique(&self.session.technique) else { return Vec::new() };
-        for p in technique.params() {
-            if let shadowlab_core::technique::ParamKind::Cameras { .. } = p.kind {
-                let cameras = technique.cameras_in_use(p.key);
-                if let Some(i) = gizmo::pick_point(projection, cameras.iter().map(|c| c.position), pos, 10.0) {
-                    let c = cameras[i];
-                    return vec![
-                        format!("{} #{} of {}", p.label, i + 1, cameras.len()),
-                        format!("position ({:.2}, {:.2}, {:.2})", c.position.x, c.position.y, c.position.z),
-                        format!(
-                            "looking at ({:.2}, {:.2}, {:.2}) · fov {:.0}°",
-                            c.target.x, c.target.y, c.target.z, c.fov_y_deg
-                        ),
-                    ];
-                }
-            }
-        }
-        Vec::new()
+        self.views.camera_tooltip(&self.session, projection, pos)
     }
 
-    /// The tooltip of what a visible overlay layer draws under `pos` (a VAL, a VPL, a cluster's
-    /// representative), from the direct or the indirect technique's hover points
-    /// ([`Technique::hover_points`](shadowlab_core::technique::Technique::hover_points)).
+    /// The tooltip of what a visible overlay layer draws under `pos` (see [`Views::overlay_tooltip`]).
     pub fn overlay_tooltip(&mut self, projection: &Projection, pos: egui::Pos2) -> Vec<String> {
-        use shadowlab_core::technique::Technique;
-        let visible: Vec<String> = self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(n, _)| n).collect();
-        let indirect_key = self.session.indirect.technique.clone();
-        let Some(gpu) = &mut self.gpu else { return Vec::new() };
-        let pick = |t: &dyn Technique| {
-            let points: Vec<_> =
-                t.hover_points().into_iter().filter(|p| visible.iter().any(|v| v == p.layer)).collect();
-            let i = gizmo::pick_point(projection, points.iter().map(|p| p.position), pos, 8.0)?;
-            Some(points[i]).map(|p| t.hover_details(p.layer, p.index)).filter(|lines| !lines.is_empty())
-        };
-        if let Some(lines) = gpu.main.technique(&self.session.technique).ok().and_then(|t| pick(t.as_ref())) {
-            return lines;
-        }
-        let indirect = indirect_key.and_then(|k| gpu.main.indirect_technique(&k).ok());
-        if let Some(lines) = indirect.as_ref().and_then(|t| pick(t.borrow().as_ref())) {
-            return lines;
-        }
-        // A visible per-pixel ID map (a cluster per pixel) under the pointer: the ID there, and what the
-        // technique says of that ID as a hover index of the map's layer. Only in the single view, which the
-        // render target fills.
-        let Some(rect) = self.last_viewport_rect.filter(|_| self.session.view.mode == ViewMode::Single) else {
-            return Vec::new();
-        };
-        // (layer, size, ids, from the indirect technique)
-        type IdMapLayer = (&'static str, (u32, u32), Arc<Vec<u32>>, bool);
-        let mut maps: Vec<IdMapLayer> = Vec::new();
-        if let Some((_, name, ids, size)) = &self.pixel_ids {
-            maps.push((name, *size, ids.clone(), false));
-        }
-        if let Some(t) = &indirect {
-            for layer in t.borrow().overlays(&[]) {
-                for o in &layer.primitives {
-                    if let Overlay::IdMap { width, height, ids, .. } = o {
-                        maps.push((layer.name, (*width, *height), ids.clone(), true));
-                    }
-                }
-            }
-        }
-        let uv = (pos - rect.min) / rect.size();
-        for (name, (w, h), ids, from_indirect) in maps {
-            if !visible.iter().any(|v| v == name) || !(0.0..1.0).contains(&uv.x) || !(0.0..1.0).contains(&uv.y) {
-                continue;
-            }
-            let (x, y) = ((uv.x * w as f32) as u32, (uv.y * h as f32) as u32);
-            let Some(&id) = ids.get((y * w + x) as usize).filter(|id| **id != u32::MAX) else { continue };
-            let mut lines = vec![format!("{name}: {id} (pixel {x}, {y})")];
-            let details = if from_indirect {
-                indirect.as_ref().map(|t| t.borrow().hover_details(name, id as usize))
-            } else {
-                gpu.main.technique(&self.session.technique).ok().map(|t| t.hover_details(name, id as usize))
-            };
-            lines.extend(details.unwrap_or_default());
-            return lines;
-        }
-        Vec::new()
-    }
-
-    /// Names of the overlay layers the current technique offers, with their state.
-    pub fn overlay_layers(&mut self) -> Vec<(String, bool)> {
-        let Some(gpu) = &mut self.gpu else { return Vec::new() };
-        let mut names: Vec<(String, bool)> = Vec::new();
-        // Only the names are needed: asking with no lights builds (almost) no primitives, every UI frame; one spot
-        // light, when the scene has one, brings the layers that only spot lights have.
-        let probe: Vec<PointLight> =
-            self.session.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
-        if let Ok(t) = gpu.main.technique(&self.session.technique) {
-            let layers = t.overlays_shown(&probe, &|_, _| false);
-            names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
-        }
-        if self.session.technique != "reference" {
-            names.push(("light ranges".into(), false));
-        }
-        if let Ok(t) = gpu.main.technique(&self.session.technique) {
-            if let Some((name, _)) = t.pixel_ids(&[]) {
-                names.push((name.to_string(), false));
-            }
-        }
-        names.extend(self.indirect_overlay_layers(&[]).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
-        names.into_iter().map(|(n, d)| (n.clone(), *self.session.view.overlays.get(&n).unwrap_or(&d))).collect()
-    }
-
-    fn render_views(&mut self, size: egui::Vec2, pixels_per_point: f32, interacting: bool) -> Result<()> {
-        let lights = self.session.animated_lights();
-        let camera = self.session.camera.camera();
-        let (mut overlays, legends) = self.overlay_primitives(&lights);
-        self.legends = legends;
-        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { self.session.technique.clone() };
-        let two = self.session.view.mode != ViewMode::Single;
-        let per_view =
-            if self.session.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
-        let settings = self.session.render_settings(per_view, interacting);
-        // Dot sizes are in screen points; the render target may be smaller or larger than the view.
-        let render_pixels_per_point = pixels_per_point * settings.width as f32 / per_view.x.max(1.0);
-        for o in &mut overlays {
-            if let Overlay::Point { radius_px, .. } = o {
-                *radius_px *= render_pixels_per_point;
-            }
-        }
-        // Lines about 2 points wide on screen, whatever the render resolution; occluded parts faded.
-        let style = OverlayStyle { line_width_px: (2.0 * render_pixels_per_point).max(1.0), occluded_alpha: 0.25 };
-        let params = self.session.params.get(&technique).cloned().unwrap_or_default();
-        // Both views get the same indirect technique and parameters, so a comparison compares the same light.
-        let (indirect, indirect_params) = self.session.indirect_inputs(interacting);
-        let x_ray = self.session.view.x_ray;
-        let Some(gpu) = &mut self.gpu else { return Ok(()) };
-        let main_inputs = FrameInputs {
-            camera,
-            lights: lights.clone(),
-            technique,
-            params,
-            indirect: indirect.clone(),
-            indirect_params: indirect_params.clone(),
-            settings: settings.clone(),
-        };
-        // While the user drags, keep the UI fluid: the preview gets a third of the budget.
-        let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
-        let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
-        // The comparison view shows the technique's exposure (held, never metered itself), so the same radiance
-        // looks the same on both sides of a split or side-by-side view.
-        if gpu.main.new_report && settings.auto_exposure == AutoExposure::Meter {
-            if let Some((scale, average)) = gpu.main.renderer.auto_exposure()? {
-                gpu.reference.renderer.set_held_exposure(scale, average)?;
-                self.metered_exposure = Some((scale, average));
-            }
-        }
-        // The technique's per-pixel ID map, once per converged frame, when its layer is on.
-        if gpu.main.is_converged() {
-            let key = gpu.main.frame_key();
-            let technique_key = main_inputs.technique.clone();
-            let view_overlays = &self.session.view.overlays;
-            let technique = gpu.main.technique(&technique_key)?;
-            let layer = technique.pixel_ids(&[]).map(|(name, _)| name);
-            let wanted = layer.is_some_and(|name| *view_overlays.get(name).unwrap_or(&false));
-            if wanted && self.pixel_ids.as_ref().is_none_or(|(k, ..)| *k != key) {
-                let positions = gpu.main.renderer.read_world_positions(&camera)?;
-                let technique = gpu.main.technique(&technique_key)?;
-                if let Some((name, ids)) = technique.pixel_ids(&positions) {
-                    self.pixel_ids = Some((key, name, Arc::new(ids), gpu.main.size));
-                }
-            }
-            if let Some((k, name, ids, (w, h))) = &self.pixel_ids {
-                if *k == key && wanted && layer == Some(*name) {
-                    overlays.insert(0, Overlay::IdMap { width: *w, height: *h, ids: ids.clone(), alpha: 0.45 });
-                }
-            }
-        }
-        gpu.main.renderer.set_overlay_style(style);
-        gpu.reference.renderer.set_overlay_style(style);
-        gpu.main.overlays(&camera, &overlays, x_ray)?;
-        let mut total_spent = spent;
-        let mut total_steps = steps;
-        if two {
-            let against = self.session.view.compare_against.clone();
-            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { against.as_str() };
-            let reference_inputs = FrameInputs {
-                camera,
-                lights,
-                technique: reference_technique.into(),
-                params: self.session.params.get(reference_technique).cloned().unwrap_or_default(),
-                indirect,
-                indirect_params,
-                settings: RenderSettings {
-                    auto_exposure: match settings.auto_exposure {
-                        AutoExposure::Off => AutoExposure::Off,
-                        _ => AutoExposure::Hold,
-                    },
-                    ..settings
-                },
-            };
-            // The reference gets what is left of the budget once the technique's image is complete.
-            let left = if gpu.main.is_converged() { budget - spent } else { budget * 0.25 };
-            let (s, n) = gpu.reference.update(
-                &gpu.render_state,
-                &reference_inputs,
-                left.max(1.0),
-                gpu.sizer.max_lights_per_step,
-            )?;
-            gpu.reference.overlays(&camera, &overlays, x_ray)?;
-            total_spent += s;
-            total_steps += n;
-        }
-        gpu.sizer.observe(total_spent, total_steps);
-        let describe = |params: &BTreeMap<String, ParamValue>| {
-            params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
-        };
-        let indirect_params = &main_inputs.indirect_params;
-        let describe_report = |r: &shadowlab_core::FrameReport, params: &BTreeMap<String, ParamValue>| {
-            let mut p = describe(params);
-            if r.indirect.is_some() && !indirect_params.is_empty() {
-                p = format!("{p} | {}", describe(indirect_params)).trim().to_string();
-            }
-            p
-        };
-        if std::mem::take(&mut gpu.reference.new_report) {
-            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
-                let p = describe_report(r, &self.session.params.get(&r.technique).cloned().unwrap_or_default());
-                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
-            }
-        }
-        if std::mem::take(&mut gpu.main.new_report) {
-            if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
-                let p = describe_report(r, &main_inputs.params);
-                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
-            }
-            if let Some(r) = &gpu.main.last_report {
-                let t = self.started.elapsed().as_secs_f64();
-                if r.technique != PREVIEW_TECHNIQUE {
-                    self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
-                    while self.timings.front().is_some_and(|(t0, _, _)| t - t0 > 60.0) {
-                        self.timings.pop_front();
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Recompute the difference image when both views have converged on new frames.
-    fn update_difference(&mut self, ctx: &egui::Context) -> Result<()> {
-        let camera = self.session.camera.camera();
-        let lights = self.session.animated_lights();
-        let Some(gpu) = &mut self.gpu else { return Ok(()) };
-        if !(gpu.main.is_converged() && gpu.reference.is_converged()) {
-            return Ok(());
-        }
-        let key = (
-            gpu.main.frame_key(),
-            gpu.reference.frame_key(),
-            self.session.view.diff_signed,
-            self.session.view.diff_visibility,
-            self.session.view.diff_gain.to_bits(),
-        );
-        if self.difference.as_ref().is_some_and(|d| d.key == key) {
-            return Ok(());
-        }
-        // A worker is on it: show its result when it arrives (an older key's result is dropped).
-        if let Some(p) = &self.pending_difference {
-            match p.result.try_recv() {
-                Ok(result) => {
-                    let (pkey, (w, h)) = (p.key, p.size);
-                    self.pending_difference = None;
-                    let (metrics, image) = result?;
-                    let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
-                    let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
-                    self.difference = Some(Difference { texture, metrics, key: pkey });
-                    if pkey == key {
-                        return Ok(());
-                    }
-                }
-                Err(std::sync::mpsc::TryRecvError::Empty) if p.key == key => {
-                    ctx.request_repaint_after(std::time::Duration::from_millis(50));
-                    return Ok(());
-                }
-                Err(_) => self.pending_difference = None,
-            }
-        }
-        use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Visibility};
-        let (w, h) = gpu.main.size;
-        // Shadow factors are those of the direct light, whatever component the views show; otherwise the
-        // component shown is compared.
-        let read = |renderer: &shadowlab_core::Renderer| {
-            if self.session.view.diff_visibility {
-                renderer.read_component(Component::Direct)
-            } else {
-                renderer.read_hdr()
-            }
-        };
-        let technique = Image::new(w, h, read(&gpu.main.renderer)?)?;
-        let reference = Image::new(w, h, read(&gpu.reference.renderer)?)?;
-        let mask = gpu.main.renderer.read_geometry_mask()?;
-        let mode = if self.session.view.diff_signed { DiffMode::Signed } else { DiffMode::Absolute };
-        let gain = self.session.view.diff_gain;
-        // The GPU part (readbacks, and for shadow factors the unshadowed and ambient-only images of the same
-        // view) here; the CPU part (metrics with FLIP, the colour map) on a worker thread unless synchronous.
-        let lit_ambient = if self.session.view.diff_visibility {
-            let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
-            let mut aux = gpu.main.renderer.new_view(settings)?;
-            let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
-            aux.render_frame(unshadowed.as_mut(), &camera, &lights, &mut |_, _| {})?;
-            let lit = Image::new(w, h, aux.read_hdr()?)?;
-            aux.render_frame(unshadowed.as_mut(), &camera, &[], &mut |_, _| {})?;
-            let ambient = Image::new(w, h, aux.read_hdr()?)?;
-            Some((lit, ambient))
-        } else {
-            None
-        };
-        let work = move || -> Result<(shadowlab_core::compare::Metrics, image::RgbaImage)> {
-            Ok(match &lit_ambient {
-                Some((lit, ambient)) => {
-                    let v_t = compare::visibility_image(&technique, lit, Some(ambient))?;
-                    let v_r = compare::visibility_image(&reference, lit, Some(ambient))?;
-                    let options = CompareOptions {
-                        visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
-                        ..Default::default()
-                    };
-                    let m = compare::compare(&technique, &reference, Some(&mask), &options)?;
-                    (m, compare::visibility_difference_image(&v_t, &v_r, w, h, Some(&mask), mode, gain)?)
-                }
-                None => {
-                    let m = compare::compare(&technique, &reference, Some(&mask), &CompareOptions::default())?;
-                    (m, compare::difference_image(&technique, &reference, Some(&mask), mode, gain)?)
-                }
-            })
-        };
-        if self.background_work {
-            let (tx, rx) = std::sync::mpsc::channel();
-            let repaint = ctx.clone();
-            std::thread::Builder::new().name("difference".into()).spawn(move || {
-                let _ = tx.send(work());
-                repaint.request_repaint();
-            })?;
-            self.pending_difference = Some(PendingDifference { key, size: (w, h), result: rx });
-            return Ok(());
-        }
-        let (metrics, image) = work()?;
-        let color = egui::ColorImage::from_rgba_unmultiplied([w as usize, h as usize], image.as_raw());
-        let texture = ctx.load_texture("difference", color, egui::TextureOptions::NEAREST);
-        self.difference = Some(Difference { texture, metrics, key });
-        Ok(())
+        self.views.overlay_tooltip(&self.session, projection, pos)
     }
 
     /// Start a sweep of `key` over `values` for the current technique, view and lights.
     pub fn start_sweep(&mut self, key: &str, values: Vec<ParamValue>) -> Result<()> {
-        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
-        let settings = gpu.main.renderer.settings().clone();
-        let fixed: Vec<(String, ParamValue)> = self
-            .session
-            .params
-            .get(&self.session.technique)
-            .map(|p| p.iter().filter(|(k, _)| k.as_str() != key).map(|(k, v)| (k.clone(), v.clone())).collect())
-            .unwrap_or_default();
-        self.sweep = Some(sweep::Sweep::start(sweep::SweepJob {
-            gpu: gpu.ctx.clone(),
-            scene: gpu.main.renderer.shared_scene(),
-            layouts: gpu.main.renderer.shared_layouts(),
-            lights: self.session.animated_lights(),
-            camera: self.session.camera.camera(),
-            settings,
-            technique: self.session.technique.clone(),
-            fixed,
-            indirect: self.session.indirect.technique.clone().map(|k| {
-                let params = self.session.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
-                (k, params)
-            }),
-            key: key.to_string(),
-            values,
-        }));
-        Ok(())
+        self.views.start_sweep(&self.session, key, values)
     }
 
     // ----- screenshots -----
@@ -1217,7 +701,7 @@ impl ShadowLabApp {
     /// Save the 3D view at its render resolution (no UI). Returns the path.
     pub fn save_view_screenshot(&mut self) -> Result<PathBuf> {
         let path = self.screenshot_name("view");
-        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let gpu = self.views.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
         let image = gpu.main.renderer.read_output()?;
         std::fs::create_dir_all(path.parent().expect("has a parent"))?;
         image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
@@ -1375,7 +859,7 @@ impl ShadowLabApp {
         }
         let rect = ui.available_rect_before_wrap();
         let response = ui.allocate_rect(rect, egui::Sense::click_and_drag());
-        self.last_viewport_rect = Some(rect);
+        self.views.last_viewport_rect = Some(rect);
         let projection_rect = if self.session.view.mode == ViewMode::SideBySide {
             egui::Rect::from_min_size(rect.min, egui::vec2(rect.width() * 0.5, rect.height()))
         } else {
@@ -1418,7 +902,9 @@ impl ShadowLabApp {
                 let ctrl = ui.input(|i| i.modifiers.command);
                 let alt = ui.input(|i| i.modifiers.alt);
                 if alt {
-                    self.probe_at(pos, projection.rect);
+                    if let Some(status) = self.views.probe_at(&mut self.session, pos, projection.rect) {
+                        self.status = status;
+                    }
                 } else if ctrl {
                     let (o, d) = projection.ray(pos);
                     if let Some((t, n)) = gizmo::pick_surface(&self.session.scene, o, d) {
@@ -1462,116 +948,25 @@ impl ShadowLabApp {
             || self.last_interaction.is_some_and(|t| t.elapsed().as_secs_f32() < 0.25);
 
         let ppp = ui.ctx().pixels_per_point();
-        self.last_view_pixels = rect.size() * ppp;
-        if let Err(e) = self.render_views(rect.size() * ppp, ppp, interacting) {
+        self.views.last_view_pixels = rect.size() * ppp;
+        if let Err(e) = self.views.render(&self.session, rect.size() * ppp, ppp, interacting) {
             self.status = format!("render error: {e:#}");
         }
         if self.session.view.mode == ViewMode::Difference {
-            if let Err(e) = self.update_difference(ui.ctx()) {
+            if let Err(e) = self.views.update_difference(&self.session, ui.ctx()) {
                 self.status = format!("difference: {e:#}");
             }
         }
 
         // Show the images.
         let painter = ui.painter_at(rect);
-        let indirect = self.session.indirect.technique.as_deref();
-        let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
-        if let Some(gpu) = &self.gpu {
-            match self.session.view.mode {
-                ViewMode::Single => {
-                    painter.image(gpu.main.texture_id, rect, uv, egui::Color32::WHITE);
-                }
-                ViewMode::SideBySide => {
-                    let (l, r) = rect.split_left_right_at_fraction(0.5);
-                    painter.image(gpu.main.texture_id, l, uv, egui::Color32::WHITE);
-                    painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
-                    painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
-                    label(&painter, l.left_top(), &technique_pair(&self.session.technique, indirect));
-                    label(&painter, r.left_top(), &technique_pair(&self.session.view.compare_against, indirect));
-                }
-                ViewMode::Difference => match &self.difference {
-                    Some(d) => {
-                        painter.image(d.texture.id(), rect, uv, egui::Color32::WHITE);
-                        let m = &d.metrics;
-                        label(
-                            &painter,
-                            rect.left_top(),
-                            &format!(
-                                "{} vs {}: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
-                                technique_pair(&self.session.technique, indirect),
-                                technique_pair(&self.session.view.compare_against, indirect),
-                                m.rmse,
-                                m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
-                                m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
-                                m.shadow_intensity_error
-                                    .map(|e| format!("{:.2}%", e * 100.0))
-                                    .unwrap_or_else(|| "-".into()),
-                            ),
-                        );
-                        legend(&painter, rect, self.session.view.diff_signed, self.session.view.diff_gain);
-                    }
-                    None => {
-                        painter.image(gpu.main.texture_id, rect, uv, egui::Color32::from_gray(90));
-                        label(&painter, rect.left_top(), "computing the difference when both images are complete…");
-                    }
-                },
-                ViewMode::Split => {
-                    let x = rect.left() + rect.width() * self.session.view.split.clamp(0.0, 1.0);
-                    let s = self.session.view.split.clamp(0.0, 1.0);
-                    let left = egui::Rect::from_min_max(rect.min, egui::pos2(x, rect.bottom()));
-                    let right = egui::Rect::from_min_max(egui::pos2(x, rect.top()), rect.max);
-                    painter.image(
-                        gpu.main.texture_id,
-                        left,
-                        egui::Rect::from_min_max(uv.min, egui::pos2(s, 1.0)),
-                        egui::Color32::WHITE,
-                    );
-                    painter.image(
-                        gpu.reference.texture_id,
-                        right,
-                        egui::Rect::from_min_max(egui::pos2(s, 0.0), uv.max),
-                        egui::Color32::WHITE,
-                    );
-                    painter.line_segment(
-                        [egui::pos2(x, rect.top()), egui::pos2(x, rect.bottom())],
-                        egui::Stroke::new(2.0, egui::Color32::WHITE),
-                    );
-                    label(&painter, rect.left_top(), &technique_pair(&self.session.technique, indirect));
-                    label(
-                        &painter,
-                        egui::pos2(x, rect.top()),
-                        &technique_pair(&self.session.view.compare_against, indirect),
-                    );
-                    // The split line is draggable from a handle at its middle.
-                    let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
-                    let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());
-                    painter.rect_filled(handle, 3.0, egui::Color32::from_white_alpha(200));
-                    if h.dragged() {
-                        self.session.view.split = ((x + h.drag_delta().x - rect.left()) / rect.width()).clamp(0.0, 1.0);
-                    }
-                }
-            }
-            // Progress of the frame being refined.
-            let progress = gpu.main.progress.min(if self.session.view.mode == ViewMode::Single {
-                1.0
-            } else {
-                gpu.reference.progress
-            });
-            if progress < 1.0 {
-                let bar = egui::Rect::from_min_size(
-                    rect.left_bottom() - egui::vec2(0.0, 4.0),
-                    egui::vec2(rect.width() * progress, 4.0),
-                );
-                painter.rect_filled(bar, 0.0, egui::Color32::from_rgb(90, 170, 255));
-                ui.ctx().request_repaint();
-            }
-        }
+        self.views.paint(ui, &painter, rect, &mut self.session);
         if let Some(at) = self.session.gizmo_target().and_then(|t| self.session.target_position(&t)) {
             let hover = pointer.and_then(|p| gizmo::hit_handle(&projection, at, p));
             gizmo::paint(&painter, &projection, at, self.drag.as_ref().map(|d| d.handle).or(hover));
         }
         if self.session.view.legend {
-            legend::paint_in_view(&painter, rect, &self.legends);
+            legend::paint_in_view(&painter, rect, &self.views.legends);
         }
         // A light under the pointer: its details in a tooltip.
         if self.drag.is_none() && !interacting {
@@ -1623,74 +1018,6 @@ impl ShadowLabApp {
     }
 }
 
-/// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
-pub fn session_name(report: &shadowlab_core::FrameReport) -> String {
-    technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
-}
-
-/// `direct`, or `direct + indirect`.
-pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
-    match indirect {
-        Some(i) => format!("{direct} + {i}"),
-        None => direct.to_string(),
-    }
-}
-
-fn label(painter: &egui::Painter, at: egui::Pos2, text: &str) {
-    painter.text(
-        at + egui::vec2(6.0, 4.0),
-        egui::Align2::LEFT_TOP,
-        text,
-        egui::FontId::proportional(13.0),
-        egui::Color32::WHITE,
-    );
-}
-
-/// Colour legend of the difference view.
-fn legend(painter: &egui::Painter, rect: egui::Rect, signed: bool, gain: f32) {
-    let w = 160.0;
-    let origin = rect.right_bottom() - egui::vec2(w + 16.0, 34.0);
-    for i in 0..w as usize {
-        let t = i as f32 / (w - 1.0);
-        let color = if signed {
-            let s = t * 2.0 - 1.0;
-            let v = (s.abs() * 255.0) as u8;
-            if s >= 0.0 {
-                egui::Color32::from_rgb(v, 0, 0)
-            } else {
-                egui::Color32::from_rgb(0, v, 0)
-            }
-        } else {
-            let [r, g, b] = shadowlab_core::compare::colormap(t);
-            egui::Color32::from_rgb(r, g, b)
-        };
-        painter.rect_filled(
-            egui::Rect::from_min_size(origin + egui::vec2(i as f32, 0.0), egui::vec2(1.0, 10.0)),
-            0.0,
-            color,
-        );
-    }
-    let (lo, hi) = if signed {
-        (format!("-{:.2}", 1.0 / gain), format!("+{:.2}", 1.0 / gain))
-    } else {
-        ("0".into(), format!("{:.2}", 1.0 / gain))
-    };
-    painter.text(
-        origin + egui::vec2(0.0, 12.0),
-        egui::Align2::LEFT_TOP,
-        lo,
-        egui::FontId::proportional(11.0),
-        egui::Color32::WHITE,
-    );
-    painter.text(
-        origin + egui::vec2(w, 12.0),
-        egui::Align2::RIGHT_TOP,
-        hi,
-        egui::FontId::proportional(11.0),
-        egui::Color32::WHITE,
-    );
-}
-
 fn chrono_like_stamp() -> String {
     let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_millis()).unwrap_or(0);
     format!("{secs}")
@@ -1731,7 +1058,7 @@ impl eframe::App for ShadowLabApp {
         // wgpu reports a lost device from its poll: poll (without waiting) before touching the device this
         // frame, so a loss is handled before anything is created on it (wgpu's buffer helpers panic then).
         // (GpuContext's device-lost callback records the loss; every renderer call refuses work after it.)
-        let lost = self.gpu.as_ref().and_then(|gpu| {
+        let lost = self.views.gpu.as_ref().and_then(|gpu| {
             let _ = gpu.ctx.device.poll(wgpu::PollType::Poll);
             gpu.ctx.lost()
         });

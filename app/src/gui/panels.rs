@@ -312,7 +312,7 @@ fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         });
     let key = app.session.technique.clone();
     let view_camera = app.session.camera.camera();
-    let Some(gpu) = &mut app.gpu else { return };
+    let Some(gpu) = &mut app.views.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
     let user = app.session.params.entry(key.clone()).or_default();
     params_panel(
@@ -353,7 +353,7 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     }
     app.session.indirect.technique = choice;
     let mut uses_vpls = false;
-    if let (Some(key), Some(gpu)) = (app.session.indirect.technique.clone(), &mut app.gpu) {
+    if let (Some(key), Some(gpu)) = (app.session.indirect.technique.clone(), &mut app.views.gpu) {
         match gpu.main.indirect_technique(&key) {
             Ok(shared) => {
                 let mut technique = shared.borrow_mut();
@@ -446,7 +446,7 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
              the last one.",
         );
     });
-    if let (true, Some((scale, average))) = (app.session.view.auto_exposure, app.metered_exposure) {
+    if let (true, Some((scale, average))) = (app.session.view.auto_exposure, app.views.metered_exposure) {
         ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"));
     }
     let label = if app.session.view.auto_exposure { "compensation" } else { "exposure" };
@@ -501,7 +501,7 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.selectable_value(&mut app.session.view.diff_gain, g, format!("×{g}"));
             }
         });
-        if let Some(d) = &app.difference {
+        if let Some(d) = &app.views.difference {
             let m = &d.metrics;
             egui::Grid::new("metrics").num_columns(2).show(ui, |ui| {
                 ui.label("RMSE");
@@ -539,7 +539,7 @@ fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             app.session.view.overlays.insert(name.clone(), x);
         }
         // The legend of the layers drawn in the last frame.
-        if let Some((_, entries)) = app.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
+        if let Some((_, entries)) = app.views.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
             for e in entries {
                 super::legend::entry_ui(ui, e);
             }
@@ -662,7 +662,7 @@ fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 /// Per-pass table of the last complete frame, a plot of recent frames, and the same-session comparison with
 /// the reference.
 pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    let Some(gpu) = &app.gpu else { return };
+    let Some(gpu) = &app.views.gpu else { return };
     let ui_ms = app.ui_frame_ms.iter().copied().sum::<f64>() / app.ui_frame_ms.len().max(1) as f64;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("adapter: {}", gpu.ctx.adapter_description()));
@@ -736,15 +736,16 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     ui.label(parts.join(" · "));
                 }
                 // Every technique seen this session against the reference, same session and adapter.
-                let reference = super::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
-                if let Some((reference_ms, _)) = app.session_times.get(&reference) {
+                let reference =
+                    super::views::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
+                if let Some((reference_ms, _)) = app.views.session_times.get(&reference) {
                     egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
                         ui.strong("technique (this session)");
                         ui.strong("GPU ms");
                         ui.strong("speedup");
                         ui.strong("parameters");
                         ui.end_row();
-                        for (name, (ms, params)) in &app.session_times {
+                        for (name, (ms, params)) in &app.views.session_times {
                             ui.label(name);
                             ui.label(format!("{ms:.1}"));
                             ui.label(format!("×{:.2}", reference_ms / ms.max(1e-6)));
@@ -760,7 +761,7 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     };
     let plot = |ui: &mut egui::Ui| {
         let mut names: Vec<String> = Vec::new();
-        for (_, _, passes) in &app.timings {
+        for (_, _, passes) in &app.views.timings {
             for p in passes {
                 if !names.contains(&p.name) {
                     names.push(p.name.clone());
@@ -768,10 +769,11 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
         Plot::new("timings").legend(Legend::default()).height(130.0).y_axis_label("ms").show(ui, |plot| {
-            let total: PlotPoints = app.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
+            let total: PlotPoints = app.views.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
             plot.line(Line::new("frame (GPU)", total));
             for name in names {
                 let pts: PlotPoints = app
+                    .views
                     .timings
                     .iter()
                     .map(|(t, _, passes)| [*t, passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>()])
@@ -805,7 +807,7 @@ pub fn figures_text(figures: &BTreeMap<String, f64>) -> String {
 fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     ui.heading("Sweep");
     let key = app.session.technique.clone();
-    let Some(gpu) = &mut app.gpu else { return };
+    let Some(gpu) = &mut app.views.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
     let numeric: Vec<_> = technique
         .params()
@@ -843,7 +845,7 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.add(egui::DragValue::new(count).range(2..=64).prefix("values "));
     });
     let (param_key, start, end, count) = (param_key.clone(), *start, *end, *count);
-    let running = app.sweep.as_mut().is_some_and(|s| s.poll());
+    let running = app.views.sweep.as_mut().is_some_and(|s| s.poll());
     let (mut run, mut cancel) = (false, false);
     ui.horizontal(|ui| {
         run = !running && ui.button("Run sweep").clicked();
@@ -858,11 +860,11 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         }
     }
     if cancel {
-        if let Some(s) = &app.sweep {
+        if let Some(s) = &app.views.sweep {
             s.cancel();
         }
     }
-    if let Some(s) = &app.sweep {
+    if let Some(s) = &app.views.sweep {
         if running {
             ui.add(egui::ProgressBar::new(s.rows.len() as f32 / s.total.max(1) as f32).show_percentage());
             ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
@@ -919,7 +921,7 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     // The direct technique's steps, then the indirect technique's (when one is chosen and describes any).
     let mut sections: Vec<(String, &'static str, Vec<shadowlab_core::technique::ExplainStep>)> = Vec::new();
     {
-        let Some(gpu) = &mut app.gpu else { return };
+        let Some(gpu) = &mut app.views.gpu else { return };
         if let Ok(technique) = gpu.main.technique(&app.session.technique) {
             sections.push((app.session.technique.clone(), technique.label(), technique.explain()));
         }
