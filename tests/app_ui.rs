@@ -23,7 +23,7 @@ const SIZE: (f32, f32) = (900.0, 560.0);
 
 /// Snapshots without the timings panel (its milliseconds change from run to run) and toasts.
 fn snapshot(h: &mut Harness<'static, ShadowLabApp>, name: &str) {
-    let timings = h.state().layout.rect(Pane::Timings).expect("the timings panel is laid out");
+    let timings = h.state().chrome.layout.rect(Pane::Timings).expect("the timings panel is laid out");
     h.mask(timings);
     h.mask(egui::Rect::from_min_max(egui::pos2(SIZE.0 - 420.0, SIZE.1 - 120.0), egui::pos2(SIZE.0, SIZE.1)));
     h.snapshot(name);
@@ -99,7 +99,7 @@ fn the_inspector_turns_a_light_into_a_spot_light() {
     assert!((spot.outer_angle - 30f32.to_radians()).abs() < 1e-4 && spot.direction.y < -0.99, "{spot:?}");
     assert!(h.query_all_by_label_contains("cone half-angle").count() >= 1, "the cone slider is shown");
     // The spot's cone is drawn as an overlay layer.
-    h.state_mut().layout.focus(Pane::Overlays);
+    h.state_mut().chrome.layout.focus(Pane::Overlays);
     h.run_steps(1);
     assert!(h.query_all_by_label_contains("spot cones").count() >= 1, "no spot cone layer");
 }
@@ -229,7 +229,7 @@ fn difference_view_measures_the_technique_against_the_reference() {
     h.run_steps(4);
     let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
-    h.state_mut().layout.focus(Pane::Render);
+    h.state_mut().chrome.layout.focus(Pane::Render);
     h.run_steps(1);
     h.get_by_label("RMSE");
     // The session's comparison table has both techniques.
@@ -602,7 +602,7 @@ fn full_view_hides_every_panel_and_tab_brings_them_back() {
     h.get_by_label("Technique");
     h.key_press(egui::Key::Tab);
     h.run_steps(2);
-    assert!(h.state().layout.full_view);
+    assert!(h.state().chrome.layout.full_view);
     assert_eq!(h.query_all_by_label("Technique").count(), 0, "the technique panel is hidden");
     assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
     assert_eq!(h.query_all_by_label("File").count(), 0, "the menu bar is hidden");
@@ -610,7 +610,7 @@ fn full_view_hides_every_panel_and_tab_brings_them_back() {
     assert!(share > 0.97, "the view fills the window in full view: {:.1} %", share * 100.0);
     h.key_press(egui::Key::F11);
     h.run_steps(2);
-    assert!(!h.state().layout.full_view);
+    assert!(!h.state().chrome.layout.full_view);
     h.get_by_label("Technique");
     // The button over the view leaves full view too.
     h.key_press(egui::Key::F11);
@@ -636,24 +636,24 @@ fn a_hidden_panel_is_restored_from_the_menu_and_the_layout_is_saved() {
     let hide: Vec<_> = h.get_all_by_label("hide").collect();
     assert_eq!(hide.len(), 2, "one hide button per tab bar");
     // The lower one: the timings' tab bar is right above the timings.
-    let timings = h.state().layout.rect(Pane::Timings).unwrap();
+    let timings = h.state().chrome.layout.rect(Pane::Timings).unwrap();
     let lower = hide.into_iter().max_by(|a, b| a.rect().center().y.total_cmp(&b.rect().center().y)).unwrap();
     assert!((lower.rect().center().y - timings.top()).abs() < 30.0, "{:?} vs {timings:?}", lower.rect());
     lower.click();
     h.run_steps(3);
-    assert!(!h.state().layout.is_shown(Pane::Timings));
+    assert!(!h.state().chrome.layout.is_shown(Pane::Timings));
     assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
     // Saved as it changed: a new app opens with the same layout.
     let mut fresh = harness(Startup { data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
     fresh.run_steps(2);
-    assert!(!fresh.state().layout.is_shown(Pane::Timings), "the layout was saved with the app state");
-    assert!(fresh.state().layout.is_shown(Pane::Lights));
+    assert!(!fresh.state().chrome.layout.is_shown(Pane::Timings), "the layout was saved with the app state");
+    assert!(fresh.state().chrome.layout.is_shown(Pane::Lights));
     // The Panels menu shows it again.
     fresh.get_by_label("Panels").click();
     fresh.run_steps(2);
     fresh.get_by_label("Timings").click();
     fresh.run_steps(2);
-    assert!(fresh.state().layout.is_shown(Pane::Timings));
+    assert!(fresh.state().chrome.layout.is_shown(Pane::Timings));
     fresh.get_by_label_contains("adapter:");
     assert!(before > 0.6);
 }
@@ -663,7 +663,7 @@ fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
     let mut h = start("legend", "cornell");
     h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
-    h.state_mut().layout.focus(Pane::Overlays);
+    h.state_mut().chrome.layout.focus(Pane::Overlays);
     h.run_steps(2);
     // "lights by cluster" is on by default: its legend is listed under its checkbox.
     h.get_by_label_contains("in its cluster's colour");
@@ -724,11 +724,11 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
     assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
     // The view's overlay layers (LightCluster's lights by cluster) are drawn over the frames, unless switched off.
-    h.state_mut().sequence_overlays = false;
+    h.state_mut().chrome.sequence_overlays = false;
     let plain = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
     let plain: Vec<_> = plain.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
     assert!(plain[0] != images[0] && plain[0].dimensions() == images[0].dimensions(), "overlays drawn");
-    h.state_mut().sequence_overlays = true;
+    h.state_mut().chrome.sequence_overlays = true;
     // The light animation: an error while it is off, then one period in 2 frames that differ.
     assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
     h.state_mut().session.animation = shadowlab::gui::Animation::Bob;
@@ -748,12 +748,12 @@ fn gif_frames(path: &std::path::Path) -> Vec<image::Frame> {
 #[test]
 fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_selected_light() {
     let mut h = start("inspector-maps", "cornell");
-    h.state_mut().layout.focus(Pane::Maps);
+    h.state_mut().chrome.layout.focus(Pane::Maps);
     h.run_steps(3);
     let app = h.state();
-    let atlas = app.inspector.atlas.as_ref().expect("the reference's atlas was read back");
+    let atlas = app.chrome.inspector.atlas.as_ref().expect("the reference's atlas was read back");
     assert!(atlas.tiles >= 6 && atlas.resolution == 256, "{} tiles of {}", atlas.tiles, atlas.resolution);
-    let cross = app.inspector.shown.as_ref().expect("a cube map is shown");
+    let cross = app.chrome.inspector.shown.as_ref().expect("a cube map is shown");
     assert_eq!((cross.width, cross.height), (4 * atlas.resolution, 3 * atlas.resolution), "unfolded as a cross");
     // Six faces of texels, outside them nothing; the light's walls within its range are drawn.
     let inside = cross.depths.iter().filter(|d| !d.is_nan()).count();
@@ -773,12 +773,12 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_s
     h.state_mut().session.selected = Some(index);
     h.run_steps(2);
     let app = h.state();
-    let cube = app.inspector.cube.expect("a cube map is shown");
-    let atlas = app.inspector.atlas.as_ref().unwrap();
+    let cube = app.chrome.inspector.cube.expect("a cube map is shown");
+    let atlas = app.chrome.inspector.atlas.as_ref().unwrap();
     assert_eq!(atlas.cube_at(light.position, 1e-4), Some(cube), "the selected light's cube map is shown");
-    assert_eq!(app.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
+    assert_eq!(app.chrome.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
     let r = atlas.resolution;
-    let cross = app.inspector.shown.as_ref().unwrap();
+    let cross = app.chrome.inspector.shown.as_ref().unwrap();
     let (x, y) = (r + r / 2, r / 2);
     let readout = cross.readout(x, y).unwrap();
     assert!(readout.contains(&format!("cube {cube} face +y")), "{readout}");
@@ -789,7 +789,7 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_s
     // Linearised grey: the same texels drawn by distance.
     h.get_by_label("linearised grey").click();
     h.run_steps(2);
-    assert!(h.state().inspector.linear && h.state().inspector.shown.is_some());
+    assert!(h.state().chrome.inspector.linear && h.state().chrome.inspector.shown.is_some());
 }
 
 #[test]
@@ -797,21 +797,21 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     use shadowlab::gui::inspector::MapSource;
     let mut h = start("inspector-insm", "cornell");
     h.state_mut().session.technique = "insm".into();
-    h.state_mut().layout.focus(Pane::Maps);
+    h.state_mut().chrome.layout.focus(Pane::Maps);
     h.run_steps(4);
     let images = MapSource { indirect: false, set: 1 };
-    let sources = h.state().inspector.sources.clone();
+    let sources = h.state().chrome.inspector.sources.clone();
     assert!(
         sources.iter().any(|(s, l)| *s == images && l.contains("intermediate depth images")),
         "INSM offers its intermediate images: {sources:?}"
     );
     assert!(sources.iter().any(|(s, l)| *s == MapSource::DIRECT && l.contains("shadow maps")), "{sources:?}");
-    h.state_mut().inspector.source = images;
+    h.state_mut().chrome.inspector.source = images;
     h.run_steps(3);
     let viewpoints =
         h.state_mut().views.gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
     let app = h.state();
-    let atlas = app.inspector.atlas.as_ref().expect("the intermediate images were read back");
+    let atlas = app.chrome.inspector.atlas.as_ref().expect("the intermediate images were read back");
     assert_eq!(atlas.cubes(), 0, "views, not cube maps");
     // Each viewpoint's image is a tile seen from that viewpoint, its texels read as distances from it.
     let eyes: Vec<glam::Vec3> = atlas.projections.iter().flatten().map(|p| p.eye()).collect();
@@ -819,7 +819,7 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     for v in &viewpoints {
         assert!(eyes.iter().any(|e| e.distance(v.position) < 1e-3), "no image from {:?}: {eyes:?}", v.position);
     }
-    let shown = app.inspector.shown.as_ref().expect("the whole atlas is shown");
+    let shown = app.chrome.inspector.shown.as_ref().expect("the whole atlas is shown");
     let r = atlas.resolution;
     let readout = shown.readout(r / 2, r / 2).unwrap();
     let distance = shown.distance(r / 2, r / 2).expect("the first viewpoint sees the room");
@@ -827,18 +827,18 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     assert!(readout.contains("tile 0 · view") && distance > 0.05 && distance < 6.0, "{readout}");
     // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
     h.state_mut().session.technique = "lightcluster".into();
-    h.state_mut().inspector.source = MapSource::DIRECT;
+    h.state_mut().chrome.inspector.source = MapSource::DIRECT;
     h.run_steps(4);
-    let atlas = h.state().inspector.atlas.as_ref().expect("LightCluster's cube maps");
+    let atlas = h.state().chrome.inspector.atlas.as_ref().expect("LightCluster's cube maps");
     assert!(atlas.cubes() > 0 && atlas.what.contains("per cluster"), "{}", atlas.what);
     h.state_mut().session.selected = Some(5);
     h.run_steps(2);
-    let note = h.state().inspector.note.clone().unwrap_or_default();
+    let note = h.state().chrome.inspector.note.clone().unwrap_or_default();
     assert!(note.starts_with("light 5: cube "), "{note}");
     // The cube shown is rendered from a member of light 5's cluster (its center).
     let group = h.state_mut().light_details(5).expect("LightCluster knows light 5's cluster").group;
     let app = h.state();
-    let (atlas, cube) = (app.inspector.atlas.as_ref().unwrap(), app.inspector.cube.unwrap());
+    let (atlas, cube) = (app.chrome.inspector.atlas.as_ref().unwrap(), app.chrome.inspector.cube.unwrap());
     assert!(group.iter().any(|&m| atlas.cube_at(app.session.lights[m].position, 1e-4) == Some(cube)), "{group:?}");
 }
 
@@ -849,7 +849,7 @@ fn every_explain_step_of_every_technique_draws_without_a_panic() {
     h.state_mut().session.indirect.vpl.count = 16;
     let mut clicked = 0;
     let mut click_all = |h: &mut Harness<'static, ShadowLabApp>, titles: Vec<&'static str>| {
-        h.state_mut().layout.focus(Pane::Explain);
+        h.state_mut().chrome.layout.focus(Pane::Explain);
         h.run_steps(1);
         for title in titles {
             h.get_by_label(title).click();
@@ -879,7 +879,7 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     let mut h = start("explain", "cornell");
     h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
-    h.state_mut().layout.focus(Pane::Explain);
+    h.state_mut().chrome.layout.focus(Pane::Explain);
     h.run_steps(1);
     h.get_by_label("2. Cluster centers").click();
     h.run_steps(2);
@@ -892,7 +892,7 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     // The cube-map step brings the shadow maps forward.
     h.get_by_label("4. One cube map per cluster").click();
     h.run_steps(2);
-    assert!(h.state().layout.is_on_screen(Pane::Maps));
+    assert!(h.state().chrome.layout.is_on_screen(Pane::Maps));
     // The visibility step draws one cluster's visibility alone; the next step restores the parameter.
     use shadowlab_core::technique::ParamValue;
     let visibility_of =
@@ -905,12 +905,12 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     assert_eq!(visibility_of(&h), Some(ParamValue::Int(-1)), "back to every cluster");
     // INSM: the mesh step shows the wireframe and the dropped edges.
     h.state_mut().session.technique = "insm".into();
-    h.state_mut().layout.focus(Pane::Explain);
+    h.state_mut().chrome.layout.focus(Pane::Explain);
     h.run_steps(3);
     h.get_by_label("2. Intermediate depth images").click();
     h.run_steps(2);
     let images = shadowlab::gui::inspector::MapSource { indirect: false, set: 1 };
-    assert!(h.state().layout.is_on_screen(Pane::Maps) && h.state().inspector.source == images);
+    assert!(h.state().chrome.layout.is_on_screen(Pane::Maps) && h.state().chrome.inspector.source == images);
     h.get_by_label("3. Their meshes").click();
     h.run_steps(2);
     assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));

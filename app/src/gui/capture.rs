@@ -172,7 +172,7 @@ impl ShadowLabApp {
         let gif_path = dir.join("sequence.gif");
         let mut gif = sequence::GifWriter::new(&gif_path, frame_ms)?;
         // The overlay layers the view shows, drawn as the view draws them (dots and lines in screen points).
-        let layers: Vec<String> = if self.sequence_overlays {
+        let layers: Vec<String> = if self.chrome.sequence_overlays {
             self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(name, _)| name).collect()
         } else {
             Vec::new()

@@ -308,43 +308,44 @@ impl egui_tiles::Behavior<Pane> for Panes<'_> {
 
 /// The tiles with the app's panes in them.
 pub fn tiles_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    let mut tree = std::mem::replace(&mut app.layout.tree, Tree::empty(egui::Id::unique("shadowlab layout (drawing)")));
+    let mut tree =
+        std::mem::replace(&mut app.chrome.layout.tree, Tree::empty(egui::Id::unique("shadowlab layout (drawing)")));
     let mut panes = Panes { app, edited: false, hide: None };
     tree.ui(&mut panes, ui);
     let (edited, hide) = (panes.edited, panes.hide);
     if let Some(id) = hide {
         tree.set_visible(id, false);
     }
-    app.layout.tree = tree;
+    app.chrome.layout.tree = tree;
     if edited || hide.is_some() {
-        app.layout.mark_changed();
+        app.chrome.layout.mark_changed();
     }
-    if let Some(pane) = app.layout.pending_focus.take() {
-        app.layout.focus(pane);
+    if let Some(pane) = app.chrome.layout.pending_focus.take() {
+        app.chrome.layout.focus(pane);
     }
 }
 
 /// The Panels menu: show or hide each panel, full view, the default layout.
 pub fn panels_menu(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     for pane in Pane::ALL.into_iter().filter(|p| *p != Pane::View) {
-        let mut shown = app.layout.is_shown(pane);
+        let mut shown = app.chrome.layout.is_shown(pane);
         if ui.checkbox(&mut shown, pane.title()).changed() {
             if shown {
                 // Shown again, and in front of its tab group.
-                app.layout.focus(pane);
+                app.chrome.layout.focus(pane);
             } else {
-                app.layout.set_shown(pane, false);
+                app.chrome.layout.set_shown(pane, false);
             }
-            app.layout.mark_changed();
+            app.chrome.layout.mark_changed();
         }
     }
     ui.separator();
     if ui.button("Full view (Tab or F11)").clicked() {
-        app.layout.toggle_full_view();
+        app.chrome.layout.toggle_full_view();
         ui.close();
     }
     if ui.button("Default layout").clicked() {
-        app.layout.reset();
+        app.chrome.layout.reset();
         ui.close();
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod camera;
 pub mod capture;
+pub mod chrome;
 pub mod document;
 pub mod gizmo;
 pub mod inspector;
@@ -16,7 +17,6 @@ pub mod session;
 pub mod sweep;
 pub mod views;
 
-use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -29,6 +29,7 @@ use shadowlab_core::technique::ParamValue;
 use shadowlab_core::GpuContext;
 
 use camera::{CameraInput, CameraMode};
+use chrome::Chrome;
 use document::{SceneFile, ViewMode};
 use gizmo::{Handle, Projection};
 pub use session::Animation;
@@ -137,13 +138,6 @@ pub fn run(startup: Startup) -> Result<()> {
         .map_err(|e| anyhow!("cannot open the window: {e}"))
 }
 
-/// A short message shown over the view.
-struct Toast {
-    text: String,
-    error: bool,
-    until: Instant,
-}
-
 /// A drag of the gizmo in progress.
 #[derive(Clone, Debug)]
 struct GizmoDrag {
@@ -159,44 +153,25 @@ pub struct ShadowLabApp {
     pub session: Session,
     /// The renderers and what is derived from their frames (difference, ID maps, legends, timings).
     pub views: Views,
+    /// The panels around the views and their state, the toasts.
+    pub chrome: Chrome,
     drag: Option<GizmoDrag>,
-    toasts: Vec<Toast>,
-    pub recent: Vec<PathBuf>,
     data_dir: PathBuf,
     /// When the app started (the time axis of the timings; `quit_after_secs`).
     started: Instant,
     last_interaction: Option<Instant>,
-    pub status: String,
     window_shot: Arc<std::sync::Mutex<Option<Arc<egui::ColorImage>>>>,
-    pub ui_frame_ms: VecDeque<f64>,
-    /// Sweep panel inputs: parameter key, start, end, number of values.
-    pub sweep_input: (String, f64, f64, usize),
     last_frame: Instant,
     exit_screenshot: Option<PathBuf>,
     quit_after_secs: Option<f32>,
     quitting: bool,
     orbit_demo: bool,
     ui_frames: u64,
-    /// The tiles of the window (panels around the 3D view) and the full-view flag.
-    pub layout: layout::Layout,
-    /// The selection of the last UI frame: a new one brings the light inspector forward.
-    last_selected: Option<usize>,
-    /// Frames of an orbit image sequence (File menu).
-    pub orbit_frames: usize,
-    /// Draw the view's visible overlay layers over the frames of image sequences (File menu).
-    pub sequence_overlays: bool,
-    /// The shadow-map inspector's state.
-    pub inspector: inspector::Inspector,
-    /// The Explain panel's chosen step: (technique key, step index).
-    pub explain_step: Option<(String, usize)>,
     /// wgpu errors outside any error scope (egui's own painting, say), shown instead of panicking.
     uncaptured_errors: Arc<std::sync::Mutex<Vec<String>>>,
     relaunch_on_device_loss: bool,
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
-    /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
-    /// that does not set them is chosen.
-    explain_saved: BTreeMap<(String, String), shadowlab_core::technique::ParamValue>,
 }
 
 fn default_data_dir() -> PathBuf {
@@ -216,32 +191,21 @@ impl ShadowLabApp {
         let mut app = ShadowLabApp {
             session: Session::new(scene),
             views: Views::new(started, !startup.synchronous),
+            chrome: Chrome::new(layout, load_recent(&data_dir)),
             drag: None,
-            toasts: Vec::new(),
-            recent: load_recent(&data_dir),
             data_dir,
             started,
             last_interaction: None,
-            status: String::new(),
             window_shot: Default::default(),
-            ui_frame_ms: VecDeque::new(),
-            sweep_input: ("d_init".into(), 0.1, 1.6, 6),
             last_frame: Instant::now(),
             exit_screenshot: startup.screenshot.clone(),
             quit_after_secs: startup.quit_after_secs,
             quitting: false,
             orbit_demo: startup.orbit_demo,
             ui_frames: 0,
-            layout,
-            last_selected: None,
-            orbit_frames: 36,
-            sequence_overlays: true,
-            inspector: inspector::Inspector::default(),
-            explain_step: None,
             uncaptured_errors: Default::default(),
             relaunch_on_device_loss: startup.relaunch_on_device_loss,
             recovery: None,
-            explain_saved: BTreeMap::new(),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -377,20 +341,16 @@ impl ShadowLabApp {
             }
         };
         self.error(recovery.message.clone());
-        self.status = recovery.message.clone();
+        self.chrome.status = recovery.message.clone();
         self.recovery = Some(recovery);
     }
 
     pub fn toast(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        log::info!("{text}");
-        self.toasts.push(Toast { text, error: false, until: Instant::now() + std::time::Duration::from_secs(4) });
+        self.chrome.toasts.say(text);
     }
 
     pub fn error(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        log::warn!("{text}");
-        self.toasts.push(Toast { text, error: true, until: Instant::now() + std::time::Duration::from_secs(8) });
+        self.chrome.toasts.error(text);
     }
 
     // ----- scenes and files -----
@@ -399,7 +359,7 @@ impl ShadowLabApp {
     pub fn set_scene(&mut self, scene: Scene) {
         self.views.set_scene(&scene);
         for text in self.session.set_scene(scene) {
-            self.toasts.push(Toast { text, error: false, until: Instant::now() + std::time::Duration::from_secs(6) });
+            self.chrome.toasts.note(text, 6);
         }
     }
 
@@ -490,10 +450,10 @@ impl ShadowLabApp {
 
     fn remember_recent(&mut self, path: &Path) {
         let path = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-        self.recent.retain(|p| p != &path);
-        self.recent.insert(0, path);
-        self.recent.truncate(10);
-        save_recent(&self.data_dir, &self.recent);
+        self.chrome.recent.retain(|p| p != &path);
+        self.chrome.recent.insert(0, path);
+        self.chrome.recent.truncate(10);
+        save_recent(&self.data_dir, &self.chrome.recent);
     }
 
     // ----- lights -----
@@ -518,8 +478,8 @@ impl ShadowLabApp {
         }
         let indirect = key != self.session.technique;
         if step.shows_shadow_maps {
-            self.inspector.source = inspector::MapSource { indirect, set: step.maps };
-            self.layout.request_focus(layout::Pane::Maps);
+            self.chrome.inspector.source = inspector::MapSource { indirect, set: step.maps };
+            self.chrome.layout.request_focus(layout::Pane::Maps);
         }
         let named: std::collections::BTreeSet<&str> =
             steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
@@ -540,7 +500,7 @@ impl ShadowLabApp {
             let value = match step.params.iter().find(|(k, _)| *k == name) {
                 Some((_, text)) => match spec.kind.parse(name, text) {
                     Ok(v) => {
-                        self.explain_saved.entry(saved).or_insert_with(|| spec.value.clone());
+                        self.chrome.explain.saved.entry(saved).or_insert_with(|| spec.value.clone());
                         v
                     }
                     Err(e) => {
@@ -548,7 +508,7 @@ impl ShadowLabApp {
                         continue;
                     }
                 },
-                None => match self.explain_saved.remove(&saved) {
+                None => match self.chrome.explain.saved.remove(&saved) {
                     Some(v) => v,
                     None => continue,
                 },
@@ -594,13 +554,13 @@ impl ShadowLabApp {
                     sources.extend(labelled(t.borrow().as_ref(), true));
                 }
             }
-            if !sources.iter().any(|(s, _)| *s == self.inspector.source) {
-                self.inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
+            if !sources.iter().any(|(s, _)| *s == self.chrome.inspector.source) {
+                self.chrome.inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
             }
             let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
-            let source = self.inspector.source;
+            let source = self.chrome.inspector.source;
             let from = (gpu.main.frame_key(), source);
-            if gpu.main.is_converged() && complete && self.inspector.read_from != Some(from) {
+            if gpu.main.is_converged() && complete && self.chrome.inspector.read_from != Some(from) {
                 let ctx = gpu.ctx.clone();
                 // `set` 0 is the shadow atlas; without one the depth images still start at 1.
                 let read = |t: &dyn Technique| {
@@ -621,7 +581,7 @@ impl ShadowLabApp {
                 } else {
                     gpu.main.technique(&key).and_then(|t| read(t.as_ref()))
                 };
-                self.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
+                self.chrome.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
             }
         }
         if let Some(i) = selected {
@@ -634,9 +594,9 @@ impl ShadowLabApp {
             }
         }
         if let Some((i, positions)) = follow {
-            self.inspector.follow_light(i, &positions);
+            self.chrome.inspector.follow_light(i, &positions);
         }
-        self.inspector.ui(ui, sources);
+        self.chrome.inspector.ui(ui, sources);
     }
 
     // ----- the views -----
@@ -725,7 +685,7 @@ impl ShadowLabApp {
             || (!ctx.egui_wants_keyboard_input()
                 && ctx.input_mut(|i| i.consume_key(egui::Modifiers::NONE, egui::Key::Tab)));
         if full_view {
-            self.layout.toggle_full_view();
+            self.chrome.layout.toggle_full_view();
         }
         let (undo, redo, duplicate, f12, shift_f12, figure) = ctx.input_mut(|i| {
             // Redo first: Ctrl+Shift+Z would otherwise also match Ctrl+Z.
@@ -903,7 +863,7 @@ impl ShadowLabApp {
                 let alt = ui.input(|i| i.modifiers.alt);
                 if alt {
                     if let Some(status) = self.views.probe_at(&mut self.session, pos, projection.rect) {
-                        self.status = status;
+                        self.chrome.status = status;
                     }
                 } else if ctrl {
                     let (o, d) = projection.ray(pos);
@@ -950,11 +910,11 @@ impl ShadowLabApp {
         let ppp = ui.ctx().pixels_per_point();
         self.views.last_view_pixels = rect.size() * ppp;
         if let Err(e) = self.views.render(&self.session, rect.size() * ppp, ppp, interacting) {
-            self.status = format!("render error: {e:#}");
+            self.chrome.status = format!("render error: {e:#}");
         }
         if self.session.view.mode == ViewMode::Difference {
             if let Err(e) = self.views.update_difference(&self.session, ui.ctx()) {
-                self.status = format!("difference: {e:#}");
+                self.chrome.status = format!("difference: {e:#}");
             }
         }
 
@@ -995,27 +955,6 @@ impl ShadowLabApp {
             ui.ctx().request_repaint();
         }
     }
-
-    fn toasts_ui(&mut self, ctx: &egui::Context) {
-        let now = Instant::now();
-        self.toasts.retain(|t| t.until > now);
-        if self.toasts.is_empty() {
-            return;
-        }
-        egui::Area::new(egui::Id::unique("toasts")).anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-12.0, -40.0)).show(
-            ctx,
-            |ui| {
-                for t in &self.toasts {
-                    let color =
-                        if t.error { egui::Color32::from_rgb(255, 120, 120) } else { egui::Color32::LIGHT_GREEN };
-                    egui::Frame::popup(ui.style()).show(ui, |ui| {
-                        ui.colored_label(color, &t.text);
-                    });
-                }
-            },
-        );
-        ctx.request_repaint_after(std::time::Duration::from_millis(500));
-    }
 }
 
 fn chrono_like_stamp() -> String {
@@ -1048,9 +987,9 @@ impl eframe::App for ShadowLabApp {
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f64() * 1000.0;
         self.last_frame = now;
-        self.ui_frame_ms.push_back(dt);
-        if self.ui_frame_ms.len() > 120 {
-            self.ui_frame_ms.pop_front();
+        self.chrome.ui_frame_ms.push_back(dt);
+        if self.chrome.ui_frame_ms.len() > 120 {
+            self.chrome.ui_frame_ms.pop_front();
         }
         if self.session.animation != Animation::Off {
             self.session.animation_time += ctx.input(|i| i.stable_dt).min(0.1);
@@ -1086,13 +1025,13 @@ impl eframe::App for ShadowLabApp {
         }
         self.handle_dropped_files(&ctx);
         self.handle_shortcuts(&ctx);
-        if self.session.selected != self.last_selected {
+        if self.session.selected != self.chrome.last_selected {
             if self.session.selected.is_some() {
-                self.layout.focus(layout::Pane::Lights);
+                self.chrome.layout.focus(layout::Pane::Lights);
             }
-            self.last_selected = self.session.selected;
+            self.chrome.last_selected = self.session.selected;
         }
-        if self.layout.full_view {
+        if self.chrome.layout.full_view {
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| {
                 self.viewport_ui(ui);
                 let at = ui.max_rect().right_top() + egui::vec2(-8.0, 8.0);
@@ -1100,7 +1039,7 @@ impl eframe::App for ShadowLabApp {
                     ui.ctx(),
                     |ui| {
                         if ui.button("Show panels (Tab)").clicked() {
-                            self.layout.toggle_full_view();
+                            self.chrome.layout.toggle_full_view();
                         }
                     },
                 );
@@ -1109,12 +1048,12 @@ impl eframe::App for ShadowLabApp {
             panels::menu_bar(self, ui);
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| layout::tiles_ui(self, ui));
         }
-        self.layout.save_if_changed(&self.data_dir, &ctx);
-        self.toasts_ui(&ctx);
+        self.chrome.layout.save_if_changed(&self.data_dir, &ctx);
+        self.chrome.toasts.ui(&ctx);
     }
 
     fn on_exit(&mut self) {
-        if let Err(e) = self.layout.save(&self.data_dir) {
+        if let Err(e) = self.chrome.layout.save(&self.data_dir) {
             log::warn!("cannot save the layout: {e:#}");
         }
     }

@@ -31,10 +31,10 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     ui.close();
                 }
                 ui.menu_button("Open recent", |ui| {
-                    if app.recent.is_empty() {
+                    if app.chrome.recent.is_empty() {
                         ui.label("(none)");
                     }
-                    for path in app.recent.clone() {
+                    for path in app.chrome.recent.clone() {
                         if ui.button(path.display().to_string()).clicked() {
                             app.open_path(&path);
                             ui.close();
@@ -104,7 +104,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                         .on_hover_text(hover)
                         .on_disabled_hover_text("Switch a light animation on in the Lights panel first");
                     if button.clicked() {
-                        match app.save_sequence(motion, app.orbit_frames) {
+                        match app.save_sequence(motion, app.chrome.orbit_frames) {
                             Ok(s) => app.toast(format!("saved {} frames and {}", s.frames.len(), s.gif.display())),
                             Err(e) => app.error(format!("image sequence failed: {e:#}")),
                         }
@@ -113,8 +113,8 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 }
                 ui.horizontal(|ui| {
                     let label = ui.label("frames per sequence");
-                    ui.add(egui::DragValue::new(&mut app.orbit_frames).range(2..=720)).labelled_by(label.id);
-                    ui.checkbox(&mut app.sequence_overlays, "with the overlays");
+                    ui.add(egui::DragValue::new(&mut app.chrome.orbit_frames).range(2..=720)).labelled_by(label.id);
+                    ui.checkbox(&mut app.chrome.sequence_overlays, "with the overlays");
                 });
             });
             ui.menu_button("Scene", |ui| {
@@ -376,7 +376,7 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                     // Both views, so a comparison keeps comparing the same indirect light.
                     for view in [&mut gpu.main, &mut gpu.reference] {
                         if let Err(e) = view.reset_indirect(&key) {
-                            app.status = format!("indirect: {e:#}");
+                            app.chrome.status = format!("indirect: {e:#}");
                         }
                     }
                 }
@@ -663,16 +663,16 @@ fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 /// the reference.
 pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     let Some(gpu) = &app.views.gpu else { return };
-    let ui_ms = app.ui_frame_ms.iter().copied().sum::<f64>() / app.ui_frame_ms.len().max(1) as f64;
+    let ui_ms = app.chrome.ui_frame_ms.iter().copied().sum::<f64>() / app.chrome.ui_frame_ms.len().max(1) as f64;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("adapter: {}", gpu.ctx.adapter_description()));
         ui.separator();
         ui.label(format!("UI {:.0} fps", 1000.0 / ui_ms.max(1e-3)));
         ui.separator();
         ui.label(format!("lights per step: {}", gpu.sizer.max_lights_per_step));
-        if !app.status.is_empty() {
+        if !app.chrome.status.is_empty() {
             ui.separator();
-            ui.colored_label(egui::Color32::LIGHT_RED, &app.status);
+            ui.colored_label(egui::Color32::LIGHT_RED, &app.chrome.status);
         }
     });
     let table = |ui: &mut egui::Ui| {
@@ -818,7 +818,7 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.label("this technique has no numeric parameter");
         return;
     }
-    let (param_key, start, end, count) = &mut app.sweep_input;
+    let (param_key, start, end, count) = &mut app.chrome.sweep_input;
     let before = param_key.clone();
     if !numeric.iter().any(|p| p.key == param_key.as_str()) {
         *param_key = numeric[0].key.to_string();
@@ -943,16 +943,17 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.label(format!("The steps of {label}, as in its paper; choose one to see it in the view."));
         let mut chosen = None;
         for (i, step) in steps.iter().enumerate() {
-            let selected = app.explain_step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
+            let selected = app.chrome.explain.step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
             if ui.selectable_label(selected, step.title).clicked() {
                 chosen = Some(i);
             }
         }
         if let Some(i) = chosen {
             app.show_explain_step(&key, &steps, i);
-            app.explain_step = Some((key.clone(), i));
+            app.chrome.explain.step = Some((key.clone(), i));
         }
-        if let Some(step) = app.explain_step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {
+        if let Some(step) = app.chrome.explain.step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i))
+        {
             ui.separator();
             ui.label(step.text);
         }
