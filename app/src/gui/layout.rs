@@ -259,10 +259,10 @@ impl egui_tiles::Behavior<Pane> for Panes<'_> {
             ui.set_min_size(ui.available_size());
             if matches!(*pane, Pane::Timings | Pane::Maps) {
                 // They fill the panel themselves (the timings' table scrolls, the maps zoom and pan).
-                super::panels::pane_ui(self.app, ui, *pane);
+                super::panels::pane_ui(&mut self.app.session, &mut self.app.views, &mut self.app.chrome, ui, *pane);
             } else {
                 egui::ScrollArea::vertical().id_salt(pane.title()).auto_shrink([false, false]).show(ui, |ui| {
-                    super::panels::pane_ui(self.app, ui, *pane);
+                    super::panels::pane_ui(&mut self.app.session, &mut self.app.views, &mut self.app.chrome, ui, *pane);
                 });
             }
         });

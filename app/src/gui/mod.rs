@@ -12,6 +12,7 @@ pub mod gizmo;
 pub mod inspector;
 pub mod layout;
 pub mod legend;
+pub mod menu;
 pub mod panels;
 pub mod session;
 pub mod sweep;
@@ -467,138 +468,6 @@ impl ShadowLabApp {
 
     // ----- rendering -----
 
-    /// Show what step `index` of technique `key`'s Explain `steps` shows: its overlay layers on, the
-    /// technique's others off; the shadow-map panel in front with the step's maps when it is about them; the
-    /// parameter values it sets, and the values from before for parameters that only other steps set.
-    pub fn show_explain_step(&mut self, key: &str, steps: &[shadowlab_core::technique::ExplainStep], index: usize) {
-        let Some(step) = steps.get(index) else { return };
-        for (name, _) in self.overlay_layers() {
-            let on = step.layers.contains(&name.as_str());
-            self.session.view.overlays.insert(name, on);
-        }
-        let indirect = key != self.session.technique;
-        if step.shows_shadow_maps {
-            self.chrome.inspector.source = inspector::MapSource { indirect, set: step.maps };
-            self.chrome.layout.request_focus(layout::Pane::Maps);
-        }
-        let named: std::collections::BTreeSet<&str> =
-            steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
-        if named.is_empty() {
-            return;
-        }
-        let Some(gpu) = &mut self.views.gpu else { return };
-        let specs = if indirect {
-            gpu.main.indirect_technique(key).map(|t| t.borrow().params())
-        } else {
-            gpu.main.technique(key).map(|t| t.params())
-        };
-        let Ok(specs) = specs else { return };
-        let mut errors = Vec::new();
-        for name in named {
-            let Some(spec) = specs.iter().find(|p| p.key == name) else { continue };
-            let saved = (key.to_string(), name.to_string());
-            let value = match step.params.iter().find(|(k, _)| *k == name) {
-                Some((_, text)) => match spec.kind.parse(name, text) {
-                    Ok(v) => {
-                        self.chrome.explain.saved.entry(saved).or_insert_with(|| spec.value.clone());
-                        v
-                    }
-                    Err(e) => {
-                        errors.push(e.to_string());
-                        continue;
-                    }
-                },
-                None => match self.chrome.explain.saved.remove(&saved) {
-                    Some(v) => v,
-                    None => continue,
-                },
-            };
-            let params = if indirect { &mut self.session.indirect.params } else { &mut self.session.params };
-            params.entry(key.to_string()).or_default().insert(name.to_string(), value);
-        }
-        for e in errors {
-            self.error(e);
-        }
-    }
-
-    /// The shadow-map inspector: reads the chosen maps back once per completed frame (not for the preview while
-    /// the camera moves), then shows them; a selected light shows its cube map.
-    pub fn maps_ui(&mut self, ui: &mut egui::Ui) {
-        use inspector::{AtlasDepths, MapSource};
-        use shadowlab_core::technique::Technique;
-        // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
-        fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {
-            t.shadow_atlas().into_iter().chain(t.depth_images()).collect()
-        }
-        fn labelled(t: &dyn Technique, indirect: bool) -> Vec<(MapSource, String)> {
-            let shadow = usize::from(t.shadow_atlas().is_none());
-            let images = t.depth_images().into_iter().map(|(_, what)| what);
-            let names = t.shadow_atlas().map(|_| "shadow maps").into_iter().chain(images);
-            let who = if indirect { "indirect" } else { "direct" };
-            names
-                .enumerate()
-                .map(|(i, name)| (MapSource { indirect, set: i + shadow }, format!("{} ({who}): {name}", t.label())))
-                .collect()
-        }
-        let key = self.session.technique.clone();
-        let indirect_key = self.session.indirect.technique.clone();
-        let selected = self.session.selected;
-        let mut sources = Vec::new();
-        let mut follow: Option<(usize, Vec<Vec3>)> = None;
-        if let Some(gpu) = &mut self.views.gpu {
-            if let Ok(t) = gpu.main.technique(&key) {
-                sources.extend(labelled(t.as_ref(), false));
-            }
-            if let Some(k) = &indirect_key {
-                if let Ok(t) = gpu.main.indirect_technique(k) {
-                    sources.extend(labelled(t.borrow().as_ref(), true));
-                }
-            }
-            if !sources.iter().any(|(s, _)| *s == self.chrome.inspector.source) {
-                self.chrome.inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
-            }
-            let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
-            let source = self.chrome.inspector.source;
-            let from = (gpu.main.frame_key(), source);
-            if gpu.main.is_converged() && complete && self.chrome.inspector.read_from != Some(from) {
-                let ctx = gpu.ctx.clone();
-                // `set` 0 is the shadow atlas; without one the depth images still start at 1.
-                let read = |t: &dyn Technique| {
-                    let offset = usize::from(t.shadow_atlas().is_none());
-                    let all = sets(t);
-                    source
-                        .set
-                        .checked_sub(offset)
-                        .and_then(|i| all.get(i))
-                        .map(|(a, what)| AtlasDepths::read(&ctx, a, what))
-                        .transpose()
-                };
-                let result = if source.indirect {
-                    match &indirect_key {
-                        Some(k) => gpu.main.indirect_technique(k).and_then(|t| read(t.borrow().as_ref())),
-                        None => Ok(None),
-                    }
-                } else {
-                    gpu.main.technique(&key).and_then(|t| read(t.as_ref()))
-                };
-                self.chrome.inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
-            }
-        }
-        if let Some(i) = selected {
-            let lights = self.session.animated_lights();
-            if let Some(light) = lights.get(i) {
-                let mut positions = vec![light.position];
-                let group = self.light_details(i).map(|d| d.group).unwrap_or_default();
-                positions.extend(group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position));
-                follow = Some((i, positions));
-            }
-        }
-        if let Some((i, positions)) = follow {
-            self.chrome.inspector.follow_light(i, &positions);
-        }
-        self.chrome.inspector.ui(ui, sources);
-    }
-
     // ----- the views -----
 
     /// Names of the overlay layers the current technique offers, with their state.
@@ -1045,7 +914,7 @@ impl eframe::App for ShadowLabApp {
                 );
             });
         } else {
-            panels::menu_bar(self, ui);
+            menu::menu_bar(self, ui);
             egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| layout::tiles_ui(self, ui));
         }
         self.chrome.layout.save_if_changed(&self.data_dir, &ctx);

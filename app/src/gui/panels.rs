@@ -5,156 +5,19 @@
 use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 use glam::Vec3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 
 use shadowlab_core::renderer::Component;
 use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, Technique, INDIRECT_REGISTRY, REGISTRY};
 use shadowlab_core::vpl::{VplSource, MAX_BOUNCES, MAX_VPLS};
 
 use super::camera::CameraMode;
+use super::chrome::{Chrome, Toasts};
 use super::document::{IndirectSettings, ViewMode};
+use super::inspector::Inspector;
 use super::layout::Pane;
-use super::{Animation, ShadowLabApp};
-use crate::sequence::Motion;
-
-pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    egui::Panel::top("menu").show(ui, |ui| {
-        egui::MenuBar::new().ui(ui, |ui| {
-            ui.menu_button("File", |ui| {
-                if ui.button("Open scene or model…").clicked() {
-                    if let Some(path) = rfd::FileDialog::new()
-                        .add_filter("ShadowLab scenes and models", &["ron", "obj", "gltf", "glb"])
-                        .pick_file()
-                    {
-                        app.open_path(&path);
-                    }
-                    ui.close();
-                }
-                ui.menu_button("Open recent", |ui| {
-                    if app.chrome.recent.is_empty() {
-                        ui.label("(none)");
-                    }
-                    for path in app.chrome.recent.clone() {
-                        if ui.button(path.display().to_string()).clicked() {
-                            app.open_path(&path);
-                            ui.close();
-                        }
-                    }
-                });
-                ui.separator();
-                if ui.button("Save scene file…").clicked() {
-                    if let Some(path) = rfd::FileDialog::new().add_filter("ShadowLab scene", &["ron"]).save_file() {
-                        match app.save_scene_file(&path) {
-                            Ok(()) => app.toast(format!("saved {}", path.display())),
-                            Err(e) => app.error(format!("save failed, nothing was overwritten: {e:#}")),
-                        }
-                    }
-                    ui.close();
-                }
-                if let Some(path) = app.session.scene_file.clone() {
-                    if ui
-                        .button(format!("Save to {}", path.file_name().unwrap_or_default().to_string_lossy()))
-                        .clicked()
-                    {
-                        match app.save_scene_file(&path) {
-                            Ok(()) => app.toast(format!("saved {}", path.display())),
-                            Err(e) => app.error(format!("save failed, nothing was overwritten: {e:#}")),
-                        }
-                        ui.close();
-                    }
-                }
-                ui.separator();
-                if ui.button("Screenshot of the 3D view (F12)").clicked() {
-                    match app.save_view_screenshot() {
-                        Ok(p) => app.toast(format!("saved {}", p.display())),
-                        Err(e) => app.error(format!("screenshot failed: {e:#}")),
-                    }
-                    ui.close();
-                }
-                if ui.button("Screenshot of the window (Shift+F12)").clicked() {
-                    app.request_window_screenshot(ui.ctx());
-                    ui.close();
-                }
-                if ui
-                    .button("Export figure: view, reference, difference (Ctrl+F12)")
-                    .on_hover_text("One PNG with captions; both images are rendered completely first")
-                    .clicked()
-                {
-                    app.export_figure();
-                    ui.close();
-                }
-                let animated = app.session.animation.period_secs().is_some();
-                let sequences = [
-                    (
-                        Motion::Orbit,
-                        "Orbit sequence (PNGs + GIF)",
-                        "A full orbit around the target, each frame complete",
-                        true,
-                    ),
-                    (
-                        Motion::Lights,
-                        "Light animation sequence (PNGs + GIF)",
-                        "One period of the light animation (Lights panel), each frame complete",
-                        animated,
-                    ),
-                ];
-                for (motion, text, hover, enabled) in sequences {
-                    let button = ui
-                        .add_enabled(enabled, egui::Button::new(text))
-                        .on_hover_text(hover)
-                        .on_disabled_hover_text("Switch a light animation on in the Lights panel first");
-                    if button.clicked() {
-                        match app.save_sequence(motion, app.chrome.orbit_frames) {
-                            Ok(s) => app.toast(format!("saved {} frames and {}", s.frames.len(), s.gif.display())),
-                            Err(e) => app.error(format!("image sequence failed: {e:#}")),
-                        }
-                        ui.close();
-                    }
-                }
-                ui.horizontal(|ui| {
-                    let label = ui.label("frames per sequence");
-                    ui.add(egui::DragValue::new(&mut app.chrome.orbit_frames).range(2..=720)).labelled_by(label.id);
-                    ui.checkbox(&mut app.chrome.sequence_overlays, "with the overlays");
-                });
-            });
-            ui.menu_button("Scene", |ui| {
-                for name in shadowlab_core::scene::builtin::NAMES {
-                    if ui.button(*name).clicked() {
-                        app.load_builtin(name);
-                        ui.close();
-                    }
-                }
-            });
-            ui.menu_button("Edit", |ui| {
-                if ui.add_enabled(app.session.history.can_undo(), egui::Button::new("Undo (Ctrl+Z)")).clicked() {
-                    app.session.undo();
-                }
-                if ui.add_enabled(app.session.history.can_redo(), egui::Button::new("Redo (Ctrl+Shift+Z)")).clicked() {
-                    app.session.redo();
-                }
-                ui.separator();
-                if ui
-                    .add_enabled(app.session.selected.is_some(), egui::Button::new("Duplicate light (Ctrl+D)"))
-                    .clicked()
-                {
-                    app.session.duplicate_selected();
-                }
-                if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Delete light (Del)")).clicked() {
-                    app.session.delete_selected();
-                }
-            });
-            ui.menu_button("View", |ui| {
-                ui.radio_value(&mut app.session.view.mode, ViewMode::Single, "Single view");
-                ui.radio_value(&mut app.session.view.mode, ViewMode::SideBySide, "Side by side with the reference");
-                ui.radio_value(&mut app.session.view.mode, ViewMode::Split, "Split view with the reference");
-                ui.radio_value(&mut app.session.view.mode, ViewMode::Difference, "Difference against the reference");
-                ui.separator();
-                ui.checkbox(&mut app.session.view.x_ray, "X-ray overlays");
-            });
-            ui.menu_button("Panels", |ui| super::layout::panels_menu(app, ui));
-        });
-    });
-}
+use super::session::{Animation, Session};
+use super::views::Views;
 
 /// A widget for one technique parameter; returns the new value when it changed.
 fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str, help: &str) -> Option<ParamValue> {
@@ -299,41 +162,33 @@ fn params_panel(
     }
 }
 
-fn technique_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn technique_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) {
     ui.heading("Shadows");
-    egui::ComboBox::from_label("Technique")
-        .selected_text(app.session.technique.clone())
-        .width(150.0)
-        .truncate()
-        .show_ui(ui, |ui| {
-            for e in REGISTRY {
-                ui.selectable_value(&mut app.session.technique, e.key.to_string(), e.label);
-            }
-        });
-    let key = app.session.technique.clone();
-    let view_camera = app.session.camera.camera();
-    let Some(gpu) = &mut app.views.gpu else { return };
-    let Ok(technique) = gpu.main.technique(&key) else { return };
-    let user = app.session.params.entry(key.clone()).or_default();
-    params_panel(
+    egui::ComboBox::from_label("Technique").selected_text(session.technique.clone()).width(150.0).truncate().show_ui(
         ui,
-        technique.as_mut(),
-        user,
-        &view_camera,
-        &mut app.session.selected_camera,
-        &mut app.session.selected,
+        |ui| {
+            for e in REGISTRY {
+                ui.selectable_value(&mut session.technique, e.key.to_string(), e.label);
+            }
+        },
     );
+    let key = session.technique.clone();
+    let view_camera = session.camera.camera();
+    let Some(gpu) = &mut views.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&key) else { return };
+    let user = session.params.entry(key.clone()).or_default();
+    params_panel(ui, technique.as_mut(), user, &view_camera, &mut session.selected_camera, &mut session.selected);
     if ui.button("Reset parameters").clicked() {
-        app.session.params.remove(&key);
+        session.params.remove(&key);
         gpu.main.reset_technique(&key);
     }
 }
 
 /// The indirect technique selector with its generated parameter panel, the VPL settings, and the component
 /// the views show.
-fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn indirect_ui(session: &mut Session, views: &mut Views, status: &mut String, ui: &mut egui::Ui) {
     ui.heading("Indirect light");
-    let mut choice = app.session.indirect.technique.clone();
+    let mut choice = session.indirect.technique.clone();
     egui::ComboBox::from_label("Indirect")
         .selected_text(choice.clone().unwrap_or_else(|| "none".into()))
         .width(150.0)
@@ -346,37 +201,37 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         });
     // A change restarts the views' frames: the indirect key is part of what a frame depends on. A technique
     // whose paper uses another VPL source switches to it (the user can switch back below).
-    if choice != app.session.indirect.technique {
+    if choice != session.indirect.technique {
         if let Some(source) = choice.as_deref().and_then(shadowlab_core::technique::preferred_vpl_source) {
-            app.session.indirect.vpl.source = source;
+            session.indirect.vpl.source = source;
         }
     }
-    app.session.indirect.technique = choice;
+    session.indirect.technique = choice;
     let mut uses_vpls = false;
-    if let (Some(key), Some(gpu)) = (app.session.indirect.technique.clone(), &mut app.views.gpu) {
+    if let (Some(key), Some(gpu)) = (session.indirect.technique.clone(), &mut views.gpu) {
         match gpu.main.indirect_technique(&key) {
             Ok(shared) => {
                 let mut technique = shared.borrow_mut();
                 uses_vpls = technique.uses_vpls();
-                let user = app.session.indirect.params.entry(key.clone()).or_default();
-                let view_camera = app.session.camera.camera();
+                let user = session.indirect.params.entry(key.clone()).or_default();
+                let view_camera = session.camera.camera();
                 ui.push_id("indirect parameters", |ui| {
                     params_panel(
                         ui,
                         technique.as_mut(),
                         user,
                         &view_camera,
-                        &mut app.session.selected_camera,
-                        &mut app.session.selected,
+                        &mut session.selected_camera,
+                        &mut session.selected,
                     );
                 });
                 drop(technique);
                 if ui.button("Reset indirect parameters").clicked() {
-                    app.session.indirect.params.remove(&key);
+                    session.indirect.params.remove(&key);
                     // Both views, so a comparison keeps comparing the same indirect light.
                     for view in [&mut gpu.main, &mut gpu.reference] {
                         if let Err(e) = view.reset_indirect(&key) {
-                            app.chrome.status = format!("indirect: {e:#}");
+                            *status = format!("indirect: {e:#}");
                         }
                     }
                 }
@@ -386,18 +241,18 @@ fn indirect_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
     }
-    ui.add_enabled_ui(uses_vpls, |ui| vpl_ui(&mut app.session.indirect, ui));
+    ui.add_enabled_ui(uses_vpls, |ui| vpl_ui(&mut session.indirect, ui));
     ui.horizontal(|ui| {
         ui.label("show");
         for c in [Component::Total, Component::Direct, Component::Indirect] {
-            ui.selectable_value(&mut app.session.indirect.component, c, c.name());
+            ui.selectable_value(&mut session.indirect.component, c, c.name());
         }
     })
     .response
     .on_hover_text("The part of the light the views, the difference and the screenshots show");
-    ui.add_enabled_ui(app.session.indirect.component == Component::Indirect, |ui| {
+    ui.add_enabled_ui(session.indirect.component == Component::Indirect, |ui| {
         ui.add(
-            egui::Slider::new(&mut app.session.indirect.gain, IndirectSettings::GAIN_RANGE)
+            egui::Slider::new(&mut session.indirect.gain, IndirectSettings::GAIN_RANGE)
                 .logarithmic(true)
                 .text("indirect gain"),
         )
@@ -436,72 +291,71 @@ fn vpl_ui(indirect: &mut IndirectSettings, ui: &mut egui::Ui) {
     });
 }
 
-fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
     ui.heading("Render");
-    ui.add(egui::Slider::new(&mut app.session.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
+    ui.add(egui::Slider::new(&mut session.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
     ui.horizontal(|ui| {
-        ui.checkbox(&mut app.session.view.auto_exposure, "auto exposure").on_hover_text(
+        ui.checkbox(&mut session.view.auto_exposure, "auto exposure").on_hover_text(
             "Scale the exposure so the image's log-average luminance (over the geometry) is middle grey; the \
              slider then compensates. Each view meters its own complete image; the preview while dragging keeps \
              the last one.",
         );
     });
-    if let (true, Some((scale, average))) = (app.session.view.auto_exposure, app.views.metered_exposure) {
+    if let (true, Some((scale, average))) = (session.view.auto_exposure, views.metered_exposure) {
         ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"));
     }
-    let label = if app.session.view.auto_exposure { "compensation" } else { "exposure" };
-    ui.add(egui::Slider::new(&mut app.session.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
-    ui.checkbox(&mut app.session.view.specular, "Blinn-Phong specular");
+    let label = if session.view.auto_exposure { "compensation" } else { "exposure" };
+    ui.add(egui::Slider::new(&mut session.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
+    ui.checkbox(&mut session.view.specular, "Blinn-Phong specular");
     ui.horizontal(|ui| {
         ui.label("Animate lights");
-        ui.radio_value(&mut app.session.animation, Animation::Off, "off");
-        ui.radio_value(&mut app.session.animation, Animation::Orbit, "orbit");
-        ui.radio_value(&mut app.session.animation, Animation::Bob, "bob");
+        ui.radio_value(&mut session.animation, Animation::Off, "off");
+        ui.radio_value(&mut session.animation, Animation::Orbit, "orbit");
+        ui.radio_value(&mut session.animation, Animation::Bob, "bob");
     });
     ui.heading("Camera");
     ui.horizontal(|ui| {
-        let mut mode = app.session.camera.mode;
+        let mut mode = session.camera.mode;
         ui.radio_value(&mut mode, CameraMode::Orbit, "orbit");
         ui.radio_value(&mut mode, CameraMode::Fly, "fly (WASD QE)");
-        app.session.camera.set_mode(mode);
+        session.camera.set_mode(mode);
     });
     ui.horizontal(|ui| {
         if ui.button("Frame scene (F)").clicked() {
-            let b = app.session.scene.bounds;
-            app.session.camera.frame(&b);
+            let b = session.scene.bounds;
+            session.camera.frame(&b);
         }
         if ui.button("Reset").clicked() {
-            app.session.camera =
-                super::camera::CameraController::from_camera(&app.session.scene.camera, &app.session.scene.bounds);
+            session.camera = super::camera::CameraController::from_camera(&session.scene.camera, &session.scene.bounds);
         }
     });
-    let near = app.session.camera.near;
-    ui.add(egui::Slider::new(&mut app.session.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
-    ui.add(egui::Slider::new(&mut app.session.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
+    let near = session.camera.near;
+    ui.add(egui::Slider::new(&mut session.camera.z_far, (near * 2.0)..=10_000.0).logarithmic(true).text("z_far"));
+    ui.add(egui::Slider::new(&mut session.camera.fov_y, 0.2..=2.5).text("fov (rad)"));
     ui.heading("Compare");
     ui.horizontal(|ui| {
-        ui.selectable_value(&mut app.session.view.mode, ViewMode::Single, "single");
-        ui.selectable_value(&mut app.session.view.mode, ViewMode::SideBySide, "side by side");
-        ui.selectable_value(&mut app.session.view.mode, ViewMode::Split, "split");
-        ui.selectable_value(&mut app.session.view.mode, ViewMode::Difference, "difference");
+        ui.selectable_value(&mut session.view.mode, ViewMode::Single, "single");
+        ui.selectable_value(&mut session.view.mode, ViewMode::SideBySide, "side by side");
+        ui.selectable_value(&mut session.view.mode, ViewMode::Split, "split");
+        ui.selectable_value(&mut session.view.mode, ViewMode::Difference, "difference");
     });
     ui.horizontal(|ui| {
         ui.label("against");
-        ui.selectable_value(&mut app.session.view.compare_against, "reference".to_string(), "reference");
-        ui.selectable_value(&mut app.session.view.compare_against, "raytraced".to_string(), "ray traced");
+        ui.selectable_value(&mut session.view.compare_against, "reference".to_string(), "reference");
+        ui.selectable_value(&mut session.view.compare_against, "raytraced".to_string(), "ray traced");
     });
-    if app.session.view.mode == ViewMode::Difference {
+    if session.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {
-            ui.checkbox(&mut app.session.view.diff_signed, "signed");
-            ui.checkbox(&mut app.session.view.diff_visibility, "shadow factors");
+            ui.checkbox(&mut session.view.diff_signed, "signed");
+            ui.checkbox(&mut session.view.diff_visibility, "shadow factors");
         });
         ui.horizontal(|ui| {
             ui.label("gain");
             for g in [1.0, 5.0, 10.0] {
-                ui.selectable_value(&mut app.session.view.diff_gain, g, format!("×{g}"));
+                ui.selectable_value(&mut session.view.diff_gain, g, format!("×{g}"));
             }
         });
-        if let Some(d) = &app.views.difference {
+        if let Some(d) = &views.difference {
             let m = &d.metrics;
             egui::Grid::new("metrics").num_columns(2).show(ui, |ui| {
                 ui.label("RMSE");
@@ -527,19 +381,19 @@ fn render_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     }
 }
 
-fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn overlays_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) {
     ui.heading("Overlays");
-    ui.checkbox(&mut app.session.view.x_ray, "X-ray (through geometry)")
+    ui.checkbox(&mut session.view.x_ray, "X-ray (through geometry)")
         .on_hover_text("Off: the parts behind surfaces are drawn faded; on: everything is drawn in full on top");
-    ui.checkbox(&mut app.session.view.legend, "Legend over the view");
+    ui.checkbox(&mut session.view.legend, "Legend over the view");
     ui.label("Hover a light for its details; click it to select it (and its cluster, when it has one).");
-    for (name, on) in app.overlay_layers() {
+    for (name, on) in views.overlay_layers(session) {
         let mut x = on;
         if ui.checkbox(&mut x, &name).changed() {
-            app.session.view.overlays.insert(name.clone(), x);
+            session.view.overlays.insert(name.clone(), x);
         }
         // The legend of the layers drawn in the last frame.
-        if let Some((_, entries)) = app.views.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
+        if let Some((_, entries)) = views.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
             for e in entries {
                 super::legend::entry_ui(ui, e);
             }
@@ -547,8 +401,8 @@ fn overlays_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     }
 }
 
-fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    ui.heading(format!("Lights ({})", app.session.lights.len()));
+fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) {
+    ui.heading(format!("Lights ({})", session.lights.len()));
     ui.label("Click a light to select it; drag the gizmo to move it. Ctrl+click on a surface adds one.");
     thread_local! {
         static SPEC: std::cell::RefCell<String> = std::cell::RefCell::new("circles:10:8:7".to_string());
@@ -558,22 +412,25 @@ fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.add(egui::TextEdit::singleline(&mut spec).desired_width(140.0).hint_text("random:64:2:1"))
             .on_hover_text("random:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene");
         if ui.button("Apply layout").clicked() {
-            app.apply_layout(&spec);
+            match session.apply_layout(&spec) {
+                Ok(n) => toasts.say(format!("{n} lights from '{spec}'")),
+                Err(e) => toasts.error(e.to_string()),
+            }
         }
         SPEC.with(|s| *s.borrow_mut() = spec);
     });
     ui.horizontal(|ui| {
-        if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
-            app.session.duplicate_selected();
+        if ui.add_enabled(session.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
+            session.duplicate_selected();
         }
-        if ui.add_enabled(app.session.selected.is_some(), egui::Button::new("Delete")).clicked() {
-            app.session.delete_selected();
+        if ui.add_enabled(session.selected.is_some(), egui::Button::new("Delete")).clicked() {
+            session.delete_selected();
         }
     });
-    if let Some(i) = app.session.selected.filter(|&i| i < app.session.lights.len()) {
+    if let Some(i) = session.selected.filter(|&i| i < session.lights.len()) {
         ui.separator();
         ui.label(format!("Light {i}"));
-        let mut l = app.session.lights[i];
+        let mut l = session.lights[i];
         let mut changed = false;
         let mut committed = false;
         let track = |r: egui::Response, changed: &mut bool, committed: &mut bool| {
@@ -629,29 +486,29 @@ fn lights_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         }
         l.color = Vec3::from_array(rgb);
         if committed {
-            app.session.begin_edit();
+            session.begin_edit();
         }
         if changed && l.is_valid() {
-            app.session.lights[i] = l;
+            session.lights[i] = l;
         }
     }
 }
 
-fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn stats_ui(session: &Session, ui: &mut egui::Ui) {
     ui.heading("Scene");
-    let b = app.session.scene.bounds;
+    let b = session.scene.bounds;
     egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
         ui.label("name");
-        ui.label(&app.session.scene.name);
+        ui.label(&session.scene.name);
         ui.end_row();
         ui.label("triangles");
-        ui.label(format!("{}", app.session.scene.triangle_count()));
+        ui.label(format!("{}", session.scene.triangle_count()));
         ui.end_row();
         ui.label("materials");
-        ui.label(format!("{}", app.session.scene.materials.len()));
+        ui.label(format!("{}", session.scene.materials.len()));
         ui.end_row();
         ui.label("lights");
-        ui.label(format!("{}", app.session.lights.len()));
+        ui.label(format!("{}", session.lights.len()));
         ui.end_row();
         ui.label("bounds");
         ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
@@ -661,18 +518,18 @@ fn stats_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 
 /// Per-pass table of the last complete frame, a plot of recent frames, and the same-session comparison with
 /// the reference.
-pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    let Some(gpu) = &app.views.gpu else { return };
-    let ui_ms = app.chrome.ui_frame_ms.iter().copied().sum::<f64>() / app.chrome.ui_frame_ms.len().max(1) as f64;
+pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: &mut egui::Ui) {
+    let Some(gpu) = &views.gpu else { return };
+    let ui_ms = ui_frame_ms.iter().copied().sum::<f64>() / ui_frame_ms.len().max(1) as f64;
     ui.horizontal_wrapped(|ui| {
         ui.label(format!("adapter: {}", gpu.ctx.adapter_description()));
         ui.separator();
         ui.label(format!("UI {:.0} fps", 1000.0 / ui_ms.max(1e-3)));
         ui.separator();
         ui.label(format!("lights per step: {}", gpu.sizer.max_lights_per_step));
-        if !app.chrome.status.is_empty() {
+        if !status.is_empty() {
             ui.separator();
-            ui.colored_label(egui::Color32::LIGHT_RED, &app.chrome.status);
+            ui.colored_label(egui::Color32::LIGHT_RED, status);
         }
     });
     let table = |ui: &mut egui::Ui| {
@@ -738,14 +595,14 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 // Every technique seen this session against the reference, same session and adapter.
                 let reference =
                     super::views::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
-                if let Some((reference_ms, _)) = app.views.session_times.get(&reference) {
+                if let Some((reference_ms, _)) = views.session_times.get(&reference) {
                     egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
                         ui.strong("technique (this session)");
                         ui.strong("GPU ms");
                         ui.strong("speedup");
                         ui.strong("parameters");
                         ui.end_row();
-                        for (name, (ms, params)) in &app.views.session_times {
+                        for (name, (ms, params)) in &views.session_times {
                             ui.label(name);
                             ui.label(format!("{ms:.1}"));
                             ui.label(format!("×{:.2}", reference_ms / ms.max(1e-6)));
@@ -761,7 +618,7 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     };
     let plot = |ui: &mut egui::Ui| {
         let mut names: Vec<String> = Vec::new();
-        for (_, _, passes) in &app.views.timings {
+        for (_, _, passes) in &views.timings {
             for p in passes {
                 if !names.contains(&p.name) {
                     names.push(p.name.clone());
@@ -769,11 +626,10 @@ pub fn timings_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
             }
         }
         Plot::new("timings").legend(Legend::default()).height(130.0).y_axis_label("ms").show(ui, |plot| {
-            let total: PlotPoints = app.views.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
+            let total: PlotPoints = views.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
             plot.line(Line::new("frame (GPU)", total));
             for name in names {
-                let pts: PlotPoints = app
-                    .views
+                let pts: PlotPoints = views
                     .timings
                     .iter()
                     .map(|(t, _, passes)| [*t, passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>()])
@@ -804,10 +660,16 @@ pub fn figures_text(figures: &BTreeMap<String, f64>) -> String {
 }
 
 /// Sweep one numeric parameter of the current technique against the reference, plotted live.
-fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn sweep_ui(
+    session: &Session,
+    views: &mut Views,
+    input: &mut (String, f64, f64, usize),
+    toasts: &mut Toasts,
+    ui: &mut egui::Ui,
+) {
     ui.heading("Sweep");
-    let key = app.session.technique.clone();
-    let Some(gpu) = &mut app.views.gpu else { return };
+    let key = session.technique.clone();
+    let Some(gpu) = &mut views.gpu else { return };
     let Ok(technique) = gpu.main.technique(&key) else { return };
     let numeric: Vec<_> = technique
         .params()
@@ -818,7 +680,7 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.label("this technique has no numeric parameter");
         return;
     }
-    let (param_key, start, end, count) = &mut app.chrome.sweep_input;
+    let (param_key, start, end, count) = input;
     let before = param_key.clone();
     if !numeric.iter().any(|p| p.key == param_key.as_str()) {
         *param_key = numeric[0].key.to_string();
@@ -845,7 +707,7 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.add(egui::DragValue::new(count).range(2..=64).prefix("values "));
     });
     let (param_key, start, end, count) = (param_key.clone(), *start, *end, *count);
-    let running = app.views.sweep.as_mut().is_some_and(|s| s.poll());
+    let running = views.sweep.as_mut().is_some_and(|s| s.poll());
     let (mut run, mut cancel) = (false, false);
     ui.horizontal(|ui| {
         run = !running && ui.button("Run sweep").clicked();
@@ -854,17 +716,17 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
     if run {
         if let Some(kind) = numeric.iter().find(|p| p.key == param_key.as_str()).map(|p| p.kind.clone()) {
             let values = super::sweep::values(&kind, start, end, count);
-            if let Err(e) = app.start_sweep(&param_key, values) {
-                app.error(format!("sweep: {e:#}"));
+            if let Err(e) = views.start_sweep(session, &param_key, values) {
+                toasts.error(format!("sweep: {e:#}"));
             }
         }
     }
     if cancel {
-        if let Some(s) = &app.views.sweep {
+        if let Some(s) = &views.sweep {
             s.cancel();
         }
     }
-    if let Some(s) = &app.views.sweep {
+    if let Some(s) = &views.sweep {
         if running {
             ui.add(egui::ProgressBar::new(s.rows.len() as f32 / s.total.max(1) as f32).show_percentage());
             ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
@@ -894,38 +756,38 @@ fn sweep_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
 }
 
 /// The UI of one panel (a tile of the layout).
-pub fn pane_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui, pane: Pane) {
+pub fn pane_ui(session: &mut Session, views: &mut Views, chrome: &mut Chrome, ui: &mut egui::Ui, pane: Pane) {
     match pane {
         // Drawn by the layout itself.
         Pane::View => {}
         Pane::Technique => {
-            technique_ui(app, ui);
+            technique_ui(session, views, ui);
             ui.separator();
-            indirect_ui(app, ui);
+            indirect_ui(session, views, &mut chrome.status, ui);
         }
-        Pane::Render => render_ui(app, ui),
-        Pane::Overlays => overlays_ui(app, ui),
-        Pane::Lights => lights_ui(app, ui),
-        Pane::Scene => stats_ui(app, ui),
-        Pane::Sweep => sweep_ui(app, ui),
-        Pane::Timings => timings_ui(app, ui),
-        Pane::Maps => app.maps_ui(ui),
-        Pane::Explain => explain_ui(app, ui),
+        Pane::Render => render_ui(session, views, ui),
+        Pane::Overlays => overlays_ui(session, views, ui),
+        Pane::Lights => lights_ui(session, &mut chrome.toasts, ui),
+        Pane::Scene => stats_ui(session, ui),
+        Pane::Sweep => sweep_ui(session, views, &mut chrome.sweep_input, &mut chrome.toasts, ui),
+        Pane::Timings => timings_ui(views, &chrome.ui_frame_ms, &chrome.status, ui),
+        Pane::Maps => maps_ui(session, views, &mut chrome.inspector, ui),
+        Pane::Explain => explain_ui(session, views, chrome, ui),
     }
 }
 
 /// The steps of the current technique's paper, as the technique declares them; choosing one switches the
 /// overlay layers (and the shadow-map panel) that show it.
-fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+fn explain_ui(session: &mut Session, views: &mut Views, chrome: &mut Chrome, ui: &mut egui::Ui) {
     ui.heading("Explain");
     // The direct technique's steps, then the indirect technique's (when one is chosen and describes any).
     let mut sections: Vec<(String, &'static str, Vec<shadowlab_core::technique::ExplainStep>)> = Vec::new();
     {
-        let Some(gpu) = &mut app.views.gpu else { return };
-        if let Ok(technique) = gpu.main.technique(&app.session.technique) {
-            sections.push((app.session.technique.clone(), technique.label(), technique.explain()));
+        let Some(gpu) = &mut views.gpu else { return };
+        if let Ok(technique) = gpu.main.technique(&session.technique) {
+            sections.push((session.technique.clone(), technique.label(), technique.explain()));
         }
-        if let Some(key) = app.session.indirect.technique.clone() {
+        if let Some(key) = session.indirect.technique.clone() {
             if let Ok(shared) = gpu.main.indirect_technique(&key) {
                 let technique = shared.borrow();
                 let steps = technique.explain();
@@ -943,20 +805,157 @@ fn explain_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         ui.label(format!("The steps of {label}, as in its paper; choose one to see it in the view."));
         let mut chosen = None;
         for (i, step) in steps.iter().enumerate() {
-            let selected = app.chrome.explain.step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
+            let selected = chrome.explain.step.as_ref().is_some_and(|(k, j)| *k == key && *j == i);
             if ui.selectable_label(selected, step.title).clicked() {
                 chosen = Some(i);
             }
         }
         if let Some(i) = chosen {
-            app.show_explain_step(&key, &steps, i);
-            app.chrome.explain.step = Some((key.clone(), i));
+            show_explain_step(session, views, chrome, &key, &steps, i);
+            chrome.explain.step = Some((key.clone(), i));
         }
-        if let Some(step) = app.chrome.explain.step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i))
-        {
+        if let Some(step) = chrome.explain.step.as_ref().filter(|(k, _)| *k == key).and_then(|(_, i)| steps.get(*i)) {
             ui.separator();
             ui.label(step.text);
         }
         ui.separator();
     }
+}
+
+/// Show what step `index` of technique `key`'s Explain `steps` shows: its overlay layers on, the
+/// technique's others off; the shadow-map panel in front with the step's maps when it is about them; the
+/// parameter values it sets, and the values from before for parameters that only other steps set.
+pub fn show_explain_step(
+    session: &mut Session,
+    views: &mut Views,
+    chrome: &mut Chrome,
+    key: &str,
+    steps: &[shadowlab_core::technique::ExplainStep],
+    index: usize,
+) {
+    let Some(step) = steps.get(index) else { return };
+    for (name, _) in views.overlay_layers(session) {
+        let on = step.layers.contains(&name.as_str());
+        session.view.overlays.insert(name, on);
+    }
+    let indirect = key != session.technique;
+    if step.shows_shadow_maps {
+        chrome.inspector.source = super::inspector::MapSource { indirect, set: step.maps };
+        chrome.layout.request_focus(Pane::Maps);
+    }
+    let named: std::collections::BTreeSet<&str> = steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
+    if named.is_empty() {
+        return;
+    }
+    let Some(gpu) = &mut views.gpu else { return };
+    let specs = if indirect {
+        gpu.main.indirect_technique(key).map(|t| t.borrow().params())
+    } else {
+        gpu.main.technique(key).map(|t| t.params())
+    };
+    let Ok(specs) = specs else { return };
+    let mut errors = Vec::new();
+    for name in named {
+        let Some(spec) = specs.iter().find(|p| p.key == name) else { continue };
+        let saved = (key.to_string(), name.to_string());
+        let value = match step.params.iter().find(|(k, _)| *k == name) {
+            Some((_, text)) => match spec.kind.parse(name, text) {
+                Ok(v) => {
+                    chrome.explain.saved.entry(saved).or_insert_with(|| spec.value.clone());
+                    v
+                }
+                Err(e) => {
+                    errors.push(e.to_string());
+                    continue;
+                }
+            },
+            None => match chrome.explain.saved.remove(&saved) {
+                Some(v) => v,
+                None => continue,
+            },
+        };
+        let params = if indirect { &mut session.indirect.params } else { &mut session.params };
+        params.entry(key.to_string()).or_default().insert(name.to_string(), value);
+    }
+    for e in errors {
+        chrome.toasts.error(e);
+    }
+}
+
+/// The shadow-map inspector: reads the chosen maps back once per completed frame (not for the preview while
+/// the camera moves), then shows them; a selected light shows its cube map.
+pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, ui: &mut egui::Ui) {
+    use super::inspector::{AtlasDepths, MapSource};
+    use shadowlab_core::technique::Technique;
+    // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
+    fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {
+        t.shadow_atlas().into_iter().chain(t.depth_images()).collect()
+    }
+    fn labelled(t: &dyn Technique, indirect: bool) -> Vec<(MapSource, String)> {
+        let shadow = usize::from(t.shadow_atlas().is_none());
+        let images = t.depth_images().into_iter().map(|(_, what)| what);
+        let names = t.shadow_atlas().map(|_| "shadow maps").into_iter().chain(images);
+        let who = if indirect { "indirect" } else { "direct" };
+        names
+            .enumerate()
+            .map(|(i, name)| (MapSource { indirect, set: i + shadow }, format!("{} ({who}): {name}", t.label())))
+            .collect()
+    }
+    let key = session.technique.clone();
+    let indirect_key = session.indirect.technique.clone();
+    let selected = session.selected;
+    let mut sources = Vec::new();
+    let mut follow: Option<(usize, Vec<Vec3>)> = None;
+    if let Some(gpu) = &mut views.gpu {
+        if let Ok(t) = gpu.main.technique(&key) {
+            sources.extend(labelled(t.as_ref(), false));
+        }
+        if let Some(k) = &indirect_key {
+            if let Ok(t) = gpu.main.indirect_technique(k) {
+                sources.extend(labelled(t.borrow().as_ref(), true));
+            }
+        }
+        if !sources.iter().any(|(s, _)| *s == inspector.source) {
+            inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
+        }
+        let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
+        let source = inspector.source;
+        let from = (gpu.main.frame_key(), source);
+        if gpu.main.is_converged() && complete && inspector.read_from != Some(from) {
+            let ctx = gpu.ctx.clone();
+            // `set` 0 is the shadow atlas; without one the depth images still start at 1.
+            let read = |t: &dyn Technique| {
+                let offset = usize::from(t.shadow_atlas().is_none());
+                let all = sets(t);
+                source
+                    .set
+                    .checked_sub(offset)
+                    .and_then(|i| all.get(i))
+                    .map(|(a, what)| AtlasDepths::read(&ctx, a, what))
+                    .transpose()
+            };
+            let result = if source.indirect {
+                match &indirect_key {
+                    Some(k) => gpu.main.indirect_technique(k).and_then(|t| read(t.borrow().as_ref())),
+                    None => Ok(None),
+                }
+            } else {
+                gpu.main.technique(&key).and_then(|t| read(t.as_ref()))
+            };
+            inspector.set_atlas(result.map_err(|e| format!("{e:#}")), from);
+        }
+    }
+    if let Some(i) = selected {
+        let lights = session.animated_lights();
+        if let Some(light) = lights.get(i) {
+            let mut positions = vec![light.position];
+            let group = views.light_details(session, i).map(|d| d.group).unwrap_or_default();
+            positions.extend(group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position));
+            follow = Some((i, positions));
+        }
+    }
+    if let Some((i, positions)) = follow {
+        inspector.follow_light(i, &positions);
+    }
+    inspector.ui(ui, sources);
 }
