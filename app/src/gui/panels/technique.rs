@@ -11,13 +11,13 @@ use shadowlab_core::renderer::Component;
 use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, Technique, INDIRECT_REGISTRY, REGISTRY};
 use shadowlab_core::vpl::{VplSource, MAX_BOUNCES, MAX_VPLS};
 
-use super::camera::CameraMode;
-use super::chrome::{Chrome, Toasts};
-use super::document::{IndirectSettings, ViewMode};
-use super::inspector::Inspector;
-use super::layout::Pane;
-use super::session::{Animation, Session};
-use super::views::Views;
+use crate::gui::camera::CameraMode;
+use crate::gui::chrome::{Chrome, Toasts};
+use crate::gui::document::{IndirectSettings, ViewMode};
+use crate::gui::inspector::Inspector;
+use crate::gui::layout::Pane;
+use crate::gui::session::{Animation, Session};
+use crate::gui::views::Views;
 
 /// A widget for one technique parameter; returns the new value when it changed.
 fn param_ui(ui: &mut egui::Ui, kind: &ParamKind, value: &ParamValue, label: &str, help: &str) -> Option<ParamValue> {
@@ -326,7 +326,8 @@ fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
             session.camera.frame(&b);
         }
         if ui.button("Reset").clicked() {
-            session.camera = super::camera::CameraController::from_camera(&session.scene.camera, &session.scene.bounds);
+            session.camera =
+                crate::gui::camera::CameraController::from_camera(&session.scene.camera, &session.scene.bounds);
         }
     });
     let near = session.camera.near;
@@ -395,7 +396,7 @@ fn overlays_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) {
         // The legend of the layers drawn in the last frame.
         if let Some((_, entries)) = views.legends.iter().find(|(n, _)| *n == name).filter(|_| x) {
             for e in entries {
-                super::legend::entry_ui(ui, e);
+                crate::gui::legend::entry_ui(ui, e);
             }
         }
     }
@@ -594,7 +595,7 @@ pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: 
                 }
                 // Every technique seen this session against the reference, same session and adapter.
                 let reference =
-                    super::views::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
+                    crate::gui::views::technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
                 if let Some((reference_ms, _)) = views.session_times.get(&reference) {
                     egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
                         ui.strong("technique (this session)");
@@ -715,7 +716,7 @@ fn sweep_ui(
     });
     if run {
         if let Some(kind) = numeric.iter().find(|p| p.key == param_key.as_str()).map(|p| p.kind.clone()) {
-            let values = super::sweep::values(&kind, start, end, count);
+            let values = crate::gui::sweep::values(&kind, start, end, count);
             if let Err(e) = views.start_sweep(session, &param_key, values) {
                 toasts.error(format!("sweep: {e:#}"));
             }
@@ -840,7 +841,7 @@ pub fn show_explain_step(
     }
     let indirect = key != session.technique;
     if step.shows_shadow_maps {
-        chrome.inspector.source = super::inspector::MapSource { indirect, set: step.maps };
+        chrome.inspector.source = crate::gui::inspector::MapSource { indirect, set: step.maps };
         chrome.layout.request_focus(Pane::Maps);
     }
     let named: std::collections::BTreeSet<&str> = steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();
@@ -885,7 +886,7 @@ pub fn show_explain_step(
 /// The shadow-map inspector: reads the chosen maps back once per completed frame (not for the preview while
 /// the camera moves), then shows them; a selected light shows its cube map.
 pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, ui: &mut egui::Ui) {
-    use super::inspector::{AtlasDepths, MapSource};
+    use crate::gui::inspector::{AtlasDepths, MapSource};
     use shadowlab_core::technique::Technique;
     // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
     fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {

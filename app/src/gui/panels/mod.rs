@@ -1,0 +1,5 @@
+//! The panels around the 3D view.
+
+pub mod technique;
+
+pub use technique::*;
