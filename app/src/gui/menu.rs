@@ -141,7 +141,7 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 ui.separator();
                 ui.checkbox(&mut app.session.view.x_ray, "X-ray overlays");
             });
-            ui.menu_button("Panels", |ui| super::layout::panels_menu(app, ui));
+            ui.menu_button("Panels", |ui| super::layout::panels_menu(&mut app.chrome.layout, ui));
         });
     });
 }

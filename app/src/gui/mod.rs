@@ -16,6 +16,7 @@ pub mod menu;
 pub mod panels;
 pub mod session;
 pub mod sweep;
+pub mod tiles;
 pub mod views;
 
 use std::path::{Path, PathBuf};
@@ -915,7 +916,7 @@ impl eframe::App for ShadowLabApp {
             });
         } else {
             menu::menu_bar(self, ui);
-            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| layout::tiles_ui(self, ui));
+            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| tiles::tiles_ui(self, ui));
         }
         self.chrome.layout.save_if_changed(&self.data_dir, &ctx);
         self.chrome.toasts.ui(&ctx);
