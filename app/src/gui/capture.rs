@@ -1,4 +1,4 @@
-//! Captures beyond screenshots: a paper-style figure (the technique, its comparison target and their
+//! Captures: screenshots of the 3D view (at its render resolution) and of the window, a paper-style figure (the technique, its comparison target and their
 //! difference side by side, with technique, parameters and metrics as captions) and image sequences (an orbit
 //! around the camera's target, or one period of the light animation) as PNGs and a GIF. Both render every
 //! image completely, now, in a renderer of their own on the view's device at the view's render resolution (the
@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Context, Result};
+use eframe::egui;
 use shadowlab_core::technique::{Overlay, ParamValue};
 use shadowlab_core::Renderer;
 
@@ -240,4 +241,89 @@ pub struct SavedSequence {
     pub frames: Vec<PathBuf>,
     /// The frames as one looping animated GIF.
     pub gif: PathBuf,
+}
+
+impl ShadowLabApp {
+    pub(super) fn screenshot_name(&self, what: &str) -> PathBuf {
+        let params: String = self
+            .session
+            .params
+            .get(&self.session.technique)
+            .map(|p| p.iter().map(|(k, v)| format!("-{k}{v}")).collect())
+            .unwrap_or_default();
+        let stamp = chrono_like_stamp();
+        let indirect = self.session.indirect.technique.as_ref().map(|k| format!("+{k}")).unwrap_or_default();
+        let name = format!(
+            "shadowlab-{}-{}{}{}-{}-{}.png",
+            self.session.scene.name, self.session.technique, params, indirect, what, stamp
+        )
+        .replace(['/', '\\', ' ', ':'], "_");
+        self.lifecycle.data_dir.join("screenshots").join(name)
+    }
+
+    /// Export a figure and say where it went (or why not).
+    pub fn export_figure(&mut self) {
+        match self.save_figure() {
+            Ok(p) => self.toast(format!("saved {}", p.display())),
+            Err(e) => self.error(format!("figure export failed: {e:#}")),
+        }
+    }
+
+    /// Save the 3D view at its render resolution (no UI). Returns the path.
+    pub fn save_view_screenshot(&mut self) -> Result<PathBuf> {
+        let path = self.screenshot_name("view");
+        let gpu = self.views.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let image = gpu.main.renderer.read_output()?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    fn save_window_screenshot(&mut self, image: &egui::ColorImage) -> Result<PathBuf> {
+        let path = self.screenshot_name("window");
+        let [w, h] = image.size;
+        let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+        let img = image::RgbaImage::from_raw(w as u32, h as u32, bytes).ok_or_else(|| anyhow!("bad screenshot"))?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        img.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    /// Ask the integration for a picture of the whole window; it arrives a frame or two later.
+    pub fn request_window_screenshot(&mut self, ctx: &egui::Context) {
+        let slot = self.lifecycle.window_shot.clone();
+        let repaint = ctx.clone();
+        ctx.request_screenshot(move |image| {
+            if let Ok(mut s) = slot.lock() {
+                *s = Some(image);
+            }
+            repaint.request_repaint();
+        });
+    }
+
+    /// Save a window screenshot that arrived: the exit screenshot (then close), or one the user asked for.
+    pub(super) fn receive_screenshots(&mut self, ctx: &egui::Context) {
+        let shot = self.lifecycle.window_shot.lock().ok().and_then(|mut s| s.take());
+        if let Some(image) = shot {
+            if let (true, Some(path)) = (self.lifecycle.quitting, self.lifecycle.exit_screenshot.take()) {
+                let [w, h] = image.size;
+                let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                match image::RgbaImage::from_raw(w as u32, h as u32, bytes).map(|img| img.save(&path)) {
+                    Some(Ok(())) => eprintln!("saved {}", path.display()),
+                    _ => eprintln!("error: cannot save {}", path.display()),
+                }
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                return;
+            }
+            match self.save_window_screenshot(&image) {
+                Ok(p) => self.toast(format!("saved {}", p.display())),
+                Err(e) => self.error(format!("screenshot failed: {e:#}")),
+            }
+        }
+    }
+}
+
+fn chrono_like_stamp() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_millis()).unwrap_or(0);
+    format!("{secs}")
 }
