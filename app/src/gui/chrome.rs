@@ -12,6 +12,7 @@ use shadowlab_core::technique::ParamValue;
 use super::inspector::Inspector;
 use super::layout::Layout;
 
+/// The panels' and the window's own state (nothing a scene file saves).
 pub struct Chrome {
     /// The tiles of the window (panels around the 3D view) and the full-view flag.
     pub layout: Layout,

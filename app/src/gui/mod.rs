@@ -3,6 +3,14 @@
 //! overlays, side-by-side and split comparison with the reference, live timings, screenshots and scene files.
 //! An indirect technique (`INDIRECT_REGISTRY`, none by default) can be added to every view, with its own
 //! generated panel, the shared VPL settings and the component (total, direct, indirect) the views show.
+//!
+//! [`ShadowLabApp`] is made of parts, each in its own module: the [`session`] (what the user edits and a scene
+//! file saves, with the undo history and the selection), the [`views`] (the renderers and what their frames
+//! give: overlays, ID maps, the difference, timings, tooltips, painting), the [`chrome`] around them (the
+//! [`layout`] of the [`tiles`], the [`panels`], the [`menu`], toasts), the 3D view's input ([`interact`]), and
+//! the window's life (opening and saving in [`open`], screenshots and figures in [`capture`], device loss in
+//! [`recovery`]). The panels take the parts they show, not the app; only the menu, the tiles, the input and
+//! the file and capture code work on the whole app.
 
 pub mod camera;
 pub mod capture;
@@ -128,6 +136,8 @@ pub fn run(startup: Startup) -> Result<()> {
         .map_err(|e| anyhow!("cannot open the window: {e}"))
 }
 
+/// The app: the session the user edits, the views that render it, the chrome around them, the 3D view's
+/// input and the window's lifecycle.
 pub struct ShadowLabApp {
     /// The scene, lights, camera, techniques and settings the user edits (what a scene file saves).
     pub session: Session,

@@ -49,6 +49,8 @@ pub enum DragTarget {
     },
 }
 
+/// What the user edits: the parts a scene file saves ([`Session::scene_file_data`]) and the editing state
+/// around them.
 pub struct Session {
     pub scene: Scene,
     pub lights: Vec<PointLight>,

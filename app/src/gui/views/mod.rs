@@ -39,6 +39,8 @@ pub struct Gpu {
 /// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
 pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
 
+/// The two renderers (the technique's view and its comparison target) and what the app derived from their
+/// last frames.
 pub struct Views {
     /// None until eframe's device is there, and again once it was lost.
     pub gpu: Option<Gpu>,
