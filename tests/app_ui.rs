@@ -23,7 +23,7 @@ const SIZE: (f32, f32) = (900.0, 560.0);
 
 /// Snapshots without the timings panel (its milliseconds change from run to run) and toasts.
 fn snapshot(h: &mut Harness<'static, ShadowLabApp>, name: &str) {
-    let timings = h.state().layout.rect(Pane::Timings).expect("the timings panel is laid out");
+    let timings = h.state().chrome.layout.rect(Pane::Timings).expect("the timings panel is laid out");
     h.mask(timings);
     h.mask(egui::Rect::from_min_max(egui::pos2(SIZE.0 - 420.0, SIZE.1 - 120.0), egui::pos2(SIZE.0, SIZE.1)));
     h.snapshot(name);
@@ -62,17 +62,17 @@ fn move_to(h: &mut Harness<'static, ShadowLabApp>, pos: egui::Pos2) {
 
 fn projection(h: &Harness<'static, ShadowLabApp>) -> Projection {
     let app = h.state();
-    Projection::new(&app.camera.camera(), app.last_viewport_rect.expect("the view was laid out"))
+    Projection::new(&app.session.camera.camera(), app.views.last_viewport_rect.expect("the view was laid out"))
 }
 
 #[test]
 fn main_window_on_a_builtin_scene() {
     let mut h = start("main", "cornell");
-    assert_eq!(h.state().lights.len(), 32);
+    assert_eq!(h.state().session.lights.len(), 32);
     h.get_by_label("Technique");
     // The lights' panel is a tab of the left column.
     h.get_by_label("Lights");
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     assert_eq!(report.counts.technique.shadow_maps, 32);
     snapshot(&mut h, "main_window_cornell");
 }
@@ -80,7 +80,7 @@ fn main_window_on_a_builtin_scene() {
 #[test]
 fn light_inspector_shows_the_selected_light() {
     let mut h = start("inspector", "cornell");
-    h.state_mut().selected = Some(3);
+    h.state_mut().session.selected = Some(3);
     h.run_steps(2);
     h.get_by_label("Light 3");
     assert!(h.query_all_by_label("L_att").count() >= 1, "the L_att slider is shown");
@@ -90,16 +90,16 @@ fn light_inspector_shows_the_selected_light() {
 #[test]
 fn the_inspector_turns_a_light_into_a_spot_light() {
     let mut h = start("inspector-spot", "cornell");
-    h.state_mut().selected = Some(3);
+    h.state_mut().session.selected = Some(3);
     h.run_steps(2);
-    assert!(h.state().lights[3].spot.is_none());
+    assert!(h.state().session.lights[3].spot.is_none());
     h.get_by_label("spot light").click();
     h.run_steps(2);
-    let spot = h.state().lights[3].spot.expect("the checkbox made a spot light");
+    let spot = h.state().session.lights[3].spot.expect("the checkbox made a spot light");
     assert!((spot.outer_angle - 30f32.to_radians()).abs() < 1e-4 && spot.direction.y < -0.99, "{spot:?}");
     assert!(h.query_all_by_label_contains("cone half-angle").count() >= 1, "the cone slider is shown");
     // The spot's cone is drawn as an overlay layer.
-    h.state_mut().layout.focus(Pane::Overlays);
+    h.state_mut().chrome.layout.focus(Pane::Overlays);
     h.run_steps(1);
     assert!(h.query_all_by_label_contains("spot cones").count() >= 1, "no spot cone layer");
 }
@@ -122,15 +122,15 @@ fn edit_session_select_move_undo_redo_save_and_reload() {
     let mut h = start("session", "cornell");
     // Select light 5 by clicking on it.
     let target = 5;
-    let at = h.state().lights[target].position;
+    let at = h.state().session.lights[target].position;
     let p = projection(&h);
     let pos = p.to_screen(at).unwrap();
-    let picked = gizmo::pick_light(&p, &h.state().lights, pos, 12.0).unwrap();
+    let picked = gizmo::pick_light(&p, &h.state().session.lights, pos, 12.0).unwrap();
     move_to(&mut h, pos);
     press(&mut h, pos, true, egui::Modifiers::NONE);
     press(&mut h, pos, false, egui::Modifiers::NONE);
-    assert_eq!(h.state().selected, Some(picked), "a click on a light selects it");
-    let start_pos = h.state().lights[picked].position;
+    assert_eq!(h.state().session.selected, Some(picked), "a click on a light selects it");
+    let start_pos = h.state().session.lights[picked].position;
 
     // Drag the X handle of the gizmo by 60 points, in small moves.
     let p = projection(&h);
@@ -154,23 +154,23 @@ fn edit_session_select_move_undo_redo_save_and_reload() {
         move_to(&mut h, grab + dir_on_screen * (10.0 * i as f32));
     }
     press(&mut h, grab + dir_on_screen * 60.0, false, egui::Modifiers::NONE);
-    let moved = h.state().lights[picked].position;
+    let moved = h.state().session.lights[picked].position;
     assert!((moved.x - start_pos.x).abs() > 0.01, "the light moved along x: {start_pos} -> {moved}");
     assert!((moved.y - start_pos.y).abs() < 1e-5 && (moved.z - start_pos.z).abs() < 1e-5, "only along x");
 
     // Undo and redo with the keyboard.
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run_steps(2);
-    assert_eq!(h.state().lights[picked].position, start_pos, "Ctrl+Z restores the position");
+    assert_eq!(h.state().session.lights[picked].position, start_pos, "Ctrl+Z restores the position");
     h.key_press_modifiers(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
     h.run_steps(2);
-    assert_eq!(h.state().lights[picked].position, moved, "Ctrl+Shift+Z moves it again");
+    assert_eq!(h.state().session.lights[picked].position, moved, "Ctrl+Shift+Z moves it again");
 
     // Save, then load in a fresh app.
     let file = dir.join("edited.ron");
     h.state_mut().save_scene_file(&file).unwrap();
-    let saved_lights = h.state().lights.clone();
-    let saved_camera = h.state().camera.camera();
+    let saved_lights = h.state().session.lights.clone();
+    let saved_camera = h.state().session.camera.camera();
     let mut fresh = harness(Startup {
         path: Some(file.clone()),
         data_dir: Some(dir.clone()),
@@ -178,9 +178,9 @@ fn edit_session_select_move_undo_redo_save_and_reload() {
         ..Default::default()
     });
     fresh.run_steps(2);
-    assert_eq!(fresh.state().scene.name, "cornell");
-    assert_eq!(fresh.state().lights, saved_lights);
-    let c = fresh.state().camera.camera();
+    assert_eq!(fresh.state().session.scene.name, "cornell");
+    assert_eq!(fresh.state().session.lights, saved_lights);
+    let c = fresh.state().session.camera.camera();
     assert!((c.position - saved_camera.position).length() < 1e-4, "{} vs {}", c.position, saved_camera.position);
     assert!(c.forward().dot(saved_camera.forward()) > 0.99999);
     assert!((c.fov_y - saved_camera.fov_y).abs() < 1e-6 && (c.z_far - saved_camera.z_far).abs() < 1e-4);
@@ -194,13 +194,13 @@ fn a_broken_scene_file_keeps_the_current_scene() {
     std::fs::write(&bad, "(version: 1, scene: Builtin(\"cornell\"), lights: [ (position: (1, 2").unwrap();
     h.state_mut().open_path(&bad);
     h.run_steps(2);
-    assert_eq!(h.state().scene.name, "restaurant");
-    assert_eq!(h.state().lights.len(), 14);
+    assert_eq!(h.state().session.scene.name, "restaurant");
+    assert_eq!(h.state().session.lights.len(), 14);
     h.get_by_label_contains("bad.ron");
     let missing = dir.join("nope.obj");
     h.state_mut().open_path(&missing);
     h.run_steps(1);
-    assert_eq!(h.state().scene.name, "restaurant");
+    assert_eq!(h.state().session.scene.name, "restaurant");
 }
 
 #[test]
@@ -208,7 +208,7 @@ fn view_screenshot_writes_a_png_at_render_resolution() {
     let mut h = start("shot", "cornell");
     let path = h.state_mut().save_view_screenshot().unwrap();
     let img = image::open(&path).unwrap();
-    let (w, _) = h.state().gpu.as_ref().unwrap().main.size;
+    let (w, _) = h.state().views.gpu.as_ref().unwrap().main.size;
     assert_eq!(img.width(), w);
     let name = path.file_name().unwrap().to_string_lossy().to_string();
     assert!(name.contains("cornell") && name.contains("reference"), "{name}");
@@ -219,49 +219,49 @@ fn difference_view_measures_the_technique_against_the_reference() {
     use shadowlab::gui::document::ViewMode;
     use shadowlab_core::technique::ParamValue;
     let mut h = start("difference", "cornell");
-    h.state_mut().view.mode = ViewMode::Difference;
+    h.state_mut().session.view.mode = ViewMode::Difference;
     h.run_steps(4);
-    let d = h.state().difference.as_ref().expect("a difference once both images are complete");
+    let d = h.state().views.difference.as_ref().expect("a difference once both images are complete");
     assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
     let app = h.state_mut();
-    app.technique = "lightcluster".into();
-    app.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
+    app.session.technique = "lightcluster".into();
+    app.session.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
     h.run_steps(4);
-    let m = &h.state().difference.as_ref().unwrap().metrics;
+    let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.pixels > 1000, "LightCluster differs from the reference: {m:?}");
-    h.state_mut().layout.focus(Pane::Render);
+    h.state_mut().chrome.layout.focus(Pane::Render);
     h.run_steps(1);
     h.get_by_label("RMSE");
     // The session's comparison table has both techniques.
-    let times = &h.state().session_times;
+    let times = &h.state().views.session_times;
     assert!(times.contains_key("reference") && times.contains_key("lightcluster"), "{times:?}");
     assert!(times["lightcluster"].1.contains("d_init=0.6"));
     h.get_by_label("technique (this session)");
     // Against the ray-traced ground truth instead: the reference itself differs a little.
     let app = h.state_mut();
-    app.technique = "reference".into();
-    app.view.compare_against = "raytraced".into();
+    app.session.technique = "reference".into();
+    app.session.view.compare_against = "raytraced".into();
     h.run_steps(4);
-    let m = &h.state().difference.as_ref().unwrap().metrics;
+    let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.share_over_threshold < 0.05, "reference vs ray traced: {m:?}");
-    assert!(h.state().session_times.contains_key("raytraced"));
+    assert!(h.state().views.session_times.contains_key("raytraced"));
 }
 
 #[test]
 fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
     use shadowlab_core::technique::ParamValue;
     let mut h = start("sweep", "cornell");
-    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(2);
     let values: Vec<ParamValue> = [0.3f32, 0.45, 0.6].iter().map(|v| ParamValue::Float(*v)).collect();
     h.state_mut().start_sweep("d_init", values).unwrap();
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
-    while h.state_mut().sweep.as_mut().unwrap().poll() {
+    while h.state_mut().views.sweep.as_mut().unwrap().poll() {
         assert!(std::time::Instant::now() < deadline, "the sweep did not finish");
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    let s = h.state().sweep.as_ref().unwrap();
+    let s = h.state().views.sweep.as_ref().unwrap();
     assert!(s.error.is_none(), "{:?}", s.error);
     assert_eq!(s.rows.len(), 3);
     assert!(s.rows.windows(2).all(|w| w[0].value < w[1].value));
@@ -269,27 +269,27 @@ fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
     // Cancelled right away, a long sweep stops early.
     let many: Vec<ParamValue> = (0..40).map(|i| ParamValue::Float(0.1 + i as f32 * 0.05)).collect();
     h.state_mut().start_sweep("d_init", many).unwrap();
-    h.state().sweep.as_ref().unwrap().cancel();
-    while h.state_mut().sweep.as_mut().unwrap().poll() {
+    h.state().views.sweep.as_ref().unwrap().cancel();
+    while h.state_mut().views.sweep.as_mut().unwrap().poll() {
         assert!(std::time::Instant::now() < deadline + std::time::Duration::from_secs(60));
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
-    assert!(h.state().sweep.as_ref().unwrap().rows.len() < 40);
+    assert!(h.state().views.sweep.as_ref().unwrap().rows.len() < 40);
 }
 
 #[test]
 fn lightcluster_offers_a_per_pixel_cluster_id_map() {
     let mut h = start("idmap", "cornell");
-    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
     assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "cluster per pixel" && !on));
-    h.state_mut().view.overlays.insert("cluster per pixel".into(), true);
+    h.state_mut().session.view.overlays.insert("cluster per pixel".into(), true);
     h.run_steps(3);
-    let (_, name, ids, (w, hgt)) = h.state().pixel_ids.clone().expect("an ID map once the frame is complete");
+    let (_, name, ids, (w, hgt)) = h.state().views.pixel_ids.clone().expect("an ID map once the frame is complete");
     assert_eq!(name, "cluster per pixel");
     assert_eq!(ids.len(), (w * hgt) as usize);
     let clusters =
-        h.state().gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().counts.technique.clusters.unwrap();
+        h.state().views.gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().counts.technique.clusters.unwrap();
     let distinct: std::collections::BTreeSet<u32> = ids.iter().copied().filter(|&i| i != u32::MAX).collect();
     assert!(distinct.len() > 1 && distinct.iter().all(|&i| (i as usize) < clusters), "{distinct:?} of {clusters}");
 }
@@ -317,7 +317,7 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     use shadowlab_core::technique::ParamValue;
     let dir = data_dir("insm");
     let mut h = start("insm", "arcade");
-    h.state_mut().technique = "insm".into();
+    h.state_mut().session.technique = "insm".into();
     h.run_steps(4);
     assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "INSM viewpoints" && *on));
     assert!(h.state_mut().overlay_layers().iter().any(|(name, _)| name == "INSM dropped edges"));
@@ -325,16 +325,16 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     // Start from the placed viewpoints: they become the custom list, and the placement switches to custom.
     h.get_by_label("Edit the placed ones").click();
     h.run_steps(3);
-    let cameras = |h: &Harness<'static, ShadowLabApp>| match h.state().params["insm"].get("viewpoints") {
+    let cameras = |h: &Harness<'static, ShadowLabApp>| match h.state().session.params["insm"].get("viewpoints") {
         Some(ParamValue::Cameras(c)) => c.clone(),
         other => panic!("no custom viewpoints: {other:?}"),
     };
     assert_eq!(cameras(&h).len(), 10, "the paper's 10 viewpoints");
-    assert_eq!(h.state().params["insm"]["placement"], ParamValue::Choice("custom".into()));
+    assert_eq!(h.state().session.params["insm"]["placement"], ParamValue::Choice("custom".into()));
 
     // Select a viewpoint that is on screen by clicking it, then move it along x with the gizmo.
     let p = projection(&h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(70.0);
     let (index, pos) = cameras(&h)
         .iter()
         .enumerate()
@@ -343,7 +343,11 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     move_to(&mut h, pos);
     press(&mut h, pos, true, egui::Modifiers::NONE);
     press(&mut h, pos, false, egui::Modifiers::NONE);
-    assert_eq!(h.state().selected_camera, Some(("viewpoints".to_string(), index)), "a click selects the viewpoint");
+    assert_eq!(
+        h.state().session.selected_camera,
+        Some(("viewpoints".to_string(), index)),
+        "a click selects the viewpoint"
+    );
     let before = cameras(&h)[index];
     drag_x_handle(&mut h, before.position);
     let after = cameras(&h)[index];
@@ -371,8 +375,8 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
         ..Default::default()
     });
     fresh.run_steps(2);
-    assert_eq!(fresh.state().technique, "insm");
-    assert_eq!(fresh.state().params["insm"]["viewpoints"], ParamValue::Cameras(edited.clone()));
+    assert_eq!(fresh.state().session.technique, "insm");
+    assert_eq!(fresh.state().session.params["insm"]["viewpoints"], ParamValue::Cameras(edited.clone()));
 
     // A file whose viewpoint is out of range is refused with the parameter named; the loaded state stays.
     let text = std::fs::read_to_string(&file).unwrap();
@@ -382,7 +386,7 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     std::fs::write(&bad, text.replacen(&fov, "fov_y_deg: 500.0", 1)).unwrap();
     let err = fresh.state_mut().load_scene_file(&bad).unwrap_err();
     assert!(format!("{err:#}").contains("viewpoints"), "{err:#}");
-    assert_eq!(fresh.state().params["insm"]["viewpoints"], ParamValue::Cameras(edited));
+    assert_eq!(fresh.state().session.params["insm"]["viewpoints"], ParamValue::Cameras(edited));
 }
 
 #[test]
@@ -392,16 +396,19 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     use shadowlab_core::technique::{ParamValue, INDIRECT_REGISTRY};
     let dir = data_dir("indirect");
     let mut h = start("indirect", "cornell");
-    assert!(h.state().gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().indirect.is_none(), "none at start");
-    h.state_mut().indirect.vpl.count = 48;
+    assert!(
+        h.state().views.gpu.as_ref().unwrap().main.last_report.as_ref().unwrap().indirect.is_none(),
+        "none at start"
+    );
+    h.state_mut().session.indirect.vpl.count = 48;
     // Choose it in the selector, by the registry's label.
     let entry = INDIRECT_REGISTRY.iter().find(|e| e.key == "vpl-unshadowed").expect("registered");
     h.get_by_label("Indirect").click();
     h.run_steps(2);
     h.get_by_label(entry.label).click();
     h.run_steps(4);
-    assert_eq!(h.state().indirect.technique.as_deref(), Some(entry.key));
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    assert_eq!(h.state().session.indirect.technique.as_deref(), Some(entry.key));
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     let indirect = report.indirect.expect("the report has the indirect technique");
     assert_eq!(indirect.technique, entry.key);
     assert!(indirect.vpls > 0 && indirect.vpls <= 48, "{} VPLs", indirect.vpls);
@@ -415,11 +422,16 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
 
     // The indirect component alone is not black; the comparison view renders the same indirect light.
     let app = h.state_mut();
-    app.indirect.component = Component::Indirect;
-    app.indirect.params.entry(entry.key.into()).or_default().insert("vpls_per_step".into(), ParamValue::Int(16));
-    app.view.mode = ViewMode::SideBySide;
+    app.session.indirect.component = Component::Indirect;
+    app.session
+        .indirect
+        .params
+        .entry(entry.key.into())
+        .or_default()
+        .insert("vpls_per_step".into(), ParamValue::Int(16));
+    app.session.view.mode = ViewMode::SideBySide;
     h.run_steps(6);
-    let gpu = h.state().gpu.as_ref().unwrap();
+    let gpu = h.state().views.gpu.as_ref().unwrap();
     let main = gpu.main.last_report.as_ref().unwrap().indirect.clone().unwrap();
     let reference = gpu.reference.last_report.as_ref().unwrap().indirect.clone().expect("the reference view too");
     assert_eq!((reference.technique.as_str(), reference.vpls), (entry.key, main.vpls));
@@ -429,7 +441,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     assert!(hdr.iter().any(|p| p[0] + p[1] + p[2] > 0.0), "some indirect light");
 
     // While the camera moves the preview has no indirect light; once it settles the same instance is back.
-    let centre = h.state().last_viewport_rect.unwrap().center();
+    let centre = h.state().views.last_viewport_rect.unwrap().center();
     move_to(&mut h, centre);
     h.event(egui::Event::MouseWheel {
         unit: egui::MouseWheelUnit::Point,
@@ -440,13 +452,13 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     });
     h.step();
     h.step();
-    let preview = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+    let preview = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
     assert!(preview.technique == "unshadowed" && preview.indirect.is_none(), "{}", preview.technique);
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
     let settled = loop {
         std::thread::sleep(std::time::Duration::from_millis(50));
         h.step();
-        let r = h.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+        let r = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
         if r.technique != "unshadowed" || std::time::Instant::now() > deadline {
             break r;
         }
@@ -457,7 +469,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     // Saved and loaded in a fresh app; a file naming an unknown indirect technique is refused, state kept.
     let file = dir.join("indirect.ron");
     h.state_mut().save_scene_file(&file).unwrap();
-    let saved = h.state().indirect.clone();
+    let saved = h.state().session.indirect.clone();
     let mut fresh = harness(Startup {
         path: Some(file.clone()),
         data_dir: Some(dir.clone()),
@@ -465,15 +477,15 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
         ..Default::default()
     });
     fresh.run_steps(3);
-    assert_eq!(fresh.state().indirect, saved);
-    let report = fresh.state().gpu.as_ref().unwrap().main.last_report.clone().unwrap();
+    assert_eq!(fresh.state().session.indirect, saved);
+    let report = fresh.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
     assert_eq!(report.indirect.map(|i| i.technique), Some(entry.key.to_string()));
     let text = std::fs::read_to_string(&file).unwrap();
     let bad = dir.join("indirect-bad.ron");
     std::fs::write(&bad, text.replace("\"vpl-unshadowed\"", "\"vpl-nonsense\"")).unwrap();
     let err = fresh.state_mut().load_scene_file(&bad).unwrap_err();
     assert!(format!("{err:#}").contains("unknown indirect technique 'vpl-nonsense'"), "{err:#}");
-    assert_eq!(fresh.state().indirect, saved);
+    assert_eq!(fresh.state().session.indirect, saved);
 }
 
 #[test]
@@ -486,7 +498,7 @@ fn the_app_can_start_with_an_indirect_technique() {
         ..Default::default()
     });
     h.run_steps(3);
-    assert_eq!(h.state().indirect.technique.as_deref(), Some("val"));
+    assert_eq!(h.state().session.indirect.technique.as_deref(), Some("val"));
     assert!(h.query_all_by_label_contains("VALs (M)").count() >= 1, "the VAL parameter panel is shown");
     // An unknown key is a message, not a panic, and no indirect technique.
     let mut bad = harness(Startup {
@@ -496,7 +508,7 @@ fn the_app_can_start_with_an_indirect_technique() {
         ..Default::default()
     });
     bad.run_steps(2);
-    assert!(bad.state().indirect.technique.is_none());
+    assert!(bad.state().session.indirect.technique.is_none());
     bad.get_by_label_contains("unknown indirect technique 'magic'");
 }
 
@@ -504,10 +516,10 @@ fn the_app_can_start_with_an_indirect_technique() {
 fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
     use shadowlab_core::technique::ParamValue;
     let mut h = start("fuzzy", "cornell");
-    h.state_mut().indirect.vpl.count = 64;
-    h.state_mut().indirect.technique = Some("fuzzy".into());
+    h.state_mut().session.indirect.vpl.count = 64;
+    h.state_mut().session.indirect.technique = Some("fuzzy".into());
     h.run_steps(8);
-    let report = h.state().gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
+    let report = h.state().views.gpu.as_ref().unwrap().main.last_report.clone().expect("a complete frame");
     let indirect = report.indirect.expect("fuzzy ran");
     assert_eq!(indirect.technique, "fuzzy");
     let figures = &indirect.counts.figures;
@@ -516,26 +528,26 @@ fn fuzzy_clustering_runs_in_the_app_and_alt_click_probes_a_pixel() {
     let layers = h.state_mut().overlay_layers();
     assert!(layers.iter().any(|(name, _)| name.starts_with("shading-point clusters")), "{layers:?}");
     // Alt+click in the view: the technique's probe parameters get the clicked pixel.
-    let rect = h.state().last_viewport_rect.expect("the view was laid out");
+    let rect = h.state().views.last_viewport_rect.expect("the view was laid out");
     let pos = rect.center();
     h.event(egui::Event::ModifiersChanged(egui::Modifiers::ALT));
     press(&mut h, pos, true, egui::Modifiers::ALT);
     press(&mut h, pos, false, egui::Modifiers::ALT);
     h.event(egui::Event::ModifiersChanged(egui::Modifiers::NONE));
     h.run_steps(8);
-    let params = h.state().indirect.params.get("fuzzy").cloned().unwrap_or_default();
+    let params = h.state().session.indirect.params.get("fuzzy").cloned().unwrap_or_default();
     let (x, y) = (params.get("probe_x"), params.get("probe_y"));
     assert!(matches!(x, Some(ParamValue::Int(v)) if *v > 0), "probe_x {x:?}");
     assert!(matches!(y, Some(ParamValue::Int(v)) if *v > 0), "probe_y {y:?}");
     // The probe layer then holds the pixel's clusters and their rays.
-    let gpu = h.state_mut().gpu.as_mut().unwrap();
+    let gpu = h.state_mut().views.gpu.as_mut().unwrap();
     let technique = gpu.main.indirect_technique("fuzzy").unwrap();
     let layers = technique.borrow().overlays(&[]);
     let probe = layers.iter().find(|l| l.name.starts_with("probe")).expect("a probe layer");
     assert!(probe.primitives.len() > 1, "the probe shows nothing");
     // And the VPL source switched to the paper's traced particles when fuzzy was chosen at startup only; here
     // it was set in code, so the user's source is kept.
-    assert_eq!(h.state().indirect.vpl.source, shadowlab_core::vpl::VplSource::Rsm);
+    assert_eq!(h.state().session.indirect.vpl.source, shadowlab_core::vpl::VplSource::Rsm);
 }
 
 #[test]
@@ -543,14 +555,14 @@ fn every_techniques_parameter_panel_draws_without_a_panic() {
     // Generated panels for every registered technique and indirect technique: a slider with a range egui
     // refuses (e.g. logarithmic across zero) panics the whole app, so each panel is drawn once here.
     let mut h = start("panels", "cornell");
-    h.state_mut().indirect.vpl.count = 16;
+    h.state_mut().session.indirect.vpl.count = 16;
     for entry in shadowlab_core::technique::REGISTRY {
-        h.state_mut().technique = entry.key.to_string();
+        h.state_mut().session.technique = entry.key.to_string();
         h.run_steps(2);
     }
-    h.state_mut().technique = "unshadowed".into();
+    h.state_mut().session.technique = "unshadowed".into();
     for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
-        h.state_mut().indirect.technique = Some(entry.key.to_string());
+        h.state_mut().session.indirect.technique = Some(entry.key.to_string());
         h.run_steps(2);
         // The selector names it; its generated panel shows its first parameter.
         assert!(h.query_all_by_label_contains(entry.key).count() >= 1, "{}: not selected", entry.key);
@@ -559,7 +571,7 @@ fn every_techniques_parameter_panel_draws_without_a_panic() {
 
 /// The share of the window the 3D view's rect covers.
 fn view_share(h: &Harness<'static, ShadowLabApp>, size: (f32, f32)) -> f32 {
-    let r = h.state().last_viewport_rect.expect("the view was laid out");
+    let r = h.state().views.last_viewport_rect.expect("the view was laid out");
     r.area() / (size.0 * size.1)
 }
 
@@ -590,7 +602,7 @@ fn full_view_hides_every_panel_and_tab_brings_them_back() {
     h.get_by_label("Technique");
     h.key_press(egui::Key::Tab);
     h.run_steps(2);
-    assert!(h.state().layout.full_view);
+    assert!(h.state().chrome.layout.full_view);
     assert_eq!(h.query_all_by_label("Technique").count(), 0, "the technique panel is hidden");
     assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
     assert_eq!(h.query_all_by_label("File").count(), 0, "the menu bar is hidden");
@@ -598,7 +610,7 @@ fn full_view_hides_every_panel_and_tab_brings_them_back() {
     assert!(share > 0.97, "the view fills the window in full view: {:.1} %", share * 100.0);
     h.key_press(egui::Key::F11);
     h.run_steps(2);
-    assert!(!h.state().layout.full_view);
+    assert!(!h.state().chrome.layout.full_view);
     h.get_by_label("Technique");
     // The button over the view leaves full view too.
     h.key_press(egui::Key::F11);
@@ -624,24 +636,24 @@ fn a_hidden_panel_is_restored_from_the_menu_and_the_layout_is_saved() {
     let hide: Vec<_> = h.get_all_by_label("hide").collect();
     assert_eq!(hide.len(), 2, "one hide button per tab bar");
     // The lower one: the timings' tab bar is right above the timings.
-    let timings = h.state().layout.rect(Pane::Timings).unwrap();
+    let timings = h.state().chrome.layout.rect(Pane::Timings).unwrap();
     let lower = hide.into_iter().max_by(|a, b| a.rect().center().y.total_cmp(&b.rect().center().y)).unwrap();
     assert!((lower.rect().center().y - timings.top()).abs() < 30.0, "{:?} vs {timings:?}", lower.rect());
     lower.click();
     h.run_steps(3);
-    assert!(!h.state().layout.is_shown(Pane::Timings));
+    assert!(!h.state().chrome.layout.is_shown(Pane::Timings));
     assert_eq!(h.query_all_by_label_contains("adapter:").count(), 0, "the timings panel is hidden");
     // Saved as it changed: a new app opens with the same layout.
     let mut fresh = harness(Startup { data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
     fresh.run_steps(2);
-    assert!(!fresh.state().layout.is_shown(Pane::Timings), "the layout was saved with the app state");
-    assert!(fresh.state().layout.is_shown(Pane::Lights));
+    assert!(!fresh.state().chrome.layout.is_shown(Pane::Timings), "the layout was saved with the app state");
+    assert!(fresh.state().chrome.layout.is_shown(Pane::Lights));
     // The Panels menu shows it again.
     fresh.get_by_label("Panels").click();
     fresh.run_steps(2);
     fresh.get_by_label("Timings").click();
     fresh.run_steps(2);
-    assert!(fresh.state().layout.is_shown(Pane::Timings));
+    assert!(fresh.state().chrome.layout.is_shown(Pane::Timings));
     fresh.get_by_label_contains("adapter:");
     assert!(before > 0.6);
 }
@@ -649,19 +661,19 @@ fn a_hidden_panel_is_restored_from_the_menu_and_the_layout_is_saved() {
 #[test]
 fn a_visible_layer_shows_its_legend_and_a_light_its_cluster() {
     let mut h = start("legend", "cornell");
-    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
-    h.state_mut().layout.focus(Pane::Overlays);
+    h.state_mut().chrome.layout.focus(Pane::Overlays);
     h.run_steps(2);
     // "lights by cluster" is on by default: its legend is listed under its checkbox.
     h.get_by_label_contains("in its cluster's colour");
-    let names: Vec<String> = h.state().legends.iter().map(|(n, _)| n.clone()).collect();
+    let names: Vec<String> = h.state().views.legends.iter().map(|(n, _)| n.clone()).collect();
     assert!(names.iter().any(|n| n == "lights by cluster"), "{names:?}");
     assert!(!names.iter().any(|n| n == "d_min spheres"), "a hidden layer has no legend: {names:?}");
     assert_eq!(h.query_all_by_label_contains("disc-light radius").count(), 0);
-    h.state_mut().view.overlays.insert("d_min spheres".into(), true);
+    h.state_mut().session.view.overlays.insert("d_min spheres".into(), true);
     h.run_steps(3);
-    let legends = &h.state().legends;
+    let legends = &h.state().views.legends;
     let d_min = legends.iter().find(|(n, _)| n == "d_min spheres").expect("shown now, with its legend");
     assert!(d_min.1.iter().any(|e| e.text.contains("disc-light radius")), "{:?}", d_min.1);
     // A light's tooltip names its cluster; selecting it selects the cluster's members for highlighting.
@@ -677,11 +689,11 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     use shadowlab_core::technique::ParamValue;
     let mut h = start("figure", "cornell");
     let app = h.state_mut();
-    app.technique = "lightcluster".into();
-    app.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
+    app.session.technique = "lightcluster".into();
+    app.session.params.entry("lightcluster".into()).or_default().insert("d_init".into(), ParamValue::Float(0.6));
     h.run_steps(3);
     let path = h.state_mut().save_figure().unwrap();
-    let (w, hgt) = h.state().gpu.as_ref().unwrap().main.size;
+    let (w, hgt) = h.state().views.gpu.as_ref().unwrap().main.size;
     let img = image::open(&path).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), figure_size(w, hgt, 3), "three panes of the view's render size");
     assert!(path.file_name().unwrap().to_string_lossy().contains("figure"));
@@ -712,14 +724,14 @@ fn figure_export_writes_three_captioned_panes_and_sequences_their_pngs_and_gifs(
     assert!(gif.iter().all(|f| f.buffer().dimensions() == (w, hgt)));
     assert!(h.state_mut().save_sequence(Motion::Orbit, 0).is_err(), "no frames is an error, not a panic");
     // The view's overlay layers (LightCluster's lights by cluster) are drawn over the frames, unless switched off.
-    h.state_mut().sequence_overlays = false;
+    h.state_mut().chrome.sequence_overlays = false;
     let plain = h.state_mut().save_sequence(Motion::Orbit, 3).unwrap();
     let plain: Vec<_> = plain.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
     assert!(plain[0] != images[0] && plain[0].dimensions() == images[0].dimensions(), "overlays drawn");
-    h.state_mut().sequence_overlays = true;
+    h.state_mut().chrome.sequence_overlays = true;
     // The light animation: an error while it is off, then one period in 2 frames that differ.
     assert!(h.state_mut().save_sequence(Motion::Lights, 2).is_err(), "the animation is off");
-    h.state_mut().animation = shadowlab::gui::Animation::Bob;
+    h.state_mut().session.animation = shadowlab::gui::Animation::Bob;
     let lights = h.state_mut().save_sequence(Motion::Lights, 2).unwrap();
     let images: Vec<_> = lights.frames.iter().map(|f| image::open(f).unwrap().to_rgba8()).collect();
     assert!(images[0] != images[1], "the lights moved between frames");
@@ -736,12 +748,12 @@ fn gif_frames(path: &std::path::Path) -> Vec<image::Frame> {
 #[test]
 fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_selected_light() {
     let mut h = start("inspector-maps", "cornell");
-    h.state_mut().layout.focus(Pane::Maps);
+    h.state_mut().chrome.layout.focus(Pane::Maps);
     h.run_steps(3);
     let app = h.state();
-    let atlas = app.inspector.atlas.as_ref().expect("the reference's atlas was read back");
+    let atlas = app.chrome.inspector.atlas.as_ref().expect("the reference's atlas was read back");
     assert!(atlas.tiles >= 6 && atlas.resolution == 256, "{} tiles of {}", atlas.tiles, atlas.resolution);
-    let cross = app.inspector.shown.as_ref().expect("a cube map is shown");
+    let cross = app.chrome.inspector.shown.as_ref().expect("a cube map is shown");
     assert_eq!((cross.width, cross.height), (4 * atlas.resolution, 3 * atlas.resolution), "unfolded as a cross");
     // Six faces of texels, outside them nothing; the light's walls within its range are drawn.
     let inside = cross.depths.iter().filter(|d| !d.is_nan()).count();
@@ -752,21 +764,21 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_s
     h.get_by_label_contains("tiles of 256² texels");
     // Selecting a light shows its cube map; the centre of its +y face sees the ceiling (the room's inside is
     // y in [0, 2]) straight above the light, and reads the distance to it.
-    let lights = h.state().lights.clone();
+    let lights = h.state().session.lights.clone();
     let (index, light) = lights
         .iter()
         .enumerate()
         .rfind(|(_, l)| 2.0 - l.position.y < 0.9 * l.range)
         .expect("a light whose range reaches the ceiling");
-    h.state_mut().selected = Some(index);
+    h.state_mut().session.selected = Some(index);
     h.run_steps(2);
     let app = h.state();
-    let cube = app.inspector.cube.expect("a cube map is shown");
-    let atlas = app.inspector.atlas.as_ref().unwrap();
+    let cube = app.chrome.inspector.cube.expect("a cube map is shown");
+    let atlas = app.chrome.inspector.atlas.as_ref().unwrap();
     assert_eq!(atlas.cube_at(light.position, 1e-4), Some(cube), "the selected light's cube map is shown");
-    assert_eq!(app.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
+    assert_eq!(app.chrome.inspector.note.as_deref(), Some(format!("light {index}: cube {cube}").as_str()));
     let r = atlas.resolution;
-    let cross = app.inspector.shown.as_ref().unwrap();
+    let cross = app.chrome.inspector.shown.as_ref().unwrap();
     let (x, y) = (r + r / 2, r / 2);
     let readout = cross.readout(x, y).unwrap();
     assert!(readout.contains(&format!("cube {cube} face +y")), "{readout}");
@@ -777,28 +789,29 @@ fn the_shadow_map_inspector_unfolds_a_cube_map_reads_distances_and_follows_the_s
     // Linearised grey: the same texels drawn by distance.
     h.get_by_label("linearised grey").click();
     h.run_steps(2);
-    assert!(h.state().inspector.linear && h.state().inspector.shown.is_some());
+    assert!(h.state().chrome.inspector.linear && h.state().chrome.inspector.shown.is_some());
 }
 
 #[test]
 fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps() {
     use shadowlab::gui::inspector::MapSource;
     let mut h = start("inspector-insm", "cornell");
-    h.state_mut().technique = "insm".into();
-    h.state_mut().layout.focus(Pane::Maps);
+    h.state_mut().session.technique = "insm".into();
+    h.state_mut().chrome.layout.focus(Pane::Maps);
     h.run_steps(4);
     let images = MapSource { indirect: false, set: 1 };
-    let sources = h.state().inspector.sources.clone();
+    let sources = h.state().chrome.inspector.sources.clone();
     assert!(
         sources.iter().any(|(s, l)| *s == images && l.contains("intermediate depth images")),
         "INSM offers its intermediate images: {sources:?}"
     );
     assert!(sources.iter().any(|(s, l)| *s == MapSource::DIRECT && l.contains("shadow maps")), "{sources:?}");
-    h.state_mut().inspector.source = images;
+    h.state_mut().chrome.inspector.source = images;
     h.run_steps(3);
-    let viewpoints = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let viewpoints =
+        h.state_mut().views.gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
     let app = h.state();
-    let atlas = app.inspector.atlas.as_ref().expect("the intermediate images were read back");
+    let atlas = app.chrome.inspector.atlas.as_ref().expect("the intermediate images were read back");
     assert_eq!(atlas.cubes(), 0, "views, not cube maps");
     // Each viewpoint's image is a tile seen from that viewpoint, its texels read as distances from it.
     let eyes: Vec<glam::Vec3> = atlas.projections.iter().flatten().map(|p| p.eye()).collect();
@@ -806,37 +819,37 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     for v in &viewpoints {
         assert!(eyes.iter().any(|e| e.distance(v.position) < 1e-3), "no image from {:?}: {eyes:?}", v.position);
     }
-    let shown = app.inspector.shown.as_ref().expect("the whole atlas is shown");
+    let shown = app.chrome.inspector.shown.as_ref().expect("the whole atlas is shown");
     let r = atlas.resolution;
     let readout = shown.readout(r / 2, r / 2).unwrap();
     let distance = shown.distance(r / 2, r / 2).expect("the first viewpoint sees the room");
     // Inside the 2 m room every surface is less than its diagonal (3.5 m) away, from a viewpoint at most ~2 m outside.
     assert!(readout.contains("tile 0 · view") && distance > 0.05 && distance < 6.0, "{readout}");
     // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
-    h.state_mut().technique = "lightcluster".into();
-    h.state_mut().inspector.source = MapSource::DIRECT;
+    h.state_mut().session.technique = "lightcluster".into();
+    h.state_mut().chrome.inspector.source = MapSource::DIRECT;
     h.run_steps(4);
-    let atlas = h.state().inspector.atlas.as_ref().expect("LightCluster's cube maps");
+    let atlas = h.state().chrome.inspector.atlas.as_ref().expect("LightCluster's cube maps");
     assert!(atlas.cubes() > 0 && atlas.what.contains("per cluster"), "{}", atlas.what);
-    h.state_mut().selected = Some(5);
+    h.state_mut().session.selected = Some(5);
     h.run_steps(2);
-    let note = h.state().inspector.note.clone().unwrap_or_default();
+    let note = h.state().chrome.inspector.note.clone().unwrap_or_default();
     assert!(note.starts_with("light 5: cube "), "{note}");
     // The cube shown is rendered from a member of light 5's cluster (its center).
     let group = h.state_mut().light_details(5).expect("LightCluster knows light 5's cluster").group;
     let app = h.state();
-    let (atlas, cube) = (app.inspector.atlas.as_ref().unwrap(), app.inspector.cube.unwrap());
-    assert!(group.iter().any(|&m| atlas.cube_at(app.lights[m].position, 1e-4) == Some(cube)), "{group:?}");
+    let (atlas, cube) = (app.chrome.inspector.atlas.as_ref().unwrap(), app.chrome.inspector.cube.unwrap());
+    assert!(group.iter().any(|&m| atlas.cube_at(app.session.lights[m].position, 1e-4) == Some(cube)), "{group:?}");
 }
 
 #[test]
 fn every_explain_step_of_every_technique_draws_without_a_panic() {
     // A glyph egui's fonts lack (an arrow, say) in a step's text panics the app when the step is chosen.
     let mut h = start("explain-all", "cornell");
-    h.state_mut().indirect.vpl.count = 16;
+    h.state_mut().session.indirect.vpl.count = 16;
     let mut clicked = 0;
     let mut click_all = |h: &mut Harness<'static, ShadowLabApp>, titles: Vec<&'static str>| {
-        h.state_mut().layout.focus(Pane::Explain);
+        h.state_mut().chrome.layout.focus(Pane::Explain);
         h.run_steps(1);
         for title in titles {
             h.get_by_label(title).click();
@@ -845,16 +858,16 @@ fn every_explain_step_of_every_technique_draws_without_a_panic() {
         }
     };
     for entry in shadowlab_core::technique::REGISTRY {
-        h.state_mut().technique = entry.key.to_string();
+        h.state_mut().session.technique = entry.key.to_string();
         h.run_steps(1);
-        let steps = h.state_mut().gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
+        let steps = h.state_mut().views.gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
         click_all(&mut h, steps.iter().map(|s| s.title).collect());
     }
-    h.state_mut().technique = "unshadowed".into();
+    h.state_mut().session.technique = "unshadowed".into();
     for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
-        h.state_mut().indirect.technique = Some(entry.key.to_string());
+        h.state_mut().session.indirect.technique = Some(entry.key.to_string());
         h.run_steps(1);
-        let t = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
+        let t = h.state_mut().views.gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
         let titles: Vec<&'static str> = t.borrow().explain().iter().map(|s| s.title).collect();
         click_all(&mut h, titles);
     }
@@ -864,9 +877,9 @@ fn every_explain_step_of_every_technique_draws_without_a_panic() {
 #[test]
 fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     let mut h = start("explain", "cornell");
-    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
-    h.state_mut().layout.focus(Pane::Explain);
+    h.state_mut().chrome.layout.focus(Pane::Explain);
     h.run_steps(1);
     h.get_by_label("2. Cluster centers").click();
     h.run_steps(2);
@@ -879,11 +892,11 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     // The cube-map step brings the shadow maps forward.
     h.get_by_label("4. One cube map per cluster").click();
     h.run_steps(2);
-    assert!(h.state().layout.is_on_screen(Pane::Maps));
+    assert!(h.state().chrome.layout.is_on_screen(Pane::Maps));
     // The visibility step draws one cluster's visibility alone; the next step restores the parameter.
     use shadowlab_core::technique::ParamValue;
     let visibility_of =
-        |h: &Harness<'static, ShadowLabApp>| h.state().params["lightcluster"].get("visibility_of").cloned();
+        |h: &Harness<'static, ShadowLabApp>| h.state().session.params["lightcluster"].get("visibility_of").cloned();
     h.get_by_label("5. Soft visibility per cluster").click();
     h.run_steps(2);
     assert_eq!(visibility_of(&h), Some(ParamValue::Int(0)));
@@ -891,18 +904,18 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
     h.run_steps(2);
     assert_eq!(visibility_of(&h), Some(ParamValue::Int(-1)), "back to every cluster");
     // INSM: the mesh step shows the wireframe and the dropped edges.
-    h.state_mut().technique = "insm".into();
-    h.state_mut().layout.focus(Pane::Explain);
+    h.state_mut().session.technique = "insm".into();
+    h.state_mut().chrome.layout.focus(Pane::Explain);
     h.run_steps(3);
     h.get_by_label("2. Intermediate depth images").click();
     h.run_steps(2);
     let images = shadowlab::gui::inspector::MapSource { indirect: false, set: 1 };
-    assert!(h.state().layout.is_on_screen(Pane::Maps) && h.state().inspector.source == images);
+    assert!(h.state().chrome.layout.is_on_screen(Pane::Maps) && h.state().chrome.inspector.source == images);
     h.get_by_label("3. Their meshes").click();
     h.run_steps(2);
     assert!(on(&mut h, "INSM mesh (wireframe)") && on(&mut h, "INSM dropped edges") && !on(&mut h, "INSM viewpoints"));
     // A technique without steps says so.
-    h.state_mut().technique = "unshadowed".into();
+    h.state_mut().session.technique = "unshadowed".into();
     h.run_steps(2);
     h.get_by_label_contains("describes no steps");
 }
@@ -910,11 +923,12 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
 #[test]
 fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     let mut h = start("viewpoint-tooltip", "arcade");
-    h.state_mut().technique = "insm".into();
+    h.state_mut().session.technique = "insm".into();
     h.run_steps(4);
     let p = projection(&h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(70.0);
-    let cameras = h.state_mut().gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(70.0);
+    let cameras =
+        h.state_mut().views.gpu.as_mut().unwrap().main.technique("insm").unwrap().cameras_in_use("viewpoints");
     let pos = cameras
         .iter()
         .filter_map(|c| p.to_screen(c.position))
@@ -929,8 +943,8 @@ fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
 /// Where a hover point of `layer` of the indirect technique `key` is on screen, inside the view, with its index.
 fn indirect_point_on_screen(h: &mut Harness<'static, ShadowLabApp>, key: &str, layer: &str) -> (egui::Pos2, usize) {
     let p = projection(h);
-    let rect = h.state().last_viewport_rect.unwrap().shrink(20.0);
-    let technique = h.state_mut().gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(20.0);
+    let technique = h.state_mut().views.gpu.as_mut().unwrap().main.indirect_technique(key).unwrap();
     let points = technique.borrow().hover_points();
     points
         .iter()
@@ -942,9 +956,9 @@ fn indirect_point_on_screen(h: &mut Harness<'static, ShadowLabApp>, key: &str, l
 #[test]
 fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     let mut h = start("overlay-tooltips", "cornell");
-    h.state_mut().technique = "unshadowed".into();
-    h.state_mut().indirect.vpl.count = 64;
-    h.state_mut().indirect.technique = Some("val".into());
+    h.state_mut().session.technique = "unshadowed".into();
+    h.state_mut().session.indirect.vpl.count = 64;
+    h.state_mut().session.indirect.technique = Some("val".into());
     h.run_steps(6);
     let p = projection(&h);
     // A VAL's centre: its number, VPL count, rectangle.
@@ -952,29 +966,29 @@ fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VAL {k} (")) && lines[1].contains("VPLs"), "{lines:?}");
     // With the centres hidden, a VPL: its light and its VAL; with its layer hidden too, nothing.
-    h.state_mut().view.overlays.insert("val centres".into(), false);
+    h.state_mut().session.view.overlays.insert("val centres".into(), false);
     let (at, i) = indirect_point_on_screen(&mut h, "val", "vpls by val");
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VPL {i} of ")) && lines.last().unwrap().starts_with("in VAL "), "{lines:?}");
-    h.state_mut().view.overlays.insert("vpls by val".into(), false);
+    h.state_mut().session.view.overlays.insert("vpls by val".into(), false);
     assert!(h.state_mut().overlay_tooltip(&p, at).is_empty(), "a hidden layer has no tooltips");
     // Fuzzy clustering: a VPL cluster's representative.
-    h.state_mut().indirect.technique = Some("fuzzy".into());
+    h.state_mut().session.indirect.technique = Some("fuzzy".into());
     h.run_steps(6);
     let (at, k) = indirect_point_on_screen(&mut h, "fuzzy", "vpl cluster representatives");
     let lines = h.state_mut().overlay_tooltip(&p, at);
     assert!(lines[0].starts_with(&format!("VPL cluster {k} (")) && lines[1].ends_with("members"), "{lines:?}");
     // A pixel of the per-pixel shading-point cluster map, once that layer is on: its cluster.
-    let centre = h.state().last_viewport_rect.unwrap().center();
+    let centre = h.state().views.last_viewport_rect.unwrap().center();
     for layer in [
         "vpl cluster representatives",
         "vpls by cluster",
         "probe: clusters and visibility rays (green visible, red blocked)",
     ] {
-        h.state_mut().view.overlays.insert(layer.into(), false);
+        h.state_mut().session.view.overlays.insert(layer.into(), false);
     }
     assert!(h.state_mut().overlay_tooltip(&p, centre).is_empty(), "the map's layer is off");
-    h.state_mut().view.overlays.insert("shading-point clusters".into(), true);
+    h.state_mut().session.view.overlays.insert("shading-point clusters".into(), true);
     let lines = h.state_mut().overlay_tooltip(&p, centre);
     let id: usize = lines
         .first()
@@ -995,13 +1009,13 @@ fn the_difference_is_computed_off_the_ui_thread_when_not_synchronous() {
     let mut h =
         harness(Startup { data_dir: Some(data_dir("difference-async")), synchronous: false, ..Default::default() });
     h.state_mut().load_builtin("cornell");
-    h.state_mut().view.mode = ViewMode::Difference;
+    h.state_mut().session.view.mode = ViewMode::Difference;
     let start = std::time::Instant::now();
-    while h.state().difference.is_none() && start.elapsed() < std::time::Duration::from_secs(120) {
+    while h.state().views.difference.is_none() && start.elapsed() < std::time::Duration::from_secs(120) {
         h.step();
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let d = h.state().difference.as_ref().expect("the worker's difference arrived");
+    let d = h.state().views.difference.as_ref().expect("the worker's difference arrived");
     assert_eq!(d.metrics.rmse, 0.0, "the reference against itself");
 }
 
@@ -1012,10 +1026,10 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
     let dir = data_dir("device-lost");
     let mut h = harness(Startup { data_dir: Some(dir.clone()), synchronous: true, ..Default::default() });
     h.state_mut().load_builtin("cornell");
-    h.state_mut().technique = "lightcluster".into();
+    h.state_mut().session.technique = "lightcluster".into();
     h.run_steps(3);
-    let lights = h.state().lights.clone();
-    let device = h.state().gpu.as_ref().unwrap().ctx.device.clone();
+    let lights = h.state().session.lights.clone();
+    let device = h.state().views.gpu.as_ref().unwrap().ctx.device.clone();
     device.destroy();
     // wgpu reports a destroyed device at the next poll once its queue is empty (a real loss at once).
     let _ = device.poll(wgpu::PollType::wait_indefinitely());
@@ -1023,7 +1037,7 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
     let app = h.state();
     let recovery = app.recovery.clone().expect("the loss was handled");
     assert!(recovery.reason.contains("Destroyed"), "{}", recovery.reason);
-    assert!(app.gpu.is_none(), "nothing renders with the lost device");
+    assert!(app.views.gpu.is_none(), "nothing renders with the lost device");
     let file = recovery.file.expect("the state was saved");
     assert_eq!(file, dir.join("recovery.ron"));
     let (program, args) = recovery.relaunch.expect("the command that goes on");
@@ -1037,34 +1051,34 @@ fn a_lost_device_saves_a_recovery_file_and_says_how_to_go_on() {
         ..Default::default()
     });
     fresh.run_steps(3);
-    assert_eq!(fresh.state().technique, "lightcluster");
-    assert_eq!(fresh.state().lights, lights);
+    assert_eq!(fresh.state().session.technique, "lightcluster");
+    assert_eq!(fresh.state().session.lights, lights);
 }
 
 #[test]
 fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
     let mut h = start("auto-exposure", "cornell");
-    let settings = h.state().render_settings(egui::vec2(320.0, 200.0), false);
+    let settings = h.state().session.render_settings(egui::vec2(320.0, 200.0), false);
     assert_eq!(settings.auto_exposure, shadowlab_core::AutoExposure::Meter, "the full image meters");
-    let preview = h.state().render_settings(egui::vec2(320.0, 200.0), true);
+    let preview = h.state().session.render_settings(egui::vec2(320.0, 200.0), true);
     assert_eq!(preview.auto_exposure, shadowlab_core::AutoExposure::Hold, "the preview holds the metered value");
-    let metered = h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
+    let metered = h.state().views.gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap();
     let (scale, average) = metered.expect("metered");
     assert!(scale.is_finite() && scale > 0.0 && average > 0.0, "{scale} {average}");
     // Side by side, the reference is shown at the technique's exposure (held, not metered on its own image).
-    h.state_mut().technique = "lightcluster".into();
-    h.state_mut().view.mode = shadowlab::gui::document::ViewMode::SideBySide;
+    h.state_mut().session.technique = "lightcluster".into();
+    h.state_mut().session.view.mode = shadowlab::gui::document::ViewMode::SideBySide;
     h.run_steps(6);
-    let gpu = h.state().gpu.as_ref().unwrap();
+    let gpu = h.state().views.gpu.as_ref().unwrap();
     let main = gpu.main.renderer.auto_exposure().unwrap().unwrap();
     let reference = gpu.reference.renderer.auto_exposure().unwrap().unwrap();
     assert_eq!(gpu.reference.renderer.settings().auto_exposure, shadowlab_core::AutoExposure::Hold);
     assert_eq!(main.0, reference.0, "one exposure for both views");
-    assert_eq!(h.state().metered_exposure.map(|m| m.0), Some(main.0), "the Render panel's figure is the view's");
-    h.state_mut().view.auto_exposure = false;
+    assert_eq!(h.state().views.metered_exposure.map(|m| m.0), Some(main.0), "the Render panel's figure is the view's");
+    h.state_mut().session.view.auto_exposure = false;
     h.run_steps(3);
     assert_eq!(
-        h.state().gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap(),
+        h.state().views.gpu.as_ref().unwrap().main.renderer.auto_exposure().unwrap(),
         None,
         "off: the exposure as set"
     );

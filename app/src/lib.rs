@@ -2,6 +2,7 @@
 
 pub mod cli;
 pub mod figure;
+pub mod files;
 pub mod gui;
 pub mod measure;
 pub mod plot;

@@ -7,10 +7,9 @@ use anyhow::{anyhow, Result};
 use serde::Serialize;
 use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Metrics, Visibility};
 use shadowlab_core::scene::{Camera, PointLight};
+use shadowlab_core::technique::Technique;
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::{FrameReport, Renderer};
-
-use crate::cli::apply_params;
 
 /// Timings of repeated frames of one technique.
 #[derive(Clone, Debug, Serialize)]
@@ -121,6 +120,32 @@ impl IndirectChoice {
     pub fn none() -> IndirectChoice {
         IndirectChoice { key: "none".into(), params: Vec::new() }
     }
+}
+
+/// Apply `--shadow-res` and `--param key=value` to a technique.
+pub fn apply_params(technique: &mut dyn Technique, shadow_res: Option<u32>, params: &[String]) -> Result<()> {
+    let mut all: Vec<(String, String)> = Vec::new();
+    // `--shadow-res` applies to the techniques that have cube maps (not to the ray-traced truth, say).
+    if let Some(r) = shadow_res.filter(|_| technique.params().iter().any(|p| p.key == "shadow_res")) {
+        all.push(("shadow_res".into(), r.to_string()));
+    }
+    for p in params {
+        let (k, v) = p.split_once('=').ok_or_else(|| anyhow!("--param '{p}': expected KEY=VALUE"))?;
+        all.push((k.trim().to_string(), v.trim().to_string()));
+    }
+    let specs = technique.params();
+    for (key, text) in all {
+        let spec = specs.iter().find(|s| s.key == key).ok_or_else(|| {
+            anyhow!(
+                "technique '{}' has no parameter '{key}' (it has: {})",
+                technique.key(),
+                specs.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
+            )
+        })?;
+        let value = spec.kind.parse(&key, &text)?;
+        technique.set_param(&key, &value)?;
+    }
+    Ok(())
 }
 
 /// Give `renderer` the indirect technique of `choice` (or none).

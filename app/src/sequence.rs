@@ -116,7 +116,7 @@ impl GifWriter {
         }
         drop(self.encoder.take());
         let bytes = std::mem::take(&mut *self.bytes.0.borrow_mut());
-        crate::cli::write_atomic(&self.path, &bytes)
+        crate::files::write_atomic(&self.path, &bytes)
     }
 }
 

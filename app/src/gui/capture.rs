@@ -1,4 +1,4 @@
-//! Captures beyond screenshots: a paper-style figure (the technique, its comparison target and their
+//! Captures: screenshots of the 3D view (at its render resolution) and of the window, a paper-style figure (the technique, its comparison target and their
 //! difference side by side, with technique, parameters and metrics as captions) and image sequences (an orbit
 //! around the camera's target, or one period of the light animation) as PNGs and a GIF. Both render every
 //! image completely, now, in a renderer of their own on the view's device at the view's render resolution (the
@@ -8,11 +8,13 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Context, Result};
+use eframe::egui;
 use shadowlab_core::technique::{Overlay, ParamValue};
 use shadowlab_core::Renderer;
 
 use super::camera::CameraMode;
-use super::{technique_pair, ShadowLabApp};
+use super::views::technique_pair;
+use super::ShadowLabApp;
 use crate::figure::{self, FigurePane};
 use crate::measure::{self, DiffKind, IndirectChoice};
 use crate::sequence::{self, Motion};
@@ -23,30 +25,30 @@ fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
 
 impl ShadowLabApp {
     fn indirect_choice(&self) -> IndirectChoice {
-        match &self.indirect.technique {
-            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.indirect.params.get(k)) },
+        match &self.session.indirect.technique {
+            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.session.indirect.params.get(k)) },
             None => IndirectChoice::none(),
         }
     }
 
     /// A renderer of its own at the view's full render resolution.
     fn capture_renderer(&self) -> Result<Renderer> {
-        let settings = self.render_settings(self.last_view_pixels, false);
-        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let settings = self.session.render_settings(self.views.last_view_pixels, false);
+        let gpu = self.views.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
         Ok(gpu.main.renderer.new_view(settings)?)
     }
 
     /// The figure as an image: three panes of the view's render size (see [`figure::figure_size`]).
     pub fn figure_image(&mut self) -> Result<image::RgbaImage> {
-        let camera = self.camera.camera();
-        let lights = self.animated_lights();
+        let camera = self.session.camera.camera();
+        let lights = self.session.animated_lights();
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
         let no_progress = &mut |_: &str| {};
-        let params = param_strings(self.params.get(&self.technique));
+        let params = param_strings(self.session.params.get(&self.session.technique));
         let tech = measure::render_technique(
             &mut renderer,
-            &self.technique,
+            &self.session.technique,
             None,
             &params,
             &camera,
@@ -66,8 +68,8 @@ impl ShadowLabApp {
             renderer.set_settings(held)?;
             renderer.set_held_exposure(scale, average)?;
         }
-        let against = self.view.compare_against.clone();
-        let against_params = param_strings(self.params.get(&against));
+        let against = self.session.view.compare_against.clone();
+        let against_params = param_strings(self.session.params.get(&against));
         let target = measure::render_technique(
             &mut renderer,
             &against,
@@ -82,7 +84,7 @@ impl ShadowLabApp {
         )?;
         let target_image = renderer.read_output()?;
         let inputs = measure::compare_inputs(&mut renderer, &camera, &lights)?;
-        let gain = self.view.diff_gain;
+        let gain = self.session.view.diff_gain;
         let (metrics, diff) = measure::compare_images(
             &tech.image,
             &target.image,
@@ -90,13 +92,13 @@ impl ShadowLabApp {
             DiffKind::Absolute,
             gain,
             true,
-            self.view.exposure,
+            self.session.view.exposure,
         )?;
-        let indirect_key = self.indirect.technique.as_deref();
+        let indirect_key = self.session.indirect.technique.as_deref();
         let (w, h) = (renderer.settings().width, renderer.settings().height);
         let title = format!(
             "{} · {} lights · {w}x{h} · {}",
-            self.scene.name,
+            self.session.scene.name,
             lights.len(),
             renderer.gpu().adapter_description()
         );
@@ -106,7 +108,7 @@ impl ShadowLabApp {
             FigurePane {
                 image: tech_image,
                 caption: vec![
-                    technique_pair(&self.technique, indirect_key),
+                    technique_pair(&self.session.technique, indirect_key),
                     shown(&params),
                     format!("GPU {:.1} ms", tech.report.gpu_total_ms),
                 ],
@@ -148,21 +150,22 @@ impl ShadowLabApp {
         let period_secs = match motion {
             Motion::Orbit => None,
             Motion::Lights => Some(
-                self.animation
+                self.session
+                    .animation
                     .period_secs()
                     .ok_or_else(|| anyhow!("the light animation is off: choose one in the Lights panel"))?,
             ),
         };
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
-        let params = param_strings(self.params.get(&self.technique));
+        let params = param_strings(self.session.params.get(&self.session.technique));
         let name = self.screenshot_name(match motion {
             Motion::Orbit => "orbit",
             Motion::Lights => "lights",
         });
         let dir = name.with_extension("");
         std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let mut orbit = self.camera.clone();
+        let mut orbit = self.session.camera.clone();
         orbit.set_mode(CameraMode::Orbit);
         let start_yaw = orbit.yaw;
         let mut paths = Vec::with_capacity(frames);
@@ -170,25 +173,25 @@ impl ShadowLabApp {
         let gif_path = dir.join("sequence.gif");
         let mut gif = sequence::GifWriter::new(&gif_path, frame_ms)?;
         // The overlay layers the view shows, drawn as the view draws them (dots and lines in screen points).
-        let layers: Vec<String> = if self.sequence_overlays {
+        let layers: Vec<String> = if self.chrome.sequence_overlays {
             self.overlay_layers().into_iter().filter(|(_, on)| *on).map(|(name, _)| name).collect()
         } else {
             Vec::new()
         };
-        let view_points = self.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
+        let view_points = self.views.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
         let render_pixels_per_point = renderer.settings().width as f32 / view_points;
         renderer.set_overlay_style(shadowlab_core::renderer::overlay::OverlayStyle {
             line_width_px: (2.0 * render_pixels_per_point).max(1.0),
             occluded_alpha: 0.25,
         });
-        let x_ray = self.view.x_ray;
+        let x_ray = self.session.view.x_ray;
         for i in 0..frames {
             let share = i as f32 / frames as f32;
             let lights = match period_secs {
-                Some(p) => self.lights_at(self.animation_time + p * share),
+                Some(p) => self.session.lights_at(self.session.animation_time + p * share),
                 None => {
                     orbit.yaw = start_yaw + std::f32::consts::TAU * share;
-                    self.animated_lights()
+                    self.session.animated_lights()
                 }
             };
             let camera = orbit.camera();
@@ -211,7 +214,7 @@ impl ShadowLabApp {
             };
             measure::render_technique_then(
                 &mut renderer,
-                &self.technique,
+                &self.session.technique,
                 None,
                 &params,
                 &camera,
@@ -238,4 +241,89 @@ pub struct SavedSequence {
     pub frames: Vec<PathBuf>,
     /// The frames as one looping animated GIF.
     pub gif: PathBuf,
+}
+
+impl ShadowLabApp {
+    pub(super) fn screenshot_name(&self, what: &str) -> PathBuf {
+        let params: String = self
+            .session
+            .params
+            .get(&self.session.technique)
+            .map(|p| p.iter().map(|(k, v)| format!("-{k}{v}")).collect())
+            .unwrap_or_default();
+        let stamp = chrono_like_stamp();
+        let indirect = self.session.indirect.technique.as_ref().map(|k| format!("+{k}")).unwrap_or_default();
+        let name = format!(
+            "shadowlab-{}-{}{}{}-{}-{}.png",
+            self.session.scene.name, self.session.technique, params, indirect, what, stamp
+        )
+        .replace(['/', '\\', ' ', ':'], "_");
+        self.lifecycle.data_dir.join("screenshots").join(name)
+    }
+
+    /// Export a figure and say where it went (or why not).
+    pub fn export_figure(&mut self) {
+        match self.save_figure() {
+            Ok(p) => self.toast(format!("saved {}", p.display())),
+            Err(e) => self.error(format!("figure export failed: {e:#}")),
+        }
+    }
+
+    /// Save the 3D view at its render resolution (no UI). Returns the path.
+    pub fn save_view_screenshot(&mut self) -> Result<PathBuf> {
+        let path = self.screenshot_name("view");
+        let gpu = self.views.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let image = gpu.main.renderer.read_output()?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        image.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    fn save_window_screenshot(&mut self, image: &egui::ColorImage) -> Result<PathBuf> {
+        let path = self.screenshot_name("window");
+        let [w, h] = image.size;
+        let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+        let img = image::RgbaImage::from_raw(w as u32, h as u32, bytes).ok_or_else(|| anyhow!("bad screenshot"))?;
+        std::fs::create_dir_all(path.parent().expect("has a parent"))?;
+        img.save(&path).with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(path)
+    }
+
+    /// Ask the integration for a picture of the whole window; it arrives a frame or two later.
+    pub fn request_window_screenshot(&mut self, ctx: &egui::Context) {
+        let slot = self.lifecycle.window_shot.clone();
+        let repaint = ctx.clone();
+        ctx.request_screenshot(move |image| {
+            if let Ok(mut s) = slot.lock() {
+                *s = Some(image);
+            }
+            repaint.request_repaint();
+        });
+    }
+
+    /// Save a window screenshot that arrived: the exit screenshot (then close), or one the user asked for.
+    pub(super) fn receive_screenshots(&mut self, ctx: &egui::Context) {
+        let shot = self.lifecycle.window_shot.lock().ok().and_then(|mut s| s.take());
+        if let Some(image) = shot {
+            if let (true, Some(path)) = (self.lifecycle.quitting, self.lifecycle.exit_screenshot.take()) {
+                let [w, h] = image.size;
+                let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                match image::RgbaImage::from_raw(w as u32, h as u32, bytes).map(|img| img.save(&path)) {
+                    Some(Ok(())) => eprintln!("saved {}", path.display()),
+                    _ => eprintln!("error: cannot save {}", path.display()),
+                }
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                return;
+            }
+            match self.save_window_screenshot(&image) {
+                Ok(p) => self.toast(format!("saved {}", p.display())),
+                Err(e) => self.error(format!("screenshot failed: {e:#}")),
+            }
+        }
+    }
+}
+
+fn chrono_like_stamp() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_millis()).unwrap_or(0);
+    format!("{secs}")
 }

@@ -210,7 +210,7 @@ impl SceneFile {
     /// Write atomically: a temporary file beside the target, then a rename; the old file survives any failure.
     pub fn save(&self, path: &Path) -> Result<()> {
         let text = self.to_ron()?;
-        crate::cli::write_atomic(path, text.as_bytes())
+        crate::files::write_atomic(path, text.as_bytes())
     }
 }
 

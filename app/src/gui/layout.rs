@@ -11,8 +11,6 @@ use eframe::egui;
 use egui_tiles::{Container, Linear, LinearDir, Tile, TileId, Tiles, Tree};
 use serde::{Deserialize, Serialize};
 
-use super::ShadowLabApp;
-
 /// What a tile shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Pane {
@@ -145,7 +143,7 @@ impl Layout {
     pub fn save(&mut self, dir: &Path) -> Result<()> {
         let file = LayoutFile { version: LAYOUT_VERSION, tree: self.tree.clone(), full_view: self.full_view };
         std::fs::create_dir_all(dir)?;
-        crate::cli::write_atomic(&Self::path(dir), ron::to_string(&file)?.as_bytes())?;
+        crate::files::write_atomic(&Self::path(dir), ron::to_string(&file)?.as_bytes())?;
         self.dirty = false;
         Ok(())
     }
@@ -226,6 +224,13 @@ impl Layout {
         self.pending_focus = Some(pane);
     }
 
+    /// Bring forward the panel [`Layout::request_focus`] asked for (once the tiles have been drawn).
+    pub fn focus_pending(&mut self) {
+        if let Some(pane) = self.pending_focus.take() {
+            self.focus(pane);
+        }
+    }
+
     /// Where the pane was laid out last frame.
     pub fn rect(&self, pane: Pane) -> Option<egui::Rect> {
         self.tree.tiles.find_pane(&pane).and_then(|id| self.tree.tiles.rect(id))
@@ -238,113 +243,27 @@ impl Default for Layout {
     }
 }
 
-/// egui_tiles' view of the app: each pane's UI, tab titles, a hide button on each tab bar.
-struct Panes<'a> {
-    app: &'a mut ShadowLabApp,
-    edited: bool,
-    hide: Option<TileId>,
-}
-
-impl egui_tiles::Behavior<Pane> for Panes<'_> {
-    fn tab_title_for_pane(&mut self, pane: &Pane) -> egui::WidgetText {
-        pane.title().into()
-    }
-
-    fn pane_ui(&mut self, ui: &mut egui::Ui, _tile_id: TileId, pane: &mut Pane) -> egui_tiles::UiResponse {
-        if *pane == Pane::View {
-            self.app.viewport_ui(ui);
-            return egui_tiles::UiResponse::None;
-        }
-        egui::Frame::NONE.inner_margin(egui::Margin::same(6)).fill(ui.visuals().panel_fill).show(ui, |ui| {
-            ui.set_min_size(ui.available_size());
-            if matches!(*pane, Pane::Timings | Pane::Maps) {
-                // They fill the panel themselves (the timings' table scrolls, the maps zoom and pan).
-                super::panels::pane_ui(self.app, ui, *pane);
-            } else {
-                egui::ScrollArea::vertical().id_salt(pane.title()).auto_shrink([false, false]).show(ui, |ui| {
-                    super::panels::pane_ui(self.app, ui, *pane);
-                });
-            }
-        });
-        egui_tiles::UiResponse::None
-    }
-
-    fn top_bar_right_ui(
-        &mut self,
-        _tiles: &Tiles<Pane>,
-        ui: &mut egui::Ui,
-        _tile_id: TileId,
-        tabs: &egui_tiles::Tabs,
-        _scroll_offset: &mut f32,
-    ) {
-        if let Some(active) = tabs.active {
-            if ui.small_button("hide").on_hover_text("Hide this panel (Panels menu shows it again)").clicked() {
-                self.hide = Some(active);
-            }
-        }
-    }
-
-    fn simplification_options(&self) -> egui_tiles::SimplificationOptions {
-        // The view has no tab bar of its own; panels keep theirs (they are dragged by their tabs).
-        egui_tiles::SimplificationOptions { all_panes_must_have_tabs: false, ..Default::default() }
-    }
-
-    fn is_tab_bar_visible(&self, _tile_id: TileId, _tabs: &egui_tiles::Tabs) -> bool {
-        true
-    }
-
-    fn gap_width(&self, _style: &egui::Style) -> f32 {
-        3.0
-    }
-
-    fn min_size(&self) -> f32 {
-        60.0
-    }
-
-    fn on_edit(&mut self, _edit_action: egui_tiles::EditAction) {
-        self.edited = true;
-    }
-}
-
-/// The tiles with the app's panes in them.
-pub fn tiles_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    let mut tree = std::mem::replace(&mut app.layout.tree, Tree::empty(egui::Id::unique("shadowlab layout (drawing)")));
-    let mut panes = Panes { app, edited: false, hide: None };
-    tree.ui(&mut panes, ui);
-    let (edited, hide) = (panes.edited, panes.hide);
-    if let Some(id) = hide {
-        tree.set_visible(id, false);
-    }
-    app.layout.tree = tree;
-    if edited || hide.is_some() {
-        app.layout.mark_changed();
-    }
-    if let Some(pane) = app.layout.pending_focus.take() {
-        app.layout.focus(pane);
-    }
-}
-
 /// The Panels menu: show or hide each panel, full view, the default layout.
-pub fn panels_menu(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
+pub fn panels_menu(layout: &mut Layout, ui: &mut egui::Ui) {
     for pane in Pane::ALL.into_iter().filter(|p| *p != Pane::View) {
-        let mut shown = app.layout.is_shown(pane);
+        let mut shown = layout.is_shown(pane);
         if ui.checkbox(&mut shown, pane.title()).changed() {
             if shown {
                 // Shown again, and in front of its tab group.
-                app.layout.focus(pane);
+                layout.focus(pane);
             } else {
-                app.layout.set_shown(pane, false);
+                layout.set_shown(pane, false);
             }
-            app.layout.mark_changed();
+            layout.mark_changed();
         }
     }
     ui.separator();
     if ui.button("Full view (Tab or F11)").clicked() {
-        app.layout.toggle_full_view();
+        layout.toggle_full_view();
         ui.close();
     }
     if ui.button("Default layout").clicked() {
-        app.layout.reset();
+        layout.reset();
         ui.close();
     }
 }

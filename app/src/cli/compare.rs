@@ -1,0 +1,235 @@
+//! `shadowlab compare`: a technique against a comparison target: the difference image, the metrics, a figure.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use serde::Serialize;
+
+use super::args::{FrameArgs, SceneArgs, TargetArgs};
+use super::setup::setup;
+use crate::files::{check_output_path, encode_png, write_atomic};
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    #[command(flatten)]
+    pub target: TargetArgs,
+    /// A technique parameter, `key=value`; repeatable.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// Difference image mode.
+    #[arg(long, value_enum, default_value = "absolute")]
+    pub mode: crate::measure::DiffKind,
+    /// Gain of the difference image (1, 5, 10, ...).
+    #[arg(long, default_value_t = 1.0)]
+    pub gain: f32,
+    /// Skip the FLIP metric (the slowest one).
+    #[arg(long)]
+    pub no_flip: bool,
+    /// Difference image (PNG).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The technique's own image (PNG).
+    #[arg(long)]
+    pub image: Option<PathBuf>,
+    /// A paper-style figure (PNG): the technique, the target and the difference side by side, with captions.
+    #[arg(long)]
+    pub figure: Option<PathBuf>,
+    /// Metrics and timings as JSON.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct CompareReport<'a> {
+    adapter: String,
+    scene: &'a str,
+    lights: usize,
+    width: u32,
+    height: u32,
+    technique: &'a str,
+    technique_parameters: &'a std::collections::BTreeMap<String, String>,
+    against: &'a str,
+    against_parameters: &'a std::collections::BTreeMap<String, String>,
+    metrics: &'a shadowlab_core::compare::Metrics,
+    technique_timing: &'a crate::measure::TimingSummary,
+    against_timing: &'a crate::measure::TimingSummary,
+    /// Same-run speedup of the technique over the comparison target (median frame times).
+    speedup: f64,
+    technique_counts: &'a shadowlab_core::renderer::FrameCounts,
+    /// The component the metrics were computed on.
+    component: &'a str,
+    indirect: &'a crate::measure::IndirectChoice,
+    against_indirect: &'a crate::measure::IndirectChoice,
+    /// VPLs the technique side used (absent without an indirect technique).
+    vpls: Option<usize>,
+    technique_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
+    against_report_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
+}
+
+pub fn run(args: CompareArgs) -> Result<()> {
+    check_output_path(&args.out, "png")?;
+    if let Some(r) = &args.report {
+        check_output_path(r, "json")?;
+    }
+    if let Some(r) = &args.image {
+        check_output_path(r, "png")?;
+    }
+    if let Some(r) = &args.figure {
+        check_output_path(r, "png")?;
+    }
+    args.target.check()?;
+    if !(args.gain.is_finite() && args.gain > 0.0) {
+        bail!("--gain {}: must be a number > 0", args.gain);
+    }
+    let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let f = &args.frame;
+    let quiet = f.quiet;
+    let mut say = |m: &str| {
+        if !quiet {
+            eprintln!("{m}");
+        }
+    };
+    let indirect = f.indirect_choice();
+    let against_indirect = args.target.against_indirect(&indirect)?;
+    let target = crate::measure::render_technique(
+        &mut renderer,
+        &args.target.against,
+        f.shadow_res,
+        &args.target.against_params,
+        &camera,
+        &lights,
+        &against_indirect,
+        f.warmup,
+        f.repeat,
+        &mut say,
+    )?;
+    let target_image = args.figure.as_ref().map(|_| renderer.read_output()).transpose()?;
+    let tech = crate::measure::render_technique(
+        &mut renderer,
+        &args.target.technique,
+        f.shadow_res,
+        &args.params,
+        &camera,
+        &lights,
+        &indirect,
+        f.warmup,
+        f.repeat,
+        &mut say,
+    )?;
+    let tech_image = renderer.read_output()?;
+    if let Some(path) = &args.image {
+        write_atomic(path, &encode_png(&tech_image)?)?;
+    }
+    let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
+    let (metrics, diff) = crate::measure::compare_images(
+        &tech.image,
+        &target.image,
+        &inputs,
+        args.mode,
+        args.gain,
+        !args.no_flip,
+        f.exposure,
+    )?;
+    let speedup = target.timing.median_ms / tech.timing.median_ms.max(1e-9);
+    if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
+        use crate::figure::{compose, metrics_caption, FigurePane};
+        let metrics_lines = metrics_caption(&metrics);
+        let params = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
+        let title = format!(
+            "{} · {} lights · {}x{} · {}",
+            scene.name,
+            lights.len(),
+            f.width,
+            f.height,
+            gpu.adapter_description()
+        );
+        let figure = compose(
+            &title,
+            &[
+                FigurePane {
+                    image: tech_image,
+                    caption: vec![
+                        args.target.technique.clone(),
+                        params(&args.params),
+                        format!("{:.1} ms (median of {}), ×{speedup:.2}", tech.timing.median_ms, tech.timing.frames),
+                    ],
+                },
+                FigurePane {
+                    image: target_image,
+                    caption: vec![
+                        args.target.against.clone(),
+                        params(&args.target.against_params),
+                        format!("{:.1} ms (median of {})", target.timing.median_ms, target.timing.frames),
+                    ],
+                },
+                FigurePane {
+                    image: diff.clone(),
+                    caption: vec![
+                        format!("{:?} difference ×{}", args.mode, args.gain).to_lowercase(),
+                        metrics_lines[0].clone(),
+                        metrics_lines[1].clone(),
+                    ],
+                },
+            ],
+        )?;
+        write_atomic(path, &encode_png(&figure)?)?;
+    }
+    write_atomic(&args.out, &encode_png(&diff)?)?;
+    if !quiet {
+        eprintln!(
+            "{} vs {} on {} ({}x{}): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over {:.0}%",
+            args.target.technique,
+            args.target.against,
+            scene.name,
+            f.width,
+            f.height,
+            metrics.rmse,
+            metrics.psnr_db.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "inf".into()),
+            metrics.flip_mean.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
+            metrics.shadow_intensity_error.map(|v| format!("{:.2}%", v * 100.0)).unwrap_or_else(|| "-".into()),
+            metrics.share_over_threshold * 100.0,
+            metrics.threshold * 100.0,
+        );
+        eprintln!(
+            "time (median of {}): {} {:.2} ms, {} {:.2} ms, speedup x{:.2}",
+            tech.timing.frames,
+            args.target.technique,
+            tech.timing.median_ms,
+            args.target.against,
+            target.timing.median_ms,
+            speedup
+        );
+        eprintln!("wrote {}", args.out.display());
+    }
+    if let Some(path) = &args.report {
+        let r = CompareReport {
+            adapter: gpu.adapter_description(),
+            scene: &args.scene.scene,
+            lights: lights.len(),
+            width: f.width,
+            height: f.height,
+            technique: &args.target.technique,
+            technique_parameters: &tech.parameters,
+            against: &args.target.against,
+            against_parameters: &target.parameters,
+            metrics: &metrics,
+            technique_timing: &tech.timing,
+            against_timing: &target.timing,
+            speedup,
+            technique_counts: &tech.report.counts,
+            component: &f.component,
+            indirect: &indirect,
+            against_indirect: &against_indirect,
+            vpls: tech.report.indirect.as_ref().map(|i| i.vpls),
+            technique_indirect: tech.report.indirect.as_ref(),
+            against_report_indirect: target.report.indirect.as_ref(),
+        };
+        write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,99 @@
+//! The headless command line: `shadowlab render`, `compare`, `sweep`, `bench`, `info`, `animate`, `sequence`:
+//! the clap types here, one file per subcommand, the argument groups they share in [`args`].
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+pub mod animate;
+pub mod args;
+pub mod bench;
+pub mod compare;
+pub mod info;
+pub mod progress;
+pub mod render;
+pub mod sequence;
+pub mod setup;
+pub mod sweep;
+
+pub use animate::AnimateArgs;
+pub use args::{check_indirect, FrameArgs, SceneArgs, TargetArgs};
+pub use bench::BenchArgs;
+pub use compare::CompareArgs;
+pub use progress::Progress;
+pub use render::RenderArgs;
+pub use sequence::SequenceArgs;
+pub use setup::load_scene;
+pub use sweep::SweepArgs;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "shadowlab",
+    version,
+    about = "See and measure how many-light shadow techniques trade quality for speed"
+)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// Open this scene file (.ron) or model (.obj, .gltf, .glb) in the app.
+    pub path: Option<PathBuf>,
+    /// App: start with this technique (e.g. lightcluster).
+    #[arg(long = "app-technique", value_name = "KEY")]
+    pub app_technique: Option<String>,
+    /// App: start in this view: single, side, split or difference.
+    #[arg(long = "app-view", value_name = "VIEW")]
+    pub app_view: Option<String>,
+    /// App: start on this built-in scene (cornell, arcade, restaurant).
+    #[arg(long = "app-scene", value_name = "NAME")]
+    pub app_scene: Option<String>,
+    /// App: start with this indirect technique (vpl-shadowmaps, vpl-raytraced, vpl-unshadowed, val, pathtraced).
+    #[arg(long = "app-indirect", value_name = "KEY")]
+    pub app_indirect: Option<String>,
+    /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
+    #[arg(long, hide = true)]
+    pub screenshot: Option<PathBuf>,
+    /// App: quit after this many seconds (smoke tests, README pictures).
+    #[arg(long, hide = true)]
+    pub quit_after: Option<f32>,
+    /// App: window size in points, `WIDTHxHEIGHT` (default 1400x860; 1024x640 on a software rasterizer).
+    #[arg(long = "window-size", value_name = "WxH")]
+    pub window_size: Option<String>,
+    /// App: orbit the camera continuously (UI frame-rate measurement).
+    #[arg(long, hide = true)]
+    pub orbit_demo: bool,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene with a technique to a PNG, with a JSON frame report.
+    Render(RenderArgs),
+    /// Render a technique and a comparison target; write the difference image and the error metrics.
+    Compare(CompareArgs),
+    /// Render a technique for every combination of parameter values, compared with the reference; CSV rows.
+    Sweep(SweepArgs),
+    /// The standard suite: every technique on the built-in scenes (and the shared real scenes when present),
+    /// timed in one run, compared with the reference; writes a Markdown table.
+    Bench(BenchArgs),
+    /// Print a scene's statistics (triangles, materials, lights, bounds) and the GPU adapter.
+    Info(SceneArgs),
+    /// Move the lights in small steps over a number of frames and measure the flicker: the mean
+    /// frame-to-frame change of the chosen component (and the technique's figures per frame); CSV rows.
+    Animate(AnimateArgs),
+    /// Render an image sequence, every frame complete: the camera orbiting its target once, or the lights
+    /// moving by a step a frame; numbered PNGs in a folder and, with `--gif`, one looping animated GIF.
+    Sequence(SequenceArgs),
+}
+
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Render(args) => render::run(args),
+        Command::Compare(args) => compare::run(args),
+        Command::Sweep(args) => sweep::run(args),
+        Command::Bench(args) => bench::run(args),
+        Command::Info(args) => info::run(args),
+        Command::Animate(args) => animate::run(args),
+        Command::Sequence(args) => sequence::run(args),
+    }
+}

@@ -1,0 +1,203 @@
+//! `shadowlab render`: one technique's image (and its shadow maps) as PNGs, with a JSON frame report.
+
+use std::path::PathBuf;
+
+use anyhow::{anyhow, bail, Result};
+use clap::Args;
+use serde::Serialize;
+use shadowlab_core::scene::Camera;
+use shadowlab_core::FrameReport;
+
+use super::args::{check_technique, FrameArgs, SceneArgs};
+use super::progress::Progress;
+use super::setup::{draw_overlays, setup};
+use crate::files::{check_output_path, encode_png, write_atomic};
+use crate::measure::apply_params;
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Technique key (reference, lightcluster, unshadowed, ...).
+    #[arg(long, default_value = "reference")]
+    pub technique: String,
+    /// A technique parameter, `key=value`; repeatable.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+    /// Output PNG.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Frame report as JSON.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Draw the overlay layers the techniques show by default (lights, clusters, VPLs, ...) over the image;
+    /// `--overlay-layer NAME` picks layers by name instead (repeatable).
+    #[arg(long)]
+    pub overlays: bool,
+    #[arg(long = "overlay-layer", value_name = "NAME")]
+    pub overlay_layers: Vec<String>,
+    /// Save the technique's shadow-map atlas (near white, far black) as this PNG, the indirect
+    /// technique's as `<name>-indirect.png` (the last batch when a frame had several), and other depth
+    /// images the technique renders (INSM's intermediate images) as `<name>-images.png`.
+    #[arg(long)]
+    pub maps_out: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct RenderReport<'a> {
+    adapter: String,
+    scene: &'a str,
+    scene_triangles: usize,
+    scale: f32,
+    lights: &'a str,
+    technique: &'a str,
+    parameters: std::collections::BTreeMap<String, String>,
+    width: u32,
+    height: u32,
+    camera: Camera,
+    frame: &'a FrameReport,
+    timing: &'a crate::measure::TimingSummary,
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    check_output_path(&args.out, "png")?;
+    if let Some(m) = &args.maps_out {
+        check_output_path(m, "png")?;
+    }
+    if let Some(r) = &args.report {
+        check_output_path(r, "json")?;
+    }
+    check_technique(&args.technique)?;
+    let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
+    let frame = &args.frame;
+    let mut technique =
+        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
+    apply_params(technique.as_mut(), frame.shadow_res, &args.params)?;
+    crate::measure::apply_indirect(&mut renderer, &frame.indirect_choice())?;
+
+    let mut reports = Vec::new();
+    let total = frame.warmup + frame.repeat.max(1);
+    for i in 0..total {
+        let label = if i < frame.warmup {
+            format!("warm-up {}/{}", i + 1, frame.warmup)
+        } else {
+            format!("{} / {} {}/{}", scene.name, technique.key(), i + 1 - frame.warmup, frame.repeat.max(1))
+        };
+        let mut progress = Progress::new(&label, frame.quiet);
+        let r = renderer.render_frame(technique.as_mut(), &camera, &lights, &mut |d, t| progress.update(d, t))?;
+        if i >= frame.warmup {
+            reports.push(r);
+        }
+    }
+    let timing = crate::measure::summarize(&reports);
+    let report = reports.pop().expect("at least one measured frame");
+    if let Some(path) = &args.maps_out {
+        let mut wrote = 0;
+        if let Some((atlas, what)) = technique.shadow_atlas() {
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
+            write_atomic(path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        if let Some((atlas, what)) = renderer.indirect().and_then(|t| t.shadow_atlas()) {
+            let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps");
+            let indirect_path = path.with_file_name(format!("{stem}-indirect.png"));
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
+            write_atomic(&indirect_path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", indirect_path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        // Other depth images the technique rendered (INSM's intermediate images): `<name>-images.png`.
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("maps").to_string();
+        let images = technique.depth_images();
+        for (i, (atlas, what)) in images.iter().enumerate() {
+            let suffix = if images.len() == 1 { String::new() } else { format!("-{i}") };
+            let images_path = path.with_file_name(format!("{stem}-images{suffix}.png"));
+            let img = shadowlab_core::gpu::readback::depth_atlas_image(renderer.gpu(), &atlas.texture)?;
+            write_atomic(&images_path, &encode_png(&img)?)?;
+            wrote += 1;
+            if !frame.quiet {
+                eprintln!("wrote {} ({what}, {} tiles of {}²)", images_path.display(), atlas.tiles, atlas.resolution);
+            }
+        }
+        if wrote == 0 {
+            bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.technique);
+        }
+    }
+    if args.overlays || !args.overlay_layers.is_empty() {
+        draw_overlays(&mut renderer, technique.as_ref(), &camera, &lights, &args.overlay_layers)?;
+    }
+    write_atomic(&args.out, &encode_png(&renderer.read_output()?)?)?;
+
+    if !frame.quiet {
+        eprintln!(
+            "{}x{} on {}: {:.1} ms GPU ({:?}), {:.0} ms wall; {} of {} lights visible, {} shadow maps in {} batches; \
+             {} shadow triangles drawn, {} culled",
+            report.width,
+            report.height,
+            gpu.adapter_description(),
+            report.gpu_total_ms,
+            report.timing_source,
+            report.wall_ms,
+            report.counts.technique.lights_visible,
+            report.counts.lights_total,
+            report.counts.technique.shadow_maps,
+            report.counts.technique.batches,
+            report.counts.technique.shadow_triangles_submitted,
+            report.counts.technique.shadow_triangles_culled,
+        );
+        if let Some(c) = report.counts.technique.clusters {
+            eprintln!(
+                "  {c} clusters{}",
+                if report.counts.technique.fell_back_to_reference { " (= visible lights: reference path)" } else { "" }
+            );
+        }
+        for p in &report.passes {
+            eprintln!("  {:<14} {:>10.2} ms  ({} passes)", p.name, p.ms, p.count);
+        }
+        for p in &report.cpu_stages {
+            eprintln!("  {:<14} {:>10.3} ms  (CPU)", p.name, p.ms);
+        }
+        if let Some((scale, average)) = renderer.auto_exposure()? {
+            eprintln!(
+                "  auto exposure: log-average luminance {average:.4}, scale x{scale:.3} (times --exposure {})",
+                frame.exposure
+            );
+        }
+        if timing.frames > 1 {
+            eprintln!(
+                "  {} frames: median {:.2} ms, min {:.2} ms, mean of 3 best {:.2} ms",
+                timing.frames, timing.median_ms, timing.min_ms, timing.best3_mean_ms
+            );
+        }
+        eprintln!("wrote {}", args.out.display());
+    }
+    if let Some(path) = &args.report {
+        let parameters = technique.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
+        let r = RenderReport {
+            adapter: gpu.adapter_description(),
+            scene: &args.scene.scene,
+            scene_triangles: scene.triangle_count(),
+            scale: args.scene.scale,
+            lights: &args.scene.lights,
+            technique: technique.key(),
+            parameters,
+            width: report.width,
+            height: report.height,
+            camera,
+            frame: &report,
+            timing: &timing,
+        };
+        write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
+        if !frame.quiet {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,122 @@
+//! The Lights panel (layouts, and the inspector of the selected light) and the Scene panel (statistics).
+
+use eframe::egui;
+use glam::Vec3;
+
+use crate::gui::chrome::Toasts;
+use crate::gui::session::Session;
+
+pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) {
+    ui.heading(format!("Lights ({})", session.lights.len()));
+    ui.label("Click a light to select it; drag the gizmo to move it. Ctrl+click on a surface adds one.");
+    thread_local! {
+        static SPEC: std::cell::RefCell<String> = std::cell::RefCell::new("circles:10:8:7".to_string());
+    }
+    ui.horizontal(|ui| {
+        let mut spec = SPEC.with(|s| s.borrow().clone());
+        ui.add(egui::TextEdit::singleline(&mut spec).desired_width(140.0).hint_text("random:64:2:1"))
+            .on_hover_text("random:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene");
+        if ui.button("Apply layout").clicked() {
+            match session.apply_layout(&spec) {
+                Ok(n) => toasts.say(format!("{n} lights from '{spec}'")),
+                Err(e) => toasts.error(e.to_string()),
+            }
+        }
+        SPEC.with(|s| *s.borrow_mut() = spec);
+    });
+    ui.horizontal(|ui| {
+        if ui.add_enabled(session.selected.is_some(), egui::Button::new("Duplicate")).clicked() {
+            session.duplicate_selected();
+        }
+        if ui.add_enabled(session.selected.is_some(), egui::Button::new("Delete")).clicked() {
+            session.delete_selected();
+        }
+    });
+    if let Some(i) = session.selected.filter(|&i| i < session.lights.len()) {
+        ui.separator();
+        ui.label(format!("Light {i}"));
+        let mut l = session.lights[i];
+        let mut changed = false;
+        let mut committed = false;
+        let track = |r: egui::Response, changed: &mut bool, committed: &mut bool| {
+            *changed |= r.changed();
+            *committed |= r.drag_started() || r.gained_focus();
+        };
+        ui.horizontal(|ui| {
+            for (axis, v) in ["x", "y", "z"].iter().zip([&mut l.position.x, &mut l.position.y, &mut l.position.z]) {
+                let r = ui.add(egui::DragValue::new(v).speed(0.01).prefix(format!("{axis} ")));
+                track(r, &mut changed, &mut committed);
+            }
+        });
+        let mut rgb = l.color.to_array();
+        let r = ui.horizontal(|ui| {
+            ui.label("colour");
+            ui.color_edit_button_rgb(&mut rgb)
+        });
+        track(r.inner, &mut changed, &mut committed);
+        let r = ui.add(egui::Slider::new(&mut l.intensity, 0.0..=1000.0).logarithmic(true).text("intensity"));
+        track(r, &mut changed, &mut committed);
+        let r = ui.add(egui::Slider::new(&mut l.range, 0.01..=1000.0).logarithmic(true).text("L_att"));
+        track(r, &mut changed, &mut committed);
+        // Spot lights: a cone (glTF semantics) aimed by yaw and pitch.
+        let mut is_spot = l.spot.is_some();
+        let r = ui.checkbox(&mut is_spot, "spot light");
+        if r.changed() {
+            committed = true;
+            changed = true;
+            l.spot =
+                is_spot.then(|| shadowlab_core::scene::Spot::aimed(Vec3::ZERO, Vec3::NEG_Y, 30f32.to_radians(), 0.2));
+        }
+        if let Some(spot) = &mut l.spot {
+            let d = spot.direction;
+            let mut yaw = d.x.atan2(-d.z).to_degrees();
+            let mut pitch = d.y.clamp(-1.0, 1.0).asin().to_degrees();
+            let mut cone = spot.outer_angle.to_degrees();
+            let mut softness = if spot.outer_angle > 0.0 { 1.0 - spot.inner_angle / spot.outer_angle } else { 0.0 };
+            ui.horizontal(|ui| {
+                let r =
+                    ui.add(egui::DragValue::new(&mut yaw).speed(0.5).range(-180.0..=180.0).prefix("yaw ").suffix("°"));
+                track(r, &mut changed, &mut committed);
+                let r = ui
+                    .add(egui::DragValue::new(&mut pitch).speed(0.5).range(-90.0..=90.0).prefix("pitch ").suffix("°"));
+                track(r, &mut changed, &mut committed);
+            });
+            let r = ui.add(egui::Slider::new(&mut cone, 0.0..=90.0).text("cone half-angle °"));
+            track(r, &mut changed, &mut committed);
+            let r = ui.add(egui::Slider::new(&mut softness, 0.0..=1.0).text("softness"));
+            track(r, &mut changed, &mut committed);
+            let (yaw, pitch) = (yaw.to_radians(), pitch.to_radians());
+            let direction = Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), -yaw.cos() * pitch.cos());
+            *spot = shadowlab_core::scene::Spot::aimed(Vec3::ZERO, direction, cone.to_radians(), softness);
+        }
+        l.color = Vec3::from_array(rgb);
+        if committed {
+            session.begin_edit();
+        }
+        if changed && l.is_valid() {
+            session.lights[i] = l;
+        }
+    }
+}
+
+pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
+    ui.heading("Scene");
+    let b = session.scene.bounds;
+    egui::Grid::new("stats").num_columns(2).show(ui, |ui| {
+        ui.label("name");
+        ui.label(&session.scene.name);
+        ui.end_row();
+        ui.label("triangles");
+        ui.label(format!("{}", session.scene.triangle_count()));
+        ui.end_row();
+        ui.label("materials");
+        ui.label(format!("{}", session.scene.materials.len()));
+        ui.end_row();
+        ui.label("lights");
+        ui.label(format!("{}", session.lights.len()));
+        ui.end_row();
+        ui.label("bounds");
+        ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
+        ui.end_row();
+    });
+}

@@ -1,0 +1,332 @@
+//! The session: what the user edits and what a scene file saves (the scene, its lights, the camera, the
+//! technique and indirect technique with their parameters, the view settings), and with it what editing needs
+//! but no file keeps: the undo history, the selection and the light animation.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use eframe::egui::Vec2;
+use glam::Vec3;
+use shadowlab_core::renderer::Component;
+use shadowlab_core::scene::layout::{self as light_layout, LightLayout};
+use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::technique::{CameraPose, ParamValue};
+use shadowlab_core::{AutoExposure, RenderSettings, ToneMap};
+
+use super::camera::CameraController;
+use super::document::{History, IndirectSettings, SceneFile, ViewSettings, FILE_VERSION};
+
+/// Light animation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Animation {
+    Off,
+    Orbit,
+    Bob,
+}
+
+impl Animation {
+    const ORBIT_RAD_PER_SEC: f32 = 0.8;
+    const BOB_RAD_PER_SEC: f32 = 1.5;
+
+    /// Seconds after which every light is back where it started (none when off).
+    pub fn period_secs(self) -> Option<f32> {
+        match self {
+            Animation::Off => None,
+            Animation::Orbit => Some(std::f32::consts::TAU / Self::ORBIT_RAD_PER_SEC),
+            Animation::Bob => Some(std::f32::consts::TAU / Self::BOB_RAD_PER_SEC),
+        }
+    }
+}
+
+/// What the gizmo moves.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DragTarget {
+    Light(usize),
+    /// Camera `index` of the current technique's `ParamKind::Cameras` parameter `key` (INSM's viewpoints).
+    Camera {
+        key: String,
+        index: usize,
+    },
+}
+
+/// What the user edits: the parts a scene file saves ([`Session::scene_file_data`]) and the editing state
+/// around them.
+pub struct Session {
+    pub scene: Scene,
+    pub lights: Vec<PointLight>,
+    pub camera: CameraController,
+    pub technique: String,
+    /// Parameters the user set, per technique.
+    pub params: BTreeMap<String, BTreeMap<String, ParamValue>>,
+    /// The indirect technique, its parameters, the VPL settings and the component shown.
+    pub indirect: IndirectSettings,
+    pub view: ViewSettings,
+    pub history: History,
+    /// The scene file the session was opened from or last saved to.
+    pub scene_file: Option<PathBuf>,
+    pub selected: Option<usize>,
+    /// A selected technique camera (parameter key, index), e.g. an INSM viewpoint; exclusive with `selected`.
+    pub selected_camera: Option<(String, usize)>,
+    pub animation: Animation,
+    pub animation_time: f32,
+}
+
+impl Session {
+    /// The scene with its own lights and camera, the reference technique, default settings.
+    pub fn new(scene: Scene) -> Session {
+        Session {
+            lights: scene.lights.clone(),
+            camera: CameraController::from_camera(&scene.camera, &scene.bounds),
+            scene,
+            technique: "reference".into(),
+            params: BTreeMap::new(),
+            indirect: IndirectSettings::default(),
+            view: ViewSettings::default(),
+            history: History::default(),
+            scene_file: None,
+            selected: None,
+            selected_camera: None,
+            animation: Animation::Off,
+            animation_time: 0.0,
+        }
+    }
+
+    /// Replace the scene, its lights (a default layout when it has none) and the camera; clears the selection
+    /// and the undo history. Returns what to tell the user: the scene's warnings, and the lights placed.
+    pub fn set_scene(&mut self, scene: Scene) -> Vec<String> {
+        let mut notes: Vec<String> = scene.warnings.iter().map(|w| format!("warning: {w}")).collect();
+        self.lights = scene.lights.clone();
+        if self.lights.is_empty() {
+            // Most OBJ files and many glTF models come without lights: start lit, and say so.
+            let layout = light_layout::default_for_unlit(&scene);
+            if let Ok(lights) = light_layout::generate(&layout, &scene) {
+                self.lights = lights;
+                notes.push(format!("{} has no lights: placed {layout} (Lights panel to change)", scene.name));
+            }
+        }
+        self.camera = CameraController::from_camera(&scene.camera, &scene.bounds);
+        self.selected = None;
+        self.history.clear();
+        self.scene = scene;
+        notes
+    }
+
+    /// Take the lights, camera, techniques, parameters and view settings of a scene file (its scene is
+    /// already loaded); everything in it was checked.
+    pub fn apply_file(&mut self, file: SceneFile) {
+        self.lights = file.lights;
+        self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
+        self.technique = file.technique;
+        self.params = file.params;
+        self.indirect = file.indirect;
+        self.view = file.view;
+    }
+
+    /// What a scene file saves of the session.
+    pub fn scene_file_data(&self) -> SceneFile {
+        SceneFile {
+            version: FILE_VERSION,
+            scene: self.scene.source.clone(),
+            lights: self.lights.clone(),
+            camera: self.camera.camera(),
+            technique: self.technique.clone(),
+            params: self.params.clone(),
+            view: self.view.clone(),
+            indirect: self.indirect.clone(),
+        }
+    }
+
+    // ----- lights -----
+
+    /// Record the current lights for undo; call before every light edit.
+    pub fn begin_edit(&mut self) {
+        self.history.record(&self.lights);
+    }
+
+    pub fn undo(&mut self) {
+        if self.history.undo(&mut self.lights) {
+            self.fix_selection();
+        }
+    }
+
+    pub fn redo(&mut self) {
+        if self.history.redo(&mut self.lights) {
+            self.fix_selection();
+        }
+    }
+
+    fn fix_selection(&mut self) {
+        if self.selected.is_some_and(|i| i >= self.lights.len()) {
+            self.selected = None;
+        }
+    }
+
+    pub fn delete_selected(&mut self) {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            self.begin_edit();
+            self.lights.remove(i);
+            self.selected = None;
+        }
+    }
+
+    pub fn duplicate_selected(&mut self) {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            self.begin_edit();
+            let mut l = self.lights[i];
+            l.position += Vec3::new(0.1, 0.0, 0.1) * l.range.min(10.0);
+            self.lights.push(l);
+            self.selected = Some(self.lights.len() - 1);
+        }
+    }
+
+    /// Add a light at a surface point (slightly off the surface along its normal).
+    pub fn add_light_at(&mut self, point: Vec3, normal: Vec3) {
+        let template = self.selected.and_then(|i| self.lights.get(i).copied()).unwrap_or_else(|| {
+            let range = (self.scene.bounds.size().length() * 0.15).max(0.5);
+            PointLight::new(
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.9, 0.8),
+                light_layout::default_intensity_for_range(range),
+                range,
+            )
+        });
+        self.begin_edit();
+        let offset = (template.range * 0.05).clamp(0.02, 0.5);
+        self.lights.push(PointLight { position: point + normal * offset, ..template });
+        self.selected = Some(self.lights.len() - 1);
+    }
+
+    /// Replace the lights by a layout (`random:64:2:1`, ...); returns how many there are now.
+    pub fn apply_layout(&mut self, spec: &str) -> anyhow::Result<usize> {
+        let lights = light_layout::parse(spec).and_then(|l: LightLayout| light_layout::generate(&l, &self.scene))?;
+        self.begin_edit();
+        self.lights = lights;
+        self.selected = None;
+        Ok(self.lights.len())
+    }
+
+    /// Lights as rendered this frame (animated when animation is on).
+    pub fn animated_lights(&self) -> Vec<PointLight> {
+        self.lights_at(self.animation_time)
+    }
+
+    /// Lights at time `t_secs` of the light animation (as they are when it is off).
+    pub fn lights_at(&self, t_secs: f32) -> Vec<PointLight> {
+        let t = t_secs;
+        match self.animation {
+            Animation::Off => self.lights.clone(),
+            Animation::Orbit => self
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let r = (l.range * 0.1).min(1.0);
+                    let a = t * Animation::ORBIT_RAD_PER_SEC + i as f32 * 0.7;
+                    PointLight { position: l.position + Vec3::new(a.cos() * r, 0.0, a.sin() * r), ..*l }
+                })
+                .collect(),
+            Animation::Bob => self
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| {
+                    let h = (l.range * 0.05).min(0.5);
+                    PointLight {
+                        position: l.position + Vec3::Y * (t * Animation::BOB_RAD_PER_SEC + i as f32).sin() * h,
+                        ..*l
+                    }
+                })
+                .collect(),
+        }
+    }
+
+    // ----- rendering -----
+
+    pub fn render_settings(&self, size: Vec2, preview: bool) -> RenderSettings {
+        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.35 } else { 1.0 };
+        RenderSettings {
+            width: ((size.x * scale) as u32).clamp(16, 4096),
+            height: ((size.y * scale) as u32).clamp(16, 4096),
+            exposure: self.view.exposure,
+            // The preview holds the full image's metered exposure, so dragging does not change the brightness.
+            auto_exposure: match (self.view.auto_exposure, preview) {
+                (false, _) => AutoExposure::Off,
+                (true, false) => AutoExposure::Meter,
+                (true, true) => AutoExposure::Hold,
+            },
+            tonemap: ToneMap::Aces,
+            specular: self.view.specular,
+            vpl: self.indirect.vpl,
+            // The preview has no indirect light: show all of what it has.
+            component: if preview { Component::Total } else { self.indirect.component },
+            indirect_gain: self
+                .indirect
+                .gain
+                .clamp(*IndirectSettings::GAIN_RANGE.start(), *IndirectSettings::GAIN_RANGE.end()),
+            ..Default::default()
+        }
+    }
+
+    /// The indirect technique of the views (None while the preview renders) and the parameters the user set.
+    pub fn indirect_inputs(&self, preview: bool) -> (Option<String>, BTreeMap<String, ParamValue>) {
+        match self.indirect.technique.clone().filter(|_| !preview) {
+            Some(key) => {
+                let params = self.indirect.params.get(&key).cloned().unwrap_or_default();
+                (Some(key), params)
+            }
+            None => (None, BTreeMap::new()),
+        }
+    }
+
+    // ----- the gizmo's targets -----
+
+    /// The current technique's first camera-list parameter as the user set it: (key, cameras).
+    pub fn technique_cameras(&self) -> Option<(String, Vec<CameraPose>)> {
+        self.params.get(&self.technique)?.iter().find_map(|(k, v)| match v {
+            ParamValue::Cameras(c) => Some((k.clone(), c.clone())),
+            _ => None,
+        })
+    }
+
+    /// What the gizmo is attached to: the selected light, else the selected technique camera.
+    pub fn gizmo_target(&self) -> Option<DragTarget> {
+        if let Some(i) = self.selected.filter(|&i| i < self.lights.len()) {
+            return Some(DragTarget::Light(i));
+        }
+        let (key, index) = self.selected_camera.clone()?;
+        let (k, cameras) = self.technique_cameras()?;
+        (k == key && index < cameras.len()).then_some(DragTarget::Camera { key, index })
+    }
+
+    pub fn target_position(&self, target: &DragTarget) -> Option<Vec3> {
+        match target {
+            DragTarget::Light(i) => self.lights.get(*i).map(|l| l.position),
+            DragTarget::Camera { key, index } => match self.params.get(&self.technique)?.get(key)? {
+                ParamValue::Cameras(c) => c.get(*index).map(|c| c.position),
+                _ => None,
+            },
+        }
+    }
+
+    /// Move a light, or a technique camera (its target moves along, so it keeps looking the same way).
+    pub fn set_target_position(&mut self, target: &DragTarget, position: Vec3) {
+        match target {
+            DragTarget::Light(i) => {
+                if let Some(l) = self.lights.get_mut(*i) {
+                    l.position = position;
+                }
+            }
+            DragTarget::Camera { key, index } => {
+                let Some(ParamValue::Cameras(c)) = self.params.get_mut(&self.technique).and_then(|p| p.get_mut(key))
+                else {
+                    return;
+                };
+                if let Some(c) = c.get_mut(*index) {
+                    let offset = c.target - c.position;
+                    c.position = position;
+                    c.target = position + offset;
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,412 @@
+//! The views: the renderers of the 3D view and of its comparison target on eframe's device, and what is
+//! derived from their frames: the overlays drawn over them and their legends, the technique's per-pixel ID
+//! map, the difference image and its metrics, the metered exposure, frame timings, the hover tooltips; and
+//! the parameter sweep run with their settings.
+
+pub mod difference;
+pub mod hover;
+pub mod paint;
+pub mod view;
+
+use std::collections::{BTreeMap, VecDeque};
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::{anyhow, Result};
+use eframe::{egui, egui_wgpu};
+use glam::Vec3;
+use shadowlab_core::renderer::overlay::OverlayStyle;
+use shadowlab_core::scene::PointLight;
+use shadowlab_core::technique::{LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
+use shadowlab_core::timing::PassTime;
+use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
+
+use super::document::ViewMode;
+use super::session::Session;
+use super::sweep;
+use difference::{Difference, PendingDifference};
+use view::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
+
+/// GPU state, created from eframe's render state.
+pub struct Gpu {
+    pub ctx: GpuContext,
+    pub render_state: egui_wgpu::RenderState,
+    pub main: View,
+    pub reference: View,
+    pub sizer: StepSizer,
+}
+
+/// A technique's per-pixel ID map: (frame key, layer name, ids, render size).
+pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
+
+/// The two renderers (the technique's view and its comparison target) and what the app derived from their
+/// last frames.
+pub struct Views {
+    /// None until eframe's device is there, and again once it was lost.
+    pub gpu: Option<Gpu>,
+    /// Timings of completed frames: (seconds since start, GPU total ms, passes).
+    pub timings: VecDeque<(f64, f64, Vec<PassTime>)>,
+    /// When the app started: the time axis of `timings`.
+    started: Instant,
+    /// Where the 3D view was laid out last UI frame.
+    pub last_viewport_rect: Option<egui::Rect>,
+    pub difference: Option<Difference>,
+    /// The difference being computed on a worker thread (metrics with FLIP cost seconds on large images).
+    pending_difference: Option<PendingDifference>,
+    /// False in tests (`Startup::synchronous`): the difference is then computed on the UI thread.
+    background_work: bool,
+    pub sweep: Option<sweep::Sweep>,
+    /// Last complete frame time (GPU ms) of every technique seen this session, with its parameters, for the
+    /// comparison table (technique vs reference, same session).
+    pub session_times: BTreeMap<String, (f64, String)>,
+    /// The technique's per-pixel ID map for a converged frame.
+    pub pixel_ids: Option<PixelIds>,
+    /// The legends of the overlay layers drawn in the last UI frame: (layer name, entries).
+    pub legends: Vec<(String, Vec<LegendEntry>)>,
+    /// The 3D view's size in physical pixels (captures render at its render resolution).
+    pub last_view_pixels: egui::Vec2,
+    /// The last complete frame's auto-exposure: (scale, log-average luminance), shown in the Render panel.
+    pub metered_exposure: Option<(f32, f32)>,
+}
+
+impl Views {
+    /// No GPU yet; `background_work` false computes the difference on the UI thread (deterministic tests).
+    pub fn new(started: Instant, background_work: bool) -> Views {
+        Views {
+            gpu: None,
+            timings: VecDeque::new(),
+            started,
+            last_viewport_rect: None,
+            difference: None,
+            pending_difference: None,
+            background_work,
+            sweep: None,
+            session_times: BTreeMap::new(),
+            pixel_ids: None,
+            legends: Vec::new(),
+            last_view_pixels: egui::vec2(640.0, 360.0),
+            metered_exposure: None,
+        }
+    }
+
+    /// Both renderers on a new scene (the comparison view shares the main view's scene buffers).
+    pub fn set_scene(&mut self, scene: &shadowlab_core::scene::Scene) {
+        if let Some(gpu) = &mut self.gpu {
+            gpu.main.set_scene(scene);
+            gpu.reference.share_scene_of(&gpu.main);
+        }
+    }
+
+    /// Alt+click: hand the clicked pixel to the indirect technique's probe (the parameters it names), so its
+    /// probe overlay shows that pixel; the app knows no technique, only `probe_params`. Returns the status line.
+    pub fn probe_at(&mut self, session: &mut Session, pos: egui::Pos2, rect: egui::Rect) -> Option<String> {
+        let (Some(key), Some(gpu)) = (session.indirect.technique.clone(), &mut self.gpu) else { return None };
+        let size = gpu.main.size;
+        let Ok(technique) = gpu.main.indirect_technique(&key) else { return None };
+        let (px, py) = technique.borrow().probe_params()?;
+        let u = ((pos.x - rect.min.x) / rect.width().max(1.0)).clamp(0.0, 1.0);
+        let v = ((pos.y - rect.min.y) / rect.height().max(1.0)).clamp(0.0, 1.0);
+        let x = ((u * size.0 as f32) as i64).min(size.0 as i64 - 1);
+        let y = ((v * size.1 as f32) as i64).min(size.1 as i64 - 1);
+        let params = session.indirect.params.entry(key).or_default();
+        params.insert(px.to_string(), ParamValue::Int(x));
+        params.insert(py.to_string(), ParamValue::Int(y));
+        Some(format!("probe at pixel ({x}, {y})"))
+    }
+
+    /// The overlay layers of the indirect technique, from the instance the main view renders with.
+    fn indirect_overlay_layers(
+        &mut self,
+        session: &Session,
+        lights: &[PointLight],
+    ) -> Vec<shadowlab_core::technique::OverlayLayer> {
+        let (Some(key), Some(gpu)) = (session.indirect.technique.clone(), &mut self.gpu) else { return Vec::new() };
+        match gpu.main.indirect_technique(&key) {
+            Ok(t) => t.borrow().overlays(lights),
+            Err(_) => Vec::new(),
+        }
+    }
+
+    /// The overlay primitives of the current technique that the user has switched on, plus the selection, and
+    /// the legend of each of those layers (as the layers describe themselves through their technique).
+    fn overlay_primitives(
+        &mut self,
+        session: &Session,
+        lights: &[PointLight],
+    ) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
+        let mut out = Vec::new();
+        let mut legends = Vec::new();
+        let overlays = &session.view.overlays;
+        let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
+        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>| {
+            for layer in layers.into_iter().filter(|l| is_on(l)) {
+                legends.push((layer.name.to_string(), technique.overlay_legend(&layer)));
+                out.extend(layer.primitives);
+            }
+        };
+        let shown = |name: &str, default: bool| *overlays.get(name).unwrap_or(&default);
+        let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
+        if let Ok(technique) = gpu.main.technique(&session.technique) {
+            // Only the shown layers are built (INSM's meshes cost a readback).
+            let layers = technique.overlays_shown(lights, &shown);
+            take(technique.as_ref(), layers, &mut out);
+        }
+        if session.technique != "reference" {
+            if let Ok(reference) = gpu.main.technique("reference") {
+                let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
+                take(reference.as_ref(), layers, &mut out);
+            }
+        }
+        if let Some(key) = session.indirect.technique.clone() {
+            if let Ok(t) = gpu.main.indirect_technique(&key) {
+                let t = t.borrow();
+                let layers = t.overlays_shown(lights, &shown);
+                take(t.as_ref(), layers, &mut out);
+            }
+        }
+        // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
+        if let Some(group) =
+            session.selected.and_then(|i| self.light_details(session, i)).map(|d| d.group).filter(|g| g.len() > 1)
+        {
+            let at: Vec<Vec3> = group.iter().filter_map(|&m| lights.get(m)).map(|l| l.position).collect();
+            let member = |p: &Vec3| at.contains(p);
+            for o in &mut out {
+                let keep = match o {
+                    Overlay::Point { position, .. } => member(position),
+                    Overlay::Line { from, to, .. } => member(from) || member(to),
+                    Overlay::Sphere { center, .. } => member(center),
+                    _ => true,
+                };
+                if !keep {
+                    if let Overlay::Point { color, .. } | Overlay::Line { color, .. } | Overlay::Sphere { color, .. } =
+                        o
+                    {
+                        color[3] *= 0.2;
+                    }
+                }
+            }
+        }
+        if let Some(l) = session.selected.and_then(|i| lights.get(i)) {
+            out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
+            out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
+        }
+        (out, legends)
+    }
+
+    /// What the current technique made of light `index` in its last frame (its cluster, say).
+    pub fn light_details(
+        &mut self,
+        session: &Session,
+        index: usize,
+    ) -> Option<shadowlab_core::technique::LightDetails> {
+        let gpu = self.gpu.as_mut()?;
+        gpu.main.technique(&session.technique).ok()?.light_details(index)
+    }
+
+    /// Names of the overlay layers the current technique offers, with their state.
+    pub fn overlay_layers(&mut self, session: &Session) -> Vec<(String, bool)> {
+        let Some(gpu) = &mut self.gpu else { return Vec::new() };
+        let mut names: Vec<(String, bool)> = Vec::new();
+        // Only the names are needed: asking with no lights builds (almost) no primitives, every UI frame; one spot
+        // light, when the scene has one, brings the layers that only spot lights have.
+        let probe: Vec<PointLight> = session.lights.iter().find(|l| l.spot.is_some()).copied().into_iter().collect();
+        if let Ok(t) = gpu.main.technique(&session.technique) {
+            let layers = t.overlays_shown(&probe, &|_, _| false);
+            names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
+        }
+        if session.technique != "reference" {
+            names.push(("light ranges".into(), false));
+        }
+        if let Ok(t) = gpu.main.technique(&session.technique) {
+            if let Some((name, _)) = t.pixel_ids(&[]) {
+                names.push((name.to_string(), false));
+            }
+        }
+        names.extend(
+            self.indirect_overlay_layers(session, &[]).into_iter().map(|l| (l.name.to_string(), l.visible_by_default)),
+        );
+        names.into_iter().map(|(n, d)| (n.clone(), *session.view.overlays.get(&n).unwrap_or(&d))).collect()
+    }
+
+    pub fn render(
+        &mut self,
+        session: &Session,
+        size: egui::Vec2,
+        pixels_per_point: f32,
+        interacting: bool,
+    ) -> Result<()> {
+        let lights = session.animated_lights();
+        let camera = session.camera.camera();
+        let (mut overlays, legends) = self.overlay_primitives(session, &lights);
+        self.legends = legends;
+        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { session.technique.clone() };
+        let two = session.view.mode != ViewMode::Single;
+        let per_view = if session.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
+        let settings = session.render_settings(per_view, interacting);
+        // Dot sizes are in screen points; the render target may be smaller or larger than the view.
+        let render_pixels_per_point = pixels_per_point * settings.width as f32 / per_view.x.max(1.0);
+        for o in &mut overlays {
+            if let Overlay::Point { radius_px, .. } = o {
+                *radius_px *= render_pixels_per_point;
+            }
+        }
+        // Lines about 2 points wide on screen, whatever the render resolution; occluded parts faded.
+        let style = OverlayStyle { line_width_px: (2.0 * render_pixels_per_point).max(1.0), occluded_alpha: 0.25 };
+        let params = session.params.get(&technique).cloned().unwrap_or_default();
+        // Both views get the same indirect technique and parameters, so a comparison compares the same light.
+        let (indirect, indirect_params) = session.indirect_inputs(interacting);
+        let x_ray = session.view.x_ray;
+        let Some(gpu) = &mut self.gpu else { return Ok(()) };
+        let main_inputs = FrameInputs {
+            camera,
+            lights: lights.clone(),
+            technique,
+            params,
+            indirect: indirect.clone(),
+            indirect_params: indirect_params.clone(),
+            settings: settings.clone(),
+        };
+        // While the user drags, keep the UI fluid: the preview gets a third of the budget.
+        let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
+        let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
+        // The comparison view shows the technique's exposure (held, never metered itself), so the same radiance
+        // looks the same on both sides of a split or side-by-side view.
+        if gpu.main.new_report && settings.auto_exposure == AutoExposure::Meter {
+            if let Some((scale, average)) = gpu.main.renderer.auto_exposure()? {
+                gpu.reference.renderer.set_held_exposure(scale, average)?;
+                self.metered_exposure = Some((scale, average));
+            }
+        }
+        // The technique's per-pixel ID map, once per converged frame, when its layer is on.
+        if gpu.main.is_converged() {
+            let key = gpu.main.frame_key();
+            let technique_key = main_inputs.technique.clone();
+            let view_overlays = &session.view.overlays;
+            let technique = gpu.main.technique(&technique_key)?;
+            let layer = technique.pixel_ids(&[]).map(|(name, _)| name);
+            let wanted = layer.is_some_and(|name| *view_overlays.get(name).unwrap_or(&false));
+            if wanted && self.pixel_ids.as_ref().is_none_or(|(k, ..)| *k != key) {
+                let positions = gpu.main.renderer.read_world_positions(&camera)?;
+                let technique = gpu.main.technique(&technique_key)?;
+                if let Some((name, ids)) = technique.pixel_ids(&positions) {
+                    self.pixel_ids = Some((key, name, Arc::new(ids), gpu.main.size));
+                }
+            }
+            if let Some((k, name, ids, (w, h))) = &self.pixel_ids {
+                if *k == key && wanted && layer == Some(*name) {
+                    overlays.insert(0, Overlay::IdMap { width: *w, height: *h, ids: ids.clone(), alpha: 0.45 });
+                }
+            }
+        }
+        gpu.main.renderer.set_overlay_style(style);
+        gpu.reference.renderer.set_overlay_style(style);
+        gpu.main.overlays(&camera, &overlays, x_ray)?;
+        let mut total_spent = spent;
+        let mut total_steps = steps;
+        if two {
+            let against = session.view.compare_against.clone();
+            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { against.as_str() };
+            let reference_inputs = FrameInputs {
+                camera,
+                lights,
+                technique: reference_technique.into(),
+                params: session.params.get(reference_technique).cloned().unwrap_or_default(),
+                indirect,
+                indirect_params,
+                settings: RenderSettings {
+                    auto_exposure: match settings.auto_exposure {
+                        AutoExposure::Off => AutoExposure::Off,
+                        _ => AutoExposure::Hold,
+                    },
+                    ..settings
+                },
+            };
+            // The reference gets what is left of the budget once the technique's image is complete.
+            let left = if gpu.main.is_converged() { budget - spent } else { budget * 0.25 };
+            let (s, n) = gpu.reference.update(
+                &gpu.render_state,
+                &reference_inputs,
+                left.max(1.0),
+                gpu.sizer.max_lights_per_step,
+            )?;
+            gpu.reference.overlays(&camera, &overlays, x_ray)?;
+            total_spent += s;
+            total_steps += n;
+        }
+        gpu.sizer.observe(total_spent, total_steps);
+        let describe = |params: &BTreeMap<String, ParamValue>| {
+            params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
+        };
+        let indirect_params = &main_inputs.indirect_params;
+        let describe_report = |r: &shadowlab_core::FrameReport, params: &BTreeMap<String, ParamValue>| {
+            let mut p = describe(params);
+            if r.indirect.is_some() && !indirect_params.is_empty() {
+                p = format!("{p} | {}", describe(indirect_params)).trim().to_string();
+            }
+            p
+        };
+        if std::mem::take(&mut gpu.reference.new_report) {
+            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+                let p = describe_report(r, &session.params.get(&r.technique).cloned().unwrap_or_default());
+                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
+            }
+        }
+        if std::mem::take(&mut gpu.main.new_report) {
+            if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+                let p = describe_report(r, &main_inputs.params);
+                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
+            }
+            if let Some(r) = &gpu.main.last_report {
+                let t = self.started.elapsed().as_secs_f64();
+                if r.technique != PREVIEW_TECHNIQUE {
+                    self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
+                    while self.timings.front().is_some_and(|(t0, _, _)| t - t0 > 60.0) {
+                        self.timings.pop_front();
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Start a sweep of `key` over `values` for the current technique, view and lights.
+    pub fn start_sweep(&mut self, session: &Session, key: &str, values: Vec<ParamValue>) -> Result<()> {
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let settings = gpu.main.renderer.settings().clone();
+        let fixed: Vec<(String, ParamValue)> = session
+            .params
+            .get(&session.technique)
+            .map(|p| p.iter().filter(|(k, _)| k.as_str() != key).map(|(k, v)| (k.clone(), v.clone())).collect())
+            .unwrap_or_default();
+        self.sweep = Some(sweep::Sweep::start(sweep::SweepJob {
+            gpu: gpu.ctx.clone(),
+            scene: gpu.main.renderer.shared_scene(),
+            layouts: gpu.main.renderer.shared_layouts(),
+            lights: session.animated_lights(),
+            camera: session.camera.camera(),
+            settings,
+            technique: session.technique.clone(),
+            fixed,
+            indirect: session.indirect.technique.clone().map(|k| {
+                let params = session.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
+                (k, params)
+            }),
+            key: key.to_string(),
+            values,
+        }));
+        Ok(())
+    }
+}
+
+/// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
+pub fn session_name(report: &shadowlab_core::FrameReport) -> String {
+    technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
+}
+
+/// `direct`, or `direct + indirect`.
+pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
+    match indirect {
+        Some(i) => format!("{direct} + {i}"),
+        None => direct.to_string(),
+    }
+}
