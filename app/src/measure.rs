@@ -253,9 +253,32 @@ pub struct CompareInputs {
 pub fn compare_inputs(renderer: &mut Renderer, camera: &Camera, lights: &[PointLight]) -> Result<CompareInputs> {
     let no_progress = &mut |_: &str| {};
     let none = IndirectChoice::none();
-    let unshadowed =
-        render_technique(renderer, "unshadowed", None, &[], camera, lights, &none, 0, 1, no_progress)?.image;
-    let ambient = render_technique(renderer, "unshadowed", None, &[], camera, &[], &none, 0, 1, no_progress)?.image;
+    let unshadowed = render_technique(
+        renderer,
+        shadowlab_core::technique::registry::preview().key,
+        None,
+        &[],
+        camera,
+        lights,
+        &none,
+        0,
+        1,
+        no_progress,
+    )?
+    .image;
+    let ambient = render_technique(
+        renderer,
+        shadowlab_core::technique::registry::preview().key,
+        None,
+        &[],
+        camera,
+        &[],
+        &none,
+        0,
+        1,
+        no_progress,
+    )?
+    .image;
     Ok(CompareInputs { mask: renderer.read_geometry_mask()?, unshadowed, ambient })
 }
 

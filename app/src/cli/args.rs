@@ -112,7 +112,7 @@ pub struct TargetArgs {
     #[arg(long, default_value = "lightcluster")]
     pub technique: String,
     /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
-    #[arg(long, default_value = "reference")]
+    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
     pub against: String,
     /// A parameter of the comparison target, `key=value`; repeatable.
     #[arg(long = "against-param", value_name = "KEY=VALUE")]

@@ -21,7 +21,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub frame: FrameArgs,
     /// Technique key (reference, lightcluster, unshadowed, ...).
-    #[arg(long, default_value = "reference")]
+    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
     pub technique: String,
     /// A technique parameter, `key=value`; repeatable.
     #[arg(long = "param", value_name = "KEY=VALUE")]

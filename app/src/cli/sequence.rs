@@ -20,7 +20,7 @@ pub struct SequenceArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    #[arg(long, default_value = "reference")]
+    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
     pub technique: String,
     #[arg(long = "param", value_name = "KEY=VALUE")]
     pub params: Vec<String>,

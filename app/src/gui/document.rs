@@ -2,6 +2,7 @@
 //! Saved as RON, atomically (temp file + rename); loading a broken file changes nothing and says why; fields
 //! from a newer version are reported, not fatal. Light edits go through [`History`] for undo/redo.
 
+use shadowlab_core::technique::registry;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -118,8 +119,9 @@ impl ViewSettings {
         in_range("resolution_scale", self.resolution_scale, 0.1, 2.0)?;
         in_range("exposure", self.exposure, 1e-3, 1e3)?;
         in_range("diff_gain", self.diff_gain, 0.01, 1e4)?;
-        if !["reference", "raytraced"].contains(&self.compare_against.as_str()) {
-            bail!("view setting compare_against = '{}' must be reference or raytraced", self.compare_against);
+        if !registry::targets().any(|e| e.key == self.compare_against) {
+            let known = registry::targets().map(|e| e.key).collect::<Vec<_>>().join(", ");
+            bail!("view setting compare_against = '{}' must be one of {known}", self.compare_against);
         }
         Ok(())
     }
@@ -139,7 +141,7 @@ impl Default for ViewSettings {
             diff_signed: false,
             diff_visibility: false,
             diff_gain: 1.0,
-            compare_against: "reference".into(),
+            compare_against: registry::REFERENCE.into(),
             legend: true,
         }
     }
@@ -274,9 +276,9 @@ mod tests {
             scene: SceneSource::Builtin("cornell".into()),
             lights: vec![PointLight::new(Vec3::ONE, Vec3::ONE, 2.0, 3.0)],
             camera: Camera::look_at(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, 0.8, 0.05, 30.0),
-            technique: "reference".into(),
+            technique: registry::REFERENCE.into(),
             params: BTreeMap::from([(
-                "reference".to_string(),
+                registry::REFERENCE.to_string(),
                 BTreeMap::from([("shadow_res".to_string(), ParamValue::Int(256))]),
             )]),
             view: ViewSettings::default(),

@@ -289,7 +289,7 @@ impl ShadowLabApp {
             }
         }));
         let ctx = GpuContext::from_device(rs.device.clone(), rs.queue.clone(), rs.adapter.get_info());
-        let main = View::new(&ctx, &rs, &self.session.scene)?;
+        let mut main = View::new(&ctx, &rs, &self.session.scene)?;
         let reference = View::sharing(&ctx, &rs, &main)?;
         // A real GPU renders a whole frame in one step; a software one starts small and adapts, and starts at
         // half resolution with 256-texel cube faces (lavapipe is ~100x slower; the user can raise both).
@@ -298,8 +298,17 @@ impl ShadowLabApp {
             if software { StepSizer::default() } else { StepSizer { max_lights_per_step: 256, ..Default::default() } };
         if software {
             self.session.view.resolution_scale = 0.5;
-            for key in ["reference", "lightcluster"] {
-                self.session.params.entry(key.into()).or_default().insert("shadow_res".into(), ParamValue::Int(256));
+            // What each technique's registry entry says a software adapter starts with, parsed by the
+            // parameter's own kind (a technique of the main view describes its parameters).
+            for entry in shadowlab_core::technique::REGISTRY.iter().filter(|e| !e.software_defaults.is_empty()) {
+                let Ok(technique) = main.technique(entry.key) else { continue };
+                let params = technique.params();
+                for (key, text) in entry.software_defaults {
+                    let Some(param) = params.iter().find(|p| p.key == *key) else { continue };
+                    if let Ok(value) = param.kind.parse(key, text) {
+                        self.session.params.entry(entry.key.into()).or_default().insert(key.to_string(), value);
+                    }
+                }
             }
         }
         self.views.gpu = Some(Gpu { ctx, render_state: rs, main, reference, sizer });

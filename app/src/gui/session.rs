@@ -78,7 +78,7 @@ impl Session {
             lights: scene.lights.clone(),
             camera: CameraController::from_camera(&scene.camera, &scene.bounds),
             scene,
-            technique: "reference".into(),
+            technique: shadowlab_core::technique::REFERENCE.into(),
             params: BTreeMap::new(),
             indirect: IndirectSettings::default(),
             view: ViewSettings::default(),

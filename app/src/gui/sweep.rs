@@ -79,7 +79,8 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
         renderer.set_indirect(Some(indirect))?;
     }
     let (w, h) = (renderer.settings().width, renderer.settings().height);
-    let mut reference = renderer.create_technique("reference").ok_or_else(|| anyhow!("no reference"))?;
+    let mut reference =
+        renderer.create_technique(shadowlab_core::technique::REFERENCE).ok_or_else(|| anyhow!("no reference"))?;
     let mut technique = renderer.create_technique(&job.technique).ok_or_else(|| anyhow!("unknown technique"))?;
     for (k, v) in &job.fixed {
         let _ = technique.set_param(k, v);

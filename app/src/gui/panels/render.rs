@@ -58,8 +58,11 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
     });
     ui.horizontal(|ui| {
         ui.label("against");
-        ui.selectable_value(&mut session.view.compare_against, "reference".to_string(), "reference");
-        ui.selectable_value(&mut session.view.compare_against, "raytraced".to_string(), "ray traced");
+        // The registry's references and ground truths, in its order.
+        for target in shadowlab_core::technique::registry::targets() {
+            ui.selectable_value(&mut session.view.compare_against, target.key.to_string(), target.key)
+                .on_hover_text(format!("{} ({})", target.label, target.role.name()));
+        }
     });
     if session.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {

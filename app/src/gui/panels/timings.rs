@@ -88,7 +88,10 @@ pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: 
                     ui.label(parts.join(" · "));
                 }
                 // Every technique seen this session against the reference, same session and adapter.
-                let reference = technique_pair("reference", r.indirect.as_ref().map(|i| i.technique.as_str()));
+                let reference = technique_pair(
+                    shadowlab_core::technique::REFERENCE,
+                    r.indirect.as_ref().map(|i| i.technique.as_str()),
+                );
                 if let Some((reference_ms, _)) = views.session_times.get(&reference) {
                     egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
                         ui.strong("technique (this session)");

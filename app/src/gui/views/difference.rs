@@ -85,7 +85,9 @@ impl Views {
         let lit_ambient = if session.view.diff_visibility {
             let settings = RenderSettings { component: Component::Direct, ..gpu.main.renderer.settings().clone() };
             let mut aux = gpu.main.renderer.new_view(settings)?;
-            let mut unshadowed = aux.create_technique("unshadowed").ok_or_else(|| anyhow!("no unshadowed"))?;
+            let mut unshadowed = aux
+                .create_technique(shadowlab_core::technique::registry::preview().key)
+                .ok_or_else(|| anyhow!("no preview technique"))?;
             aux.render_frame(unshadowed.as_mut(), &camera, &lights, &mut |_, _| {})?;
             let lit = Image::new(w, h, aux.read_hdr()?)?;
             aux.render_frame(unshadowed.as_mut(), &camera, &[], &mut |_, _| {})?;

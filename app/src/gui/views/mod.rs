@@ -8,6 +8,7 @@ pub mod hover;
 pub mod paint;
 pub mod view;
 
+use shadowlab_core::technique::REFERENCE;
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 use std::time::Instant;
@@ -25,7 +26,7 @@ use super::document::ViewMode;
 use super::session::Session;
 use super::sweep;
 use difference::{Difference, PendingDifference};
-use view::{FrameInputs, StepSizer, View, PREVIEW_TECHNIQUE};
+use view::{preview_technique, FrameInputs, StepSizer, View};
 
 /// GPU state, created from eframe's render state.
 pub struct Gpu {
@@ -151,8 +152,8 @@ impl Views {
             let layers = technique.overlays_shown(lights, &shown);
             take(technique.as_ref(), layers, &mut out);
         }
-        if session.technique != "reference" {
-            if let Ok(reference) = gpu.main.technique("reference") {
+        if session.technique != REFERENCE {
+            if let Ok(reference) = gpu.main.technique(REFERENCE) {
                 let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
                 take(reference.as_ref(), layers, &mut out);
             }
@@ -214,7 +215,7 @@ impl Views {
             let layers = t.overlays_shown(&probe, &|_, _| false);
             names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         }
-        if session.technique != "reference" {
+        if session.technique != REFERENCE {
             names.push(("light ranges".into(), false));
         }
         if let Ok(t) = gpu.main.technique(&session.technique) {
@@ -239,7 +240,7 @@ impl Views {
         let camera = session.camera.camera();
         let (mut overlays, legends) = self.overlay_primitives(session, &lights);
         self.legends = legends;
-        let technique = if interacting { PREVIEW_TECHNIQUE.to_string() } else { session.technique.clone() };
+        let technique = if interacting { preview_technique().to_string() } else { session.technique.clone() };
         let two = session.view.mode != ViewMode::Single;
         let per_view = if session.view.mode == ViewMode::SideBySide { egui::vec2(size.x * 0.5, size.y) } else { size };
         let settings = session.render_settings(per_view, interacting);
@@ -305,7 +306,7 @@ impl Views {
         let mut total_steps = steps;
         if two {
             let against = session.view.compare_against.clone();
-            let reference_technique = if interacting { PREVIEW_TECHNIQUE } else { against.as_str() };
+            let reference_technique = if interacting { preview_technique() } else { against.as_str() };
             let reference_inputs = FrameInputs {
                 camera,
                 lights,
@@ -346,19 +347,19 @@ impl Views {
             p
         };
         if std::mem::take(&mut gpu.reference.new_report) {
-            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+            if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != preview_technique()) {
                 let p = describe_report(r, &session.params.get(&r.technique).cloned().unwrap_or_default());
                 self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
             }
         }
         if std::mem::take(&mut gpu.main.new_report) {
-            if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != PREVIEW_TECHNIQUE) {
+            if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != preview_technique()) {
                 let p = describe_report(r, &main_inputs.params);
                 self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
             }
             if let Some(r) = &gpu.main.last_report {
                 let t = self.started.elapsed().as_secs_f64();
-                if r.technique != PREVIEW_TECHNIQUE {
+                if r.technique != preview_technique() {
                     self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
                     while self.timings.front().is_some_and(|(t0, _, _)| t - t0 > 60.0) {
                         self.timings.pop_front();

@@ -30,8 +30,10 @@ use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer};
 
 /// Milliseconds of GPU work one UI frame may wait for.
 const FRAME_BUDGET_MS: f64 = 30.0;
-/// The technique used while the camera or a light moves.
-pub const PREVIEW_TECHNIQUE: &str = "unshadowed";
+/// The technique used while the camera or a light moves: the registry's preview (no visibility).
+pub fn preview_technique() -> &'static str {
+    shadowlab_core::technique::registry::preview().key
+}
 
 /// What an image depends on; a change restarts the progressive frame.
 #[derive(Clone, Debug, PartialEq)]
