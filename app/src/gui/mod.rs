@@ -139,7 +139,8 @@ fn select_adapter(adapters: &[wgpu::Adapter], surface: Option<&wgpu::Surface<'_>
 }
 
 /// The window size when none is given: 1400x860, or 1024x640 on a software rasterizer (`software`), where
-/// egui's drawing and the presentation of the window cost in proportion to its area (README, "The app").
+/// egui's drawing and the presentation of the window cost in proportion to its area (`docs/measurements.md`,
+/// UI frame rate of the app).
 pub fn default_window_size(software: bool) -> [f32; 2] {
     if software {
         eprintln!("software rasterizer: opening a 1024x640 window (--window-size to choose)");
