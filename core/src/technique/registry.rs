@@ -1,7 +1,7 @@
 //! The registry: every technique ShadowLab has, with its role, its default comparison target, its shaders and
 //! what it changes on a software adapter. The app's selectors, its comparison targets, the CLI's
-//! `--technique`/`--indirect`/`--against*` and the test harness read these lists; nothing outside a technique's
-//! folder and this file names a technique.
+//! `--technique`/`--indirect`/`--against*` and the test harness read these lists; no file outside a technique's
+//! folder and this one names a technique's module (`core/tests/shaders.rs` holds the rule).
 
 use super::{fuzzy, insm, lightcluster, pathtraced, raytraced, reference, unshadowed, val, vpl_gather, Technique};
 use crate::gpu::GpuContext;
