@@ -2,15 +2,14 @@
 
 use std::path::PathBuf;
 
-use anyhow::{anyhow, bail, Result};
+use anyhow::{bail, Result};
 use clap::Args;
 use shadowlab_core::scene::PointLight;
 
-use super::args::{check_technique, parse_step, FrameArgs, SceneArgs};
+use super::args::{check_technique, parse_step, FrameArgs, SceneArgs, TechniqueChoice};
 use super::progress::Progress;
 use super::setup::setup;
 use crate::files::{check_output_path, write_atomic};
-use crate::measure::apply_params;
 
 #[derive(Args, Debug)]
 pub struct AnimateArgs {
@@ -18,10 +17,8 @@ pub struct AnimateArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
-    pub technique: String,
-    #[arg(long = "param", value_name = "KEY=VALUE")]
-    pub params: Vec<String>,
+    #[command(flatten)]
+    pub choice: TechniqueChoice,
     /// Frames rendered; the lights move by `--step` between frames.
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
@@ -35,22 +32,20 @@ pub struct AnimateArgs {
 
 pub fn run(args: AnimateArgs) -> Result<()> {
     check_output_path(&args.out, "csv")?;
-    check_technique(&args.technique)?;
+    check_technique(&args.choice.technique)?;
     if args.frames < 2 || args.frames > 1000 {
         bail!("--frames {}: between 2 and 1000", args.frames);
     }
     let step = parse_step(&args.step)?;
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
-    let mut technique =
-        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
-    apply_params(technique.as_mut(), f.shadow_res, &args.params)?;
+    let mut technique = args.choice.create(&renderer, f.shadow_res)?;
     crate::measure::apply_indirect(&mut renderer, &f.indirect_choice())?;
     let mut previous: Option<Vec<[f32; 4]>> = None;
     // Per frame: index, change against the previous frame, mean radiance, figures.
     type FrameRow = (u32, Option<f64>, f64, std::collections::BTreeMap<String, f64>);
     let mut rows: Vec<FrameRow> = Vec::new();
-    let mut progress = Progress::new(&format!("animate {}", args.technique), f.quiet).with_unit("frame");
+    let mut progress = Progress::new(&format!("animate {}", args.choice.technique), f.quiet).with_unit("frame");
     for i in 0..args.frames {
         let moved: Vec<PointLight> =
             lights.iter().map(|l| PointLight { position: l.position + step * i as f32, ..*l }).collect();
@@ -94,7 +89,7 @@ pub fn run(args: AnimateArgs) -> Result<()> {
     if !f.quiet {
         eprintln!(
             "{} + {} on {}: mean frame-to-frame change {:.3e} ({:.2} % of the mean {} radiance {:.3e})",
-            args.technique,
+            args.choice.technique,
             f.indirect,
             scene.name,
             mean_change,

@@ -153,6 +153,33 @@ pub fn check_indirect(key: &str) -> Result<()> {
     Ok(())
 }
 
+/// The direct technique of `render`, `animate` and `sequence`: its key and its parameters.
+#[derive(Args, Debug)]
+pub struct TechniqueChoice {
+    /// Technique key (reference, lightcluster, unshadowed, ...).
+    #[arg(long, default_value = technique::REFERENCE)]
+    pub technique: String,
+    /// A technique parameter, `key=value`; repeatable.
+    #[arg(long = "param", value_name = "KEY=VALUE")]
+    pub params: Vec<String>,
+}
+
+impl TechniqueChoice {
+    /// The technique on `renderer` with its parameters set (`shadow_res` from `--shadow-res` first). The key was
+    /// checked with [`check_technique`] before the GPU was set up.
+    pub fn create(
+        &self,
+        renderer: &shadowlab_core::Renderer,
+        shadow_res: Option<u32>,
+    ) -> Result<Box<dyn technique::Technique>> {
+        let mut created = renderer
+            .create_technique(&self.technique)
+            .ok_or_else(|| anyhow!("unknown technique '{}'", self.technique))?;
+        crate::measure::apply_params(created.as_mut(), shadow_res, &self.params)?;
+        Ok(created)
+    }
+}
+
 pub fn check_technique(key: &str) -> Result<()> {
     if technique::REGISTRY.iter().all(|e| e.key != key) {
         bail!("unknown technique '{key}' (choose one of: {})", technique::keys());

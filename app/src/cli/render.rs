@@ -2,17 +2,16 @@
 
 use std::path::PathBuf;
 
-use anyhow::{anyhow, bail, Result};
+use anyhow::{bail, Result};
 use clap::Args;
 use serde::Serialize;
 use shadowlab_core::scene::Camera;
 use shadowlab_core::FrameReport;
 
-use super::args::{check_technique, FrameArgs, SceneArgs};
+use super::args::{check_technique, FrameArgs, SceneArgs, TechniqueChoice};
 use super::progress::Progress;
 use super::setup::{draw_overlays, setup};
 use crate::files::{check_output_path, encode_png, write_atomic};
-use crate::measure::apply_params;
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -20,12 +19,8 @@ pub struct RenderArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    /// Technique key (reference, lightcluster, unshadowed, ...).
-    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
-    pub technique: String,
-    /// A technique parameter, `key=value`; repeatable.
-    #[arg(long = "param", value_name = "KEY=VALUE")]
-    pub params: Vec<String>,
+    #[command(flatten)]
+    pub choice: TechniqueChoice,
     /// Output PNG.
     #[arg(long)]
     pub out: PathBuf,
@@ -69,12 +64,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(r) = &args.report {
         check_output_path(r, "json")?;
     }
-    check_technique(&args.technique)?;
+    check_technique(&args.choice.technique)?;
     let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let frame = &args.frame;
-    let mut technique =
-        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
-    apply_params(technique.as_mut(), frame.shadow_res, &args.params)?;
+    let mut technique = args.choice.create(&renderer, frame.shadow_res)?;
     crate::measure::apply_indirect(&mut renderer, &frame.indirect_choice())?;
 
     let mut reports = Vec::new();
@@ -127,7 +120,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
         }
         if wrote == 0 {
-            bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.technique);
+            bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.choice.technique);
         }
     }
     if args.overlays || !args.overlay_layers.is_empty() {

@@ -8,11 +8,10 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use shadowlab_core::scene::PointLight;
 
-use super::args::{check_technique, parse_step, FrameArgs, SceneArgs};
+use super::args::{check_technique, parse_step, FrameArgs, SceneArgs, TechniqueChoice};
 use super::progress::Progress;
 use super::setup::{draw_overlays, parse_vec3s, setup};
 use crate::files::{check_output_path, encode_png, write_atomic};
-use crate::measure::apply_params;
 
 #[derive(Args, Debug)]
 pub struct SequenceArgs {
@@ -20,10 +19,8 @@ pub struct SequenceArgs {
     pub scene: SceneArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
-    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
-    pub technique: String,
-    #[arg(long = "param", value_name = "KEY=VALUE")]
-    pub params: Vec<String>,
+    #[command(flatten)]
+    pub choice: TechniqueChoice,
     /// Frames of the sequence.
     #[arg(long, default_value_t = 36)]
     pub frames: u32,
@@ -55,16 +52,14 @@ pub fn run(args: SequenceArgs) -> Result<()> {
     if let Some(g) = &args.gif {
         check_output_path(g, "gif")?;
     }
-    check_technique(&args.technique)?;
+    check_technique(&args.choice.technique)?;
     let step = parse_step(&args.step)?;
     if args.out_dir.exists() && !args.out_dir.is_dir() {
         bail!("--out-dir {}: not a folder", args.out_dir.display());
     }
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
-    let mut technique =
-        renderer.create_technique(&args.technique).ok_or_else(|| anyhow!("unknown technique '{}'", args.technique))?;
-    apply_params(technique.as_mut(), f.shadow_res, &args.params)?;
+    let mut technique = args.choice.create(&renderer, f.shadow_res)?;
     crate::measure::apply_indirect(&mut renderer, &f.indirect_choice())?;
     std::fs::create_dir_all(&args.out_dir).with_context(|| format!("cannot create {}", args.out_dir.display()))?;
     let target = match &f.camera {
@@ -73,7 +68,7 @@ pub fn run(args: SequenceArgs) -> Result<()> {
     };
     let mut gif = args.gif.as_deref().map(|g| crate::sequence::GifWriter::new(g, args.frame_ms)).transpose()?;
     let mut gif_secs = 0.0;
-    let mut progress = Progress::new(&format!("sequence {}", args.technique), f.quiet).with_unit("frame");
+    let mut progress = Progress::new(&format!("sequence {}", args.choice.technique), f.quiet).with_unit("frame");
     for i in 0..frames {
         let (camera, moved) = match args.motion {
             crate::sequence::Motion::Orbit => {
