@@ -282,7 +282,12 @@ fn compare_writes_a_difference_image_and_metrics() {
     assert!(r["metrics"]["flip_mean"].as_f64().is_some());
     assert!(r["metrics"]["shadow_intensity_error"].as_f64().is_some());
     assert_eq!(r["technique_timing"]["frames"], 3);
-    assert!(r["speedup"].as_f64().unwrap() > 0.0);
+    assert!(r["speedup"]["ratio"].as_f64().unwrap() > 0.0);
+    // Both sides in one named clock, with the wall-clock ratio beside it.
+    let clock = r["speedup"]["clock"].as_str().unwrap();
+    assert!(["gpu_timestamps", "wall_clock_steps"].contains(&clock), "{clock}");
+    assert!(r["speedup"]["wall_ratio"].as_f64().unwrap() > 0.0);
+    assert!(r["technique_timing"]["clock"].as_str().is_some());
     assert!(r["technique_counts"]["clusters"].as_u64().unwrap() < 32);
     // The reference against itself is exact.
     let out = shadowlab(&[
@@ -310,6 +315,34 @@ fn compare_writes_a_difference_image_and_metrics() {
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(r["metrics"]["rmse"].as_f64().unwrap(), 0.0);
     assert!(r["metrics"]["psnr_db"].is_null());
+}
+
+#[test]
+fn a_bad_clock_is_refused_and_a_chosen_one_is_named() {
+    let dir = out_dir("clock");
+    let png = dir.join("out.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .args(["render", "--scene", "cornell", "--width", "32", "--height", "24", "--out", png.to_str().unwrap()])
+        .env("SHADOWLAB_TIMING", "fast")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let last = stderr.lines().last().unwrap_or_default();
+    assert!(last.starts_with("error: ") && last.contains("auto, gpu or cpu"), "{last}");
+
+    let json = dir.join("report.json");
+    let out = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .args(["render", "--quiet", "--scene", "cornell", "--width", "32", "--height", "24", "--warmup", "0"])
+        .args(["--out", png.to_str().unwrap(), "--report", json.to_str().unwrap()])
+        .env("SHADOWLAB_TIMING", "cpu")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let frame = if r["frame"].is_object() { &r["frame"] } else { &r };
+    assert_eq!(frame["timing"]["source"], "wall_clock_steps", "{frame}");
+    assert_eq!(frame["timing"]["mode"], "cpu");
 }
 
 #[test]

@@ -8,26 +8,78 @@ use serde::Serialize;
 use shadowlab_core::compare::{self, CompareOptions, DiffMode, Image, Metrics, Visibility};
 use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::Technique;
-use shadowlab_core::timing::PassTime;
+use shadowlab_core::timing::{common_clock, PassTime, TimingSource};
 use shadowlab_core::{FrameReport, Renderer};
 
 /// Timings of repeated frames of one technique.
+///
+/// A frame's time is its GPU work in `clock` (every step: G-buffer, shadow maps, shading, tone mapping) plus its
+/// CPU stages (clustering, VPL generation, readbacks a technique waits for), which run before its GPU steps.
 #[derive(Clone, Debug, Serialize)]
 pub struct TimingSummary {
     pub frames: usize,
+    /// The clock of `median_ms`, `min_ms`, `best3_mean_ms` and `passes_median_ms`: GPU timestamps only when
+    /// every frame used them.
+    pub clock: TimingSource,
+    /// Why the run left the timestamps, when it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clock_reason: Option<String>,
     pub median_ms: f64,
     pub min_ms: f64,
     /// Mean of the three fastest frames (the fuzzy-clustering paper's "mean of the 3 best of 10").
     pub best3_mean_ms: f64,
-    /// Per pass, the median over frames.
+    /// Per pass (or step, in wall-clock steps), the median over frames.
     pub passes_median_ms: Vec<PassTime>,
-    /// Median wall-clock time of a frame, from its start to its last readback (CPU stages, waits and all
-    /// passes; the figure to compare where a pass's timestamps are missing or unreliable).
+    /// Median frame time in wall-clock steps (plus CPU stages), whatever `clock` is: every summary has it, so
+    /// any two compare in it.
+    pub steps_median_ms: f64,
+    /// Median frame time in GPU timestamps (plus CPU stages), where the adapter has them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timestamps_median_ms: Option<f64>,
+    /// Median wall-clock time of a frame, from its start to its last readback (CPU stages, culling, waits and
+    /// all steps).
     pub wall_median_ms: f64,
     /// The fastest frame's wall-clock time (the least disturbed on a shared machine).
     pub wall_min_ms: f64,
     /// Per CPU stage of the techniques (e.g. clustering, readbacks), the median over frames.
     pub cpu_stages_median_ms: Vec<PassTime>,
+}
+
+impl TimingSummary {
+    /// The median frame time in `clock` (the wall-clock steps where these frames lack timestamps).
+    pub fn median_in(&self, clock: TimingSource) -> f64 {
+        match clock {
+            TimingSource::GpuTimestamps => self.timestamps_median_ms.unwrap_or(self.steps_median_ms),
+            TimingSource::WallClockSteps => self.steps_median_ms,
+        }
+    }
+}
+
+/// How much faster one side is than the other, both measured in `clock`.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Speedup {
+    /// `against` time over `technique` time (above 1: the technique is faster).
+    pub ratio: f64,
+    pub clock: TimingSource,
+    /// The same ratio of the frames' wall clocks (start to last readback), for a check.
+    pub wall_ratio: f64,
+}
+
+impl Speedup {
+    /// `technique` against `against`, in the clock both have (timestamps only when both sides used them).
+    pub fn of(technique: &TimingSummary, against: &TimingSummary) -> Speedup {
+        let clock = common_clock(technique.clock, against.clock);
+        Speedup {
+            ratio: against.median_in(clock) / technique.median_in(clock).max(1e-9),
+            clock,
+            wall_ratio: against.wall_median_ms / technique.wall_median_ms.max(1e-9),
+        }
+    }
+
+    /// "×2.31 (GPU timestamps; wall clock ×2.28)".
+    pub fn text(&self) -> String {
+        format!("x{:.2} ({}; frame wall clock x{:.2})", self.ratio, self.clock.name(), self.wall_ratio)
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -44,13 +96,27 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
-    let totals: Vec<f64> = reports.iter().map(|r| r.gpu_total_ms).collect();
+    let clock = if reports.iter().all(|r| r.timing.comparable_source() == TimingSource::GpuTimestamps) {
+        TimingSource::GpuTimestamps
+    } else {
+        TimingSource::WallClockSteps
+    };
+    let totals: Vec<f64> = reports.iter().map(|r| r.frame_ms_in(clock)).collect();
     let mut sorted = totals.clone();
     sorted.sort_by(f64::total_cmp);
     let best = &sorted[..sorted.len().min(3)];
+    // The passes in `clock`: a frame that used timestamps where the others did not contributes its steps.
+    fn in_clock(r: &FrameReport, clock: TimingSource) -> &[PassTime] {
+        if r.timing.source == clock {
+            &r.passes
+        } else {
+            &r.steps
+        }
+    }
+    let passes = |r| in_clock(r, clock);
     let mut names: Vec<String> = Vec::new();
     for r in reports {
-        for p in &r.passes {
+        for p in passes(r) {
             if !names.contains(&p.name) {
                 names.push(p.name.clone());
             }
@@ -60,9 +126,9 @@ pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
         .into_iter()
         .map(|name| {
             let v: Vec<f64> =
-                reports.iter().map(|r| r.passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum()).collect();
+                reports.iter().map(|r| passes(r).iter().filter(|p| p.name == name).map(|p| p.ms).sum()).collect();
             let count =
-                reports.last().map(|r| r.passes.iter().filter(|p| p.name == name).map(|p| p.count).sum()).unwrap_or(0);
+                reports.last().map(|r| passes(r).iter().filter(|p| p.name == name).map(|p| p.count).sum()).unwrap_or(0);
             PassTime { name, ms: median(v), count }
         })
         .collect();
@@ -89,7 +155,13 @@ pub fn summarize(reports: &[FrameReport]) -> TimingSummary {
             PassTime { name, ms: median(v), count: 1 }
         })
         .collect();
+    let has_timestamps = reports.iter().all(|r| r.timing.timestamps_ms.is_some());
     TimingSummary {
+        clock,
+        clock_reason: reports.iter().rev().find_map(|r| r.timing.reason.clone()),
+        steps_median_ms: median(reports.iter().map(|r| r.frame_ms_in(TimingSource::WallClockSteps)).collect()),
+        timestamps_median_ms: has_timestamps
+            .then(|| median(reports.iter().map(|r| r.frame_ms_in(TimingSource::GpuTimestamps)).collect())),
         wall_median_ms: median(reports.iter().map(|r| r.wall_ms).collect()),
         wall_min_ms: reports.iter().map(|r| r.wall_ms).reduce(f64::min).unwrap_or(0.0),
         cpu_stages_median_ms,
@@ -432,11 +504,20 @@ mod tests {
     fn timing_summary_takes_median_min_and_best_three() {
         let r = |ms: f64| FrameReport {
             technique: "t".into(),
+            parameters: Default::default(),
+            view_fingerprint: 0,
             width: 1,
             height: 1,
-            timing_source: shadowlab_core::timing::TimingSource::GpuTimestamps,
+            timing: shadowlab_core::timing::FrameTiming {
+                mode: shadowlab_core::timing::TimingMode::Auto,
+                source: TimingSource::GpuTimestamps,
+                reason: None,
+                timestamps_ms: Some(ms),
+                steps_wall_ms: 2.0 * ms,
+            },
             passes: vec![PassTime { name: "shading".into(), ms, count: 1 }],
-            gpu_total_ms: ms,
+            total_ms: ms,
+            steps: vec![PassTime { name: "shading".into(), ms: 2.0 * ms, count: 1 }],
             cpu_stages: vec![],
             wall_ms: ms,
             counts: Default::default(),
@@ -447,5 +528,58 @@ mod tests {
         assert_eq!(s.min_ms, 1.0);
         assert_eq!(s.best3_mean_ms, 2.0);
         assert_eq!(s.passes_median_ms[0].ms, 3.0);
+        assert_eq!(s.clock, TimingSource::GpuTimestamps);
+        assert_eq!(s.steps_median_ms, 6.0);
+    }
+
+    fn report(ms: f64, source: TimingSource, steps_ms: f64) -> FrameReport {
+        FrameReport {
+            technique: "t".into(),
+            parameters: Default::default(),
+            view_fingerprint: 0,
+            width: 1,
+            height: 1,
+            timing: shadowlab_core::timing::FrameTiming {
+                mode: shadowlab_core::timing::TimingMode::Auto,
+                source,
+                reason: None,
+                timestamps_ms: Some(ms),
+                steps_wall_ms: steps_ms,
+            },
+            passes: match source {
+                TimingSource::GpuTimestamps => vec![PassTime { name: "shading".into(), ms, count: 1 }],
+                TimingSource::WallClockSteps => vec![PassTime { name: "shade step".into(), ms: steps_ms, count: 1 }],
+            },
+            total_ms: ms,
+            steps: vec![PassTime { name: "shade step".into(), ms: steps_ms, count: 1 }],
+            cpu_stages: vec![PassTime { name: "clustering".into(), ms: 1.0, count: 1 }],
+            wall_ms: steps_ms + 1.0,
+            counts: Default::default(),
+            indirect: None,
+        }
+    }
+
+    #[test]
+    fn a_speedup_compares_both_sides_in_one_clock() {
+        // Both in timestamps: the timestamps (plus the CPU stage) on both sides.
+        let fast = summarize(&[report(1.0, TimingSource::GpuTimestamps, 3.0)]);
+        let slow = summarize(&[report(9.0, TimingSource::GpuTimestamps, 11.0)]);
+        let s = Speedup::of(&fast, &slow);
+        assert_eq!(s.clock, TimingSource::GpuTimestamps);
+        assert!((s.ratio - 10.0 / 2.0).abs() < 1e-9, "{s:?}");
+        // One side in wall-clock steps: both sides in wall-clock steps, never timestamps against steps.
+        let slow_wall = summarize(&[report(9.0, TimingSource::WallClockSteps, 11.0)]);
+        assert_eq!(slow_wall.clock, TimingSource::WallClockSteps);
+        assert_eq!(slow_wall.passes_median_ms[0].name, "shade step");
+        let s = Speedup::of(&fast, &slow_wall);
+        assert_eq!(s.clock, TimingSource::WallClockSteps);
+        assert!((s.ratio - 12.0 / 4.0).abs() < 1e-9, "{s:?}");
+        assert!((s.wall_ratio - 12.0 / 4.0).abs() < 1e-9, "{s:?}");
+        // A run that changed clock between frames is summarized in wall-clock steps throughout.
+        let mixed =
+            summarize(&[report(1.0, TimingSource::GpuTimestamps, 3.0), report(1.0, TimingSource::WallClockSteps, 3.0)]);
+        assert_eq!(mixed.clock, TimingSource::WallClockSteps);
+        assert_eq!(mixed.median_ms, 4.0);
+        assert_eq!(mixed.passes_median_ms[0].name, "shade step");
     }
 }

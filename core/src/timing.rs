@@ -1,7 +1,19 @@
-//! Per-pass timing. With `TIMESTAMP_QUERY` every pass gets GPU timestamps (wgpu-profiler); without it, each
-//! submitted step is timed on the CPU from submit to completion, and the report says so.
+//! Per-pass timing in one clock that holds, chosen per run.
+//!
+//! Every step of a frame is timed both ways: GPU timestamps around each pass (wgpu-profiler, where the adapter
+//! has `TIMESTAMP_QUERY`) and CPU wall time from submitting the step to its completion. `SHADOWLAB_TIMING`
+//! picks the clock a report's `passes` use:
+//! - `gpu`: the timestamps (the wall-clock steps where the adapter has none);
+//! - `cpu`: the wall-clock steps;
+//! - `auto` (the default): the timestamps, until a step's timestamps cover under [`AUTO_MIN_COVERAGE`] of its
+//!   submit-to-done time (steps of at least [`AUTO_MIN_STEP_MS`], where submission overhead is small); from
+//!   that frame on the run uses the wall-clock steps and says why ([`PassTimer::reason`]). Measured on
+//!   lavapipe: the timestamps around a ray-traced VPL gather read 0.06 ms for a dispatch that held the queue
+//!   for about a second.
+//!
+//! Whatever the clock, a report also carries the sum of the wall-clock steps and, where the adapter has them,
+//! the sum of the timestamps, so two reports are always comparable in one clock ([`common_clock`]).
 
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -10,14 +22,120 @@ use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
 
-/// Where the milliseconds of a report come from.
+/// A step must take at least this long from submit to completion before `auto` judges its timestamps.
+pub const AUTO_MIN_STEP_MS: f64 = 2.0;
+/// `auto` leaves the timestamps when a judged step's timestamps cover less than this share of its wall time.
+pub const AUTO_MIN_COVERAGE: f64 = 0.5;
+
+/// What the user asked for (`SHADOWLAB_TIMING`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TimingMode {
+    #[default]
+    Auto,
+    Gpu,
+    Cpu,
+}
+
+impl TimingMode {
+    pub const CHOICES: &'static str = "auto, gpu or cpu";
+
+    pub fn parse(text: &str) -> Result<TimingMode, GpuError> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "" | "auto" => Ok(TimingMode::Auto),
+            "gpu" => Ok(TimingMode::Gpu),
+            "cpu" => Ok(TimingMode::Cpu),
+            other => Err(GpuError::InvalidSettings(format!(
+                "SHADOWLAB_TIMING={other:?} is not a clock: choose {} (auto, the default, uses GPU timestamps \
+                 unless they disagree with the wall clock)",
+                TimingMode::CHOICES
+            ))),
+        }
+    }
+
+    /// `SHADOWLAB_TIMING`, `auto` when unset; a value that is no choice is an error naming the choices.
+    pub fn from_env() -> Result<TimingMode, GpuError> {
+        match std::env::var("SHADOWLAB_TIMING") {
+            Ok(v) => TimingMode::parse(&v),
+            Err(std::env::VarError::NotPresent) => Ok(TimingMode::Auto),
+            Err(std::env::VarError::NotUnicode(_)) => {
+                Err(GpuError::InvalidSettings(format!("SHADOWLAB_TIMING is not text: choose {}", TimingMode::CHOICES)))
+            }
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            TimingMode::Auto => "auto",
+            TimingMode::Gpu => "gpu",
+            TimingMode::Cpu => "cpu",
+        }
+    }
+}
+
+/// The clock of a report's milliseconds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TimingSource {
     /// GPU timestamp queries around each pass.
     GpuTimestamps,
-    /// CPU wall time from submitting a step to its completion (no timestamp support).
-    CpuFallback,
+    /// CPU wall time from submitting each step to its completion.
+    WallClockSteps,
+}
+
+impl TimingSource {
+    /// "GPU timestamps" / "wall-clock steps", for tables and captions.
+    pub fn name(self) -> &'static str {
+        match self {
+            TimingSource::GpuTimestamps => "GPU timestamps",
+            TimingSource::WallClockSteps => "wall-clock steps",
+        }
+    }
+}
+
+/// The clock two sets of figures can both be compared in: the timestamps when both have them, else the
+/// wall-clock steps (which every report has).
+pub fn common_clock(a: TimingSource, b: TimingSource) -> TimingSource {
+    if a == TimingSource::GpuTimestamps && b == TimingSource::GpuTimestamps {
+        TimingSource::GpuTimestamps
+    } else {
+        TimingSource::WallClockSteps
+    }
+}
+
+/// The clock of one frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameTiming {
+    pub mode: TimingMode,
+    /// The clock of the report's `passes` and `total_ms`.
+    pub source: TimingSource,
+    /// Why `auto` left the timestamps (set from the frame where it did, for the rest of the run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+    /// Sum of the GPU timestamps of the frame, where the adapter has them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timestamps_ms: Option<f64>,
+    /// Sum of the frame's steps from submit to completion.
+    pub steps_wall_ms: f64,
+}
+
+impl FrameTiming {
+    /// The frame's GPU work in `clock` (the timestamps, or the wall-clock steps where they are missing).
+    pub fn ms_in(&self, clock: TimingSource) -> f64 {
+        match clock {
+            TimingSource::GpuTimestamps => self.timestamps_ms.unwrap_or(self.steps_wall_ms),
+            TimingSource::WallClockSteps => self.steps_wall_ms,
+        }
+    }
+
+    /// The clock this frame's figures are comparable in (timestamps only when it has them and uses them).
+    pub fn comparable_source(&self) -> TimingSource {
+        if self.timestamps_ms.is_some() {
+            self.source
+        } else {
+            TimingSource::WallClockSteps
+        }
+    }
 }
 
 /// Time spent in passes of one name during a frame (batches of the same pass are summed).
@@ -29,35 +147,80 @@ pub struct PassTime {
     pub count: u32,
 }
 
+/// One frame's timings as [`PassTimer::finish_frame`] returns them.
+pub struct FrameTimes {
+    /// In the clock of `timing.source`.
+    pub passes: Vec<PassTime>,
+    /// Wall-clock steps, by step label (always).
+    pub steps: Vec<PassTime>,
+    pub timing: FrameTiming,
+}
+
+struct Step {
+    label: String,
+    wall_ms: f64,
+}
+
 pub struct PassTimer {
     profiler: GpuProfiler,
-    source: TimingSource,
-    cpu: BTreeMap<String, (f64, u32)>,
+    timestamps: bool,
+    mode: TimingMode,
+    /// Set when `auto` left the timestamps; the rest of the run uses the wall-clock steps.
+    reason: Option<String>,
+    steps: Vec<Step>,
+    /// For every timestamp query of the frame, in the order they were opened, the step it belongs to.
+    query_steps: std::cell::RefCell<Vec<usize>>,
     /// While set, the labels of recorded passes are the indirect technique's.
     indirect: std::cell::Cell<bool>,
     indirect_labels: std::cell::RefCell<std::collections::BTreeSet<String>>,
 }
 
 impl PassTimer {
+    /// A timer in the clock `SHADOWLAB_TIMING` names (an error for a value that is no choice).
     pub fn new(gpu: &GpuContext) -> Result<PassTimer, GpuError> {
+        let mode = TimingMode::from_env()?;
         let settings = GpuProfilerSettings {
             enable_timer_queries: gpu.timestamps,
             enable_debug_groups: true,
             max_num_pending_frames: 4,
         };
         let profiler = GpuProfiler::new(&gpu.device, settings).map_err(|e| GpuError::Validation(e.to_string()))?;
-        let source = if gpu.timestamps { TimingSource::GpuTimestamps } else { TimingSource::CpuFallback };
         Ok(PassTimer {
             profiler,
-            source,
-            cpu: BTreeMap::new(),
+            timestamps: gpu.timestamps,
+            mode,
+            reason: None,
+            steps: Vec::new(),
+            query_steps: Default::default(),
             indirect: std::cell::Cell::new(false),
             indirect_labels: Default::default(),
         })
     }
 
+    /// Choose the clock for the rest of the run (forgets an earlier `auto` decision).
+    pub fn set_mode(&mut self, mode: TimingMode) {
+        self.mode = mode;
+        self.reason = None;
+    }
+
+    pub fn mode(&self) -> TimingMode {
+        self.mode
+    }
+
+    /// Why `auto` left the timestamps, once it has.
+    pub fn reason(&self) -> Option<&str> {
+        self.reason.as_deref()
+    }
+
+    /// The clock the next frame's passes will use.
     pub fn source(&self) -> TimingSource {
-        self.source
+        match self.mode {
+            _ if !self.timestamps => TimingSource::WallClockSteps,
+            TimingMode::Cpu => TimingSource::WallClockSteps,
+            TimingMode::Gpu => TimingSource::GpuTimestamps,
+            TimingMode::Auto if self.reason.is_some() => TimingSource::WallClockSteps,
+            TimingMode::Auto => TimingSource::GpuTimestamps,
+        }
     }
 
     /// Mark the passes recorded from now on as the indirect technique's (or not).
@@ -73,6 +236,9 @@ impl PassTimer {
     fn note(&self, label: &str) {
         if self.indirect.get() {
             self.indirect_labels.borrow_mut().insert(label.to_string());
+        }
+        if self.timestamps {
+            self.query_steps.borrow_mut().push(self.steps.len());
         }
     }
 
@@ -116,61 +282,154 @@ impl PassTimer {
         self.profiler.end_query(encoder, query);
     }
 
-    /// Submit one step of a frame. In CPU-fallback mode the step is waited for and its wall time recorded
-    /// under `cpu_label`.
-    pub fn submit(&mut self, gpu: &GpuContext, encoder: wgpu::CommandEncoder, cpu_label: &str) -> Result<(), GpuError> {
-        let start = Instant::now();
-        self.note(cpu_label);
-        gpu.queue.submit([encoder.finish()]);
-        if self.source == TimingSource::CpuFallback {
-            gpu.wait_idle()?;
-            let e = self.cpu.entry(cpu_label.to_string()).or_insert((0.0, 0));
-            e.0 += start.elapsed().as_secs_f64() * 1000.0;
-            e.1 += 1;
+    /// Submit one step of a frame, wait for it and record its wall time under `step_label`.
+    pub fn submit(
+        &mut self,
+        gpu: &GpuContext,
+        encoder: wgpu::CommandEncoder,
+        step_label: &str,
+    ) -> Result<(), GpuError> {
+        if self.indirect.get() {
+            self.indirect_labels.borrow_mut().insert(step_label.to_string());
         }
+        let start = Instant::now();
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait_idle()?;
+        self.steps.push(Step { label: step_label.to_string(), wall_ms: start.elapsed().as_secs_f64() * 1000.0 });
         Ok(())
     }
 
-    /// Close the frame: resolve the queries, wait for the GPU and return the per-pass times (in first-seen
-    /// order for GPU timestamps).
-    pub fn finish_frame(&mut self, gpu: &GpuContext) -> Result<Vec<PassTime>, GpuError> {
+    /// Close the frame: resolve the queries, wait for the GPU, judge the timestamps (`auto`) and return the
+    /// frame's times (passes in first-seen order for GPU timestamps).
+    pub fn finish_frame(&mut self, gpu: &GpuContext) -> Result<FrameTimes, GpuError> {
         let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("resolve") });
         self.profiler.resolve_queries(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         self.profiler.end_frame().map_err(|e| GpuError::Validation(format!("timer: {e}")))?;
         gpu.wait_idle()?;
         let results = self.profiler.process_finished_frame(gpu.queue.get_timestamp_period());
-        let mut out: Vec<PassTime> = Vec::new();
-        match self.source {
-            TimingSource::GpuTimestamps => {
-                if let Some(results) = results {
-                    collect(&results, &mut out);
+        let steps = std::mem::take(&mut self.steps);
+        let query_steps = std::mem::take(&mut *self.query_steps.borrow_mut());
+        let mut timestamp_passes: Vec<PassTime> = Vec::new();
+        let mut flat: Vec<(String, f64)> = Vec::new();
+        if let Some(results) = &results {
+            flatten(results, &mut flat);
+            for (name, ms) in &flat {
+                match timestamp_passes.iter_mut().find(|p| &p.name == name) {
+                    Some(p) => {
+                        p.ms += ms;
+                        p.count += 1;
+                    }
+                    None => timestamp_passes.push(PassTime { name: name.clone(), ms: *ms, count: 1 }),
                 }
             }
-            TimingSource::CpuFallback => {
-                out.extend(std::mem::take(&mut self.cpu).into_iter().map(|(name, (ms, count))| PassTime {
-                    name,
-                    ms,
-                    count,
-                }));
+        }
+        if self.mode == TimingMode::Auto && self.timestamps && self.reason.is_none() && flat.len() == query_steps.len()
+        {
+            self.reason = judge(&steps, &flat, &query_steps);
+        }
+        let mut step_times: Vec<PassTime> = Vec::new();
+        for s in &steps {
+            match step_times.iter_mut().find(|p| p.name == s.label) {
+                Some(p) => {
+                    p.ms += s.wall_ms;
+                    p.count += 1;
+                }
+                None => step_times.push(PassTime { name: s.label.clone(), ms: s.wall_ms, count: 1 }),
             }
         }
-        Ok(out)
+        let source = self.source();
+        let timing = FrameTiming {
+            mode: self.mode,
+            source,
+            reason: self.reason.clone(),
+            timestamps_ms: (self.timestamps && results.is_some()).then(|| flat.iter().map(|(_, ms)| ms).sum()),
+            steps_wall_ms: steps.iter().map(|s| s.wall_ms).sum(),
+        };
+        let passes = match source {
+            TimingSource::GpuTimestamps => timestamp_passes,
+            TimingSource::WallClockSteps => step_times.clone(),
+        };
+        Ok(FrameTimes { passes, steps: step_times, timing })
     }
 }
 
-fn collect(results: &[GpuTimerQueryResult], out: &mut Vec<PassTime>) {
+/// `auto`'s judgement of one frame: the reason to leave the timestamps, or None when they hold.
+fn judge(steps: &[Step], queries: &[(String, f64)], query_steps: &[usize]) -> Option<String> {
+    let mut covered = vec![0.0; steps.len()];
+    for ((_, ms), &step) in queries.iter().zip(query_steps) {
+        if let Some(c) = covered.get_mut(step) {
+            *c += ms;
+        }
+    }
+    steps.iter().zip(&covered).find(|(s, &c)| s.wall_ms >= AUTO_MIN_STEP_MS && c < AUTO_MIN_COVERAGE * s.wall_ms).map(
+        |(s, c)| {
+            format!(
+                "the GPU timestamps of step '{}' covered {c:.2} ms of its {:.1} ms from submit to completion \
+                 (under {:.0} %), so this run reports wall-clock steps (SHADOWLAB_TIMING=gpu keeps the timestamps)",
+                s.label,
+                s.wall_ms,
+                AUTO_MIN_COVERAGE * 100.0
+            )
+        },
+    )
+}
+
+fn flatten(results: &[GpuTimerQueryResult], out: &mut Vec<(String, f64)>) {
     for r in results {
         if let Some(t) = &r.time {
-            let ms = (t.end - t.start) * 1000.0;
-            match out.iter_mut().find(|p| p.name == r.label) {
-                Some(p) => {
-                    p.ms += ms;
-                    p.count += 1;
-                }
-                None => out.push(PassTime { name: r.label.clone(), ms, count: 1 }),
-            }
+            out.push((r.label.clone(), (t.end - t.start) * 1000.0));
         }
-        collect(&r.nested_queries, out);
+        flatten(&r.nested_queries, out);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bad_clock_is_an_error_naming_the_choices() {
+        assert_eq!(TimingMode::parse("CPU").unwrap(), TimingMode::Cpu);
+        assert_eq!(TimingMode::parse(" gpu ").unwrap(), TimingMode::Gpu);
+        assert_eq!(TimingMode::parse("").unwrap(), TimingMode::Auto);
+        let e = TimingMode::parse("fast").unwrap_err().to_string();
+        assert!(e.contains("\"fast\"") && e.contains("auto, gpu or cpu"), "{e}");
+    }
+
+    fn step(label: &str, wall_ms: f64) -> Step {
+        Step { label: label.into(), wall_ms }
+    }
+
+    #[test]
+    fn auto_judges_each_long_step_by_its_own_timestamps() {
+        let steps = [step("gbuffer", 5.0), step("gather", 1000.0), step("tiny", 1.0)];
+        // Timestamps that hold (the tiny step's overhead is not judged).
+        let good = [("gbuffer".to_string(), 4.5), ("gather".to_string(), 990.0), ("tiny".to_string(), 0.01)];
+        assert_eq!(judge(&steps, &good, &[0, 1, 2]), None);
+        // A gather whose timestamps read 0.06 ms of its second: the run leaves them, naming the step.
+        let bad = [("gbuffer".to_string(), 4.5), ("gather".to_string(), 0.06), ("tiny".to_string(), 0.01)];
+        let reason = judge(&steps, &bad, &[0, 1, 2]).expect("the gather's timestamps miss the work");
+        assert!(reason.contains("'gather'") && reason.contains("0.06 ms"), "{reason}");
+        // Two passes of one step add up.
+        let split = [("a".to_string(), 2.4), ("b".to_string(), 2.4)];
+        assert_eq!(judge(&[step("both", 5.0)], &split, &[0, 0]), None);
+    }
+
+    #[test]
+    fn one_clock_for_two_sides() {
+        use TimingSource::*;
+        assert_eq!(common_clock(GpuTimestamps, GpuTimestamps), GpuTimestamps);
+        assert_eq!(common_clock(GpuTimestamps, WallClockSteps), WallClockSteps);
+        assert_eq!(common_clock(WallClockSteps, GpuTimestamps), WallClockSteps);
+        let t = FrameTiming {
+            mode: TimingMode::Auto,
+            source: GpuTimestamps,
+            reason: None,
+            timestamps_ms: None,
+            steps_wall_ms: 3.0,
+        };
+        assert_eq!(t.comparable_source(), WallClockSteps, "no timestamps: only the wall clock compares");
+        assert_eq!(t.ms_in(GpuTimestamps), 3.0);
     }
 }

@@ -87,7 +87,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ("raytraced", &[]),
     ];
     let mut md = String::from(
-        "| scene | technique | parameters | shadow maps | median ms | min ms | speedup vs reference | RMSE | shadow error |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | technique | parameters | shadow maps | median ms | min ms | clock | speedup vs reference | RMSE | shadow error |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut adapter = String::new();
     for s in &suite {
@@ -150,14 +150,17 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     (
                         format!("{:.5}", m.rmse),
                         m.shadow_intensity_error.map(|e| format!("{:.2}%", e * 100.0)).unwrap_or_default(),
-                        format!("{:.2}", reference.timing.median_ms / r.timing.median_ms.max(1e-9)),
+                        {
+                            let sp = crate::measure::Speedup::of(&r.timing, &reference.timing);
+                            format!("{:.2} ({}; wall x{:.2})", sp.ratio, sp.clock.name(), sp.wall_ratio)
+                        },
                     )
                 }
                 None => ("0".into(), "0%".into(), "1.00".into()),
             };
             let c = &r.report.counts.technique;
             md += &format!(
-                "| {} | {} | {} | {}{} | {:.1} | {:.1} | {} | {} | {} |\n",
+                "| {} | {} | {} | {}{} | {:.1} | {:.1} | {} | {} | {} | {} |\n",
                 s.name,
                 key,
                 params.join(" "),
@@ -165,6 +168,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 c.clusters.map(|n| format!(" ({n} clusters)")).unwrap_or_default(),
                 r.timing.median_ms,
                 r.timing.min_ms,
+                r.timing.clock.name(),
                 speedup,
                 rmse,
                 shadow

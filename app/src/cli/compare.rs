@@ -58,8 +58,8 @@ struct CompareReport<'a> {
     metrics: &'a shadowlab_core::compare::Metrics,
     technique_timing: &'a crate::measure::TimingSummary,
     against_timing: &'a crate::measure::TimingSummary,
-    /// Same-run speedup of the technique over the comparison target (median frame times).
-    speedup: f64,
+    /// Same-run speedup of the technique over the comparison target (median frame times, both in one clock).
+    speedup: crate::measure::Speedup,
     technique_counts: &'a shadowlab_core::renderer::FrameCounts,
     /// The component the metrics were computed on.
     component: &'a str,
@@ -135,7 +135,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
         !args.no_flip,
         f.exposure,
     )?;
-    let speedup = target.timing.median_ms / tech.timing.median_ms.max(1e-9);
+    let speedup = crate::measure::Speedup::of(&tech.timing, &target.timing);
+    let clock = speedup.clock;
     if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
         use crate::figure::{compose, metrics_caption, FigurePane};
         let metrics_lines = metrics_caption(&metrics);
@@ -156,7 +157,13 @@ pub fn run(args: CompareArgs) -> Result<()> {
                     caption: vec![
                         args.target.technique.clone(),
                         params(&args.params),
-                        format!("{:.1} ms (median of {}), ×{speedup:.2}", tech.timing.median_ms, tech.timing.frames),
+                        format!(
+                            "{:.1} ms (median of {}, {}), ×{:.2}",
+                            tech.timing.median_in(clock),
+                            tech.timing.frames,
+                            clock.name(),
+                            speedup.ratio
+                        ),
                     ],
                 },
                 FigurePane {
@@ -164,7 +171,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
                     caption: vec![
                         args.target.against.clone(),
                         params(&args.target.against_params),
-                        format!("{:.1} ms (median of {})", target.timing.median_ms, target.timing.frames),
+                        format!("{:.1} ms (median of {})", target.timing.median_in(clock), target.timing.frames),
                     ],
                 },
                 FigurePane {
@@ -195,14 +202,18 @@ pub fn run(args: CompareArgs) -> Result<()> {
             metrics.share_over_threshold * 100.0,
             metrics.threshold * 100.0,
         );
+        if let Some(reason) = tech.timing.clock_reason.as_ref().or(target.timing.clock_reason.as_ref()) {
+            eprintln!("timing: {reason}");
+        }
         eprintln!(
-            "time (median of {}): {} {:.2} ms, {} {:.2} ms, speedup x{:.2}",
+            "time (median of {}, {}): {} {:.2} ms, {} {:.2} ms, speedup {}",
             tech.timing.frames,
+            clock.name(),
             args.target.technique,
-            tech.timing.median_ms,
+            tech.timing.median_in(clock),
             args.target.against,
-            target.timing.median_ms,
-            speedup
+            target.timing.median_in(clock),
+            speedup.text()
         );
         eprintln!("wrote {}", args.out.display());
     }

@@ -130,13 +130,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
     if !frame.quiet {
         eprintln!(
-            "{}x{} on {}: {:.1} ms GPU ({:?}), {:.0} ms wall; {} of {} lights visible, {} shadow maps in {} batches; \
+            "{}x{} on {}: {:.1} ms ({}), {:.0} ms wall; {} of {} lights visible, {} shadow maps in {} batches; \
              {} shadow triangles drawn, {} culled",
             report.width,
             report.height,
             gpu.adapter_description(),
-            report.gpu_total_ms,
-            report.timing_source,
+            report.frame_ms(),
+            report.timing.source.name(),
             report.wall_ms,
             report.counts.technique.lights_visible,
             report.counts.lights_total,
@@ -145,6 +145,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
             report.counts.technique.shadow_triangles_submitted,
             report.counts.technique.shadow_triangles_culled,
         );
+        if let Some(reason) = &report.timing.reason {
+            eprintln!("  timing: {reason}");
+        }
         if let Some(c) = report.counts.technique.clusters {
             eprintln!(
                 "  {c} clusters{}",
@@ -165,8 +168,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         if timing.frames > 1 {
             eprintln!(
-                "  {} frames: median {:.2} ms, min {:.2} ms, mean of 3 best {:.2} ms",
-                timing.frames, timing.median_ms, timing.min_ms, timing.best3_mean_ms
+                "  {} frames: median {:.2} ms, min {:.2} ms, mean of 3 best {:.2} ms ({})",
+                timing.frames,
+                timing.median_ms,
+                timing.min_ms,
+                timing.best3_mean_ms,
+                timing.clock.name()
             );
         }
         eprintln!("wrote {}", args.out.display());

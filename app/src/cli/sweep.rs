@@ -159,6 +159,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
             "min_ms",
             "against_ms",
             "speedup",
+            "clock",
             "rmse",
             "psnr_db",
             "flip",
@@ -185,6 +186,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let mut progress = Progress::new(&format!("sweep {}", args.target.technique), quiet).with_unit("setting");
     progress.update(0, settings.len());
     let mut plotted_counts: Vec<usize> = Vec::new();
+    let mut told_clock = false;
+    // The timings behind `plot_rows`: the plot shows all of them in one clock, chosen once every row is in.
+    let mut plot_timings: Vec<crate::measure::TimingSummary> = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
         if let Some(l) = lights_for(setting)? {
             if light_count != Some(l.len()) {
@@ -198,9 +202,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 plot_rows.push(crate::plot::PlotRow {
                     x: lights.len() as f64,
                     series: format!("{} (against)", args.target.against),
-                    ms: target.timing.median_ms,
+                    ms: 0.0,
                     rmse: None,
                 });
+                plot_timings.push(target.timing.clone());
             }
         }
         let strings = technique_params(setting);
@@ -228,11 +233,20 @@ pub fn run(args: SweepArgs) -> Result<()> {
         plot_rows.push(crate::plot::PlotRow {
             x: setting[0].1.parse().unwrap_or(0.0),
             series: setting[1..].iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" "),
-            ms: r.timing.median_ms,
+            ms: 0.0,
             rmse: Some(m.rmse),
         });
+        plot_timings.push(r.timing.clone());
+        let speedup = crate::measure::Speedup::of(&r.timing, &target.timing);
+        if let Some(reason) = r.timing.clock_reason.as_ref().or(target.timing.clock_reason.as_ref()) {
+            if !told_clock && !quiet {
+                eprintln!("timing: {reason}");
+            }
+            told_clock = true;
+        }
         let c = &r.report.counts.technique;
-        let pass = |name: &str| r.timing.passes_median_ms.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>();
+        let pass =
+            |name: &str| 0.0 + r.timing.passes_median_ms.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>();
         let mut row: Vec<String> = setting.iter().map(|(_, v)| v.clone()).collect();
         row.extend([
             c.clusters.map(|n| n.to_string()).unwrap_or_default(),
@@ -241,10 +255,11 @@ pub fn run(args: SweepArgs) -> Result<()> {
             c.batches.to_string(),
             format!("{:.2}", pass("shadow maps")),
             format!("{:.2}", pass("shading")),
-            format!("{:.2}", r.timing.median_ms),
+            format!("{:.2}", r.timing.median_in(speedup.clock)),
             format!("{:.2}", r.timing.min_ms),
-            format!("{:.2}", target.timing.median_ms),
-            format!("{:.2}", target.timing.median_ms / r.timing.median_ms.max(1e-9)),
+            format!("{:.2}", target.timing.median_in(speedup.clock)),
+            format!("{:.2}", speedup.ratio),
+            speedup.clock.name().to_string(),
             format!("{:.5}", m.rmse),
             m.psnr_db.map(|p| format!("{p:.2}")).unwrap_or_else(|| "inf".into()),
             m.flip_mean.map(|v| format!("{v:.4}")).unwrap_or_default(),
@@ -304,7 +319,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
             f.width,
             f.height,
             args.target.against,
-            target.timing.median_ms
+            target.timing.median_in(target.timing.clock)
         );
         eprint!("{md}");
         eprintln!("wrote {}", args.out.display());
@@ -332,7 +347,13 @@ pub fn run(args: SweepArgs) -> Result<()> {
         } else {
             format!("{technique_name} on {} ({} lights, {}x{}{component})", scene.name, lights.len(), f.width, f.height)
         };
-        let reference_ms = (!lights_swept).then_some(target.timing.median_ms);
+        let clock =
+            plot_timings.iter().fold(target.timing.clock, |c, t| shadowlab_core::timing::common_clock(c, t.clock));
+        for (row, timing) in plot_rows.iter_mut().zip(&plot_timings) {
+            row.ms = timing.median_in(clock);
+        }
+        let reference_ms = (!lights_swept).then_some(target.timing.median_in(clock));
+        let title = format!("{title}, time in {}", clock.name());
         crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, &against_name, reference_ms)?;
         std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
         if !quiet {

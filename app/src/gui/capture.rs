@@ -104,13 +104,14 @@ impl ShadowLabApp {
         );
         let metrics_lines = figure::metrics_caption(&metrics);
         let shown = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
+        let speedup = measure::Speedup::of(&tech.timing, &target.timing);
         let panes = [
             FigurePane {
                 image: tech_image,
                 caption: vec![
                     technique_pair(&self.session.technique, indirect_key),
                     shown(&params),
-                    format!("GPU {:.1} ms", tech.report.gpu_total_ms),
+                    format!("{:.1} ms, {}", tech.timing.median_in(speedup.clock), speedup.text()),
                 ],
             },
             FigurePane {
@@ -118,7 +119,7 @@ impl ShadowLabApp {
                 caption: vec![
                     technique_pair(&against, indirect_key),
                     shown(&against_params),
-                    format!("GPU {:.1} ms", target.report.gpu_total_ms),
+                    format!("{:.1} ms ({})", target.timing.median_in(speedup.clock), speedup.clock.name()),
                 ],
             },
             FigurePane {

@@ -26,6 +26,7 @@ pub mod open;
 pub mod panels;
 pub mod recovery;
 pub mod session;
+pub mod session_times;
 pub mod sweep;
 pub mod tiles;
 pub mod views;

@@ -11,6 +11,7 @@ use anyhow::{anyhow, Result};
 use shadowlab_core::compare::{self, CompareOptions, Image};
 use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::ParamValue;
+use shadowlab_core::timing::{common_clock, TimingSource};
 use shadowlab_core::{GpuContext, RenderSettings, Renderer};
 
 /// One finished setting.
@@ -20,6 +21,8 @@ pub struct SweepRow {
     pub ms: f64,
     pub rmse: f64,
     pub reference_ms: f64,
+    /// The clock of `ms` and `reference_ms`.
+    pub clock: TimingSource,
 }
 
 pub enum SweepMessage {
@@ -87,7 +90,7 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
         let _ = reference.set_param(k, v);
     }
     let r = renderer.render_frame(reference.as_mut(), &job.camera, &job.lights, &mut |_, _| {})?;
-    let reference_ms = r.gpu_total_ms;
+    let reference_report = r;
     let reference_image = Image::new(w, h, renderer.read_hdr()?)?;
     let mask = renderer.read_geometry_mask()?;
     for value in &job.values {
@@ -99,7 +102,15 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
         let image = Image::new(w, h, renderer.read_hdr()?)?;
         let options = CompareOptions { flip: false, ..Default::default() };
         let m = compare::compare(&image, &reference_image, Some(&mask), &options)?;
-        send(SweepMessage::Row(SweepRow { value: number(value), ms: report.gpu_total_ms, rmse: m.rmse, reference_ms }));
+        // Both sides in one clock: the timestamps only when both frames used them.
+        let clock = common_clock(report.timing.comparable_source(), reference_report.timing.comparable_source());
+        send(SweepMessage::Row(SweepRow {
+            value: number(value),
+            ms: report.frame_ms_in(clock),
+            rmse: m.rmse,
+            reference_ms: reference_report.frame_ms_in(clock),
+            clock,
+        }));
     }
     Ok(())
 }

@@ -79,11 +79,8 @@ impl GpuContext {
 
     /// Use a device created elsewhere (the app passes eframe's).
     pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> GpuContext {
-        // SHADOWLAB_TIMING=cpu times every submitted step on the CPU (submit to completion) instead of with
-        // timestamps: lavapipe's timestamps around some compute dispatches come back far too short (measured:
-        // 0.2 ms around a dispatch that held the queue for 1.7 s), so wall-clock figures are the honest ones there.
-        let cpu_timing = std::env::var("SHADOWLAB_TIMING").is_ok_and(|v| v.eq_ignore_ascii_case("cpu"));
-        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY) && !cpu_timing;
+        // Which clock a run reports (timestamps or wall-clock steps) is `timing::PassTimer`'s choice.
+        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         // After a loss every call on the device is void and wgpu's buffer helpers panic: `guarded` refuses work
         // from then on. wgpu calls this at once for a real loss, and at the next poll after `destroy`.
         let lost = std::sync::Arc::new(std::sync::Mutex::new(None));

@@ -151,6 +151,16 @@ impl Renderer {
     pub fn gpu(&self) -> &GpuContext {
         &self.gpu
     }
+
+    /// Choose the clock of the reports from the next frame on (`SHADOWLAB_TIMING` chose it at creation).
+    pub fn set_timing_mode(&mut self, mode: crate::timing::TimingMode) {
+        self.timer.set_mode(mode);
+    }
+
+    /// The clock the next frame's passes will use, and why `auto` chose the wall clock when it did.
+    pub fn timing_source(&self) -> (crate::timing::TimingSource, Option<&str>) {
+        (self.timer.source(), self.timer.reason())
+    }
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
     }
@@ -573,18 +583,30 @@ impl Renderer {
 
     fn finish_frame_unguarded(&mut self, job: FrameJob, technique: &dyn Technique) -> Result<FrameReport, GpuError> {
         self.tonemap()?;
-        let passes = self.timer.finish_frame(&self.gpu)?;
+        let times = self.timer.finish_frame(&self.gpu)?;
+        let passes = times.passes;
         let indirect_labels = self.timer.take_indirect_labels();
         let indirect_passes: Vec<PassTime> =
             passes.iter().filter(|p| indirect_labels.contains(&p.name)).cloned().collect();
-        let gpu_total_ms = passes.iter().map(|p| p.ms).sum();
+        let total_ms = passes.iter().map(|p| p.ms).sum();
+        let parameters =
+            |t: &dyn Technique| t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
         Ok(FrameReport {
             technique: technique.key().to_string(),
+            parameters: parameters(technique),
+            view_fingerprint: report::fingerprint(&(
+                &job.camera,
+                &job.lights,
+                self.settings.work_fingerprint(),
+                self.scene.triangle_count,
+                self.scene.bounds,
+            )),
             width: self.settings.width,
             height: self.settings.height,
-            timing_source: self.timer.source(),
+            timing: times.timing,
             passes,
-            gpu_total_ms,
+            total_ms,
+            steps: times.steps,
             cpu_stages: technique.cpu_times(),
             wall_ms: job.started.elapsed().as_secs_f64() * 1000.0,
             counts: FrameCounts {
@@ -600,6 +622,7 @@ impl Renderer {
                     gpu_ms: indirect_passes.iter().map(|p| p.ms).sum(),
                     passes: indirect_passes,
                     technique: t.key().to_string(),
+                    parameters: parameters(t.as_ref()),
                     vpls: if t.uses_vpls() { self.vpls.set.vpls.len() } else { 0 },
                     vpl_source: self.settings.vpl.source,
                     vpl_misses: self.vpls.set.misses,

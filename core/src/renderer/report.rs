@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::scene::{Camera, PointLight};
 use crate::technique::TechniqueCounts;
-use crate::timing::{PassTime, TimingSource};
+use crate::timing::{FrameTiming, PassTime, TimingSource};
 
 /// Counts of a frame.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -23,13 +23,23 @@ pub struct FrameCounts {
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameReport {
     pub technique: String,
+    /// The technique's parameters in the frame (`key` -> value as text).
+    pub parameters: std::collections::BTreeMap<String, String>,
     pub width: u32,
     pub height: u32,
-    pub timing_source: TimingSource,
-    /// Per pass, in the order they ran; passes of one name (batches) are summed.
+    /// What the frame rendered besides the technique: a fingerprint of the camera, the lights, the renderer's
+    /// settings that change the work ([`super::RenderSettings::work_fingerprint`]) and the scene's size. Two frames with the same fingerprint, technique
+    /// and parameters measured the same configuration (the app keys its session times by it).
+    pub view_fingerprint: u64,
+    /// The clock of `passes` and `total_ms`, and the frame's GPU work in the other clock.
+    pub timing: FrameTiming,
+    /// Per pass (GPU timestamps) or per step (wall-clock steps), in the order they ran; passes of one name
+    /// (batches) are summed.
     pub passes: Vec<PassTime>,
-    /// Sum of the passes.
-    pub gpu_total_ms: f64,
+    /// Sum of the passes, in the clock `timing.source` names.
+    pub total_ms: f64,
+    /// Per step, its wall time from submit to completion (whatever the clock of `passes`).
+    pub steps: Vec<PassTime>,
     /// CPU stages of the technique (e.g. clustering), milliseconds.
     pub cpu_stages: Vec<PassTime>,
     /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
@@ -40,10 +50,30 @@ pub struct FrameReport {
     pub indirect: Option<IndirectReport>,
 }
 
+impl FrameReport {
+    /// The frame's CPU stages, direct and indirect (milliseconds).
+    pub fn cpu_stages_ms(&self) -> f64 {
+        let indirect = self.indirect.iter().flat_map(|i| &i.cpu_stages);
+        self.cpu_stages.iter().chain(indirect).map(|p| p.ms).sum()
+    }
+
+    /// The frame's time in `clock`: its GPU work in that clock (every step's passes) plus its CPU stages
+    /// (clustering, VPL generation, ...), which run before the GPU steps.
+    pub fn frame_ms_in(&self, clock: TimingSource) -> f64 {
+        self.timing.ms_in(clock) + self.cpu_stages_ms()
+    }
+
+    /// [`FrameReport::frame_ms_in`] the report's own clock.
+    pub fn frame_ms(&self) -> f64 {
+        self.frame_ms_in(self.timing.source)
+    }
+}
+
 /// What the indirect technique of a frame did.
 #[derive(Clone, Debug, Serialize)]
 pub struct IndirectReport {
     pub technique: String,
+    pub parameters: std::collections::BTreeMap<String, String>,
     /// VPLs used (0 for techniques that use none, e.g. the path tracer).
     pub vpls: usize,
     pub vpl_source: crate::vpl::VplSource,
@@ -86,4 +116,21 @@ impl FrameJob {
             self.steps_done as f32 / self.steps_total as f32
         }
     }
+}
+
+/// A fingerprint of `value`'s `Debug` form (which writes every `f32` exactly), without building the text:
+/// stable within one build, for telling configurations apart, not for storing.
+pub fn fingerprint(value: &impl std::fmt::Debug) -> u64 {
+    use std::fmt::Write;
+    use std::hash::Hasher;
+    struct Sink(std::collections::hash_map::DefaultHasher);
+    impl Write for Sink {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            self.0.write(s.as_bytes());
+            Ok(())
+        }
+    }
+    let mut sink = Sink(std::collections::hash_map::DefaultHasher::new());
+    let _ = write!(sink, "{value:?}");
+    sink.0.finish()
 }

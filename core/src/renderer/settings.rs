@@ -50,6 +50,23 @@ pub struct RenderSettings {
     pub light_tiles: bool,
 }
 
+impl RenderSettings {
+    /// The settings that change a frame's work (size, specular, steps, VPLs, component, tiles), for telling
+    /// measured configurations apart; the display-only ones (exposure and its metering, tone map, ambient and
+    /// background colours, indirect gain) are left out, so the app's two views compare.
+    pub fn work_fingerprint(&self) -> u64 {
+        super::report::fingerprint(&(
+            self.width,
+            self.height,
+            self.specular,
+            self.max_lights_per_step,
+            &self.vpl,
+            self.component,
+            self.light_tiles,
+        ))
+    }
+}
+
 /// Whether the tone mapping scales the exposure by a metered one ([`exposure`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize, Default)]
 #[serde(rename_all = "snake_case")]

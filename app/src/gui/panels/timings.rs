@@ -9,11 +9,12 @@ use shadowlab_core::technique::{ParamKind, ParamValue};
 
 use crate::gui::chrome::Toasts;
 use crate::gui::session::Session;
-use crate::gui::views::{technique_pair, Views};
+use crate::gui::views::Views;
+use shadowlab_core::timing::TimingSource;
 
 /// Per-pass table of the last complete frame, a plot of recent frames, and the same-session comparison with
 /// the reference.
-pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: &mut egui::Ui) {
+pub fn timings_ui(views: &Views, scene: &str, ui_frame_ms: &VecDeque<f64>, status: &str, ui: &mut egui::Ui) {
     let Some(gpu) = &views.gpu else { return };
     let ui_ms = ui_frame_ms.iter().copied().sum::<f64>() / ui_frame_ms.len().max(1) as f64;
     ui.horizontal_wrapped(|ui| {
@@ -51,11 +52,12 @@ pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: 
                         ui.label("1");
                         ui.end_row();
                     }
-                    ui.strong(format!("{} total", r.technique));
-                    ui.strong(format!("{:.2}", r.gpu_total_ms));
-                    ui.label(format!("{:?}", r.timing_source));
+                    ui.strong(format!("{} frame", r.technique));
+                    ui.strong(format!("{:.2}", r.frame_ms()));
+                    ui.label(r.timing.source.name());
                     ui.end_row();
                 });
+                clock_ui(r, ui);
                 let c = &r.counts;
                 ui.label(format!(
                     "{} of {} lights visible · {} shadow maps in {} steps{} · shadow triangles {} drawn, {} culled",
@@ -87,27 +89,7 @@ pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: 
                     }
                     ui.label(parts.join(" · "));
                 }
-                // Every technique seen this session against the reference, same session and adapter.
-                let reference = technique_pair(
-                    shadowlab_core::technique::REFERENCE,
-                    r.indirect.as_ref().map(|i| i.technique.as_str()),
-                );
-                if let Some((reference_ms, _)) = views.session_times.get(&reference) {
-                    egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
-                        ui.strong("technique (this session)");
-                        ui.strong("GPU ms");
-                        ui.strong("speedup");
-                        ui.strong("parameters");
-                        ui.end_row();
-                        for (name, (ms, params)) in &views.session_times {
-                            ui.label(name);
-                            ui.label(format!("{ms:.1}"));
-                            ui.label(format!("×{:.2}", reference_ms / ms.max(1e-6)));
-                            ui.label(params);
-                            ui.end_row();
-                        }
-                    });
-                }
+                session_ui(views, scene, r, ui);
             } else {
                 ui.label("rendering the first frame…");
             }
@@ -144,6 +126,78 @@ pub fn timings_ui(views: &Views, ui_frame_ms: &VecDeque<f64>, status: &str, ui: 
     } else {
         plot(ui);
         table(ui);
+    }
+}
+
+/// Which clock the milliseconds come from, and the frame in the other clock.
+fn clock_ui(r: &shadowlab_core::FrameReport, ui: &mut egui::Ui) {
+    let t = &r.timing;
+    let other = match (t.source, t.timestamps_ms) {
+        (TimingSource::GpuTimestamps, _) => format!("wall-clock steps {:.2} ms", t.steps_wall_ms),
+        (TimingSource::WallClockSteps, Some(ts)) => format!("GPU timestamps {ts:.2} ms"),
+        (TimingSource::WallClockSteps, None) => "the adapter has no GPU timestamps".to_string(),
+    };
+    ui.label(format!(
+        "clock: {} (SHADOWLAB_TIMING={}); frame = GPU work + CPU stages; {other}; frame wall clock {:.1} ms",
+        t.source.name(),
+        t.mode.name(),
+        r.wall_ms
+    ))
+    .on_hover_text(
+        "Every step is timed both ways: GPU timestamps around each pass and the wall time from submitting the \
+         step to its completion. auto uses the timestamps until they cover under half of a step's wall time.",
+    );
+    if let Some(reason) = &t.reason {
+        ui.colored_label(egui::Color32::from_rgb(230, 180, 80), format!("auto chose the wall clock: {reason}"));
+    }
+}
+
+/// The configurations of this view measured this session, with their speedup over the reference of the same
+/// view in one clock.
+fn session_ui(views: &Views, scene: &str, r: &shadowlab_core::FrameReport, ui: &mut egui::Ui) {
+    let times = &views.session_times;
+    if times.is_empty() {
+        return;
+    }
+    let view = crate::gui::session_times::view_of(scene, r);
+    let reference = shadowlab_core::technique::REFERENCE;
+    let rows = times.rows(view, reference);
+    if rows.is_empty() {
+        return;
+    }
+    match times.reference(view, reference) {
+        Some(base) => ui.label(format!(
+            "speedup = the {reference} frame ({}) over each frame, both of this view ({}, this camera and settings), \
+             in the clock both used",
+            if base.parameters.is_empty() { "default parameters" } else { base.parameters.as_str() },
+            base.view_text
+        )),
+        None => ui.label(format!(
+            "no {reference} frame of this view yet (same scene, lights, camera, size and settings): no speedup shown"
+        )),
+    };
+    egui::Grid::new("session").striped(true).num_columns(4).show(ui, |ui| {
+        ui.strong("technique (this view)");
+        ui.strong("frame ms");
+        ui.strong("speedup");
+        ui.strong("parameters");
+        ui.end_row();
+        for row in rows {
+            let e = &row.entry;
+            ui.label(&e.technique);
+            let clock = row.speedup.map(|(_, c)| c).unwrap_or(e.clock());
+            ui.label(format!("{:.1}", e.ms_in(clock))).on_hover_text(clock.name());
+            match row.speedup {
+                Some((ratio, clock)) => ui.label(format!("×{ratio:.2}")).on_hover_text(format!("in {}", clock.name())),
+                None => ui.label("-").on_hover_text("the reference itself, or no reference frame of this view"),
+            };
+            ui.label(&e.parameters);
+            ui.end_row();
+        }
+    });
+    let others = times.other_views(view);
+    if others > 0 {
+        ui.weak(format!("{others} frame(s) of other views (camera, lights, size or settings) are not compared"));
     }
 }
 

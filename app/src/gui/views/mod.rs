@@ -9,7 +9,7 @@ pub mod paint;
 pub mod view;
 
 use shadowlab_core::technique::REFERENCE;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -45,7 +45,7 @@ pub type PixelIds = (u64, &'static str, Arc<Vec<u32>>, (u32, u32));
 pub struct Views {
     /// None until eframe's device is there, and again once it was lost.
     pub gpu: Option<Gpu>,
-    /// Timings of completed frames: (seconds since start, GPU total ms, passes).
+    /// Timings of completed frames: (seconds since start, frame ms in the report's clock, passes).
     pub timings: VecDeque<(f64, f64, Vec<PassTime>)>,
     /// When the app started: the time axis of `timings`.
     started: Instant,
@@ -57,9 +57,8 @@ pub struct Views {
     /// False in tests (`Startup::synchronous`): the difference is then computed on the UI thread.
     background_work: bool,
     pub sweep: Option<sweep::Sweep>,
-    /// Last complete frame time (GPU ms) of every technique seen this session, with its parameters, for the
-    /// comparison table (technique vs reference, same session).
-    pub session_times: BTreeMap<String, (f64, String)>,
+    /// The last complete frame of every configuration measured this session, for the speedup table.
+    pub session_times: super::session_times::SessionTimes,
     /// The technique's per-pixel ID map for a converged frame.
     pub pixel_ids: Option<PixelIds>,
     /// The legends of the overlay layers drawn in the last UI frame: (layer name, entries).
@@ -82,7 +81,7 @@ impl Views {
             pending_difference: None,
             background_work,
             sweep: None,
-            session_times: BTreeMap::new(),
+            session_times: Default::default(),
             pixel_ids: None,
             legends: Vec::new(),
             last_view_pixels: egui::vec2(640.0, 360.0),
@@ -335,32 +334,20 @@ impl Views {
             total_steps += n;
         }
         gpu.sizer.observe(total_spent, total_steps);
-        let describe = |params: &BTreeMap<String, ParamValue>| {
-            params.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ")
-        };
-        let indirect_params = &main_inputs.indirect_params;
-        let describe_report = |r: &shadowlab_core::FrameReport, params: &BTreeMap<String, ParamValue>| {
-            let mut p = describe(params);
-            if r.indirect.is_some() && !indirect_params.is_empty() {
-                p = format!("{p} | {}", describe(indirect_params)).trim().to_string();
-            }
-            p
-        };
+        let scene_name = &session.scene.name;
         if std::mem::take(&mut gpu.reference.new_report) {
             if let Some(r) = gpu.reference.last_report.as_ref().filter(|r| r.technique != preview_technique()) {
-                let p = describe_report(r, &session.params.get(&r.technique).cloned().unwrap_or_default());
-                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
+                self.session_times.record(scene_name, r);
             }
         }
         if std::mem::take(&mut gpu.main.new_report) {
             if let Some(r) = gpu.main.last_report.as_ref().filter(|r| r.technique != preview_technique()) {
-                let p = describe_report(r, &main_inputs.params);
-                self.session_times.insert(session_name(r), (r.gpu_total_ms, p));
+                self.session_times.record(scene_name, r);
             }
             if let Some(r) = &gpu.main.last_report {
                 let t = self.started.elapsed().as_secs_f64();
                 if r.technique != preview_technique() {
-                    self.timings.push_back((t, r.gpu_total_ms, r.passes.clone()));
+                    self.timings.push_back((t, r.frame_ms(), r.passes.clone()));
                     while self.timings.front().is_some_and(|(t0, _, _)| t - t0 > 60.0) {
                         self.timings.pop_front();
                     }
