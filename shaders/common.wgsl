@@ -48,6 +48,39 @@ fn spot_factor(light: Light, dir: vec3<f32>) -> f32 {
 @group(0) @binding(3) var gbuffer_emissive: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_depth: texture_2d<f32>;
 
+// Hardware-independent work counters, read by core/src/renderer/work_counters.rs: keep the slots in sync with
+// `slot` there (a test checks). A counter is 64 bits (low, high word) in one of WORK_BUCKETS buckets chosen by
+// the pixel's 16x16 tile, so the atomics of a pass spread over many addresses.
+const WORK_SHADED_PIXELS: u32 = 0u;
+const WORK_LIGHT_EVALUATIONS: u32 = 1u;
+const WORK_SHADOW_LOOKUPS: u32 = 2u;
+const WORK_FILTER_TAPS: u32 = 3u;
+const WORK_SHADOW_RAYS: u32 = 4u;
+const WORK_CLOSEST_HIT_RAYS: u32 = 5u;
+const WORK_VPL_EVALUATIONS: u32 = 6u;
+const WORK_INDIRECT_SHADOW_LOOKUPS: u32 = 7u;
+const WORK_INDIRECT_FILTER_TAPS: u32 = 8u;
+const WORK_INDIRECT_SHADOW_RAYS: u32 = 9u;
+const WORK_INDIRECT_CLOSEST_HIT_RAYS: u32 = 10u;
+const WORK_INDIRECT_LIGHT_EVALUATIONS: u32 = 11u;
+const WORK_SLOTS: u32 = 12u;
+const WORK_BUCKETS: u32 = 1024u;
+@group(0) @binding(5) var<storage, read_write> work_counters: array<atomic<u32>>;
+
+// Add `n` to counter `slot` of the bucket of `pixel`'s tile.
+fn count_work(pixel: vec2<i32>, slot: u32, n: u32) {
+    if n == 0u {
+        return;
+    }
+    let tile = vec2<u32>(max(pixel, vec2<i32>(0))) / 16u;
+    let bucket = (tile.y * 61u + tile.x) % WORK_BUCKETS;
+    let at = (bucket * WORK_SLOTS + slot) * 2u;
+    let old = atomicAdd(&work_counters[at], n);
+    if old > 0xffffffffu - n {
+        atomicAdd(&work_counters[at + 1u], 1u);
+    }
+}
+
 const PI: f32 = 3.14159265358979;
 
 struct FullscreenOut {

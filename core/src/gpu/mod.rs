@@ -57,6 +57,9 @@ impl GpuContext {
             max_texture_array_layers: adapter.limits().max_texture_array_layers,
             max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
             max_buffer_size: adapter.limits().max_buffer_size,
+            // WebGPU's default, which every desktop adapter meets: the ray-traced shading binds lights, tile
+            // lists, the BVH and the work counters in one stage (the app asks eframe for the same).
+            max_storage_buffers_per_shader_stage: adapter.limits().max_storage_buffers_per_shader_stage.min(8),
             ..limits
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -55,6 +55,17 @@ impl SharedLayouts {
                 tex(3, unfilterable),
                 // Depth bound as an unfilterable float texture: textureLoad on depth textures has no GLSL form.
                 tex(4, unfilterable),
+                // The work counters (renderer/work_counters.rs), written by shading passes.
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
+                    visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: false },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
             ],
         });
         let camera = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

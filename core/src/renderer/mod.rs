@@ -24,6 +24,7 @@ mod setup;
 pub mod shade_pass;
 pub mod targets;
 pub mod vpl_gather;
+pub mod work_counters;
 
 use std::time::Instant;
 
@@ -74,6 +75,8 @@ pub struct Renderer {
     /// Per screen tile, the visible lights that reach it; built in `begin_frame` for techniques that read it.
     light_tiles: light_tiles::TileLists,
     light_spheres: Vec<[f32; 4]>,
+    /// What only the GPU knows of a frame's work (work_counters.rs).
+    work_counters: work_counters::WorkCounters,
     /// True when [`Renderer::set_fixed_vpls`] gave the VPLs.
     fixed_vpls: bool,
 }
@@ -185,7 +188,13 @@ impl Renderer {
             self.indirect_buffer = indirect;
             self.targets = FrameTargets::new(&self.gpu, settings.width, settings.height);
             self.screen_bind_group =
-                Self::screen_bind_group(&self.gpu.device, &self.layouts, &self.frame_uniform, &self.targets);
+                Self::screen_bind_group(
+                    &self.gpu.device,
+                    &self.layouts,
+                    &self.frame_uniform,
+                    &self.targets,
+                    &self.work_counters,
+                );
             self.rebind_tonemap();
         }
         self.settings = settings;
@@ -456,6 +465,7 @@ impl Renderer {
         if self.indirect.is_some() {
             encoder.clear_buffer(&self.indirect_buffer, 0, None);
         }
+        self.work_counters.clear(&mut encoder);
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
 
         self.visible_lights.update(&self.gpu, lights, &frustum);
@@ -589,6 +599,13 @@ impl Renderer {
         let indirect_passes: Vec<PassTime> =
             passes.iter().filter(|p| indirect_labels.contains(&p.name)).cloned().collect();
         let total_ms = passes.iter().map(|p| p.ms).sum();
+        let wall_ms = job.started.elapsed().as_secs_f64() * 1000.0;
+        // Read after the frame's clock stopped: the readback is in no step's time.
+        let gpu_work = self.work_counters.read(&self.gpu)?;
+        let counts = technique.counts();
+        let mut work = counts.work;
+        work.add(&gpu_work.direct);
+        work.depth_triangles += counts.shadow_triangles_submitted;
         let parameters =
             |t: &dyn Technique| t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
         Ok(FrameReport {
@@ -608,7 +625,8 @@ impl Renderer {
             total_ms,
             steps: times.steps,
             cpu_stages: technique.cpu_times(),
-            wall_ms: job.started.elapsed().as_secs_f64() * 1000.0,
+            wall_ms,
+            work: work.to_map(gpu_work.shaded_pixels),
             counts: FrameCounts {
                 lights_total: job.lights.len(),
                 scene_triangles: self.scene.triangle_count,
@@ -627,6 +645,13 @@ impl Renderer {
                     vpl_source: self.settings.vpl.source,
                     vpl_misses: self.vpls.set.misses,
                     vpls_reused: job.vpls_reused,
+                    work: {
+                        let c = t.counts();
+                        let mut w = c.work;
+                        w.add(&gpu_work.indirect);
+                        w.depth_triangles += c.shadow_triangles_submitted;
+                        w.to_map(gpu_work.shaded_pixels)
+                    },
                     counts: t.counts(),
                     cpu_stages,
                 }

@@ -45,6 +45,9 @@ pub struct FrameReport {
     /// CPU wall time from the start of the frame to its completion (includes culling and waiting).
     pub wall_ms: f64,
     pub counts: FrameCounts,
+    /// Hardware-independent work counts of the direct part (the G-buffer's triangles included; keys and
+    /// meanings in [`crate::technique::work`]).
+    pub work: std::collections::BTreeMap<String, f64>,
     /// The indirect technique of the frame, when there is one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub indirect: Option<IndirectReport>,
@@ -83,6 +86,8 @@ pub struct IndirectReport {
     /// "vpl generation" stage timed only the check.
     pub vpls_reused: bool,
     pub counts: TechniqueCounts,
+    /// Hardware-independent work counts of the indirect technique ([`crate::technique::work`]).
+    pub work: std::collections::BTreeMap<String, f64>,
     /// CPU stages (VPL generation, the technique's own), milliseconds.
     pub cpu_stages: Vec<PassTime>,
     /// The frame's passes that the indirect technique ran (also in the frame's `passes`), and their sum.

@@ -108,7 +108,8 @@ impl Renderer {
             SharedLayouts::OUTPUT_FORMAT,
             false,
         );
-        let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets);
+        let work_counters = work_counters::WorkCounters::new(device);
+        let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets, &work_counters);
         let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
         let exposure = exposure::ExposureMeter::new(gpu, &layouts, &targets, &indirect_buffer);
         let tonemap_bind_group =
@@ -146,6 +147,7 @@ impl Renderer {
             visible_lights: lights::VisibleLights::new(gpu),
             light_tiles,
             light_spheres: Vec::new(),
+            work_counters,
         })
     }
 
@@ -154,6 +156,7 @@ impl Renderer {
         layouts: &SharedLayouts,
         frame_uniform: &wgpu::Buffer,
         t: &FrameTargets,
+        work: &work_counters::WorkCounters,
     ) -> wgpu::BindGroup {
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("screen"),
@@ -164,6 +167,7 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&t.normal) },
                 wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&t.emissive) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&t.depth) },
+                wgpu::BindGroupEntry { binding: 5, resource: work.buffer.as_entire_binding() },
             ],
         })
     }

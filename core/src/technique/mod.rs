@@ -27,11 +27,13 @@ pub mod reference;
 pub mod unshadowed;
 pub mod val;
 pub mod vpl_gather;
+pub mod work;
 
 pub use overlay::{
     index_color, light_layer_legend, light_overlay_color, light_overlays, ExplainStep, Glyph, HoverPoint, LegendEntry,
     LightDetails, Overlay, OverlayLayer,
 };
+pub use work::WorkCounts;
 pub use params::{check_param, CameraPose, Param, ParamError, ParamKind, ParamValue};
 pub use registry::{
     create, create_indirect, indirect_keys, keys, preferred_vpl_source, Role, TechniqueEntry, INDIRECT_REGISTRY,
@@ -110,6 +112,10 @@ pub struct TechniqueCounts {
     /// True when the technique handed the frame to the reference path (LightCluster's worst case).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub fell_back_to_reference: bool,
+    /// The work counts the CPU decides (shadow texels written, k-means distances, ...); the renderer adds what
+    /// the GPU counted and the triangles of the depth passes.
+    #[serde(skip)]
+    pub work: work::WorkCounts,
     /// Further named figures a technique reports (`vpls`, `samples`, ...): reports, CSV columns and panels list
     /// them without knowing the technique.
     #[serde(flatten)]
