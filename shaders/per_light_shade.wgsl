@@ -42,6 +42,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         discard;
     }
     var sum = vec3<f32>(0.0);
+    var lookups = 0u;
     // The batch's lights that reach this pixel's tile (light_tiles.wgsl), in batch order.
     let span = tile_span(pixel, batch.first_light, batch.light_count);
     for (var j = span.start; j < span.end; j++) {
@@ -50,7 +51,12 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         let unshadowed = shade_light(s, light);
         if any(unshadowed > vec3<f32>(0.0)) {
             sum += unshadowed * reference_visibility(s, light, index - batch.first_light);
+            lookups += 1u;
         }
     }
+    count_work(pixel, WORK_LIGHT_EVALUATIONS, span.end - span.start);
+    // One texel per lookup (binary visibility).
+    count_work(pixel, WORK_SHADOW_LOOKUPS, lookups);
+    count_work(pixel, WORK_FILTER_TAPS, lookups);
     return vec4<f32>(sum, 0.0);
 }

@@ -87,7 +87,12 @@ fn bvh_cut_out(tri: u32, u: f32, v: f32) -> bool {
 
 // Any-hit: true when a triangle lies on origin + t * dir for 0 < t < t_max. Stack-based, near child first.
 // (Carrying the near child's record instead of reloading it measured no faster on lavapipe.)
+// Rays traced by this invocation, for the work counters (a pass adds them with `count_work`).
+var<private> bvh_shadow_rays: u32 = 0u;
+var<private> bvh_closest_rays: u32 = 0u;
+
 fn bvh_occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
+    bvh_shadow_rays += 1u;
     let inv = bvh_safe_inverse(dir);
     let root = bvh_nodes[0];
     if bvh_ray_box(origin, inv, root.min, root.max, t_max) >= BVH_MISS {
@@ -178,6 +183,7 @@ fn bvh_ray_triangle_hit(origin: vec3<f32>, dir: vec3<f32>, tri: BvhTriangle, t_m
 // Closest hit, the twin of `closest_hit_cpu` in bvh.rs: near child first, subtrees whose box starts beyond the
 // nearest hit so far are skipped when popped.
 fn bvh_closest_hit(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> BvhHit {
+    bvh_closest_rays += 1u;
     var best: BvhHit;
     best.t = BVH_MISS;
     best.triangle = 0u;

@@ -6,7 +6,16 @@
 
 @group(1) @binding(0) var paraboloid_atlas: texture_2d<f32>;
 
+// Lookups of this invocation (one texel each), for the work counters.
+var<private> vpl_lookups: u32 = 0u;
+
+fn count_visibility_work(pixel: vec2<i32>) {
+    count_work(pixel, WORK_INDIRECT_SHADOW_LOOKUPS, vpl_lookups);
+    count_work(pixel, WORK_INDIRECT_FILTER_TAPS, vpl_lookups);
+}
+
 fn vpl_visibility(s: Surface, v: Vpl, k: u32) -> f32 {
+    vpl_lookups += 1u;
     let basis = vpl_basis(v.normal.xyz);
     let centre = v.position.xyz + v.normal.xyz * gather.origin_offset;
     // Normal offset in texels of the map at the receiver: a texel spans about (2 / res)(1 + cos) radians.

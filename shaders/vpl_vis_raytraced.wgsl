@@ -2,6 +2,10 @@
 // every VPL visibility approximation. Both ends are pushed off their surfaces by the bias (scaled by the camera
 // distance, as the ray-traced shadows do: the G-buffer's position error grows with it).
 
+fn count_visibility_work(pixel: vec2<i32>) {
+    count_work(pixel, WORK_INDIRECT_SHADOW_RAYS, bvh_shadow_rays);
+}
+
 fn vpl_visibility(s: Surface, v: Vpl, k: u32) -> f32 {
     let eps = gather.bias * max(1.0, length(frame.camera_position.xyz - s.position));
     let origin = s.position + s.normal * eps;

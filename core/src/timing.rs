@@ -153,8 +153,13 @@ pub struct FrameTimes {
     pub passes: Vec<PassTime>,
     /// Wall-clock steps, by step label (always).
     pub steps: Vec<PassTime>,
+    /// GPU timestamps of passes submitted in CPU stages (their time is in the stages').
+    pub stage_passes: Vec<PassTime>,
     pub timing: FrameTiming,
 }
+
+/// The step index of a query recorded in a CPU stage.
+const IN_STAGE: usize = usize::MAX;
 
 struct Step {
     label: String,
@@ -170,6 +175,10 @@ pub struct PassTimer {
     steps: Vec<Step>,
     /// For every timestamp query of the frame, in the order they were opened, the step it belongs to.
     query_steps: std::cell::RefCell<Vec<usize>>,
+    /// While set, recorded passes belong to a technique's CPU stage (GPU work it submits and waits for in
+    /// `prepare`, such as a GPU k-means): the stage's wall time holds them, so they stay out of the frame's
+    /// GPU clock (else they would count twice).
+    in_stage: std::cell::Cell<bool>,
     /// While set, the labels of recorded passes are the indirect technique's.
     indirect: std::cell::Cell<bool>,
     indirect_labels: std::cell::RefCell<std::collections::BTreeSet<String>>,
@@ -192,6 +201,7 @@ impl PassTimer {
             reason: None,
             steps: Vec::new(),
             query_steps: Default::default(),
+            in_stage: std::cell::Cell::new(false),
             indirect: std::cell::Cell::new(false),
             indirect_labels: Default::default(),
         })
@@ -223,6 +233,11 @@ impl PassTimer {
         }
     }
 
+    /// Mark the passes recorded from now on as a CPU stage's (or not): see `in_stage`.
+    pub fn set_stage(&self, on: bool) {
+        self.in_stage.set(on);
+    }
+
     /// Mark the passes recorded from now on as the indirect technique's (or not).
     pub fn set_indirect(&self, on: bool) {
         self.indirect.set(on);
@@ -238,7 +253,8 @@ impl PassTimer {
             self.indirect_labels.borrow_mut().insert(label.to_string());
         }
         if self.timestamps {
-            self.query_steps.borrow_mut().push(self.steps.len());
+            let step = if self.in_stage.get() { IN_STAGE } else { self.steps.len() };
+            self.query_steps.borrow_mut().push(step);
         }
     }
 
@@ -311,22 +327,32 @@ impl PassTimer {
         let steps = std::mem::take(&mut self.steps);
         let query_steps = std::mem::take(&mut *self.query_steps.borrow_mut());
         let mut timestamp_passes: Vec<PassTime> = Vec::new();
-        let mut flat: Vec<(String, f64)> = Vec::new();
+        let mut stage_passes: Vec<PassTime> = Vec::new();
+        let mut all: Vec<(String, f64)> = Vec::new();
         if let Some(results) = &results {
-            flatten(results, &mut flat);
-            for (name, ms) in &flat {
-                match timestamp_passes.iter_mut().find(|p| &p.name == name) {
-                    Some(p) => {
-                        p.ms += ms;
-                        p.count += 1;
-                    }
-                    None => timestamp_passes.push(PassTime { name: name.clone(), ms: *ms, count: 1 }),
+            flatten(results, &mut all);
+        }
+        // Without one step per query (a query the adapter did not time), every query counts as a step's.
+        let aligned = all.len() == query_steps.len();
+        let mut flat: Vec<(String, f64)> = Vec::new();
+        let mut flat_steps: Vec<usize> = Vec::new();
+        for (i, (name, ms)) in all.iter().enumerate() {
+            let in_stage = aligned && query_steps[i] == IN_STAGE;
+            let list = if in_stage { &mut stage_passes } else { &mut timestamp_passes };
+            match list.iter_mut().find(|p| &p.name == name) {
+                Some(p) => {
+                    p.ms += ms;
+                    p.count += 1;
                 }
+                None => list.push(PassTime { name: name.clone(), ms: *ms, count: 1 }),
+            }
+            if !in_stage {
+                flat.push((name.clone(), *ms));
+                flat_steps.push(if aligned { query_steps[i] } else { 0 });
             }
         }
-        if self.mode == TimingMode::Auto && self.timestamps && self.reason.is_none() && flat.len() == query_steps.len()
-        {
-            self.reason = judge(&steps, &flat, &query_steps);
+        if self.mode == TimingMode::Auto && self.timestamps && self.reason.is_none() && aligned {
+            self.reason = judge(&steps, &flat, &flat_steps);
         }
         let mut step_times: Vec<PassTime> = Vec::new();
         for s in &steps {
@@ -350,7 +376,7 @@ impl PassTimer {
             TimingSource::GpuTimestamps => timestamp_passes,
             TimingSource::WallClockSteps => step_times.clone(),
         };
-        Ok(FrameTimes { passes, steps: step_times, timing })
+        Ok(FrameTimes { passes, steps: step_times, stage_passes, timing })
     }
 }
 

@@ -166,6 +166,8 @@ mod tests {
             passes: Vec::new(),
             total_ms: timestamps.unwrap_or(steps),
             steps: Vec::new(),
+            stage_passes: Vec::new(),
+            work: Default::default(),
             cpu_stages: Vec::new(),
             wall_ms: steps,
             counts: Default::default(),

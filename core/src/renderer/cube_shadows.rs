@@ -262,6 +262,8 @@ impl DistanceReader {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CubeStats {
     pub cubes: usize,
+    /// Depth texels the maps cover (6 faces of resolution² per cube map, resolution² per paraboloid map).
+    pub texels_written: u64,
     pub triangles_submitted: u64,
     pub triangles_culled: u64,
 }
@@ -483,6 +485,7 @@ impl CubeShadowRenderer {
         first_tile: usize,
     ) -> CubeStats {
         let atlas = self.atlas.as_ref().expect("ensure_tiles before render_paraboloids");
+        let r = atlas.resolution as u64;
         assert!(first_tile + casters.len() <= atlas.tiles && first_tile + casters.len() <= MAX_CUBES_PER_BATCH * 6);
         if self.paraboloid_pipeline.is_none() {
             let module =
@@ -511,7 +514,8 @@ impl CubeShadowRenderer {
         // The paraboloid pass clears the atlas (`record(.., true)` below).
         self.atlas.as_mut().expect("checked above").record_projections(true, first_tile, projections);
         self.ensure_masked(gpu, &geometry, true);
-        let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
+        let mut stats =
+            CubeStats { cubes: casters.len(), texels_written: casters.len() as u64 * r * r, ..Default::default() };
         let mut lists = DrawLists::default();
         let all = 0..geometry.chunks.len() as u32;
         for (i, c) in casters.iter().enumerate() {
@@ -603,6 +607,7 @@ impl CubeShadowRenderer {
         clear: bool,
     ) -> CubeStats {
         let atlas = self.atlas.as_ref().expect("ensure_tiles before render_views");
+        let r = atlas.resolution as u64;
         assert!(first_tile + views.len() <= atlas.tiles && first_tile + views.len() <= MAX_CUBES_PER_BATCH * 6);
         let matrices: Vec<MatrixUniform> = views.iter().map(|m| MatrixUniform::new(*m)).collect();
         let projections = views.iter().map(|&clip_from_world| TileProjection::Perspective { clip_from_world });
@@ -610,7 +615,7 @@ impl CubeShadowRenderer {
         let offset = (first_tile * std::mem::size_of::<MatrixUniform>()) as u64;
         gpu.queue.write_buffer(&self.faces, offset, bytemuck::cast_slice(&matrices));
         self.ensure_masked(gpu, &geometry, false);
-        let mut stats = CubeStats::default();
+        let mut stats = CubeStats { texels_written: views.len() as u64 * r * r, ..Default::default() };
         let mut lists = DrawLists::default();
         let all = 0..geometry.chunks.len() as u32;
         for (vi, m) in views.iter().enumerate() {
@@ -649,7 +654,9 @@ impl CubeShadowRenderer {
 
         // Culling on the CPU, draw lists per face.
         self.ensure_masked(gpu, &geometry, false);
-        let mut stats = CubeStats { cubes: casters.len(), ..Default::default() };
+        let r = self.atlas.as_ref().map_or(0, |a| a.resolution as u64);
+        let mut stats =
+            CubeStats { cubes: casters.len(), texels_written: casters.len() as u64 * 6 * r * r, ..Default::default() };
         let mut lists = DrawLists::default();
         for (ci, caster) in casters.iter().enumerate() {
             // A chunk outside the caster's range sphere is culled for all six faces at once.

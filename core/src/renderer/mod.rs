@@ -187,14 +187,13 @@ impl Renderer {
             let indirect = create_indirect_buffer(&self.gpu, settings.width, settings.height, self.indirect.is_some())?;
             self.indirect_buffer = indirect;
             self.targets = FrameTargets::new(&self.gpu, settings.width, settings.height);
-            self.screen_bind_group =
-                Self::screen_bind_group(
-                    &self.gpu.device,
-                    &self.layouts,
-                    &self.frame_uniform,
-                    &self.targets,
-                    &self.work_counters,
-                );
+            self.screen_bind_group = Self::screen_bind_group(
+                &self.gpu.device,
+                &self.layouts,
+                &self.frame_uniform,
+                &self.targets,
+                &self.work_counters,
+            );
             self.rebind_tonemap();
         }
         self.settings = settings;
@@ -370,6 +369,7 @@ impl Renderer {
         // View-frustum culling of chunks for the G-buffer.
         let frustum = Frustum::from_clip_from_world(&clip_from_world);
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.work_counters.clear(&mut encoder);
         let mut gbuffer_triangles = 0u64;
         {
             let chunks = &self.scene.chunks;
@@ -465,22 +465,29 @@ impl Renderer {
         if self.indirect.is_some() {
             encoder.clear_buffer(&self.indirect_buffer, 0, None);
         }
-        self.work_counters.clear(&mut encoder);
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
 
         self.visible_lights.update(&self.gpu, lights, &frustum);
+        // GPU work a technique submits and waits for in `prepare` is its CPU stages' time (timing.rs).
+        self.timer.set_stage(true);
         let direct_steps = {
             let ctx = self.context(camera, lights);
-            technique.prepare(&ctx)?
+            technique.prepare(&ctx)
         };
+        self.timer.set_stage(false);
+        let direct_steps = direct_steps?;
         self.build_light_tiles(technique.uses_light_tiles())?;
         let mut indirect_steps = 0;
         if let Some(mut indirect) = self.indirect.take() {
             let t0 = Instant::now();
+            self.timer.set_stage(true);
             vpls_reused = !self.update_vpls(indirect.as_ref(), lights);
+            self.timer.set_stage(false);
             vpl_ms = t0.elapsed().as_secs_f64() * 1000.0;
             let ctx = self.context(camera, lights);
+            self.timer.set_stage(true);
             let prepared = indirect.prepare(&ctx);
+            self.timer.set_stage(false);
             self.indirect = Some(indirect);
             indirect_steps = prepared?;
         }
@@ -624,6 +631,7 @@ impl Renderer {
             passes,
             total_ms,
             steps: times.steps,
+            stage_passes: times.stage_passes,
             cpu_stages: technique.cpu_times(),
             wall_ms,
             work: work.to_map(gpu_work.shaded_pixels),

@@ -40,6 +40,10 @@ pub struct FrameReport {
     pub total_ms: f64,
     /// Per step, its wall time from submit to completion (whatever the clock of `passes`).
     pub steps: Vec<PassTime>,
+    /// GPU timestamps of passes a technique submitted and waited for in a CPU stage (e.g. a GPU k-means in
+    /// `prepare`): their time is in `cpu_stages`, so they are in no clock's total.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stage_passes: Vec<PassTime>,
     /// CPU stages of the technique (e.g. clustering), milliseconds.
     pub cpu_stages: Vec<PassTime>,
     /// CPU wall time from the start of the frame to its completion (includes culling and waiting).

@@ -33,12 +33,12 @@ pub use overlay::{
     index_color, light_layer_legend, light_overlay_color, light_overlays, ExplainStep, Glyph, HoverPoint, LegendEntry,
     LightDetails, Overlay, OverlayLayer,
 };
-pub use work::WorkCounts;
 pub use params::{check_param, CameraPose, Param, ParamError, ParamKind, ParamValue};
 pub use registry::{
     create, create_indirect, indirect_keys, keys, preferred_vpl_source, Role, TechniqueEntry, INDIRECT_REGISTRY,
     REFERENCE, REGISTRY,
 };
+pub use work::WorkCounts;
 
 use glam::Vec3;
 use serde::Serialize;
@@ -128,6 +128,7 @@ impl TechniqueCounts {
         self.shadow_maps += stats.cubes;
         self.shadow_triangles_submitted += stats.triangles_submitted;
         self.shadow_triangles_culled += stats.triangles_culled;
+        self.work.shadow_texels_written += stats.texels_written;
     }
 }
 

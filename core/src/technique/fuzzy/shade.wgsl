@@ -66,10 +66,12 @@ fn fuzzy_shade_main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     var sum = vec3<f32>(0.0);
+    var bits_read = 0u;
     for (var k = 0u; k < gather.vpl_count; k++) {
         let j = gather.first_vpl + k;
         let term = vpl_term(s, vpls[j]);
         if max(term.x, max(term.y, term.z)) > 0.0 {
+            bits_read += used;
             let word = j >> 5u;
             let bit = j & 31u;
             var v = 0.0;
@@ -79,5 +81,9 @@ fn fuzzy_shade_main(@builtin(global_invocation_id) id: vec3<u32>) {
             sum += term * v;
         }
     }
+    count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, gather.vpl_count);
+    // A lookup of the visibility V~ is one bit of a shading-point cluster's row (one "tap" each).
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_SHADOW_LOOKUPS, bits_read);
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_FILTER_TAPS, bits_read);
     indirect_out[index] += vec4<f32>(s.albedo / PI * sum, 0.0);
 }

@@ -119,7 +119,11 @@ struct ShadowSample {
     receiver: f32,
 }
 
+// Shadow-map texels this invocation read (blocker search and filter), for the work counters.
+var<private> lc_taps: u32 = 0u;
+
 fn shadow_sample(q: vec3<f32>, cluster: Cluster, cube_index: u32) -> ShadowSample {
+    lc_taps += 1u;
     let look = cube_lookup(q - cluster.position, cube_index, batch.resolution, batch.tiles_per_row);
     let depth = textureLoad(shadow_atlas, look.texel, 0).r;
     var out: ShadowSample;
@@ -210,6 +214,8 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         discard;
     }
     var sum = vec3<f32>(0.0);
+    var evaluations = 0u;
+    var lookups = 0u;
     // The batch's clusters whose C_att sphere reaches this pixel's tile (light_tiles.wgsl), in batch order.
     let span = tile_span(pixel, batch.first_cluster, batch.cluster_count);
     for (var j = span.start; j < span.end; j++) {
@@ -228,10 +234,16 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         for (var i = 0u; i < cluster.light_count; i++) {
             unshadowed += shade_light(s, lights[cluster.first_light + i]);
         }
+        evaluations += cluster.light_count;
         if any(unshadowed > vec3<f32>(0.0)) {
             let visibility = cluster_visibility(s, cluster, c);
             sum += select(unshadowed * visibility, vec3<f32>(visibility), only);
+            lookups += 1u;
         }
     }
+    count_work(pixel, WORK_LIGHT_EVALUATIONS, evaluations);
+    // One lookup per cluster shadow map, its taps as PCF / PCSS took them (early outs included).
+    count_work(pixel, WORK_SHADOW_LOOKUPS, lookups);
+    count_work(pixel, WORK_FILTER_TAPS, lc_taps);
     return vec4<f32>(sum, 0.0);
 }

@@ -114,5 +114,7 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
         sum += albedo_y / PI * irradiance;
     }
     let index = id.y * width + id.x;
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_CLOSEST_HIT_RAYS, bvh_closest_rays);
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_SHADOW_RAYS, bvh_shadow_rays);
     indirect_out[index] += vec4<f32>(s.albedo * sum / f32(step.total_samples), 0.0);
 }

@@ -109,5 +109,7 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         }
         sum += unshadowed * visibility;
     }
+    count_work(pixel, WORK_LIGHT_EVALUATIONS, span.end - span.start);
+    count_work(pixel, WORK_SHADOW_RAYS, bvh_shadow_rays);
     return vec4<f32>(sum, 0.0);
 }

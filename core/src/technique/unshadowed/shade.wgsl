@@ -24,5 +24,6 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
     for (var j = span.start; j < span.end; j++) {
         sum += shade_light(s, lights[tile_item(span, j)]);
     }
+    count_work(pixel, WORK_LIGHT_EVALUATIONS, span.end - span.start);
     return vec4<f32>(sum, 0.0);
 }

@@ -67,7 +67,13 @@ struct CssmSample {
     zb: vec4<f32>,
 }
 
+// VAL-map lookups of this invocation and the texels (or filtered CSSM fetches) they read, for the work
+// counters.
+var<private> val_lookups: u32 = 0u;
+var<private> val_taps: u32 = 0u;
+
 fn cssm_fetch(m: u32, t: vec2<f32>, lod: f32) -> CssmSample {
+    val_taps += 1u;
     let res = f32(val_params.resolution);
     let half = 0.5 * exp2(ceil(lod));
     let inside = clamp(t, vec2<f32>(half), vec2<f32>(res - half));
@@ -128,6 +134,7 @@ fn cssm_visibility(m: u32, t: vec2<f32>, d: f32, dn: f32, search: f32, delta: f3
 
 // Occluder distance stored at texel `t` (clamped into the tile) of VAL m's map.
 fn val_occluder(m: u32, t: vec2<f32>, near: f32, far: f32) -> f32 {
+    val_taps += 1u;
     let res = val_params.resolution;
     let texel = clamp(vec2<i32>(floor(t)), vec2<i32>(0), vec2<i32>(i32(res) - 1));
     let origin = vec2<i32>(vec2<u32>(m % val_params.tiles_per_row, m / val_params.tiles_per_row) * res);
@@ -167,6 +174,7 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     let near = val.depth.x;
     let far = val.depth.y;
     let receiver = d - val_params.bias;
+    val_lookups += 1u;
     if val_params.mode == 0u {
         return select(0.0, 1.0, receiver <= val_occluder(m, t, near, far));
     }
@@ -230,16 +238,21 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let range = gather_range(id.xy);
     var sum = vec3<f32>(0.0);
+    var evaluations = 0u;
     for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let i = gather.first_vpl + k;
         if val_params.solo >= 0 && vpl_val[i] != u32(val_params.solo) {
             continue;
         }
         let term = vpl_term(s, vpls[i]);
+        evaluations += 1u;
         if max(term.x, max(term.y, term.z)) > 0.0 {
             sum += term * visibility[min(vpl_val[i], MAX_VALS - 1u)];
         }
     }
+    count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, evaluations);
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_SHADOW_LOOKUPS, val_lookups);
+    count_work(vec2<i32>(id.xy), WORK_INDIRECT_FILTER_TAPS, val_taps);
     let index = id.y * width + id.x;
     indirect_out[index] += vec4<f32>(s.albedo / PI * sum * range.scale, 0.0);
 }

@@ -451,6 +451,10 @@ impl Technique for VirtualAreaLights {
             log::info!("val: {} VALs asked for, {n} VPLs: using {m}", self.params.vals);
         }
         self.counts = TechniqueCounts { lights_visible: ctx.lights.len(), ..Default::default() };
+        // Steps 2 and 4 of the k-means (CPU and GPU alike): every VPL against every centre, `iterations` times
+        // and once more for the final map.
+        self.counts.work.kmeans_distance_evaluations =
+            (kp.iterations as u64 + 1) * n as u64 * kp.vals.min(n) as u64 * u64::from(!vpls.is_empty());
         self.counts.figures.insert("vpls".into(), n as f64);
         self.counts.figures.insert("vals".into(), self.clustering.non_empty as f64);
         self.counts.figures.insert("iterations".into(), self.params.iterations as f64);
