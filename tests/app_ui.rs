@@ -240,6 +240,10 @@ fn difference_view_measures_the_technique_against_the_reference() {
     let row = rows.iter().find(|r| r.entry.key == "lightcluster").unwrap();
     assert!(row.speedup.is_some(), "the two views measured one configuration: {times:?}");
     h.get_by_label("technique (this view)");
+    // The panel names its clock, what the speedup compares, and the frame's work counts.
+    assert!(h.query_all_by_label_contains("(SHADOWLAB_TIMING=").count() >= 1, "the clock is named");
+    h.get_by_label_contains("speedup = the reference frame");
+    h.get_by_label("work counts (hardware-independent)");
     // Against the ray-traced ground truth instead: the reference itself differs a little.
     let app = h.state_mut();
     app.session.technique = "reference".into();

@@ -87,7 +87,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         ("raytraced", &[]),
     ];
     let mut md = String::from(
-        "| scene | technique | parameters | shadow maps | median ms | min ms | clock | speedup vs reference | RMSE | shadow error |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | technique | parameters | shadow maps | median ms | min ms | clock | speedup vs reference | RMSE | shadow error | lookups/px | taps/px | shadow rays | depth triangles | shadow texels |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut adapter = String::new();
     for s in &suite {
@@ -159,8 +159,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 None => ("0".into(), "0%".into(), "1.00".into()),
             };
             let c = &r.report.counts.technique;
+            let work = r.report.total_work();
             md += &format!(
-                "| {} | {} | {} | {}{} | {:.1} | {:.1} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} | {}{} | {:.1} | {:.1} | {} | {} | {} | {} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} |\n",
                 s.name,
                 key,
                 params.join(" "),
@@ -171,7 +172,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 r.timing.clock.name(),
                 speedup,
                 rmse,
-                shadow
+                shadow,
+                work["shadow_lookups_per_pixel"],
+                work["filter_taps_per_pixel"],
+                work["shadow_rays"],
+                work["depth_triangles"],
+                work["shadow_texels_written"],
             );
             if reference.is_none() {
                 reference = Some(r);

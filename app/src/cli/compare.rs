@@ -61,6 +61,9 @@ struct CompareReport<'a> {
     /// Same-run speedup of the technique over the comparison target (median frame times, both in one clock).
     speedup: crate::measure::Speedup,
     technique_counts: &'a shadowlab_core::renderer::FrameCounts,
+    /// Hardware-independent work of each side's last frame, direct and indirect together.
+    technique_work: std::collections::BTreeMap<String, f64>,
+    against_work: std::collections::BTreeMap<String, f64>,
     /// The component the metrics were computed on.
     component: &'a str,
     indirect: &'a crate::measure::IndirectChoice,
@@ -233,6 +236,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
             against_timing: &target.timing,
             speedup,
             technique_counts: &tech.report.counts,
+            technique_work: tech.report.total_work(),
+            against_work: target.report.total_work(),
             component: &f.component,
             indirect: &indirect,
             against_indirect: &against_indirect,

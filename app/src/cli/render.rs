@@ -148,6 +148,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if let Some(reason) = &report.timing.reason {
             eprintln!("  timing: {reason}");
         }
+        let work = report.total_work();
+        let shown: Vec<String> = shadowlab_core::technique::work::WORK_KEYS
+            .iter()
+            .filter_map(|k| work.get(*k).filter(|v| **v != 0.0).map(|v| format!("{k} {}", work_number(*v))))
+            .collect();
+        eprintln!("  work: {}", shown.join(", "));
         if let Some(c) = report.counts.technique.clusters {
             eprintln!(
                 "  {c} clusters{}",
@@ -200,4 +206,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// A work count as people read it: integers whole, means with two decimals.
+fn work_number(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
+    }
 }

@@ -293,6 +293,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
         for st in &r.timing.cpu_stages_median_ms {
             figures.insert(format!("cpu.{}_ms", st.name), st.ms);
         }
+        // Work counts (hardware-independent), a column each where the technique does such work.
+        figures.extend(r.report.work.iter().filter(|(_, v)| **v != 0.0).map(|(k, v)| (format!("work.{k}"), *v)));
+        if let Some(ind) = &r.report.indirect {
+            let nonzero = ind.work.iter().filter(|(k, v)| **v != 0.0 && k.as_str() != "shaded_pixels");
+            figures.extend(nonzero.map(|(k, v)| (format!("indirect.work.{k}"), *v)));
+        }
         row_figures.push(figures);
         progress.update(i + 1, settings.len());
     }

@@ -70,6 +70,25 @@ impl FrameReport {
         self.timing.ms_in(clock) + self.cpu_stages_ms()
     }
 
+    /// The frame's work counts, direct and indirect together (the per-pixel means over the same pixels).
+    pub fn total_work(&self) -> std::collections::BTreeMap<String, f64> {
+        let mut m = self.work.clone();
+        if let Some(i) = &self.indirect {
+            for (k, v) in &i.work {
+                if k != "shaded_pixels" {
+                    *m.entry(k.clone()).or_insert(0.0) += v;
+                }
+            }
+        }
+        let pixels = m.get("shaded_pixels").copied().unwrap_or(0.0);
+        for (mean, total) in [("shadow_lookups_per_pixel", "shadow_lookups"), ("filter_taps_per_pixel", "filter_taps")]
+        {
+            let t = m.get(total).copied().unwrap_or(0.0);
+            m.insert(mean.to_string(), if pixels > 0.0 { t / pixels } else { 0.0 });
+        }
+        m
+    }
+
     /// [`FrameReport::frame_ms_in`] the report's own clock.
     pub fn frame_ms(&self) -> f64 {
         self.frame_ms_in(self.timing.source)

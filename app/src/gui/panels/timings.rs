@@ -58,6 +58,7 @@ pub fn timings_ui(views: &Views, scene: &str, ui_frame_ms: &VecDeque<f64>, statu
                     ui.end_row();
                 });
                 clock_ui(r, ui);
+                work_ui(r, ui);
                 let c = &r.counts;
                 ui.label(format!(
                     "{} of {} lights visible · {} shadow maps in {} steps{} · shadow triangles {} drawn, {} culled",
@@ -150,6 +151,46 @@ fn clock_ui(r: &shadowlab_core::FrameReport, ui: &mut egui::Ui) {
     if let Some(reason) = &t.reason {
         ui.colored_label(egui::Color32::from_rgb(230, 180, 80), format!("auto chose the wall clock: {reason}"));
     }
+}
+
+/// The frame's work counts (hardware-independent), direct and indirect, where the technique did such work.
+fn work_ui(r: &shadowlab_core::FrameReport, ui: &mut egui::Ui) {
+    let indirect = r.indirect.as_ref().map(|i| &i.work);
+    let keys: Vec<&str> = shadowlab_core::technique::work::WORK_KEYS
+        .iter()
+        .copied()
+        .filter(|k| {
+            r.work.get(*k).is_some_and(|v| *v != 0.0) || indirect.and_then(|w| w.get(*k)).is_some_and(|v| *v != 0.0)
+        })
+        .collect();
+    if keys.is_empty() {
+        return;
+    }
+    let number = |v: Option<&f64>| match v {
+        Some(v) if v.fract() == 0.0 => format!("{v:.0}"),
+        Some(v) => format!("{v:.2}"),
+        None => "-".into(),
+    };
+    ui.collapsing("work counts (hardware-independent)", |ui| {
+        egui::Grid::new("work").striped(true).num_columns(3).show(ui, |ui| {
+            ui.strong("work");
+            ui.strong(&r.technique);
+            ui.strong(r.indirect.as_ref().map_or("", |i| i.technique.as_str()));
+            ui.end_row();
+            for k in keys {
+                ui.label(k.replace('_', " "));
+                ui.label(number(r.work.get(k)));
+                ui.label(if indirect.is_some() && k != "shaded_pixels" {
+                    number(indirect.and_then(|w| w.get(k)))
+                } else {
+                    String::new()
+                });
+                ui.end_row();
+            }
+        });
+    })
+    .header_response
+    .on_hover_text("Counted where the work is decided: on the CPU (triangles, texels, k-means) or by the shaders");
 }
 
 /// The configurations of this view measured this session, with their speedup over the reference of the same

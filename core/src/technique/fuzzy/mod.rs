@@ -510,6 +510,10 @@ impl Technique for FuzzyClustering {
             self.counts.figures.insert("shading points".into(), members as f64);
             self.counts.figures.insert("k_sp".into(), sp_live as f64);
             self.counts.figures.insert("shadow rays".into(), (sp_live * self.light_count) as f64);
+            // Step 5's rays, decided here: one per live shading-point cluster and live light (the kernel skips
+            // dead ones; a pair closer than twice the bias, which traces none, is counted all the same).
+            let lights_live = if vpl_clustered { live(&self.inspection.vpl_clusters) } else { self.light_count };
+            self.counts.work.shadow_rays = (sp_live * lights_live) as u64;
             if self.mode == ClusterMode::ShadingPoints {
                 // The lights are the VPLs: upload them behind the representatives.
                 let gpu_vpls: Vec<GpuVpl> = self.vpls.vpls.iter().map(GpuVpl::new).collect();
