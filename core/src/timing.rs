@@ -308,8 +308,12 @@ impl PassTimer {
         if self.indirect.get() {
             self.indirect_labels.borrow_mut().insert(step_label.to_string());
         }
+        let command_buffer = encoder.finish();
+        // Drain whatever else is queued first (the app's own UI painting shares the queue), so the step's wall
+        // time is its own.
+        gpu.wait_idle()?;
         let start = Instant::now();
-        gpu.queue.submit([encoder.finish()]);
+        gpu.queue.submit([command_buffer]);
         gpu.wait_idle()?;
         self.steps.push(Step { label: step_label.to_string(), wall_ms: start.elapsed().as_secs_f64() * 1000.0 });
         Ok(())

@@ -55,7 +55,14 @@ impl Renderer {
             AutoExposure::Hold => !self.exposure.metered,
         };
         if meter {
-            self.exposure.encode(&mut encoder, &self.screen_bind_group, self.settings.width, self.settings.height);
+            let timer = timed.then_some(&self.timer);
+            self.exposure.encode(
+                &mut encoder,
+                &self.screen_bind_group,
+                self.settings.width,
+                self.settings.height,
+                timer,
+            );
         }
         let desc = wgpu::RenderPassDescriptor {
             label: Some("tonemap"),

@@ -110,15 +110,31 @@ impl ExposureMeter {
     }
 
     /// Meter the displayed image into `result` (before the tone mapping, in the same encoder).
-    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, screen: &wgpu::BindGroup, width: u32, height: u32) {
-        let mut pass = encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("exposure meter"), timestamp_writes: None });
-        pass.set_bind_group(0, screen, &[]);
-        pass.set_bind_group(1, &self.bind_group, &[]);
-        pass.set_pipeline(&self.meter);
-        pass.dispatch_workgroups(width.div_ceil(16), height.div_ceil(16), 1);
-        pass.set_pipeline(&self.resolve);
-        pass.dispatch_workgroups(1, 1, 1);
+    /// Meter the HDR image (two dispatches). With `timer`, timed as the pass "exposure meter" of the frame, so
+    /// the step that holds it is covered by timestamps (timing.rs judges steps by their coverage).
+    pub fn encode(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        screen: &wgpu::BindGroup,
+        width: u32,
+        height: u32,
+        timer: Option<&crate::timing::PassTimer>,
+    ) {
+        let record = |pass: &mut wgpu::ComputePass<'_>| {
+            pass.set_bind_group(0, screen, &[]);
+            pass.set_bind_group(1, &self.bind_group, &[]);
+            pass.set_pipeline(&self.meter);
+            pass.dispatch_workgroups(width.div_ceil(16), height.div_ceil(16), 1);
+            pass.set_pipeline(&self.resolve);
+            pass.dispatch_workgroups(1, 1, 1);
+        };
+        match timer {
+            Some(t) => t.compute_pass(encoder, "exposure meter", record),
+            None => record(&mut encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("exposure meter"),
+                timestamp_writes: None,
+            })),
+        }
         self.metered = true;
     }
 
