@@ -219,6 +219,65 @@ fn view_screenshot_writes_a_png_at_render_resolution() {
     assert_eq!(img.width(), w);
     let name = path.file_name().unwrap().to_string_lossy().to_string();
     assert!(name.contains("cornell") && name.contains("reference"), "{name}");
+    // The screenshot holds the pixels the screen shows (the screen used to show them decoded once more,
+    // darker): egui's own rendering of the window against the saved image, over the central half of the view
+    // (box means, which resampling from render resolution to the view's pixels keeps) and at 9 points (most
+    // equal to a neighbouring texel; the rest lie on edges, where the view filters).
+    let shown = h.render().expect("kittest renders the window");
+    let rect = h.state().views.last_viewport_rect.expect("the view was laid out");
+    let ppp = h.ctx.pixels_per_point();
+    let saved = img.to_rgba8();
+    let (sw, sh) = (saved.width() as f32, saved.height() as f32);
+    let mean = |img: &image::RgbaImage, x0: f32, y0: f32, x1: f32, y1: f32| {
+        let mut sum = [0f64; 3];
+        let mut n = 0f64;
+        for y in y0 as u32..y1 as u32 {
+            for x in x0 as u32..x1 as u32 {
+                let p = img.get_pixel(x, y);
+                for i in 0..3 {
+                    sum[i] += p[i] as f64;
+                }
+                n += 1.0;
+            }
+        }
+        sum.map(|v| v / n)
+    };
+    let on_screen = mean(
+        &shown,
+        (rect.left() + 0.25 * rect.width()) * ppp,
+        (rect.top() + 0.25 * rect.height()) * ppp,
+        (rect.left() + 0.75 * rect.width()) * ppp,
+        (rect.top() + 0.75 * rect.height()) * ppp,
+    );
+    let in_file = mean(&saved, 0.25 * sw, 0.25 * sh, 0.75 * sw, 0.75 * sh);
+    for i in 0..3 {
+        assert!(
+            (on_screen[i] - in_file[i]).abs() <= 2.0,
+            "the screen's mean {on_screen:?} and the screenshot's {in_file:?} differ (channel {i})"
+        );
+    }
+    let mut off: Vec<i32> = Vec::new();
+    for fy in [0.3f32, 0.5, 0.7] {
+        for fx in [0.3f32, 0.5, 0.7] {
+            let a = shown.get_pixel(
+                ((rect.left() + fx * rect.width()) * ppp) as u32,
+                ((rect.top() + fy * rect.height()) * ppp) as u32,
+            );
+            let nearest = (-1i32..=1)
+                .flat_map(|dy| (-1i32..=1).map(move |dx| (dx, dy)))
+                .map(|(dx, dy)| {
+                    let px = ((fx * sw) as i32 + dx).clamp(0, sw as i32 - 1) as u32;
+                    let py = ((fy * sh) as i32 + dy).clamp(0, sh as i32 - 1) as u32;
+                    let c = saved.get_pixel(px, py);
+                    (0..3).map(|i| (a[i] as i32 - c[i] as i32).abs()).max().unwrap()
+                })
+                .min()
+                .unwrap();
+            off.push(nearest);
+        }
+    }
+    off.sort();
+    assert!(off[4] <= 1, "at most half of the points may differ by more than a step: {off:?}");
 }
 
 #[test]

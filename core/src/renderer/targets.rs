@@ -16,7 +16,14 @@ pub struct FrameTargets {
     /// sRGB output; the app shows it, the CLI saves it.
     pub output_texture: wgpu::Texture,
     pub output: wgpu::TextureView,
+    /// The same texels as plain `Rgba8Unorm`: what egui samples. egui expects textures that are not
+    /// sRGB-aware (its shader treats texels as gamma-encoded); through the sRGB view the screen showed the
+    /// encoded image decoded once more, darker than every screenshot and figure (which read these bytes).
+    pub output_display: wgpu::TextureView,
 }
+
+/// The plain view format of the output (see `FrameTargets::output_display`).
+pub const OUTPUT_DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 fn target(gpu: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFormat, copy: bool) -> wgpu::Texture {
     let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -31,7 +38,7 @@ fn target(gpu: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFo
         dimension: wgpu::TextureDimension::D2,
         format,
         usage,
-        view_formats: &[],
+        view_formats: if format == SharedLayouts::OUTPUT_FORMAT { &[OUTPUT_DISPLAY_FORMAT] } else { &[] },
     })
 }
 
@@ -52,6 +59,10 @@ impl FrameTargets {
             hdr: hdr_texture.create_view(&Default::default()),
             hdr_texture,
             output: output_texture.create_view(&Default::default()),
+            output_display: output_texture.create_view(&wgpu::TextureViewDescriptor {
+                format: Some(OUTPUT_DISPLAY_FORMAT),
+                ..Default::default()
+            }),
             output_texture,
         }
     }

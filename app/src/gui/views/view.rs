@@ -171,7 +171,7 @@ impl View {
     fn with_renderer(gpu: &GpuContext, render_state: &egui_wgpu::RenderState, renderer: Renderer) -> Result<View> {
         let texture_id = render_state.renderer.write().register_native_texture(
             &gpu.device,
-            &renderer.targets().output,
+            &renderer.targets().output_display,
             wgpu::FilterMode::Linear,
         );
         Ok(View {
@@ -273,7 +273,7 @@ impl View {
                 self.size = (settings.width, settings.height);
                 render_state.renderer.write().update_egui_texture_from_wgpu_texture(
                     &self.renderer.gpu().device,
-                    &self.renderer.targets().output,
+                    &self.renderer.targets().output_display,
                     wgpu::FilterMode::Linear,
                     self.texture_id,
                 );
