@@ -48,10 +48,7 @@ pub struct TimingSummary {
 impl TimingSummary {
     /// The median frame time in `clock` (the wall-clock steps where these frames lack timestamps).
     pub fn median_in(&self, clock: TimingSource) -> f64 {
-        match clock {
-            TimingSource::GpuTimestamps => self.timestamps_median_ms.unwrap_or(self.steps_median_ms),
-            TimingSource::WallClockSteps => self.steps_median_ms,
-        }
+        shadowlab_core::timing::in_clock(clock, self.steps_median_ms, self.timestamps_median_ms)
     }
 }
 
@@ -79,6 +76,15 @@ impl Speedup {
     /// "×2.31 (GPU timestamps; wall clock ×2.28)".
     pub fn text(&self) -> String {
         format!("x{:.2} ({}; frame wall clock x{:.2})", self.ratio, self.clock.name(), self.wall_ratio)
+    }
+}
+
+/// A count as people read it: whole numbers whole, means with two decimals (work counts in the CLI and the app).
+pub fn count_text(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.2}")
     }
 }
 

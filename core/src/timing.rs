@@ -7,7 +7,7 @@
 //! - `cpu`: the wall-clock steps;
 //! - `auto` (the default): the timestamps, until a step's timestamps cover under [`AUTO_MIN_COVERAGE`] of its
 //!   submit-to-done time (steps of at least [`AUTO_MIN_STEP_MS`], where submission overhead is small); from
-//!   that frame on the run uses the wall-clock steps and says why ([`PassTimer::reason`]), provided the time
+//!   that frame on the run uses the wall-clock steps and says why (`FrameTiming::reason`), provided the time
 //!   they miss is at least [`AUTO_MIN_MISSING_SHARE`] of the frame. Measured on
 //!   lavapipe: the timestamps around fuzzy clustering's visibility dispatch read 0.03 ms of its 36.8 ms.
 //!
@@ -123,13 +123,19 @@ pub struct FrameTiming {
     pub steps_wall_ms: f64,
 }
 
+/// A time in `clock`, from its wall-clock-steps figure and its timestamps figure (when it has one; the
+/// wall-clock steps where it has none). Every "ms in a clock" of reports, summaries and the app is this.
+pub fn in_clock(clock: TimingSource, steps_ms: f64, timestamps_ms: Option<f64>) -> f64 {
+    match clock {
+        TimingSource::GpuTimestamps => timestamps_ms.unwrap_or(steps_ms),
+        TimingSource::WallClockSteps => steps_ms,
+    }
+}
+
 impl FrameTiming {
     /// The frame's GPU work in `clock` (the timestamps, or the wall-clock steps where they are missing).
     pub fn ms_in(&self, clock: TimingSource) -> f64 {
-        match clock {
-            TimingSource::GpuTimestamps => self.timestamps_ms.unwrap_or(self.steps_wall_ms),
-            TimingSource::WallClockSteps => self.steps_wall_ms,
-        }
+        in_clock(clock, self.steps_wall_ms, self.timestamps_ms)
     }
 
     /// The clock this frame's figures are comparable in (timestamps only when it has them and uses them).
@@ -215,15 +221,6 @@ impl PassTimer {
     pub fn set_mode(&mut self, mode: TimingMode) {
         self.mode = mode;
         self.reason = None;
-    }
-
-    pub fn mode(&self) -> TimingMode {
-        self.mode
-    }
-
-    /// Why `auto` left the timestamps, once it has.
-    pub fn reason(&self) -> Option<&str> {
-        self.reason.as_deref()
     }
 
     /// The clock the next frame's passes will use.
@@ -342,6 +339,7 @@ impl PassTimer {
         }
         // Without one step per query (a query the adapter did not time), every query counts as a step's.
         let aligned = all.len() == query_steps.len();
+        // The queries of steps, with their step, for `auto`'s judgement (only made when aligned).
         let mut flat: Vec<(String, f64)> = Vec::new();
         let mut flat_steps: Vec<usize> = Vec::new();
         for (i, (name, ms)) in all.iter().enumerate() {
@@ -356,7 +354,9 @@ impl PassTimer {
             }
             if !in_stage {
                 flat.push((name.clone(), *ms));
-                flat_steps.push(if aligned { query_steps[i] } else { 0 });
+                if aligned {
+                    flat_steps.push(query_steps[i]);
+                }
             }
         }
         if self.mode == TimingMode::Auto && self.timestamps && self.reason.is_none() && aligned {

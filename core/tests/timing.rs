@@ -30,6 +30,9 @@ fn auto_uses_the_wall_clock_where_the_timestamps_miss_the_work() {
     let gpu = gpu();
     let r = fuzzy_frame(TimingMode::Auto);
     if !gpu.timestamps {
+        // Without timestamps there is nothing to judge; CI's software adapter has them, so there this fails.
+        let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false");
+        assert!(!ci, "the adapter has no timestamp queries: auto's judgement cannot be tested");
         assert_eq!(r.timing.source, TimingSource::WallClockSteps, "no timestamps: the wall clock");
         return;
     }

@@ -151,7 +151,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let work = report.total_work();
         let shown: Vec<String> = shadowlab_core::technique::work::WORK_KEYS
             .iter()
-            .filter_map(|k| work.get(*k).filter(|v| **v != 0.0).map(|v| format!("{k} {}", work_number(*v))))
+            .filter_map(|k| {
+                work.get(*k).filter(|v| **v != 0.0).map(|v| format!("{k} {}", crate::measure::count_text(*v)))
+            })
             .collect();
         eprintln!("  work: {}", shown.join(", "));
         if let Some(c) = report.counts.technique.clusters {
@@ -206,13 +208,4 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// A work count as people read it: integers whole, means with two decimals.
-fn work_number(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e15 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.2}")
-    }
 }

@@ -43,10 +43,7 @@ impl SessionTime {
     }
 
     pub fn ms_in(&self, clock: TimingSource) -> f64 {
-        match clock {
-            TimingSource::GpuTimestamps => self.timestamps_ms.unwrap_or(self.steps_ms),
-            TimingSource::WallClockSteps => self.steps_ms,
-        }
+        shadowlab_core::timing::in_clock(clock, self.steps_ms, self.timestamps_ms)
     }
 }
 

@@ -159,11 +159,6 @@ impl Renderer {
     pub fn set_timing_mode(&mut self, mode: crate::timing::TimingMode) {
         self.timer.set_mode(mode);
     }
-
-    /// The clock the next frame's passes will use, and why `auto` chose the wall clock when it did.
-    pub fn timing_source(&self) -> (crate::timing::TimingSource, Option<&str>) {
-        (self.timer.source(), self.timer.reason())
-    }
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
     }
@@ -610,9 +605,6 @@ impl Renderer {
         // Read after the frame's clock stopped: the readback is in no step's time.
         let gpu_work = self.work_counters.read(&self.gpu)?;
         let counts = technique.counts();
-        let mut work = counts.work;
-        work.add(&gpu_work.direct);
-        work.depth_triangles += counts.shadow_triangles_submitted;
         let parameters =
             |t: &dyn Technique| t.params().into_iter().map(|p| (p.key.to_string(), p.value.to_string())).collect();
         Ok(FrameReport {
@@ -620,7 +612,7 @@ impl Renderer {
             parameters: parameters(technique),
             view_fingerprint: report::fingerprint(&(
                 &job.camera,
-                &job.lights,
+                report::lights_fingerprint(&job.lights),
                 self.settings.work_fingerprint(),
                 self.scene.triangle_count,
                 self.scene.bounds,
@@ -634,14 +626,15 @@ impl Renderer {
             stage_passes: times.stage_passes,
             cpu_stages: technique.cpu_times(),
             wall_ms,
-            work: work.to_map(gpu_work.shaded_pixels),
+            work: counts.work_map(&gpu_work.direct, gpu_work.shaded_pixels),
             counts: FrameCounts {
                 lights_total: job.lights.len(),
                 scene_triangles: self.scene.triangle_count,
                 gbuffer_triangles: job.gbuffer_triangles,
-                technique: technique.counts(),
+                technique: counts,
             },
             indirect: self.indirect.as_ref().map(|t| {
+                let counts = t.counts();
                 let mut cpu_stages = vec![PassTime { name: "vpl generation".into(), ms: job.vpl_ms, count: 1 }];
                 cpu_stages.extend(t.cpu_times());
                 IndirectReport {
@@ -653,14 +646,8 @@ impl Renderer {
                     vpl_source: self.settings.vpl.source,
                     vpl_misses: self.vpls.set.misses,
                     vpls_reused: job.vpls_reused,
-                    work: {
-                        let c = t.counts();
-                        let mut w = c.work;
-                        w.add(&gpu_work.indirect);
-                        w.depth_triangles += c.shadow_triangles_submitted;
-                        w.to_map(gpu_work.shaded_pixels)
-                    },
-                    counts: t.counts(),
+                    work: counts.work_map(&gpu_work.indirect, gpu_work.shaded_pixels),
+                    counts,
                     cpu_stages,
                 }
             }),

@@ -130,6 +130,19 @@ impl TechniqueCounts {
         self.shadow_triangles_culled += stats.triangles_culled;
         self.work.shadow_texels_written += stats.texels_written;
     }
+
+    /// The frame's work map of this technique: its CPU-decided counts, what the GPU counted for it and the
+    /// triangles its depth passes submitted.
+    pub fn work_map(
+        &self,
+        gpu_counted: &work::WorkCounts,
+        shaded_pixels: u64,
+    ) -> std::collections::BTreeMap<String, f64> {
+        let mut w = self.work;
+        w.add(gpu_counted);
+        w.depth_triangles += self.shadow_triangles_submitted;
+        w.to_map(shaded_pixels)
+    }
 }
 
 pub trait Technique {

@@ -166,11 +166,7 @@ fn work_ui(r: &shadowlab_core::FrameReport, ui: &mut egui::Ui) {
     if keys.is_empty() {
         return;
     }
-    let number = |v: Option<&f64>| match v {
-        Some(v) if v.fract() == 0.0 => format!("{v:.0}"),
-        Some(v) => format!("{v:.2}"),
-        None => "-".into(),
-    };
+    let number = |v: Option<&f64>| v.map_or("-".to_string(), |v| crate::measure::count_text(*v));
     ui.collapsing("work counts (hardware-independent)", |ui| {
         egui::Grid::new("work").striped(true).num_columns(3).show(ui, |ui| {
             ui.strong("work");
