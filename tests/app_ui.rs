@@ -9,7 +9,7 @@ use egui_kittest::kittest::Queryable;
 use egui_kittest::Harness;
 use shadowlab::gui::gizmo::{self, Projection};
 use shadowlab::gui::layout::Pane;
-use shadowlab::gui::{ShadowLabApp, Startup};
+use shadowlab::gui::{ShadowLabApp, StartState, Startup};
 use shadowlab::sequence::Motion;
 
 fn data_dir(name: &str) -> PathBuf {
@@ -369,6 +369,13 @@ fn lightcluster_offers_a_per_pixel_cluster_id_map() {
 
 /// Drag the gizmo's X handle at `at` by 60 points, in small moves.
 fn drag_x_handle(h: &mut Harness<'static, ShadowLabApp>, at: glam::Vec3) {
+    let (grab, dir_on_screen) = grab_x_handle(h, at);
+    press(h, grab + dir_on_screen * 60.0, false, egui::Modifiers::NONE);
+}
+
+/// Press on the gizmo's X handle at `at` and move it by 60 points in small moves, without releasing it:
+/// returns where it was grabbed and the handle's direction on screen.
+fn grab_x_handle(h: &mut Harness<'static, ShadowLabApp>, at: glam::Vec3) -> (egui::Pos2, egui::Vec2) {
     let p = projection(h);
     let center = p.to_screen(at).expect("the gizmo is on screen");
     let grab = (0..360)
@@ -382,7 +389,92 @@ fn drag_x_handle(h: &mut Harness<'static, ShadowLabApp>, at: glam::Vec3) {
     for i in 1..=6 {
         move_to(h, grab + dir_on_screen * (10.0 * i as f32));
     }
-    press(h, grab + dir_on_screen * 60.0, false, egui::Modifiers::NONE);
+    (grab, dir_on_screen)
+}
+
+/// The points of a layer of the main view's `technique` for the session's lights.
+fn layer_points(h: &mut Harness<'static, ShadowLabApp>, technique: &str, layer: &str) -> Vec<glam::Vec3> {
+    let lights = h.state().session.lights.clone();
+    let gpu = h.state_mut().views.gpu.as_mut().unwrap();
+    let layers = gpu.main.technique(technique).unwrap().overlays(&lights);
+    let layer = layers.into_iter().find(|l| l.name == layer).expect("the layer");
+    layer
+        .primitives
+        .iter()
+        .filter_map(|o| match o {
+            shadowlab_core::technique::Overlay::Point { position, .. } => Some(*position),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn cluster_overlays_follow_a_dragged_light_before_it_is_released() {
+    let mut h = start("drag-clusters", "cornell");
+    h.state_mut().session.technique = "lightcluster".into();
+    h.run_steps(4);
+    // A light that is a cluster's center, on screen: its cluster center moves with it only if the clustering
+    // runs again while it is dragged (the full frame waits for the release).
+    let centers = layer_points(&mut h, "lightcluster", "cluster centers");
+    let p = projection(&h);
+    let rect = h.state().views.last_viewport_rect.unwrap().shrink(120.0);
+    let index = h
+        .state()
+        .session
+        .lights
+        .iter()
+        .position(|l| centers.contains(&l.position) && p.to_screen(l.position).is_some_and(|s| rect.contains(s)))
+        .expect("a cluster center on screen");
+    h.state_mut().session.selected = Some(index);
+    h.run_steps(3);
+    let before = h.state().session.lights[index].position;
+    let (grab, dir) = grab_x_handle(&mut h, before);
+    let moved = h.state().session.lights[index].position;
+    assert!((moved - before).length() > 1e-3, "the light moves while the handle is held");
+    let during = layer_points(&mut h, "lightcluster", "cluster centers");
+    assert!(
+        during.iter().any(|c| (*c - moved).length() < 1e-4),
+        "the cluster center follows the dragged light before the release: {moved:?} not in {during:?}"
+    );
+    assert!(!during.iter().any(|c| (*c - before).length() < 1e-4), "no center is left where the light was");
+    // The legend does not call LightCluster's layers stale; after the release the full frame agrees.
+    assert!(h.state().views.legends.iter().all(|(_, e)| e.iter().all(|e| e.text != shadowlab::gui::views::STALE_NOTE)));
+    press(&mut h, grab + dir * 60.0, false, egui::Modifiers::NONE);
+    h.run_steps(4);
+    let after = layer_points(&mut h, "lightcluster", "cluster centers");
+    let released = h.state().session.lights[index].position;
+    assert!(after.iter().any(|c| (*c - released).length() < 1e-4));
+}
+
+#[test]
+fn an_indirect_technique_is_compared_with_its_own_target() {
+    use shadowlab::gui::document::ViewMode;
+    let mut h = start("indirect-target", "cornell");
+    {
+        let s = &mut h.state_mut().session;
+        s.technique = "reference".into();
+        s.indirect.vpl.count = 64;
+        s.indirect.technique = Some("val".into());
+        s.indirect.component = shadowlab_core::renderer::Component::Indirect;
+        s.view.mode = ViewMode::Difference;
+    }
+    h.run_steps(8);
+    let rmse =
+        |h: &Harness<'static, ShadowLabApp>| h.state().views.difference.as_ref().expect("a difference").metrics.rmse;
+    // By default the target has the view's own indirect technique: the same frame on both sides.
+    assert!(rmse(&h) < 1e-5, "val against val: {}", rmse(&h));
+    // VALs against one shadow map per VPL (their declared target): the approximate visibility shows.
+    h.state_mut().session.view.against_indirect = Some("vpl-shadowmaps".into());
+    h.run_steps(8);
+    assert!(rmse(&h) > 1e-4, "val against vpl-shadowmaps: {}", rmse(&h));
+    let report = h.state().views.gpu.as_ref().unwrap().reference.last_report.clone().expect("a target frame");
+    assert_eq!(report.indirect.map(|i| i.technique).as_deref(), Some("vpl-shadowmaps"));
+    // Saved in the scene file and loaded again.
+    let file = data_dir("indirect-target").join("target.ron");
+    h.state_mut().save_scene_file(&file).unwrap();
+    let mut fresh = start("indirect-target-load", "cornell");
+    fresh.state_mut().load_scene_file(&file).unwrap();
+    assert_eq!(fresh.state().session.view.against_indirect.as_deref(), Some("vpl-shadowmaps"));
 }
 
 #[test]
@@ -567,7 +659,7 @@ fn the_app_can_start_with_an_indirect_technique() {
         data_dir: Some(data_dir("startup-indirect")),
         synchronous: true,
         builtin: Some("cornell".into()),
-        indirect: Some("val".into()),
+        start: StartState { indirect: Some("val".into()), ..Default::default() },
         ..Default::default()
     });
     h.run_steps(3);
@@ -577,7 +669,7 @@ fn the_app_can_start_with_an_indirect_technique() {
     let mut bad = harness(Startup {
         data_dir: Some(data_dir("startup-indirect-bad")),
         synchronous: true,
-        indirect: Some("magic".into()),
+        start: StartState { indirect: Some("magic".into()), ..Default::default() },
         ..Default::default()
     });
     bad.run_steps(2);
@@ -1155,4 +1247,50 @@ fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
         None,
         "off: the exposure as set"
     );
+}
+
+#[test]
+fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
+    use shadowlab_core::technique::ParamValue;
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("start-state")),
+        synchronous: true,
+        builtin: Some("cornell".into()),
+        start: StartState {
+            technique: Some("lightcluster".into()),
+            params: vec!["d_init=0.9".into(), "filter=pcss".into()],
+            view: Some("difference".into()),
+            against: Some("raytraced".into()),
+            against_params: vec!["bias=0.02".into()],
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    h.run_steps(6);
+    let s = &h.state().session;
+    assert_eq!(s.technique, "lightcluster");
+    assert_eq!(s.params["lightcluster"]["d_init"], ParamValue::Float(0.9));
+    assert_eq!(s.params["lightcluster"]["filter"], ParamValue::Choice("pcss".into()));
+    assert_eq!(s.view.compare_against, "raytraced");
+    assert_eq!(s.params["raytraced"]["bias"], ParamValue::Float(0.02));
+    let line = h.state().exit_line();
+    assert!(line.contains("view=difference | technique=lightcluster"), "{line}");
+    assert!(line.contains("d_init=0.9") && line.contains("against=raytraced bias=0.02"), "{line}");
+    assert!(line.contains(" rmse="), "the last metrics: {line}");
+    // A parameter the technique lacks is a message, and the rest still applies.
+    let mut bad = harness(Startup {
+        data_dir: Some(data_dir("start-state-bad")),
+        synchronous: true,
+        start: StartState {
+            technique: Some("lightcluster".into()),
+            params: vec!["warp=3".into()],
+            against_indirect: Some("magic".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    bad.run_steps(2);
+    assert_eq!(bad.state().session.technique, "lightcluster");
+    bad.get_by_label_contains("has no parameter 'warp'");
+    bad.get_by_label_contains("--app-against-indirect 'magic'");
 }

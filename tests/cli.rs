@@ -872,3 +872,98 @@ fn auto_exposure_scales_the_image_by_what_it_metered() {
         assert!(auto_mean > fixed_mean + 5.0, "scale {scale}: mean grey auto {auto_mean}, fixed {fixed_mean}");
     }
 }
+
+/// The rows of a trade-off CSV as maps from column to cell (no cell of these tests holds a comma).
+fn tradeoff_rows(path: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    lines.map(|l| header.iter().map(|h| h.to_string()).zip(l.split(',').map(String::from)).collect()).collect()
+}
+
+const TRADEOFF_VIEW: [&str; 10] =
+    ["--quiet", "--scene", "cornell", "--width", "64", "--height", "48", "--shadow-res", "32", "--warmup"];
+
+#[test]
+fn tradeoff_flags_the_pareto_front_of_several_techniques() {
+    let dir = out_dir("tradeoff");
+    let csv = dir.join("t.csv");
+    let png = dir.join("t.png");
+    let mut args = vec!["tradeoff"];
+    args.extend(TRADEOFF_VIEW);
+    args.extend([
+        "0",
+        "--try",
+        "lightcluster d_init=0.4,1.2 filter=pcf",
+        "--try",
+        "reference",
+        "--try",
+        "unshadowed",
+        "--against",
+        "reference",
+        "--work-axis",
+        "depth_triangles",
+        "--out",
+        csv.to_str().unwrap(),
+        "--plot",
+        png.to_str().unwrap(),
+    ]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let rows = tradeoff_rows(&csv);
+    assert_eq!(rows.len(), 4, "{rows:?}");
+    let num = |r: &std::collections::BTreeMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
+    assert_eq!(rows[0]["parameters"], "d_init=0.4 filter=pcf");
+    assert_eq!(rows[2]["try"], "reference");
+    assert_eq!(num(&rows[2], "error"), 0.0, "the reference against itself");
+    assert!(num(&rows[3], "error") > 0.0, "unshadowed misses every shadow");
+    assert!(rows.iter().all(|r| r["clock"] == rows[0]["clock"] && r["metric"] == "RMSE"));
+    // The flags are the front: a row is on it exactly when no other row is at most as slow and as wrong.
+    for r in &rows {
+        let dominated = rows.iter().any(|q| {
+            let (qm, qe, rm, re) = (num(q, "ms"), num(q, "error"), num(r, "ms"), num(r, "error"));
+            qm <= rm && qe <= re && (qm < rm || qe < re)
+        });
+        assert_eq!(r["pareto"], (!dominated).to_string(), "{r:?}");
+    }
+    assert!(rows.iter().any(|r| r["pareto"] == "true") && rows.iter().all(|r| r["pick"] == "false"));
+    assert!(num(&rows[2], "work.depth_triangles") > 0.0, "work counts are columns");
+    let plot = image::open(&png).unwrap();
+    assert_eq!((plot.width(), plot.height()), (1440, 520), "two panels: time and work");
+}
+
+#[test]
+fn tradeoff_tunes_to_a_budget_with_few_frames() {
+    let dir = out_dir("tradeoff-budget");
+    let csv = dir.join("t.csv");
+    let run = |goal: &[&str]| {
+        let mut args = vec!["tradeoff"];
+        args.extend(TRADEOFF_VIEW);
+        args.extend(["0", "--try", "lightcluster d_init=0.2:1.6:0.2", "--out", csv.to_str().unwrap()]);
+        args.extend(goal);
+        let out = shadowlab(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    // Every setting fits: the two ends of the bracketed d_init tell so, and the pick is the fastest of them.
+    let text = run(&["--max-error", "1e9"]);
+    assert!(text.contains("pick: lightcluster d_init="), "{text}");
+    assert!(text.contains("2 of the 8 configurations rendered"), "{text}");
+    let rows = tradeoff_rows(&csv);
+    assert_eq!(rows.len(), 2);
+    let picked: Vec<_> = rows.iter().filter(|r| r["pick"] == "true").collect();
+    assert_eq!(picked.len(), 1);
+    let fastest = rows.iter().map(|r| r["ms"].parse::<f64>().unwrap()).fold(f64::INFINITY, f64::min);
+    assert_eq!(picked[0]["ms"].parse::<f64>().unwrap(), fastest);
+    // Nothing fits a budget no frame can meet: said, not a pick.
+    let text = run(&["--budget-ms", "0.000001"]);
+    assert!(text.contains("pick: nothing fits within 0.000001 ms"), "{text}");
+    // Bad input is refused before anything renders.
+    let base = ["tradeoff", "--scene", "cornell", "--out", csv.to_str().unwrap()];
+    let with = |extra: &[&'static str]| base.iter().copied().chain(extra.iter().copied()).collect::<Vec<&str>>();
+    assert_fails_with(&with(&["--try", "nosuch"]), "'nosuch' is not a technique");
+    assert_fails_with(&with(&["--try", "reference", "--budget-ms=-1"]), "--budget-ms -1");
+    assert_fails_with(&with(&["--try", "reference", "--work-axis", "nope"]), "--work-axis 'nope'");
+    assert_fails_with(&with(&["--try", "lightcluster d_init=-3"]), "d_init");
+    assert_fails_with(&with(&["--try", "reference", "--against", "raytraced bias=0.01,0.02"]), "the target takes one");
+}

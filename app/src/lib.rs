@@ -7,3 +7,4 @@ pub mod gui;
 pub mod measure;
 pub mod plot;
 pub mod sequence;
+pub mod tradeoff;

@@ -122,3 +122,118 @@ pub fn sweep_plot(
     let image = image::RgbImage::from_raw(SIZE.0, SIZE.1, rgb).ok_or_else(|| anyhow!("plot buffer size"))?;
     image.save_with_format(path, image::ImageFormat::Png).map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
 }
+
+/// One configuration of a trade-off, for plotting.
+pub struct TradeoffPoint {
+    /// The try it belongs to (one colour each).
+    pub series: String,
+    pub ms: f64,
+    pub error: f64,
+    /// The work count of the second panel, when one was asked for.
+    pub work: Option<f64>,
+    pub pareto: bool,
+    pub pick: bool,
+}
+
+/// Write a PNG of error against time per frame (and against a work count when `work_label` is given), one
+/// colour per try, the Pareto front as a black line, the pick ringed, the target's time as a dashed line.
+pub fn tradeoff_plot(
+    path: &Path,
+    title: &str,
+    error_label: &str,
+    points: &[TradeoffPoint],
+    target: Option<(&str, f64)>,
+    work_label: Option<&str>,
+) -> Result<()> {
+    if points.is_empty() {
+        return Err(anyhow!("nothing to plot"));
+    }
+    register_font();
+    let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw the plot: {e}");
+    let mut series: Vec<&str> = Vec::new();
+    for p in points {
+        if !series.contains(&p.series.as_str()) {
+            series.push(&p.series);
+        }
+    }
+    let max_ms = points.iter().map(|p| p.ms).chain(target.map(|t| t.1)).fold(0.0, f64::max).max(1e-6) * 1.1;
+    let max_err = points.iter().map(|p| p.error).filter(|e| e.is_finite()).fold(0.0, f64::max).max(1e-9) * 1.1;
+    // The panels' x axes: time per frame, and the work count when one is asked for.
+    let mut panels: Vec<(&str, bool)> = vec![("time per frame (ms)", true)];
+    if let Some(label) = work_label {
+        panels.push((label, false));
+    }
+    let x_of = |p: &TradeoffPoint, time: bool| if time { p.ms } else { p.work.unwrap_or(0.0) };
+    let size: (u32, u32) = (720 * panels.len() as u32, 520);
+    let mut rgb = vec![0u8; (size.0 * size.1 * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let areas = root.split_evenly((1, panels.len()));
+        let colors = [
+            RGBColor(31, 119, 180),
+            RGBColor(214, 39, 40),
+            RGBColor(44, 160, 44),
+            RGBColor(148, 103, 189),
+            RGBColor(255, 127, 14),
+            RGBColor(23, 190, 207),
+        ];
+        for (area, &(x_label, time)) in areas.iter().zip(&panels) {
+            let x_of = |p: &TradeoffPoint| x_of(p, time);
+            let max_x = if time { max_ms } else { points.iter().map(x_of).fold(0.0, f64::max).max(1.0) * 1.1 };
+            let mut chart = ChartBuilder::on(area)
+                .margin(14)
+                .x_label_area_size(44)
+                .y_label_area_size(74)
+                .build_cartesian_2d(0.0..max_x, 0.0..max_err)
+                .map_err(|e| err(&e))?;
+            chart.configure_mesh().x_desc(x_label).y_desc(error_label).draw().map_err(|e| err(&e))?;
+            if let Some((name, ms)) = target.filter(|_| time) {
+                chart
+                    .draw_series(DashedLineSeries::new(vec![(ms, 0.0), (ms, max_err)], 8, 5, BLACK.stroke_width(1)))
+                    .map_err(|e| err(&e))?
+                    .label(format!("{name} (target)"))
+                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+            }
+            let mut front: Vec<(f64, f64)> = points.iter().filter(|p| p.pareto).map(|p| (x_of(p), p.error)).collect();
+            front.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+            if time && front.len() > 1 {
+                chart
+                    .draw_series(LineSeries::new(front, BLACK.stroke_width(2)))
+                    .map_err(|e| err(&e))?
+                    .label("Pareto front")
+                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+            }
+            for (i, name) in series.iter().enumerate() {
+                let color = colors[i % colors.len()];
+                let pts: Vec<(f64, f64)> =
+                    points.iter().filter(|p| p.series == *name).map(|p| (x_of(p), p.error)).collect();
+                chart
+                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, color.filled())))
+                    .map_err(|e| err(&e))?
+                    .label(name.to_string())
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
+            }
+            let picks: Vec<(f64, f64)> = points.iter().filter(|p| p.pick).map(|p| (x_of(p), p.error)).collect();
+            if !picks.is_empty() {
+                chart
+                    .draw_series(picks.into_iter().map(|p| Circle::new(p, 9, BLACK.stroke_width(2))))
+                    .map_err(|e| err(&e))?
+                    .label("pick")
+                    .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
+            }
+            // Upper right: on a trade-off the slow and wrong corner, where no configuration worth having lies.
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| err(&e))?;
+        }
+        root.present().map_err(|e| err(&e))?;
+    }
+    let image = image::RgbImage::from_raw(size.0, size.1, rgb).ok_or_else(|| anyhow!("plot buffer size"))?;
+    image.save_with_format(path, image::ImageFormat::Png).map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
+}

@@ -726,3 +726,34 @@ fn a_texture_on_another_texcoord_set_gets_the_second_uv_channel() {
         assert!((*b - *a - glam::Vec2::new(0.5, 0.25)).length() < 1e-6, "{a} -> {b}");
     }
 }
+
+/// The triangles of a scene for a CPU BVH.
+fn triangles(scene: &shadowlab_core::scene::Scene) -> Vec<[Vec3; 3]> {
+    scene
+        .meshes
+        .iter()
+        .flat_map(|m| m.indices.chunks_exact(3).map(|t| [0, 1, 2].map(|k| m.positions[t[k] as usize])))
+        .collect()
+}
+
+#[test]
+fn real_interiors_are_first_seen_from_inside_and_the_cornell_box_from_outside() {
+    use shadowlab_core::accel::{bvh::Bvh, first_view};
+    let Some(scenes) = scenes_dir("real_interiors_are_first_seen_from_inside") else { return };
+    for (path, scale) in [("dabrovic-sponza/sponza.obj", 1.0), ("conference/conference.obj", 0.01)] {
+        let scene = load_obj(&scenes.join(path), scale).unwrap();
+        assert!(scene.camera_is_framing(), "an OBJ brings no camera");
+        let bvh = Bvh::build(&triangles(&scene));
+        let b = scene.bounds;
+        let cam = first_view::interior_view(&bvh, &b, scene.camera.fov_y).expect("an enclosed interior");
+        let p = cam.position;
+        assert!(p.cmpgt(b.min).all() && p.cmplt(b.max).all(), "{path}: {p} inside {b:?}");
+        // Seen from where the framing camera would be, above the roof, the model is behind a wall: the
+        // interior camera has room around it.
+        let (_, clearance) = first_view::probe(&bvh, p, b.size().length());
+        assert!(clearance > 0.02 * b.size().length(), "{path}: {clearance} from the nearest surface");
+    }
+    let open_box = load_obj(&scenes.join("cornell-box/CornellBox-Original.obj"), 1.0).unwrap();
+    let bvh = Bvh::build(&triangles(&open_box));
+    assert!(first_view::interior_view(&bvh, &open_box.bounds, 0.9).is_none(), "an open box is framed from outside");
+}

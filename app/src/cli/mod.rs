@@ -1,10 +1,12 @@
-//! The headless command line: `shadowlab render`, `compare`, `sweep`, `bench`, `info`, `animate`, `sequence`:
+//! The headless command line: `shadowlab render`, `compare`, `sweep`, `bench`, `info`, `animate`, `sequence`,
+//! `tradeoff`:
 //! the clap types here, one file per subcommand, the argument groups they share in [`args`].
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use shadowlab_core::technique;
 
 pub mod animate;
 pub mod args;
@@ -16,6 +18,7 @@ pub mod render;
 pub mod sequence;
 pub mod setup;
 pub mod sweep;
+pub mod tradeoff;
 
 pub use animate::AnimateArgs;
 pub use args::{check_indirect, FrameArgs, SceneArgs, TargetArgs};
@@ -26,6 +29,7 @@ pub use render::RenderArgs;
 pub use sequence::SequenceArgs;
 pub use setup::load_scene;
 pub use sweep::SweepArgs;
+pub use tradeoff::TradeoffArgs;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -39,18 +43,33 @@ pub struct Cli {
     pub command: Option<Command>,
     /// Open this scene file (.ron) or model (.obj, .gltf, .glb) in the app.
     pub path: Option<PathBuf>,
-    /// App: start with this technique (e.g. lightcluster).
-    #[arg(long = "app-technique", value_name = "KEY")]
+    #[arg(long = "app-technique", value_name = "KEY", help = registry_help("App: start with this technique", false))]
     pub app_technique: Option<String>,
+    /// App: a parameter of the start technique, `key=value`; repeatable.
+    #[arg(long = "app-param", value_name = "KEY=VALUE")]
+    pub app_params: Vec<String>,
     /// App: start in this view: single, side, split or difference.
     #[arg(long = "app-view", value_name = "VIEW")]
     pub app_view: Option<String>,
     /// App: start on this built-in scene (cornell, arcade, restaurant).
     #[arg(long = "app-scene", value_name = "NAME")]
     pub app_scene: Option<String>,
-    /// App: start with this indirect technique (vpl-shadowmaps, vpl-raytraced, vpl-unshadowed, val, pathtraced).
-    #[arg(long = "app-indirect", value_name = "KEY")]
+    #[arg(long = "app-indirect", value_name = "KEY", help = registry_help("App: start with this indirect technique", true))]
     pub app_indirect: Option<String>,
+    /// App: a parameter of the start indirect technique, `key=value`; repeatable.
+    #[arg(long = "app-indirect-param", value_name = "KEY=VALUE")]
+    pub app_indirect_params: Vec<String>,
+    #[arg(long = "app-against", value_name = "KEY", help = target_help())]
+    pub app_against: Option<String>,
+    /// App: a parameter of the comparison target, `key=value`; repeatable.
+    #[arg(long = "app-against-param", value_name = "KEY=VALUE")]
+    pub app_against_params: Vec<String>,
+    #[arg(
+        long = "app-against-indirect",
+        value_name = "KEY",
+        help = registry_help("App: the comparison target's indirect technique, none or one of", true)
+    )]
+    pub app_against_indirect: Option<String>,
     /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
     #[arg(long, hide = true)]
     pub screenshot: Option<PathBuf>,
@@ -63,6 +82,17 @@ pub struct Cli {
     /// App: orbit the camera continuously (UI frame-rate measurement).
     #[arg(long, hide = true)]
     pub orbit_demo: bool,
+}
+
+/// `what: key, key, ...` with the registry's keys (direct or indirect), for `--help`.
+fn registry_help(what: &str, indirect: bool) -> String {
+    format!("{what}: {}", if indirect { technique::indirect_keys() } else { technique::keys() })
+}
+
+/// `--app-against`: the registry's comparison targets.
+fn target_help() -> String {
+    let keys: Vec<&str> = technique::registry::targets().map(|e| e.key).collect();
+    format!("App: compare against this reference or ground truth: {}", keys.join(", "))
 }
 
 #[derive(Subcommand, Debug)]
@@ -84,6 +114,9 @@ pub enum Command {
     /// Render an image sequence, every frame complete: the camera orbiting its target once, or the lights
     /// moving by a step a frame; numbered PNGs in a folder and, with `--gif`, one looping animated GIF.
     Sequence(SequenceArgs),
+    /// Several techniques with ranges of their parameters against one target: error against time per frame
+    /// (and work), the Pareto front; with `--budget-ms` or `--max-error`, the pick that fits; CSV rows.
+    Tradeoff(TradeoffArgs),
 }
 
 pub fn run(command: Command) -> Result<()> {
@@ -95,5 +128,6 @@ pub fn run(command: Command) -> Result<()> {
         Command::Info(args) => info::run(args),
         Command::Animate(args) => animate::run(args),
         Command::Sequence(args) => sequence::run(args),
+        Command::Tradeoff(args) => tradeoff::run(args),
     }
 }

@@ -25,8 +25,15 @@ fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
 
 impl ShadowLabApp {
     fn indirect_choice(&self) -> IndirectChoice {
-        match &self.session.indirect.technique {
-            Some(k) => IndirectChoice { key: k.clone(), params: param_strings(self.session.indirect.params.get(k)) },
+        self.indirect_choice_of(self.session.indirect.technique.as_deref())
+    }
+
+    /// `key`'s indirect technique with the parameters the user set for it (or none).
+    fn indirect_choice_of(&self, key: Option<&str>) -> IndirectChoice {
+        match key {
+            Some(k) => {
+                IndirectChoice { key: k.to_string(), params: param_strings(self.session.indirect.params.get(k)) }
+            }
             None => IndirectChoice::none(),
         }
     }
@@ -70,6 +77,7 @@ impl ShadowLabApp {
         }
         let against = self.session.view.compare_against.clone();
         let against_params = param_strings(self.session.params.get(&against));
+        let against_indirect = self.indirect_choice_of(self.session.against_indirect_key());
         let target = measure::render_technique(
             &mut renderer,
             &against,
@@ -77,7 +85,7 @@ impl ShadowLabApp {
             &against_params,
             &camera,
             &lights,
-            &indirect,
+            &against_indirect,
             0,
             1,
             no_progress,
@@ -117,7 +125,7 @@ impl ShadowLabApp {
             FigurePane {
                 image: target_image,
                 caption: vec![
-                    technique_pair(&against, indirect_key),
+                    technique_pair(&against, self.session.against_indirect_key()),
                     shown(&against_params),
                     format!("{:.1} ms ({})", target.timing.median_in(speedup.clock), speedup.clock.name()),
                 ],

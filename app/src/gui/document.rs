@@ -102,6 +102,10 @@ pub struct ViewSettings {
     pub diff_gain: f32,
     /// What side-by-side, split and difference views compare with: `reference` or `raytraced`.
     pub compare_against: String,
+    /// The comparison target's indirect technique: None = the view's own (both sides the same indirect
+    /// light), `none` = direct light only, or a key of the indirect registry (`val` against `vpl-shadowmaps`,
+    /// `fuzzy` against `pathtraced`). Absent in older files (= the view's own).
+    pub against_indirect: Option<String>,
     /// A legend of the visible overlay layers drawn over the 3D view.
     pub legend: bool,
 }
@@ -123,6 +127,14 @@ impl ViewSettings {
             let known = registry::targets().map(|e| e.key).collect::<Vec<_>>().join(", ");
             bail!("view setting compare_against = '{}' must be one of {known}", self.compare_against);
         }
+        if let Some(k) = self.against_indirect.as_deref() {
+            if k != "none" && shadowlab_core::technique::INDIRECT_REGISTRY.iter().all(|e| e.key != k) {
+                bail!(
+                    "view setting against_indirect = '{k}' must be none or one of {}",
+                    shadowlab_core::technique::indirect_keys()
+                );
+            }
+        }
         Ok(())
     }
 }
@@ -142,6 +154,7 @@ impl Default for ViewSettings {
             diff_visibility: false,
             diff_gain: 1.0,
             compare_against: registry::REFERENCE.into(),
+            against_indirect: None,
             legend: true,
         }
     }

@@ -174,6 +174,9 @@ impl ShadowLabApp {
 
         let ppp = ui.ctx().pixels_per_point();
         self.views.last_view_pixels = rect.size() * ppp;
+        // Frames an Explain step set up (its parameter values) are not the user's configurations: the session
+        // table leaves them out.
+        self.views.session_times.recording = self.chrome.explain.step.is_none();
         if let Err(e) = self.views.render(&self.session, rect.size() * ppp, ppp, interacting) {
             self.chrome.status = format!("render error: {e:#}");
         }

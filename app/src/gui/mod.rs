@@ -27,6 +27,7 @@ pub mod panels;
 pub mod recovery;
 pub mod session;
 pub mod session_times;
+pub mod start;
 pub mod sweep;
 pub mod tiles;
 pub mod views;
@@ -43,12 +44,12 @@ use shadowlab_core::GpuContext;
 
 use camera::CameraMode;
 use chrome::Chrome;
-use document::ViewMode;
 use gizmo::Projection;
 use interact::Interaction;
 pub use recovery::Recovery;
 pub use session::Animation;
 use session::Session;
+pub use start::StartState;
 use views::view::{StepSizer, View};
 use views::{Gpu, Views};
 
@@ -67,14 +68,10 @@ pub struct Startup {
     pub synchronous: bool,
     /// Orbit the camera continuously, as a user dragging would (UI frame-rate measurements).
     pub orbit_demo: bool,
-    /// Start with this technique key.
-    pub technique: Option<String>,
-    /// Start in this view: single, side, split or difference.
-    pub view: Option<String>,
     /// Start on this built-in scene.
     pub builtin: Option<String>,
-    /// Start with this indirect technique key.
-    pub indirect: Option<String>,
+    /// Start with these techniques, parameters, view and comparison target.
+    pub start: StartState,
     /// Window size in points.
     pub window_size: Option<(f32, f32)>,
     /// When the GPU device is lost, start a new ShadowLab on the saved recovery file and close this one
@@ -247,34 +244,7 @@ impl ShadowLabApp {
         if let Some(path) = startup.path {
             app.open_path(&path);
         }
-        if let Some(t) = startup.technique {
-            if shadowlab_core::technique::REGISTRY.iter().any(|e| e.key == t) {
-                app.session.technique = t;
-            } else {
-                app.error(format!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()));
-            }
-        }
-        if let Some(k) = startup.indirect {
-            if shadowlab_core::technique::INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
-                if let Some(source) = shadowlab_core::technique::preferred_vpl_source(&k) {
-                    app.session.indirect.vpl.source = source;
-                }
-                app.session.indirect.technique = Some(k);
-            } else {
-                app.error(format!(
-                    "unknown indirect technique '{k}' (choose one of: {})",
-                    shadowlab_core::technique::indirect_keys()
-                ));
-            }
-        }
-        match startup.view.as_deref() {
-            None => {}
-            Some("single") => app.session.view.mode = ViewMode::Single,
-            Some("side") => app.session.view.mode = ViewMode::SideBySide,
-            Some("split") => app.session.view.mode = ViewMode::Split,
-            Some("difference") => app.session.view.mode = ViewMode::Difference,
-            Some(other) => app.error(format!("unknown view '{other}' (single, side, split, difference)")),
-        }
+        app.apply_start(startup.start);
         Ok(app)
     }
 
@@ -401,8 +371,7 @@ impl ShadowLabApp {
             self.session.duplicate_selected();
         }
         if frame {
-            let b = self.session.scene.bounds;
-            self.session.camera.frame(&b);
+            self.views.frame_scene(&mut self.session);
         }
         if f12 {
             match self.save_view_screenshot() {
@@ -452,6 +421,7 @@ impl eframe::App for ShadowLabApp {
         if let Some(secs) = self.lifecycle.quit_after_secs {
             if !self.lifecycle.quitting && self.lifecycle.started.elapsed().as_secs_f32() >= secs {
                 self.lifecycle.quitting = true;
+                println!("{}", self.exit_line());
                 let t = self.lifecycle.started.elapsed().as_secs_f64();
                 eprintln!(
                     "UI frames: {} in {t:.1} s ({:.1} fps)",

@@ -12,8 +12,15 @@ use super::ShadowLabApp;
 
 impl ShadowLabApp {
     /// Replace the scene (and its lights and camera). The previous scene stays when `scene` failed to load.
-    pub fn set_scene(&mut self, scene: Scene) {
+    pub fn set_scene(&mut self, mut scene: Scene) {
         self.views.set_scene(&scene);
+        // A model without a camera of its own starts inside when it is an interior (the framing camera would
+        // see its roof), from outside otherwise.
+        if scene.camera_is_framing() {
+            if let Some(camera) = self.views.interior_view(&scene.bounds, scene.camera.fov_y) {
+                scene.camera = camera;
+            }
+        }
         for text in self.session.set_scene(scene) {
             self.chrome.toasts.note(text, 6);
         }

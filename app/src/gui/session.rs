@@ -69,6 +69,10 @@ pub struct Session {
     pub selected_camera: Option<(String, usize)>,
     pub animation: Animation,
     pub animation_time: f32,
+    /// The light layout the lights came from, as the Lights panel shows and edits it: `scene` for the scene's
+    /// own lights, the layout placed for a scene without lights, the last applied one; empty for the lights of
+    /// a scene file.
+    pub layout_spec: String,
 }
 
 impl Session {
@@ -88,6 +92,7 @@ impl Session {
             selected_camera: None,
             animation: Animation::Off,
             animation_time: 0.0,
+            layout_spec: "scene".into(),
         }
     }
 
@@ -96,11 +101,13 @@ impl Session {
     pub fn set_scene(&mut self, scene: Scene) -> Vec<String> {
         let mut notes: Vec<String> = scene.warnings.iter().map(|w| format!("warning: {w}")).collect();
         self.lights = scene.lights.clone();
+        self.layout_spec = "scene".into();
         if self.lights.is_empty() {
             // Most OBJ files and many glTF models come without lights: start lit, and say so.
             let layout = light_layout::default_for_unlit(&scene);
             if let Ok(lights) = light_layout::generate(&layout, &scene) {
                 self.lights = lights;
+                self.layout_spec = layout.to_string();
                 notes.push(format!("{} has no lights: placed {layout} (Lights panel to change)", scene.name));
             }
         }
@@ -115,6 +122,7 @@ impl Session {
     /// already loaded); everything in it was checked.
     pub fn apply_file(&mut self, file: SceneFile) {
         self.lights = file.lights;
+        self.layout_spec = String::new();
         self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
         self.technique = file.technique;
         self.params = file.params;
@@ -202,6 +210,7 @@ impl Session {
         self.begin_edit();
         self.lights = lights;
         self.selected = None;
+        self.layout_spec = spec.trim().to_string();
         Ok(self.lights.len())
     }
 
@@ -274,6 +283,25 @@ impl Session {
                 let params = self.indirect.params.get(&key).cloned().unwrap_or_default();
                 (Some(key), params)
             }
+            None => (None, BTreeMap::new()),
+        }
+    }
+
+    /// The comparison target's indirect technique key (None: direct light only): the view's own unless the
+    /// user chose another for the target ([`ViewSettings::against_indirect`]).
+    pub fn against_indirect_key(&self) -> Option<&str> {
+        match self.view.against_indirect.as_deref() {
+            None => self.indirect.technique.as_deref(),
+            Some("none") => None,
+            Some(k) => Some(k),
+        }
+    }
+
+    /// The comparison target's indirect technique (None while the preview renders) with the parameters the
+    /// user set for it.
+    pub fn against_indirect_inputs(&self, preview: bool) -> (Option<String>, BTreeMap<String, ParamValue>) {
+        match self.against_indirect_key().filter(|_| !preview) {
+            Some(key) => (Some(key.to_string()), self.indirect.params.get(key).cloned().unwrap_or_default()),
             None => (None, BTreeMap::new()),
         }
     }

@@ -56,16 +56,28 @@ pub struct SpeedupRow {
     pub speedup: Option<(f64, TimingSource)>,
 }
 
-#[derive(Default, Debug)]
+#[derive(Debug)]
 pub struct SessionTimes {
     entries: BTreeMap<(u64, String, String), SessionTime>,
     next: u64,
+    /// False while frames are not the user's own configurations (an Explain step's): [`SessionTimes::record`]
+    /// then keeps nothing.
+    pub recording: bool,
+}
+
+impl Default for SessionTimes {
+    fn default() -> Self {
+        SessionTimes { entries: BTreeMap::new(), next: 0, recording: true }
+    }
 }
 
 impl SessionTimes {
     /// Keep `report`'s frame as the time of its configuration (`scene` names the scene, `parameters` the
     /// technique's and indirect technique's parameters as shown).
     pub fn record(&mut self, scene: &str, report: &FrameReport) {
+        if !self.recording {
+            return;
+        }
         let indirect = report.indirect.as_ref().map(|i| (i.technique.clone(), i.parameters.clone()));
         let view = view_of(scene, report);
         let technique = crate::gui::views::session_name(report);

@@ -1,5 +1,6 @@
 //! The sweep panel: renders the current technique for a range of one parameter's values on a worker thread
-//! (its own renderer on the shared device), compares each image with the reference, and plots time and error
+//! (its own renderer on the shared device), compares each image with the view's comparison target (its
+//! technique and indirect technique), and plots time and error
 //! against the parameter while it runs. Cancel stops it after the current setting.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -54,8 +55,12 @@ pub struct SweepJob {
     pub settings: RenderSettings,
     pub technique: String,
     pub fixed: Vec<(String, ParamValue)>,
-    /// The indirect technique both the technique's and the reference's frames add (key, parameters).
+    /// The indirect technique the technique's frames add (key, parameters).
     pub indirect: Option<(String, Vec<(String, ParamValue)>)>,
+    /// The comparison target: its key and parameters, and its indirect technique.
+    pub against: String,
+    pub against_params: Vec<(String, ParamValue)>,
+    pub against_indirect: Option<(String, Vec<(String, ParamValue)>)>,
     pub key: String,
     pub values: Vec<ParamValue>,
 }
@@ -73,26 +78,31 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
     let mut renderer = Renderer::for_scene(&job.gpu, job.scene.clone(), job.layouts.clone(), settings)?;
-    if let Some((key, params)) = &job.indirect {
-        let mut indirect =
+    let set_indirect = |renderer: &mut Renderer, indirect: &Option<(String, Vec<(String, ParamValue)>)>| {
+        let Some((key, params)) = indirect else { return renderer.set_indirect(None).map_err(anyhow::Error::from) };
+        let mut t =
             renderer.create_indirect_technique(key).ok_or_else(|| anyhow!("unknown indirect technique '{key}'"))?;
         for (k, v) in params {
-            indirect.set_param(k, v)?;
+            t.set_param(k, v)?;
         }
-        renderer.set_indirect(Some(indirect))?;
-    }
+        renderer.set_indirect(Some(t)).map_err(anyhow::Error::from)
+    };
     let (w, h) = (renderer.settings().width, renderer.settings().height);
     let mut reference =
-        renderer.create_technique(shadowlab_core::technique::REFERENCE).ok_or_else(|| anyhow!("no reference"))?;
+        renderer.create_technique(&job.against).ok_or_else(|| anyhow!("unknown technique '{}'", job.against))?;
     let mut technique = renderer.create_technique(&job.technique).ok_or_else(|| anyhow!("unknown technique"))?;
     for (k, v) in &job.fixed {
         let _ = technique.set_param(k, v);
+    }
+    for (k, v) in &job.against_params {
         let _ = reference.set_param(k, v);
     }
+    set_indirect(&mut renderer, &job.against_indirect)?;
     let r = renderer.render_frame(reference.as_mut(), &job.camera, &job.lights, &mut |_, _| {})?;
     let reference_report = r;
     let reference_image = Image::new(w, h, renderer.read_hdr()?)?;
     let mask = renderer.read_geometry_mask()?;
+    set_indirect(&mut renderer, &job.indirect)?;
     for value in &job.values {
         if cancel.load(Ordering::Relaxed) {
             break;

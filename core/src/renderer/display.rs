@@ -3,6 +3,15 @@
 use super::*;
 
 impl Renderer {
+    /// Let `technique` run its overlay stages for `camera` and `lights` without rendering (the app's preview
+    /// while a light or the camera moves): the same light culling and aspect as a frame of this renderer.
+    /// True when the technique's overlays now follow them ([`Technique::update_overlays`]).
+    pub fn update_overlays(&self, technique: &mut dyn Technique, camera: &Camera, lights: &[PointLight]) -> bool {
+        let frustum = Frustum::from_clip_from_world(&camera.clip_from_world(self.aspect()));
+        let visible: Vec<usize> = lights::visible_indices(lights, &frustum).collect();
+        technique.update_overlays(&crate::technique::OverlayContext { camera, frustum, lights, visible: &visible })
+    }
+
     pub(super) fn rebind_tonemap(&mut self) {
         self.exposure.rebind(&self.gpu, &self.targets, &self.indirect_buffer);
         self.tonemap_bind_group = Self::tonemap_bind_group(

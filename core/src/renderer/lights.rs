@@ -33,17 +33,20 @@ impl VisibleLights {
     /// Cull `lights` (invalid ones dropped) against `frustum` and upload the visible ones.
     pub fn update(&mut self, gpu: &GpuContext, lights: &[PointLight], frustum: &Frustum) {
         self.indices.clear();
-        self.indices.extend(
-            lights
-                .iter()
-                .enumerate()
-                .filter(|(_, l)| l.is_valid() && frustum.intersects_sphere(l.position, l.range))
-                .map(|(i, _)| i),
-        );
+        self.indices.extend(visible_indices(lights, frustum));
         self.gpu.clear();
         self.gpu.extend(self.indices.iter().map(|&i| GpuLight::new(&lights[i])));
         if self.buffer.write(gpu, &self.gpu) {
             self.generation += 1;
         }
     }
+}
+
+/// The indices of the valid lights whose range sphere touches `frustum`, in order: a frame's light culling.
+pub fn visible_indices<'a>(lights: &'a [PointLight], frustum: &'a Frustum) -> impl Iterator<Item = usize> + 'a {
+    lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.is_valid() && frustum.intersects_sphere(l.position, l.range))
+        .map(|(i, _)| i)
 }

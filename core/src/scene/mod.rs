@@ -295,6 +295,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether the scene's camera is the loaders' framing of its bounds (the model brought no camera).
+    pub fn camera_is_framing(&self) -> bool {
+        self.camera == Camera::framing(&self.bounds)
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(Mesh::triangle_count).sum()
     }

@@ -145,6 +145,16 @@ impl TechniqueCounts {
     }
 }
 
+/// What a technique's overlay stages need to run without rendering a frame: the app's preview while a light or
+/// the camera moves ([`Technique::update_overlays`], through `Renderer::update_overlays`).
+pub struct OverlayContext<'a> {
+    pub camera: &'a Camera,
+    pub frustum: Frustum,
+    pub lights: &'a [PointLight],
+    /// Indices of the lights whose range touches the view frustum, as a frame's light culling finds them.
+    pub visible: &'a [usize],
+}
+
 pub trait Technique {
     /// Stable identifier used by the CLI and scene files (`reference`).
     fn key(&self) -> &'static str;
@@ -170,6 +180,14 @@ pub trait Technique {
         Vec::new()
     }
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
+    /// Run the stages that make the overlays again for `ctx`'s lights and camera, without rendering, so the
+    /// overlays follow a dragged light or camera in the same UI frame while the preview renders the image.
+    /// True when the overlays now show `ctx` (or never depended on the lights and camera); false (the default)
+    /// when they still show the last complete frame. Only called between frames: the next `prepare` starts
+    /// from scratch.
+    fn update_overlays(&mut self, _ctx: &OverlayContext) -> bool {
+        false
+    }
     /// [`Technique::overlays`] with primitives only in the layers `shown(name, visible_by_default)` accepts; the
     /// others keep their name and default and no primitives (the layer list needs them). The app asks this every
     /// UI frame, so a technique whose layers cost a readback (INSM's meshes) overrides it to build only those

@@ -9,20 +9,19 @@ use crate::gui::session::Session;
 pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) {
     ui.heading(format!("Lights ({})", session.lights.len()));
     ui.label("Click a light to select it; drag the gizmo to move it. Ctrl+click on a surface adds one.");
-    thread_local! {
-        static SPEC: std::cell::RefCell<String> = std::cell::RefCell::new("circles:10:8:7".to_string());
-    }
+    // The layout the lights came from (`scene`, the one placed for a scene without lights, the last applied),
+    // edited in place and applied with the button.
     ui.horizontal(|ui| {
-        let mut spec = SPEC.with(|s| s.borrow().clone());
-        ui.add(egui::TextEdit::singleline(&mut spec).desired_width(140.0).hint_text("random:64:2:1"))
+        let hint = if session.layout_spec.is_empty() { "the scene file's lights" } else { "random:64:2:1" };
+        ui.add(egui::TextEdit::singleline(&mut session.layout_spec).desired_width(140.0).hint_text(hint))
             .on_hover_text("random:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene");
         if ui.button("Apply layout").clicked() {
+            let spec = session.layout_spec.clone();
             match session.apply_layout(&spec) {
                 Ok(n) => toasts.say(format!("{n} lights from '{spec}'")),
                 Err(e) => toasts.error(e.to_string()),
             }
         }
-        SPEC.with(|s| *s.borrow_mut() = spec);
     });
     ui.horizontal(|ui| {
         if ui.add_enabled(session.selected.is_some(), egui::Button::new("Duplicate")).clicked() {

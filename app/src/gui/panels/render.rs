@@ -18,8 +18,14 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
              the last one.",
         );
     });
-    if let (true, Some((scale, average))) = (session.view.auto_exposure, views.metered_exposure) {
-        ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"));
+    // The line is there before the first metering too, so nothing below it moves when the value arrives.
+    if session.view.auto_exposure {
+        match views.metered_exposure {
+            Some((scale, average)) => {
+                ui.label(format!("metered: log-average luminance {average:.4}, scale ×{scale:.3}"))
+            }
+            None => ui.label("metered: when the first frame is complete"),
+        };
     }
     let label = if session.view.auto_exposure { "compensation" } else { "exposure" };
     ui.add(egui::Slider::new(&mut session.view.exposure, 0.05..=8.0).logarithmic(true).text(label));
@@ -38,9 +44,12 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
         session.camera.set_mode(mode);
     });
     ui.horizontal(|ui| {
-        if ui.button("Frame scene (F)").clicked() {
-            let b = session.scene.bounds;
-            session.camera.frame(&b);
+        if ui
+            .button("Frame scene (F)")
+            .on_hover_text("Inside an enclosed interior, from outside for an object")
+            .clicked()
+        {
+            views.frame_scene(session);
         }
         if ui.button("Reset").clicked() {
             session.camera = CameraController::from_camera(&session.scene.camera, &session.scene.bounds);
@@ -64,6 +73,7 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
                 .on_hover_text(format!("{} ({})", target.label, target.role.name()));
         }
     });
+    target_indirect_ui(session, ui);
     if session.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {
             ui.checkbox(&mut session.view.diff_signed, "signed");
@@ -77,24 +87,40 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
         });
         if let Some(d) = &views.difference {
             let m = &d.metrics;
+            // While a new comparison is on its way the numbers are the previous frames': greyed and said so.
+            let stale = !views.difference_is_current();
+            if stale {
+                ui.label(egui::RichText::new("previous frames' metrics: the new comparison is being computed").weak());
+            }
+            let text = |s: String| if stale { egui::RichText::new(s).weak() } else { egui::RichText::new(s) };
             egui::Grid::new("metrics").num_columns(2).show(ui, |ui| {
                 ui.label("RMSE");
-                ui.label(format!("{:.5}", m.rmse));
+                ui.label(text(format!("{:.5}", m.rmse)));
                 ui.end_row();
                 ui.label("MSE");
-                ui.label(format!("{:.3e}", m.mse));
+                ui.label(text(format!("{:.3e}", m.mse)));
                 ui.end_row();
-                ui.label("PSNR");
-                ui.label(m.psnr_db.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "inf".into()));
+                ui.label("PSNR").on_hover_text(
+                    "10·log10(peak² / MSE) over the HDR images, the peak being the target's brightest luminance \
+                     over the compared pixels (not 1: HDR radiance has no fixed maximum)",
+                );
+                ui.label(text(match m.psnr_db {
+                    Some(p) => format!("{p:.2} dB (peak {:.3})", m.peak_luminance),
+                    None => "inf (identical images)".into(),
+                }));
                 ui.end_row();
                 ui.label("FLIP mean");
-                ui.label(m.flip_mean.map(|f| format!("{f:.4}")).unwrap_or_else(|| "-".into()));
+                ui.label(text(m.flip_mean.map(|f| format!("{f:.4}")).unwrap_or_else(|| "- (not computed)".into())));
                 ui.end_row();
                 ui.label("shadow error");
-                ui.label(m.shadow_intensity_error.map(|e| format!("{:.2}%", e * 100.0)).unwrap_or_else(|| "-".into()));
+                ui.label(text(match m.shadow_intensity_error {
+                    Some(e) => format!("{:.2}%", e * 100.0),
+                    None if !session.view.diff_visibility => "- (needs \"shadow factors\" on)".into(),
+                    None => "- (no lit pixel to compare)".into(),
+                }));
                 ui.end_row();
                 ui.label(format!("pixels > {:.0}%", m.threshold * 100.0));
-                ui.label(format!("{:.2}%", m.share_over_threshold * 100.0));
+                ui.label(text(format!("{:.2}%", m.share_over_threshold * 100.0)));
                 ui.end_row();
             });
         }
@@ -119,4 +145,47 @@ pub fn overlays_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) 
             }
         }
     }
+}
+
+/// The comparison target's indirect technique: the view's own (the default: the same indirect light on both
+/// sides), none, or one of the indirect registry's references and ground truths, the view's declared target
+/// marked (VALs against one shadow map per VPL, fuzzy clustering against exact VPL visibility).
+fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
+    use shadowlab_core::technique::INDIRECT_REGISTRY;
+    let own = session.indirect.technique.clone();
+    if own.is_none() && session.view.against_indirect.is_none() {
+        return;
+    }
+    let declared = own.as_deref().and_then(|k| INDIRECT_REGISTRY.iter().find(|e| e.key == k)).map(|e| e.target);
+    let name = |choice: &Option<String>| -> String {
+        match choice.as_deref() {
+            None => format!("same ({})", own.as_deref().unwrap_or("none")),
+            Some("none") => "none".to_string(),
+            Some(k) if Some(k) == declared && own.as_deref() != Some(k) => {
+                format!("{k} ({}'s target)", own.as_deref().unwrap_or_default())
+            }
+            Some(k) => k.to_string(),
+        }
+    };
+    let current = session.view.against_indirect.clone();
+    ui.horizontal(|ui| {
+        ui.label("target's indirect");
+        egui::ComboBox::from_id_salt("against indirect")
+            .selected_text(name(&current))
+            .show_ui(ui, |ui| {
+                let mut choices: Vec<Option<String>> = vec![None, Some("none".into())];
+                choices
+                    .extend(INDIRECT_REGISTRY.iter().filter(|e| e.role.is_target()).map(|e| Some(e.key.to_string())));
+                for choice in choices {
+                    let text = name(&choice);
+                    ui.selectable_value(&mut session.view.against_indirect, choice, text);
+                }
+            })
+            .response
+            .on_hover_text(
+                "The indirect technique of the comparison view (side by side, split, difference, figures, sweeps): \
+             the view's own compares the direct techniques under the same indirect light; a reference or ground \
+             truth compares the indirect technique itself",
+            );
+    });
 }

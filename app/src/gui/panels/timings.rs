@@ -105,16 +105,35 @@ pub fn timings_ui(views: &Views, scene: &str, ui_frame_ms: &VecDeque<f64>, statu
                 }
             }
         }
-        Plot::new("timings").legend(Legend::default()).height(130.0).y_axis_label("ms").show(ui, |plot| {
+        // Colours chosen here and named under the plot: a legend inside a 130-point plot covered its lines.
+        let color = |i: usize| {
+            if i == 0 {
+                egui::Color32::WHITE
+            } else {
+                egui::ecolor::Hsva::new((i as f32 * 0.618_034).fract(), 0.7, 0.95, 1.0).into()
+            }
+        };
+        Plot::new("timings").height(130.0).y_axis_label("ms").show(ui, |plot| {
             let total: PlotPoints = views.timings.iter().map(|(t, ms, _)| [*t, *ms]).collect();
-            plot.line(Line::new("frame (GPU)", total));
-            for name in names {
+            plot.line(Line::new("frame", total).color(color(0)));
+            for (i, name) in names.iter().enumerate() {
                 let pts: PlotPoints = views
                     .timings
                     .iter()
-                    .map(|(t, _, passes)| [*t, passes.iter().filter(|p| p.name == name).map(|p| p.ms).sum::<f64>()])
+                    .map(|(t, _, passes)| [*t, passes.iter().filter(|p| p.name == *name).map(|p| p.ms).sum::<f64>()])
                     .collect();
-                plot.line(Line::new(name, pts));
+                plot.line(Line::new(name.clone(), pts).color(color(i + 1)));
+            }
+        });
+        ui.horizontal_wrapped(|ui| {
+            ui.spacing_mut().item_spacing.x = 10.0;
+            for (i, name) in std::iter::once("frame").chain(names.iter().map(String::as_str)).enumerate() {
+                ui.horizontal(|ui| {
+                    ui.spacing_mut().item_spacing.x = 3.0;
+                    let (swatch, _) = ui.allocate_exact_size(egui::vec2(9.0, 9.0), egui::Sense::hover());
+                    ui.painter().rect_filled(swatch, 1.0, color(i));
+                    ui.label(egui::RichText::new(name).small());
+                });
             }
         });
     };

@@ -25,6 +25,15 @@ pub(super) struct PendingDifference {
 }
 
 impl Views {
+    /// Whether the shown difference is of the views' current frames (false while a newer one is computed or
+    /// the views are still rendering new frames).
+    pub fn difference_is_current(&self) -> bool {
+        let (Some(d), Some(gpu)) = (&self.difference, &self.gpu) else { return false };
+        gpu.main.is_converged()
+            && gpu.reference.is_converged()
+            && (d.key.0, d.key.1) == (gpu.main.frame_key(), gpu.reference.frame_key())
+    }
+
     /// Recompute the difference image when both views have converged on new frames.
     pub fn update_difference(&mut self, session: &Session, ctx: &egui::Context) -> Result<()> {
         let camera = session.camera.camera();

@@ -18,7 +18,7 @@ use eframe::{egui, egui_wgpu};
 use glam::Vec3;
 use shadowlab_core::renderer::overlay::OverlayStyle;
 use shadowlab_core::scene::PointLight;
-use shadowlab_core::technique::{LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
+use shadowlab_core::technique::{Glyph, LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
 
@@ -97,6 +97,29 @@ impl Views {
         }
     }
 
+    /// A camera inside the scene when it is an enclosed interior (through the scene's BVH, built once and
+    /// shared with the tracers), None for an object or without a GPU.
+    pub fn interior_view(
+        &self,
+        bounds: &shadowlab_core::math::Aabb,
+        fov_y: f32,
+    ) -> Option<shadowlab_core::scene::Camera> {
+        let gpu = self.gpu.as_ref()?;
+        let (bvh, _) = gpu.main.renderer.shared_scene().bvh(&gpu.ctx);
+        shadowlab_core::accel::first_view::interior_view(&bvh.cpu, bounds, fov_y)
+    }
+
+    /// "Frame scene": the interior view inside an enclosed interior, else the bounds framed from outside.
+    pub fn frame_scene(&self, session: &mut Session) {
+        let bounds = session.scene.bounds;
+        match self.interior_view(&bounds, session.camera.fov_y) {
+            Some(camera) => {
+                session.camera = super::camera::CameraController::from_camera(&camera, &bounds);
+            }
+            None => session.camera.frame(&bounds),
+        }
+    }
+
     /// Alt+click: hand the clicked pixel to the indirect technique's probe (the parameters it names), so its
     /// probe overlay shows that pixel; the app knows no technique, only `probe_params`. Returns the status line.
     pub fn probe_at(&mut self, session: &mut Session, pos: egui::Pos2, rect: egui::Rect) -> Option<String> {
@@ -129,18 +152,25 @@ impl Views {
 
     /// The overlay primitives of the current technique that the user has switched on, plus the selection, and
     /// the legend of each of those layers (as the layers describe themselves through their technique).
+    /// `stale` (direct, indirect): the technique's layers show its last complete frame, not these lights (the
+    /// preview while dragging, for a technique whose overlay stages did not run again): said in their legends.
     fn overlay_primitives(
         &mut self,
         session: &Session,
         lights: &[PointLight],
+        stale: (bool, bool),
     ) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
         let mut out = Vec::new();
         let mut legends = Vec::new();
         let overlays = &session.view.overlays;
         let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
-        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>| {
+        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>, stale: bool| {
             for layer in layers.into_iter().filter(|l| is_on(l)) {
-                legends.push((layer.name.to_string(), technique.overlay_legend(&layer)));
+                let mut legend = technique.overlay_legend(&layer);
+                if stale {
+                    legend.push(LegendEntry::new(Glyph::Rect, [0.7, 0.7, 0.7, 1.0], STALE_NOTE));
+                }
+                legends.push((layer.name.to_string(), legend));
                 out.extend(layer.primitives);
             }
         };
@@ -149,19 +179,25 @@ impl Views {
         if let Ok(technique) = gpu.main.technique(&session.technique) {
             // Only the shown layers are built (INSM's meshes cost a readback).
             let layers = technique.overlays_shown(lights, &shown);
-            take(technique.as_ref(), layers, &mut out);
+            take(technique.as_ref(), layers, &mut out, stale.0);
         }
-        if session.technique != REFERENCE {
+        // The reference's light ranges over any technique that has no such layer of its own.
+        let own_ranges = gpu
+            .main
+            .technique(&session.technique)
+            .is_ok_and(|t| t.overlays_shown(&[], &|_, _| false).iter().any(|l| l.name == "light ranges"));
+        if session.technique != REFERENCE && !own_ranges {
             if let Ok(reference) = gpu.main.technique(REFERENCE) {
                 let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
-                take(reference.as_ref(), layers, &mut out);
+                // Drawn from the lights themselves: always live.
+                take(reference.as_ref(), layers, &mut out, false);
             }
         }
         if let Some(key) = session.indirect.technique.clone() {
             if let Ok(t) = gpu.main.indirect_technique(&key) {
                 let t = t.borrow();
                 let layers = t.overlays_shown(lights, &shown);
-                take(t.as_ref(), layers, &mut out);
+                take(t.as_ref(), layers, &mut out, stale.1);
             }
         }
         // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
@@ -214,7 +250,8 @@ impl Views {
             let layers = t.overlays_shown(&probe, &|_, _| false);
             names.extend(layers.into_iter().map(|l| (l.name.to_string(), l.visible_by_default)));
         }
-        if session.technique != REFERENCE {
+        // The reference's light ranges, offered over a technique that has no such layer of its own (listed once).
+        if session.technique != REFERENCE && names.iter().all(|(n, _)| n != "light ranges") {
             names.push(("light ranges".into(), false));
         }
         if let Ok(t) = gpu.main.technique(&session.technique) {
@@ -237,7 +274,17 @@ impl Views {
     ) -> Result<()> {
         let lights = session.animated_lights();
         let camera = session.camera.camera();
-        let (mut overlays, legends) = self.overlay_primitives(session, &lights);
+        // While the user drags, the preview renders the image, and the technique's overlay stages run again
+        // for the new lights and camera (LightCluster's clustering), so its overlays follow in this UI frame.
+        let stale = match (&mut self.gpu, interacting) {
+            (Some(gpu), true) => {
+                let indirect = session.indirect.technique.as_deref();
+                let (direct, indirect) = gpu.main.update_overlays(&session.technique, indirect, &camera, &lights)?;
+                (!direct, !indirect)
+            }
+            _ => (false, false),
+        };
+        let (mut overlays, legends) = self.overlay_primitives(session, &lights, stale);
         self.legends = legends;
         let technique = if interacting { preview_technique().to_string() } else { session.technique.clone() };
         let two = session.view.mode != ViewMode::Single;
@@ -253,8 +300,10 @@ impl Views {
         // Lines about 2 points wide on screen, whatever the render resolution; occluded parts faded.
         let style = OverlayStyle { line_width_px: (2.0 * render_pixels_per_point).max(1.0), occluded_alpha: 0.25 };
         let params = session.params.get(&technique).cloned().unwrap_or_default();
-        // Both views get the same indirect technique and parameters, so a comparison compares the same light.
+        // The comparison view gets the target's indirect technique: the view's own (the same light on both
+        // sides) unless the user chose another (VALs against one map per VPL, say).
         let (indirect, indirect_params) = session.indirect_inputs(interacting);
+        let (against_indirect, against_indirect_params) = session.against_indirect_inputs(interacting);
         let x_ray = session.view.x_ray;
         let Some(gpu) = &mut self.gpu else { return Ok(()) };
         let main_inputs = FrameInputs {
@@ -262,8 +311,8 @@ impl Views {
             lights: lights.clone(),
             technique,
             params,
-            indirect: indirect.clone(),
-            indirect_params: indirect_params.clone(),
+            indirect,
+            indirect_params,
             settings: settings.clone(),
         };
         // While the user drags, keep the UI fluid: the preview gets a third of the budget.
@@ -311,8 +360,8 @@ impl Views {
                 lights,
                 technique: reference_technique.into(),
                 params: session.params.get(reference_technique).cloned().unwrap_or_default(),
-                indirect,
-                indirect_params,
+                indirect: against_indirect,
+                indirect_params: against_indirect_params,
                 settings: RenderSettings {
                     auto_exposure: match settings.auto_exposure {
                         AutoExposure::Off => AutoExposure::Off,
@@ -379,12 +428,25 @@ impl Views {
                 let params = session.indirect.params.get(&k).cloned().unwrap_or_default().into_iter().collect();
                 (k, params)
             }),
+            against: session.view.compare_against.clone(),
+            against_params: session
+                .params
+                .get(&session.view.compare_against)
+                .map(|p| p.iter().map(|(k, v)| (k.clone(), v.clone())).collect())
+                .unwrap_or_default(),
+            against_indirect: match session.against_indirect_inputs(false) {
+                (Some(k), params) => Some((k, params.into_iter().collect())),
+                (None, _) => None,
+            },
             key: key.to_string(),
             values,
         }));
         Ok(())
     }
 }
+
+/// The legend line of a layer whose technique's overlays do not follow a moving light or camera.
+pub const STALE_NOTE: &str = "while moving: as of the last complete frame (follows on release)";
 
 /// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
 pub fn session_name(report: &shadowlab_core::FrameReport) -> String {

@@ -12,6 +12,7 @@ impl Views {
     /// Paint the images of the view mode into `rect`; dragging the split line's handle moves `view.split`.
     pub fn paint(&self, ui: &mut egui::Ui, painter: &egui::Painter, rect: egui::Rect, session: &mut Session) {
         let indirect = session.indirect.technique.as_deref();
+        let against_indirect = session.against_indirect_key();
         let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
         if let Some(gpu) = &self.gpu {
             match session.view.mode {
@@ -24,7 +25,7 @@ impl Views {
                     painter.image(gpu.reference.texture_id, r, uv, egui::Color32::WHITE);
                     painter.line_segment([r.left_top(), r.left_bottom()], egui::Stroke::new(2.0, egui::Color32::BLACK));
                     label(painter, l.left_top(), &technique_pair(&session.technique, indirect));
-                    label(painter, r.left_top(), &technique_pair(&session.view.compare_against, indirect));
+                    label(painter, r.left_top(), &technique_pair(&session.view.compare_against, against_indirect));
                 }
                 ViewMode::Difference => match &self.difference {
                     Some(d) => {
@@ -36,7 +37,7 @@ impl Views {
                             &format!(
                                 "{} vs {}: RMSE {:.4}  PSNR {}  FLIP {}  shadow error {}",
                                 technique_pair(&session.technique, indirect),
-                                technique_pair(&session.view.compare_against, indirect),
+                                technique_pair(&session.view.compare_against, against_indirect),
                                 m.rmse,
                                 m.psnr_db.map(|p| format!("{p:.1} dB")).unwrap_or_else(|| "inf".into()),
                                 m.flip_mean.map(|f| format!("{f:.3}")).unwrap_or_else(|| "-".into()),
@@ -74,7 +75,11 @@ impl Views {
                         egui::Stroke::new(2.0, egui::Color32::WHITE),
                     );
                     label(painter, rect.left_top(), &technique_pair(&session.technique, indirect));
-                    label(painter, egui::pos2(x, rect.top()), &technique_pair(&session.view.compare_against, indirect));
+                    label(
+                        painter,
+                        egui::pos2(x, rect.top()),
+                        &technique_pair(&session.view.compare_against, against_indirect),
+                    );
                     // The split line is draggable from a handle at its middle.
                     let handle = egui::Rect::from_center_size(egui::pos2(x, rect.center().y), egui::vec2(14.0, 40.0));
                     let h = ui.interact(handle, ui.scope_id().with("split"), egui::Sense::drag());

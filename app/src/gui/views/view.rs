@@ -202,6 +202,30 @@ impl View {
         Ok(self.techniques.get_mut(entry.key).expect("inserted above"))
     }
 
+    /// Run the overlay stages of `key` (and of the indirect technique `indirect`) for `camera` and `lights`
+    /// without rendering, while the preview renders the image: whether each one's overlays now follow them
+    /// (direct, indirect).
+    pub fn update_overlays(
+        &mut self,
+        key: &str,
+        indirect: Option<&str>,
+        camera: &shadowlab_core::scene::Camera,
+        lights: &[PointLight],
+    ) -> Result<(bool, bool)> {
+        self.technique(key)?;
+        let technique = self.techniques.get_mut(key).ok_or_else(|| anyhow!("unknown technique '{key}'"))?;
+        let direct = self.renderer.update_overlays(technique.as_mut(), camera, lights);
+        let indirect = match indirect {
+            Some(k) => {
+                let t = self.indirect_technique(k)?;
+                let live = self.renderer.update_overlays(t.borrow_mut().as_mut(), camera, lights);
+                live
+            }
+            None => true,
+        };
+        Ok((direct, indirect))
+    }
+
     /// The indirect technique instance for `key` (an `INDIRECT_REGISTRY` key), created on first use. Its
     /// parameters are the ones the renderer uses when it is installed.
     pub fn indirect_technique(&mut self, key: &str) -> Result<SharedIndirect> {

@@ -469,6 +469,20 @@ impl Technique for LightCluster {
         Some(("cluster per pixel", ids))
     }
 
+    /// Step 1 again (about 0.1 ms for hundreds of lights), so the clusters follow a dragged light or camera.
+    fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> bool {
+        let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
+        let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
+        self.clusterer.cluster_visible_into(
+            ctx.lights,
+            ctx.visible,
+            ctx.camera.position,
+            &cluster_params,
+            &mut self.clustering,
+        );
+        true
+    }
+
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let clusters = &self.clustering.clusters;
         let valid = |i: usize| i < lights.len();

@@ -1,0 +1,208 @@
+//! Starting the app in a known state (`--app-technique`, `--app-param`, `--app-against`, ...), for a class or
+//! a script, and the one line it prints at exit with `--quit-after`: the view, both configurations and the
+//! last metrics.
+
+use std::collections::BTreeMap;
+
+use anyhow::{anyhow, bail, Result};
+use shadowlab_core::technique::{ParamValue, INDIRECT_REGISTRY, REGISTRY};
+
+use super::document::ViewMode;
+use super::ShadowLabApp;
+
+/// What the start options set, beyond the scene: techniques, their parameters, the view, the target.
+#[derive(Clone, Debug, Default)]
+pub struct StartState {
+    pub technique: Option<String>,
+    /// `key=value` of the technique.
+    pub params: Vec<String>,
+    pub indirect: Option<String>,
+    pub indirect_params: Vec<String>,
+    /// single, side, split or difference.
+    pub view: Option<String>,
+    /// The comparison target (a reference or ground truth).
+    pub against: Option<String>,
+    pub against_params: Vec<String>,
+    /// The target's indirect technique (`none`, or a key).
+    pub against_indirect: Option<String>,
+}
+
+/// The view mode a `--app-view` names.
+pub fn parse_view(text: &str) -> Result<ViewMode> {
+    Ok(match text {
+        "single" => ViewMode::Single,
+        "side" => ViewMode::SideBySide,
+        "split" => ViewMode::Split,
+        "difference" => ViewMode::Difference,
+        other => bail!("unknown view '{other}' (single, side, split, difference)"),
+    })
+}
+
+fn view_name(mode: ViewMode) -> &'static str {
+    match mode {
+        ViewMode::Single => "single",
+        ViewMode::SideBySide => "side",
+        ViewMode::Split => "split",
+        ViewMode::Difference => "difference",
+    }
+}
+
+/// `key=value` pairs, parsed by the parameters' own kinds.
+fn parse_params(
+    owner: &str,
+    specs: &[shadowlab_core::technique::Param],
+    pairs: &[String],
+) -> Result<BTreeMap<String, ParamValue>> {
+    let mut out = BTreeMap::new();
+    for pair in pairs {
+        let (k, v) = pair.split_once('=').ok_or_else(|| anyhow!("'{pair}': expected KEY=VALUE"))?;
+        let (k, v) = (k.trim(), v.trim());
+        let spec = specs.iter().find(|s| s.key == k).ok_or_else(|| {
+            anyhow!(
+                "'{owner}' has no parameter '{k}' (it has: {})",
+                specs.iter().map(|s| s.key).collect::<Vec<_>>().join(", ")
+            )
+        })?;
+        out.insert(k.to_string(), spec.kind.parse(k, v)?);
+    }
+    Ok(out)
+}
+
+impl ShadowLabApp {
+    /// Apply the start options; each bad one is reported (on stderr and in the window) and skipped.
+    pub fn apply_start(&mut self, start: StartState) {
+        let report = |app: &mut ShadowLabApp, e: anyhow::Error| {
+            eprintln!("error: {e:#}");
+            app.error(format!("{e:#}"));
+        };
+        if let Some(t) = &start.technique {
+            match REGISTRY.iter().find(|e| e.key == t) {
+                Some(e) => self.session.technique = e.key.to_string(),
+                None => report(
+                    self,
+                    anyhow!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()),
+                ),
+            }
+        }
+        if let Some(k) = &start.indirect {
+            if INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
+                if let Some(source) = shadowlab_core::technique::preferred_vpl_source(k) {
+                    self.session.indirect.vpl.source = source;
+                }
+                self.session.indirect.technique = Some(k.clone());
+            } else {
+                report(
+                    self,
+                    anyhow!(
+                        "unknown indirect technique '{k}' (choose one of: {})",
+                        shadowlab_core::technique::indirect_keys()
+                    ),
+                );
+            }
+        }
+        if let Some(v) = &start.view {
+            match parse_view(v) {
+                Ok(mode) => self.session.view.mode = mode,
+                Err(e) => report(self, e),
+            }
+        }
+        if let Some(a) = &start.against {
+            if shadowlab_core::technique::registry::targets().any(|e| e.key == a) {
+                self.session.view.compare_against = a.clone();
+            } else {
+                let known: Vec<&str> = shadowlab_core::technique::registry::targets().map(|e| e.key).collect();
+                report(self, anyhow!("--app-against '{a}': choose one of {}", known.join(", ")));
+            }
+        }
+        if let Some(k) = &start.against_indirect {
+            if k == "none" || INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
+                self.session.view.against_indirect = Some(k.clone());
+            } else {
+                report(
+                    self,
+                    anyhow!(
+                        "--app-against-indirect '{k}': choose none or one of {}",
+                        shadowlab_core::technique::indirect_keys()
+                    ),
+                );
+            }
+        }
+        let direct = [
+            (self.session.technique.clone(), &start.params, "--app-param"),
+            (self.session.view.compare_against.clone(), &start.against_params, "--app-against-param"),
+        ];
+        for (key, pairs, option) in direct {
+            if pairs.is_empty() {
+                continue;
+            }
+            let specs = match self.views.gpu.as_mut().map(|g| g.main.technique(&key)) {
+                Some(Ok(t)) => t.params(),
+                _ => continue,
+            };
+            match parse_params(&key, &specs, pairs) {
+                Ok(values) => self.session.params.entry(key).or_default().extend(values),
+                Err(e) => report(self, anyhow!("{option}: {e:#}")),
+            }
+        }
+        if !start.indirect_params.is_empty() {
+            let key = self.session.indirect.technique.clone();
+            let specs = match (&key, self.views.gpu.as_mut()) {
+                (Some(k), Some(g)) => g.main.indirect_technique(k).map(|t| t.borrow().params()).ok(),
+                _ => None,
+            };
+            match (key, specs) {
+                (Some(key), Some(specs)) => match parse_params(&key, &specs, &start.indirect_params) {
+                    Ok(values) => self.session.indirect.params.entry(key).or_default().extend(values),
+                    Err(e) => report(self, anyhow!("--app-indirect-param: {e:#}")),
+                },
+                _ => report(self, anyhow!("--app-indirect-param needs --app-indirect")),
+            }
+        }
+    }
+
+    /// The line printed at exit (`--quit-after`): the scene and view, both configurations as they rendered
+    /// last, and the last difference's metrics (or why there are none).
+    pub fn exit_line(&self) -> String {
+        let s = &self.session;
+        let params = |p: Option<&BTreeMap<String, ParamValue>>| -> String {
+            p.map(|p| p.iter().map(|(k, v)| format!(" {k}={v}")).collect::<String>()).unwrap_or_default()
+        };
+        let indirect = |key: Option<&str>| match key {
+            Some(k) => format!(" indirect={k}{}", params(s.indirect.params.get(k))),
+            None => String::new(),
+        };
+        let mut line = format!(
+            "shadowlab: scene={} view={} | technique={}{}{} | against={}{}{}",
+            s.scene.name,
+            view_name(s.view.mode),
+            s.technique,
+            params(s.params.get(&s.technique)),
+            indirect(s.indirect.technique.as_deref()),
+            s.view.compare_against,
+            params(s.params.get(&s.view.compare_against)),
+            indirect(s.against_indirect_key()),
+        );
+        let last_ms = self.views.gpu.as_ref().and_then(|g| g.main.last_report.as_ref()).map(|r| r.frame_ms());
+        if let Some(ms) = last_ms {
+            line += &format!(" | frame_ms={ms:.2}");
+        }
+        match (&self.views.difference, s.view.mode) {
+            (Some(d), ViewMode::Difference) => {
+                let m = &d.metrics;
+                line += &format!(" | rmse={:.6} mse={:.3e}", m.rmse, m.mse);
+                if let Some(p) = m.psnr_db {
+                    line += &format!(" psnr_db={p:.2} peak={:.3}", m.peak_luminance);
+                }
+                if let Some(f) = m.flip_mean {
+                    line += &format!(" flip={f:.4}");
+                }
+                if let Some(e) = m.shadow_intensity_error {
+                    line += &format!(" shadow_error={e:.5}");
+                }
+            }
+            (None, ViewMode::Difference) => line += " | metrics: none yet (the difference was not complete)",
+            _ => line += " | metrics: none (only the difference view computes them: --app-view difference)",
+        }
+        line
+    }
+}

@@ -1,0 +1,145 @@
+//! The first view of a model that brings no camera: from outside for an object, from inside for an enclosed
+//! interior (a courtyard, a hall, a room), where a camera framing the bounds from outside sees the roof.
+//!
+//! Enclosed means that rays from the middle of the bounds hit the model in most directions at or below the
+//! horizon ([`ENCLOSED_SHARE`] of those of [`PROBE_DIRECTIONS`], through the scene's BVH): walls all around and
+//! a floor, whether or not there is a roof (a courtyard open to the sky is an interior; an object on a floor,
+//! seen from the middle of its bounds, has no walls); an interior is then seen from a
+//! point with room around it, near one end of its longest horizontal axis, at a third of its height, looking
+//! along that axis.
+
+use glam::Vec3;
+
+use super::bvh::{closest_hit_cpu, Bvh};
+use crate::math::Aabb;
+use crate::scene::Camera;
+
+/// Directions the enclosure and the clearance are probed in (a Fibonacci sphere).
+pub const PROBE_DIRECTIONS: usize = 96;
+
+/// The share of the probe rays at or below the horizon (up to [`HORIZON`]) from the middle of the bounds that
+/// must hit the model for it to be an interior.
+pub const ENCLOSED_SHARE: f32 = 0.85;
+
+/// The highest `y` of a probe direction counted for the enclosure: a little above the horizon.
+pub const HORIZON: f32 = 0.25;
+
+fn directions() -> impl Iterator<Item = Vec3> {
+    let n = PROBE_DIRECTIONS as f32;
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    (0..PROBE_DIRECTIONS).map(move |i| {
+        let y = 1.0 - (i as f32 + 0.5) / n * 2.0;
+        let r = (1.0 - y * y).max(0.0).sqrt();
+        let phi = golden * i as f32;
+        Vec3::new(r * phi.cos(), y, r * phi.sin())
+    })
+}
+
+/// The share of the probe directions at or below [`HORIZON`] in which a ray from `point` hits the model within
+/// `t_max`, and the nearest hit distance over all directions (`t_max` when none hits).
+pub fn probe(bvh: &Bvh, point: Vec3, t_max: f32) -> (f32, f32) {
+    let (mut low, mut low_hits) = (0, 0);
+    let mut nearest = t_max;
+    for dir in directions() {
+        let hit = closest_hit_cpu(bvh, point, dir, t_max);
+        if let Some(hit) = hit {
+            nearest = nearest.min(hit.t);
+        }
+        if dir.y <= HORIZON {
+            low += 1;
+            low_hits += hit.is_some() as usize;
+        }
+    }
+    (low_hits as f32 / low.max(1) as f32, nearest)
+}
+
+/// Whether the model in `bounds` encloses its middle (an interior to be seen from inside).
+pub fn is_interior(bvh: &Bvh, bounds: &Aabb) -> bool {
+    if !(bounds.min.is_finite() && bounds.max.is_finite()) || bvh.triangles.is_empty() {
+        return false;
+    }
+    let diagonal = bounds.size().length().max(1e-6);
+    probe(bvh, bounds.center(), diagonal).0 >= ENCLOSED_SHARE
+}
+
+/// A camera inside the interior in `bounds`, or None when the model is not one (keep the outside view).
+pub fn interior_view(bvh: &Bvh, bounds: &Aabb, fov_y: f32) -> Option<Camera> {
+    if !is_interior(bvh, bounds) {
+        return None;
+    }
+    let size = bounds.size();
+    let center = bounds.center();
+    let diagonal = size.length();
+    // The longest horizontal axis, walked from one end towards the middle.
+    let axis = if size.x >= size.z { Vec3::X } else { Vec3::Z };
+    let half = 0.5 * axis.dot(size);
+    let mut best: Option<(f32, Vec3)> = None;
+    for along in [-0.6f32, -0.45, -0.3, 0.6, 0.45, 0.3, 0.0] {
+        for height in [0.3f32, 0.2, 0.45] {
+            let p = center + axis * (along * half) + Vec3::Y * ((height - 0.5) * size.y);
+            let (_, clearance) = probe(bvh, p, diagonal);
+            // Prefer the first candidates (a long view from near an end), as long as there is room around.
+            let score = clearance / diagonal;
+            if score >= 0.04 {
+                best = Some((score, p));
+                break;
+            }
+            if best.is_none_or(|(s, _)| score > s) {
+                best = Some((score, p));
+            }
+        }
+        if best.is_some_and(|(s, _)| s >= 0.04) {
+            break;
+        }
+    }
+    let (score, position) = best?;
+    // Look along the axis towards the middle (from the middle itself: towards the far end), level.
+    let towards = if axis.dot(position - center) > 0.0 { -axis } else { axis };
+    let target = position + towards * half.max(1e-3);
+    let near = (score * diagonal * 0.05).max(diagonal * 1e-5);
+    Some(Camera::look_at(position, target, fov_y, near, diagonal * 1.5))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The six faces of the box from `min` to `max` as triangles (a closed room), or five (open at the top).
+    fn room(min: Vec3, max: Vec3, closed: bool) -> Vec<[Vec3; 3]> {
+        let c = |x: usize, y: usize, z: usize| Vec3::new([min.x, max.x][x], [min.y, max.y][y], [min.z, max.z][z]);
+        let quads = [
+            [c(0, 0, 0), c(1, 0, 0), c(1, 0, 1), c(0, 0, 1)], // floor
+            [c(0, 1, 0), c(1, 1, 0), c(1, 1, 1), c(0, 1, 1)], // roof
+            [c(0, 0, 0), c(0, 1, 0), c(0, 1, 1), c(0, 0, 1)],
+            [c(1, 0, 0), c(1, 1, 0), c(1, 1, 1), c(1, 0, 1)],
+            [c(0, 0, 0), c(1, 0, 0), c(1, 1, 0), c(0, 1, 0)],
+            [c(0, 0, 1), c(1, 0, 1), c(1, 1, 1), c(0, 1, 1)],
+        ];
+        quads
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| closed || *i != 1)
+            .flat_map(|(_, q)| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect()
+    }
+
+    #[test]
+    fn a_room_is_seen_from_inside_and_an_object_from_outside() {
+        let (min, max) = (Vec3::new(-10.0, 0.0, -4.0), Vec3::new(10.0, 6.0, 4.0));
+        let bounds = Aabb { min, max };
+        let bvh = Bvh::build(&room(min, max, true));
+        let cam = interior_view(&bvh, &bounds, 0.9).expect("a closed room is an interior");
+        let p = cam.position;
+        assert!(p.x > min.x && p.x < max.x && p.y > min.y && p.y < max.y && p.z > min.z && p.z < max.z, "{p}");
+        assert!(cam.forward().x.abs() > 0.99, "looks along the room's long axis: {}", cam.forward());
+        // A courtyard open to the sky is still an interior (most directions hit a wall or the floor).
+        let courtyard = Bvh::build(&room(min, max, false));
+        assert!(is_interior(&courtyard, &bounds));
+        // A floor with a block on it is an object: most rays from the middle of its bounds miss.
+        let mut floor = room(Vec3::new(-10.0, 0.0, -10.0), Vec3::new(10.0, 0.01, 10.0), true);
+        floor.extend(room(Vec3::new(5.0, 0.0, 5.0), Vec3::new(7.0, 3.0, 7.0), true));
+        let object = Aabb { min: Vec3::new(-10.0, 0.0, -10.0), max: Vec3::new(10.0, 3.0, 10.0) };
+        assert!(interior_view(&Bvh::build(&floor), &object, 0.9).is_none());
+        assert!(interior_view(&Bvh::build(&[]), &object, 0.9).is_none(), "no triangles: keep the framing");
+    }
+}
