@@ -24,6 +24,7 @@ pub mod lightcluster;
 pub mod pathtraced;
 pub mod raytraced;
 pub mod reference;
+pub mod restir;
 pub mod unshadowed;
 pub mod val;
 pub mod vpl_gather;

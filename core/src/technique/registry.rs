@@ -3,7 +3,9 @@
 //! `--technique`/`--indirect`/`--against*` and the test harness read these lists; no file outside a technique's
 //! folder and this one names a technique's module (`core/tests/shaders.rs` holds the rule).
 
-use super::{fuzzy, insm, lightcluster, pathtraced, raytraced, reference, unshadowed, val, vpl_gather, Technique};
+use super::{
+    fuzzy, insm, lightcluster, pathtraced, raytraced, reference, restir, unshadowed, val, vpl_gather, Technique,
+};
 use crate::gpu::GpuContext;
 use crate::renderer::layouts::SharedLayouts;
 use crate::shaders::WgslModule;
@@ -120,6 +122,17 @@ pub const REGISTRY: &[TechniqueEntry] = &[
         vpl_source: None,
         software_defaults: &[],
         shaders: insm::SHADERS,
+    },
+    TechniqueEntry {
+        key: "restir",
+        label: "ReSTIR (spatiotemporal reservoir resampling, Bitterli 2020)",
+        role: Role::Approximation,
+        target: "raytraced",
+        tolerance: tolerance(0.05, 0.2),
+        create: |gpu, layouts| Box::new(restir::Restir::new(gpu, layouts)),
+        vpl_source: None,
+        software_defaults: &[("frames", "4")],
+        shaders: restir::SHADERS,
     },
     TechniqueEntry {
         key: "raytraced",
