@@ -1294,3 +1294,43 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
     bad.get_by_label_contains("has no parameter 'warp'");
     bad.get_by_label_contains("--app-against-indirect 'magic'");
 }
+
+#[test]
+fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
+    use shadowlab::gui::panels::tradeoff::TryInput;
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("tradeoff", "cornell");
+    h.state_mut().chrome.layout.focus(Pane::Sweep);
+    h.run_steps(2);
+    {
+        let input = &mut h.state_mut().chrome.tradeoff_input;
+        let lc = TryInput { on: true, param: Some("d_init".into()), from: 0.2, to: 1.6, count: 8 };
+        input.tries.insert("lightcluster".into(), lc);
+        input.tries.insert("reference".into(), TryInput { on: false, param: None, from: 0.0, to: 1.0, count: 2 });
+        input.use_budget = true;
+        input.budget_ms = 1e6;
+    }
+    h.get_by_label("Run trade-off").click_accesskit();
+    h.run_steps(2);
+    assert!(h.state().views.tradeoff.is_some(), "the trade-off started");
+    let started = std::time::Instant::now();
+    while h.state_mut().views.tradeoff.as_mut().is_some_and(|t| t.poll()) {
+        assert!(started.elapsed().as_secs() < 120, "the trade-off finishes");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    h.run_steps(2);
+    let t = h.state().views.tradeoff.as_ref().expect("a trade-off ran");
+    assert!(t.error.is_none(), "{:?}", t.error);
+    // Every d_init fits a budget of 1e6 ms: the two ends tell so, and nothing else is rendered.
+    assert_eq!(t.rows.len(), 2, "{:?}", t.rows);
+    let pick = t.pick().expect("a pick within the budget");
+    let (value, error) = (t.rows[pick].setting[0].1.clone(), t.rows[pick].error);
+    assert!(t.rows.iter().all(|r| r.error >= error), "the pick has the lowest error");
+    assert_eq!(h.state().session.technique, "reference");
+    h.get_by_label("Tune: use the pick").click_accesskit();
+    h.run_steps(2);
+    let s = &h.state().session;
+    assert_eq!(s.technique, "lightcluster", "Tune loads the pick's technique");
+    assert_eq!(s.params["lightcluster"]["d_init"], ParamValue::Float(value.parse().unwrap()), "and its d_init");
+}

@@ -22,6 +22,8 @@ pub struct Chrome {
     pub explain: Explain,
     /// Sweep panel inputs: parameter key, start, end, number of values.
     pub sweep_input: (String, f64, f64, usize),
+    /// The Trade-off section's techniques, ranges, metric and budget.
+    pub tradeoff_input: super::panels::tradeoff::TradeoffInput,
     /// Recently opened or saved scene files and models, newest first (File menu).
     pub recent: Vec<PathBuf>,
     /// Frames of an orbit image sequence (File menu).
@@ -44,6 +46,7 @@ impl Chrome {
             inspector: Inspector::default(),
             explain: Explain::default(),
             sweep_input: ("d_init".into(), 0.1, 1.6, 6),
+            tradeoff_input: Default::default(),
             recent,
             orbit_frames: 36,
             sequence_overlays: true,

@@ -30,6 +30,7 @@ pub mod session_times;
 pub mod start;
 pub mod sweep;
 pub mod tiles;
+pub mod tradeoff_run;
 pub mod views;
 
 use std::path::PathBuf;

@@ -8,6 +8,7 @@ pub mod maps;
 pub mod render;
 pub mod technique;
 pub mod timings;
+pub mod tradeoff;
 
 use eframe::egui;
 
@@ -30,7 +31,11 @@ pub fn pane_ui(session: &mut Session, views: &mut Views, chrome: &mut Chrome, ui
         Pane::Overlays => render::overlays_ui(session, views, ui),
         Pane::Lights => lights::lights_ui(session, &mut chrome.toasts, ui),
         Pane::Scene => lights::stats_ui(session, ui),
-        Pane::Sweep => timings::sweep_ui(session, views, &mut chrome.sweep_input, &mut chrome.toasts, ui),
+        Pane::Sweep => {
+            timings::sweep_ui(session, views, &mut chrome.sweep_input, &mut chrome.toasts, ui);
+            ui.separator();
+            tradeoff::tradeoff_ui(session, views, &mut chrome.tradeoff_input, &mut chrome.toasts, ui);
+        }
         Pane::Timings => timings::timings_ui(views, &session.scene.name, &chrome.ui_frame_ms, &chrome.status, ui),
         Pane::Maps => maps::maps_ui(session, views, &mut chrome.inspector, ui),
         Pane::Explain => explain::explain_ui(session, views, chrome, ui),

@@ -57,6 +57,8 @@ pub struct Views {
     /// False in tests (`Startup::synchronous`): the difference is then computed on the UI thread.
     background_work: bool,
     pub sweep: Option<sweep::Sweep>,
+    /// The trade-off of the Sweep panel, in progress or finished.
+    pub tradeoff: Option<super::tradeoff_run::Tradeoff>,
     /// The last complete frame of every configuration measured this session, for the speedup table.
     pub session_times: super::session_times::SessionTimes,
     /// The technique's per-pixel ID map for a converged frame.
@@ -81,6 +83,7 @@ impl Views {
             pending_difference: None,
             background_work,
             sweep: None,
+            tradeoff: None,
             session_times: Default::default(),
             pixel_ids: None,
             legends: Vec::new(),
@@ -95,6 +98,46 @@ impl Views {
             gpu.main.set_scene(scene);
             gpu.reference.share_scene_of(&gpu.main);
         }
+    }
+
+    /// Start a trade-off of `tries` on the current view against its comparison target (technique, parameters,
+    /// indirect technique), with the user's parameters under the tried ones.
+    pub fn start_tradeoff(
+        &mut self,
+        session: &Session,
+        tries: Vec<crate::tradeoff::TrySpec>,
+        metric: super::tradeoff_run::ErrorMetric,
+        goal: crate::tradeoff::Goal,
+    ) -> Result<()> {
+        let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
+        let strings = |p: Option<&std::collections::BTreeMap<String, ParamValue>>| -> Vec<String> {
+            p.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
+        };
+        let base_params =
+            tries.iter().map(|t| (t.technique.clone(), strings(session.params.get(&t.technique)))).collect();
+        let against = session.view.compare_against.clone();
+        let against_indirect = match session.against_indirect_key() {
+            Some(k) => {
+                crate::measure::IndirectChoice { key: k.to_string(), params: strings(session.indirect.params.get(k)) }
+            }
+            None => crate::measure::IndirectChoice::none(),
+        };
+        self.tradeoff = Some(super::tradeoff_run::Tradeoff::start(super::tradeoff_run::TradeoffJob {
+            gpu: gpu.ctx.clone(),
+            scene: gpu.main.renderer.shared_scene(),
+            layouts: gpu.main.renderer.shared_layouts(),
+            lights: session.animated_lights(),
+            camera: session.camera.camera(),
+            settings: gpu.main.renderer.settings().clone(),
+            tries,
+            base_params,
+            against_params: strings(session.params.get(&against)),
+            against,
+            against_indirect,
+            metric,
+            goal,
+        }));
+        Ok(())
     }
 
     /// A camera inside the scene when it is an enclosed interior (through the scene's BVH, built once and

@@ -1,0 +1,328 @@
+//! The Trade-off section of the Sweep panel: the ticked techniques, each over a range of one of its numeric
+//! parameters, rendered on a worker against the view's comparison target; error against time per frame (one
+//! colour per technique, the Pareto front, the target's time), a hovered point's configuration, a click loads
+//! it into the view; with a budget, "Tune" sets the pick.
+
+use std::collections::BTreeMap;
+
+use eframe::egui;
+use egui_plot::{Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine};
+use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
+
+use crate::gui::chrome::Toasts;
+use crate::gui::session::Session;
+use crate::gui::tradeoff_run::ErrorMetric;
+use crate::gui::views::Views;
+use crate::tradeoff::{self, Goal, TrySpec};
+
+/// One technique of the trade-off: ticked or not, and the range of the parameter it is tried over.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TryInput {
+    pub on: bool,
+    /// The swept numeric parameter, None for the technique as set.
+    pub param: Option<String>,
+    pub from: f64,
+    pub to: f64,
+    pub count: usize,
+}
+
+/// What the Trade-off section edits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TradeoffInput {
+    pub tries: BTreeMap<String, TryInput>,
+    pub metric: ErrorMetric,
+    pub use_budget: bool,
+    pub budget_ms: f64,
+}
+
+impl Default for TradeoffInput {
+    fn default() -> Self {
+        TradeoffInput { tries: BTreeMap::new(), metric: ErrorMetric::Rmse, use_budget: false, budget_ms: 100.0 }
+    }
+}
+
+const COLORS: [egui::Color32; 6] = [
+    egui::Color32::from_rgb(31, 119, 180),
+    egui::Color32::from_rgb(214, 39, 40),
+    egui::Color32::from_rgb(44, 160, 44),
+    egui::Color32::from_rgb(148, 103, 189),
+    egui::Color32::from_rgb(255, 127, 14),
+    egui::Color32::from_rgb(23, 190, 207),
+];
+
+/// The values of a range for a parameter kind, as `sweep --param` writes them.
+fn values_text(kind: &ParamKind, from: f64, to: f64, count: usize) -> String {
+    crate::gui::sweep::values(kind, from, to, count)
+        .iter()
+        .map(ParamValue::to_string)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold(Vec::<String>::new(), |mut v, x| {
+            if !v.contains(&x) {
+                v.push(x);
+            }
+            v
+        })
+        .join(",")
+}
+
+pub fn tradeoff_ui(
+    session: &mut Session,
+    views: &mut Views,
+    input: &mut TradeoffInput,
+    toasts: &mut Toasts,
+    ui: &mut egui::Ui,
+) {
+    ui.heading("Trade-off");
+    ui.label(format!(
+        "Error against time per frame on this view, against {} (Compare sets it): the ticked techniques, each over \
+         a range of one parameter.",
+        crate::gui::views::technique_pair(&session.view.compare_against, session.against_indirect_key())
+    ));
+    let Some(gpu) = &mut views.gpu else { return };
+    // The technique's parameters, from the main view's instances.
+    let mut specs = BTreeMap::new();
+    for entry in REGISTRY {
+        if let Ok(t) = gpu.main.technique(entry.key) {
+            specs.insert(entry.key, t.params());
+        }
+    }
+    for entry in REGISTRY {
+        let params = &specs[entry.key];
+        let numeric: Vec<_> =
+            params.iter().filter(|p| matches!(p.kind, ParamKind::Float { .. } | ParamKind::Int { .. })).collect();
+        let default_on = entry.key == session.technique;
+        let t = input.tries.entry(entry.key.to_string()).or_insert_with(|| TryInput {
+            on: default_on,
+            param: None,
+            from: 0.0,
+            to: 1.0,
+            count: 4,
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut t.on, entry.key).on_hover_text(format!("{} ({})", entry.label, entry.role.name()));
+            if !t.on {
+                return;
+            }
+            let before = t.param.clone();
+            egui::ComboBox::from_id_salt(("tradeoff param", entry.key))
+                .selected_text(t.param.clone().unwrap_or_else(|| "as set".into()))
+                .show_ui(ui, |ui| {
+                    ui.selectable_value(&mut t.param, None, "as set");
+                    for p in &numeric {
+                        ui.selectable_value(&mut t.param, Some(p.key.to_string()), p.label);
+                    }
+                });
+            if t.param != before {
+                if let Some(p) = numeric.iter().find(|p| Some(p.key) == t.param.as_deref()) {
+                    (t.from, t.to) = match p.kind {
+                        ParamKind::Float { min, max } => (min as f64, max as f64),
+                        ParamKind::Int { min, max } => {
+                            (min as f64, (max as f64).min(min as f64 * 16.0).max(min as f64 + 1.0))
+                        }
+                        _ => (0.0, 1.0),
+                    };
+                }
+            }
+            if t.param.is_some() {
+                ui.add(egui::DragValue::new(&mut t.from).speed(0.01).prefix("from "));
+                ui.add(egui::DragValue::new(&mut t.to).speed(0.01).prefix("to "));
+                ui.add(egui::DragValue::new(&mut t.count).range(2..=32).prefix("values "));
+            }
+        });
+    }
+    ui.horizontal(|ui| {
+        ui.label("error");
+        for m in ErrorMetric::ALL {
+            ui.selectable_value(&mut input.metric, m, m.name());
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut input.use_budget, "budget").on_hover_text(
+            "The lowest error within this time per frame: the swept parameter is bisected (time and error taken as \
+             monotone in it) instead of rendering every value",
+        );
+        ui.add_enabled(input.use_budget, egui::DragValue::new(&mut input.budget_ms).range(0.01..=1e6).suffix(" ms"));
+    });
+    let running = views.tradeoff.as_mut().is_some_and(|t| t.poll());
+    let (mut run, mut cancel) = (false, false);
+    ui.horizontal(|ui| {
+        run = !running && ui.button("Run trade-off").clicked();
+        cancel = running && ui.button("Cancel").clicked();
+    });
+    if run {
+        let mut tries = Vec::new();
+        for entry in REGISTRY {
+            let Some(t) = input.tries.get(entry.key).filter(|t| t.on) else { continue };
+            let param = t.param.as_ref().and_then(|k| specs[entry.key].iter().find(|p| p.key == k.as_str()));
+            let params = match param {
+                Some(p) => vec![(p.key.to_string(), vec![values_text(&p.kind, t.from, t.to, t.count)])],
+                None => Vec::new(),
+            };
+            let text = std::iter::once(entry.key.to_string())
+                .chain(params.iter().map(|(k, v)| format!("{k}={}", v[0])))
+                .collect::<Vec<_>>()
+                .join(" ");
+            let indirect = session.indirect.technique.as_deref().unwrap_or("none");
+            match TrySpec::parse(&text, entry.key, indirect) {
+                Ok(mut spec) => {
+                    // The view's indirect parameters, as the user set them.
+                    if let Some(k) = &session.indirect.technique {
+                        for (pk, v) in session.indirect.params.get(k).into_iter().flatten() {
+                            spec.params.push((format!("{}{pk}", tradeoff::INDIRECT_PREFIX), vec![v.to_string()]));
+                        }
+                    }
+                    tries.push(spec)
+                }
+                Err(e) => toasts.error(format!("trade-off: {e:#}")),
+            }
+        }
+        if tries.is_empty() {
+            toasts.error("trade-off: tick at least one technique");
+        } else if let Err(e) = views.start_tradeoff(session, tries, input.metric, goal(input)) {
+            toasts.error(format!("trade-off: {e:#}"));
+        }
+    }
+    if cancel {
+        if let Some(t) = &views.tradeoff {
+            t.cancel();
+        }
+    }
+    let Some(t) = &views.tradeoff else { return };
+    if running {
+        ui.add(egui::ProgressBar::new(t.rows.len() as f32 / t.expected.max(1) as f32).text(format!(
+            "{} of about {} configurations",
+            t.rows.len(),
+            t.expected
+        )));
+        ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
+    }
+    if let Some(e) = &t.error {
+        ui.colored_label(egui::Color32::LIGHT_RED, e);
+    }
+    let points = t.points();
+    let front = tradeoff::pareto(&points);
+    let pick = if t.finished { t.pick() } else { None };
+    let clock = t.clock();
+    let mut clicked = None;
+    let response = Plot::new("tradeoff")
+        .height(180.0)
+        .x_axis_label(format!("ms per frame ({})", clock.name()))
+        .y_axis_label(t.metric.name())
+        .include_x(0.0)
+        .include_y(0.0)
+        .show(ui, |plot| {
+            if let Some(target) = t.target {
+                plot.vline(VLine::new("target", target.ms_in(clock)).color(egui::Color32::GRAY));
+            }
+            let mut line: Vec<[f64; 2]> =
+                points.iter().zip(&front).filter(|(_, f)| **f).map(|(p, _)| [p.ms, p.error]).collect();
+            line.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            if line.len() > 1 {
+                plot.line(Line::new("Pareto front", PlotPoints::from(line)).color(egui::Color32::WHITE));
+            }
+            for (i, spec) in t.tries.iter().enumerate() {
+                let pts: Vec<[f64; 2]> = t
+                    .rows
+                    .iter()
+                    .zip(&points)
+                    .filter(|(r, _)| r.try_index == i)
+                    .map(|(_, p)| [p.ms, p.error])
+                    .collect();
+                let color = COLORS[i % COLORS.len()];
+                plot.points(Points::new(spec.label(), PlotPoints::from(pts)).radius(4.0).color(color));
+            }
+            if let Some(i) = pick {
+                let p = [points[i].ms, points[i].error];
+                let ring = Points::new("pick", PlotPoints::from(vec![p])).shape(MarkerShape::Circle).filled(false);
+                plot.points(ring.radius(9.0).color(egui::Color32::YELLOW));
+            }
+            // The configuration nearest the pointer (in screen space), for the tooltip and a click.
+            let pointer = plot.response().hover_pos();
+            let nearest = pointer.and_then(|at| {
+                points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| (i, plot.screen_from_plot(PlotPoint::new(p.ms, p.error)).distance(at)))
+                    .filter(|(_, d)| *d < 12.0)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(i, _)| i)
+            });
+            if plot.response().clicked() {
+                clicked = nearest;
+            }
+            nearest
+        });
+    if let Some(i) = response.inner {
+        let r = &t.rows[i];
+        let text = format!(
+            "{} {}\n{:.2} ms ({}), {} {:.5}{}",
+            t.tries[r.try_index].label(),
+            tradeoff::setting_text(&r.setting),
+            points[i].ms,
+            clock.name(),
+            t.metric.name(),
+            r.error,
+            if front[i] { "\non the Pareto front" } else { "" }
+        );
+        response.response.on_hover_text_at_pointer(format!("{text}\nclick: load this configuration"));
+    }
+    match (t.goal, t.finished, pick) {
+        (Goal::All, ..) | (_, false, _) => {}
+        (_, true, Some(i)) => {
+            let r = &t.rows[i];
+            ui.label(format!(
+                "pick: {} {} at {:.2} ms, {} {:.5} ({} configurations rendered)",
+                t.tries[r.try_index].label(),
+                tradeoff::setting_text(&r.setting),
+                points[i].ms,
+                t.metric.name(),
+                r.error,
+                t.rows.len()
+            ));
+            if ui.button("Tune: use the pick").clicked() {
+                clicked = Some(i);
+            }
+        }
+        (_, true, None) => {
+            ui.label("nothing fits the budget");
+        }
+    }
+    if let Some(i) = clicked {
+        let (try_index, setting) = (t.rows[i].try_index, t.rows[i].setting.clone());
+        let spec = t.tries[try_index].clone();
+        load_configuration(session, views, &spec, &setting, toasts);
+    }
+}
+
+fn goal(input: &TradeoffInput) -> Goal {
+    if input.use_budget {
+        Goal::BudgetMs(input.budget_ms)
+    } else {
+        Goal::All
+    }
+}
+
+/// Make `spec` with `setting` the view's technique and parameters.
+pub fn load_configuration(
+    session: &mut Session,
+    views: &mut Views,
+    spec: &TrySpec,
+    setting: &tradeoff::Setting,
+    toasts: &mut Toasts,
+) {
+    let Some(gpu) = &mut views.gpu else { return };
+    let Ok(technique) = gpu.main.technique(&spec.technique) else { return };
+    let params = technique.params();
+    session.technique = spec.technique.clone();
+    for (key, text) in setting.iter().filter(|(k, _)| !k.starts_with(tradeoff::INDIRECT_PREFIX)) {
+        match params.iter().find(|p| p.key == key.as_str()).map(|p| p.kind.parse(key, text)) {
+            Some(Ok(value)) => {
+                session.params.entry(spec.technique.clone()).or_default().insert(key.clone(), value);
+            }
+            Some(Err(e)) => toasts.error(format!("{e}")),
+            None => toasts.error(format!("'{}' has no parameter '{key}'", spec.technique)),
+        }
+    }
+    toasts.say(format!("loaded {} {}", spec.label(), tradeoff::setting_text(setting)));
+}
