@@ -113,6 +113,24 @@ fn with_every_light_a_candidate_the_unbiased_mean_converges_to_the_ray_tracer() 
         || (m - m_truth).abs() > 0.03 * m_truth
         || (m_all - m_all_truth).abs() > 0.01 * m_all_truth;
     assert!(!failed, "restir is not the ray tracer's image: {d}; see {}", pictures("restir-converges", &image, &truth));
+    // The tile source (uniform over the pixel's tile list, the renderer's tiled light lists) converges as well.
+    let tiled: Params = &[
+        ("source", choice("tiles")),
+        ("candidates", int(8)),
+        ("history", int(0)),
+        ("spatial", int(0)),
+        ("frames", int(64)),
+    ];
+    let mut t = restir(&r, tiled);
+    let (tiled_image, _) = frame(&mut r, &mut t, &camera, &lights);
+    let d_tiled = display_difference(&tiled_image, &truth, W, H, 1.0, None);
+    let m_tiled = mean(&tiled_image, &all);
+    eprintln!("tile source, 8 candidates, 64 frames: {d_tiled}; mean {m_tiled:.5}");
+    assert!(
+        d_tiled.mean_abs <= TOLERANCE && (m_tiled - m_all_truth).abs() <= 0.01 * m_all_truth,
+        "tile source: {d_tiled}, mean {m_tiled} against {m_all_truth}; see {}",
+        pictures("restir-converges-tiles", &tiled_image, &truth)
+    );
     // Without visibility the same test fails by far: the shadows cover enough of the view.
     assert!(in_shadow > (W * H / 10) as usize, "only {in_shadow} pixels in shadow");
     assert!(none.mean_abs > 5.0 * TOLERANCE, "the unshadowed image passes too: {none}");

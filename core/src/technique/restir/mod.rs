@@ -85,6 +85,7 @@ const CANDIDATES: WgslModule = crate::wgsl!(
     "restir_candidates",
     [
         "shaders/common.wgsl",
+        "shaders/light_tiles.wgsl",
         "shaders/raytrace_bvh.wgsl",
         "core/src/technique/restir/reservoir.wgsl",
         "core/src/technique/restir/trace.wgsl",
@@ -145,7 +146,7 @@ struct FrameUniform {
     depth_threshold: f32,
     normal_cos: f32,
     first_frame: u32,
-    _pad: u32,
+    tiled: u32,
 }
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 144);
 
@@ -257,7 +258,15 @@ impl Restir {
         let pipeline = |module: &WgslModule, entry: &str| {
             compute_pipeline(gpu, layouts, module.name, module.source, entry, &[&group_layout])
         };
-        let candidates_pipeline = pipeline(&CANDIDATES, "candidates_main");
+        // Candidates read the renderer's tile lists too (group 2), for the tile source.
+        let candidates_pipeline = compute_pipeline(
+            gpu,
+            layouts,
+            CANDIDATES.name,
+            CANDIDATES.source,
+            "candidates_main",
+            &[&group_layout, &layouts.light_tiles],
+        );
         let temporal_pipeline = pipeline(&TEMPORAL, "temporal_main");
         let spatial_pipeline = pipeline(&SPATIAL, "spatial_main");
         let shade_entries = [
@@ -339,7 +348,8 @@ impl Restir {
         }
         let started = std::time::Instant::now();
         let table = match self.params.source {
-            Source::Uniform => alias::uniform_table(visible),
+            // The tile source draws from the tile lists; the table maps their entries (visible lights) to lights.
+            Source::Uniform | Source::Tiles => alias::uniform_table(visible),
             Source::Power => {
                 let power: Vec<f64> = visible
                     .iter()
@@ -471,7 +481,7 @@ impl Restir {
             depth_threshold: p.depth_threshold,
             normal_cos: p.normal_threshold_deg.to_radians().cos(),
             first_frame: first_frame as u32,
-            _pad: 0,
+            tiled: (p.source == Source::Tiles) as u32,
         }
     }
 
@@ -498,7 +508,14 @@ impl Restir {
 
     /// Steps 1-2: candidates, RIS and visibility reuse, into this frame's reservoirs.
     fn candidates_pass(&self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
-        self.dispatch(ctx, encoder, "restir candidates", &self.candidates_pipeline, &self.groups().to_working);
+        let (x, y) = pixel_workgroups(ctx.size);
+        ctx.timer.compute_pass(encoder, "restir candidates", |pass| {
+            pass.set_pipeline(&self.candidates_pipeline);
+            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+            pass.set_bind_group(1, &self.groups().to_working, &[]);
+            pass.set_bind_group(2, ctx.light_tiles.bind_group(), &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        });
     }
 
     /// Step 3: temporal reuse of the last final reservoirs, in place.
@@ -636,6 +653,10 @@ impl Technique for Restir {
             times.push(PassTime { name: "restir source table".into(), ms: self.table_ms, count: 1 });
         }
         times
+    }
+
+    fn uses_light_tiles(&self) -> bool {
+        self.params.source == Source::Tiles
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

@@ -9,6 +9,9 @@ pub enum Source {
     Uniform,
     /// In proportion to a light's power (luminance of colour times intensity), through an alias table.
     Power,
+    /// Every light of the pixel's 16x16 tile list alike (the renderer's tile lists: the lights whose range
+    /// reaches the tile). Not the paper's: its lights have no range.
+    Tiles,
 }
 
 /// How reservoirs of other pixels (and of the previous frame) are combined.
@@ -21,7 +24,7 @@ pub enum BiasMode {
     Unbiased,
 }
 
-pub const SOURCES: &[&str] = &["uniform", "power"];
+pub const SOURCES: &[&str] = &["uniform", "power", "tiles"];
 pub const BIAS_MODES: &[&str] = &["biased", "unbiased"];
 /// The most spatial neighbours per pixel (the shader keeps their pixels for the unbiased `Z`).
 /// Keep in sync with `RESTIR_MAX_SPATIAL` in `restir/spatial.wgsl`.
@@ -103,11 +106,13 @@ impl RestirParams {
             choice(
                 "source",
                 "Source pdf",
-                "What the candidates are drawn from: every visible light alike, or by power (alias table)",
+                "What the candidates are drawn from: every visible light alike, by power (alias table), or the \
+                 lights of the pixel's tile list alike",
                 SOURCES,
                 match self.source {
                     Source::Uniform => "uniform",
                     Source::Power => "power",
+                    Source::Tiles => "tiles",
                 },
             ),
             int(
@@ -180,7 +185,11 @@ impl RestirParams {
         match (key, value) {
             ("candidates", ParamValue::Int(v)) => self.candidates = *v as u32,
             ("source", ParamValue::Choice(v)) => {
-                self.source = if v == "uniform" { Source::Uniform } else { Source::Power }
+                self.source = match v.as_str() {
+                    "uniform" => Source::Uniform,
+                    "tiles" => Source::Tiles,
+                    _ => Source::Power,
+                }
             }
             ("history", ParamValue::Int(v)) => self.history = *v as u32,
             ("spatial", ParamValue::Int(v)) => self.spatial = *v as u32,

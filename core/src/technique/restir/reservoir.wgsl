@@ -59,7 +59,8 @@ struct RestirFrame {
     normal_cos: f32,
     // 1: the first ReSTIR frame of the rendered frame (the mean starts over)
     first_frame: u32,
-    _pad0: u32,
+    // 1: candidates drawn uniformly from the pixel's tile list instead of the source table
+    tiled: u32,
 }
 
 @group(1) @binding(2) var<storage, read> lights: array<Light>;
