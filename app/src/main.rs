@@ -49,6 +49,8 @@ fn main() -> ExitCode {
                 against_indirect: args.app_against_indirect,
             },
             relaunch_on_device_loss: true,
+            no_file_dialogs: false,
+            soak_secs: args.soak_secs,
         }),
     };
     match result {

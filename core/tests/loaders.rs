@@ -757,3 +757,75 @@ fn real_interiors_are_first_seen_from_inside_and_the_cornell_box_from_outside() 
     let bvh = Bvh::build(&triangles(&open_box));
     assert!(first_view::interior_view(&bvh, &open_box.bounds, 0.9).is_none(), "an open box is framed from outside");
 }
+
+/// A glTF as gltfpack writes it (KHR_mesh_quantization): one triangle with `i16` positions and normalised `i8`
+/// normals, dequantised by its node's scale and translation; in `dir`, with its buffer embedded as base64.
+fn quantized_gltf(dir: &Path, required: &[&str]) -> PathBuf {
+    // Positions (0,0,0), (1000,0,0), (0,1000,0) as i16 + 2 bytes of padding each (stride 8); normals (0,0,127)
+    // as i8 + 1 byte of padding (stride 4).
+    let mut bytes: Vec<u8> = Vec::new();
+    for p in [[0i16, 0, 0], [1000, 0, 0], [0, 1000, 0]] {
+        for c in p {
+            bytes.extend(c.to_le_bytes());
+        }
+        bytes.extend([0, 0]);
+    }
+    for _ in 0..3 {
+        bytes.extend([0u8, 0, 127, 0]);
+    }
+    let b64 = {
+        const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut s = String::new();
+        for c in bytes.chunks(3) {
+            let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+            for i in 0..4 {
+                s.push(if i <= c.len() { T[(n >> (18 - 6 * i) & 63) as usize] as char } else { '=' });
+            }
+        }
+        s
+    };
+    let required: Vec<String> = required.iter().map(|e| format!("\"{e}\"")).collect();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":[{r}],"extensionsRequired":[{r}],
+        "scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"mesh":0,"scale":[0.002,0.002,0.002],"translation":[1,0,0]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1}}}}]}}],
+        "accessors":[
+          {{"bufferView":0,"componentType":5122,"count":3,"type":"VEC3","min":[0,0,0],"max":[1000,1000,0]}},
+          {{"bufferView":1,"componentType":5120,"normalized":true,"count":3,"type":"VEC3"}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":24,"byteStride":8}},
+                       {{"buffer":0,"byteOffset":24,"byteLength":12,"byteStride":4}}],
+        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#,
+        r = required.join(",")
+    );
+    let path = dir.join("quantized.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+#[test]
+fn gltf_with_khr_mesh_quantization_loads_dequantised() {
+    let dir = std::env::temp_dir().join("shadowlab-quantized");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = load_gltf(&quantized_gltf(&dir, &["KHR_mesh_quantization"]), 1.0).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mesh = &scene.meshes[0];
+    // 1000 * 0.002 + 1 = 3: the node's transform dequantises the integers.
+    assert_close(mesh.positions[0], Vec3::new(1.0, 0.0, 0.0), 1e-5);
+    assert_close(mesh.positions[1], Vec3::new(3.0, 0.0, 0.0), 1e-5);
+    assert_close(mesh.positions[2], Vec3::new(1.0, 2.0, 0.0), 1e-5);
+    assert_close(mesh.normals[0], Vec3::Z, 1e-5);
+}
+
+#[test]
+fn gltf_requiring_an_unsupported_extension_is_refused_by_name_before_validation() {
+    let dir = std::env::temp_dir().join("shadowlab-draco");
+    std::fs::create_dir_all(&dir).unwrap();
+    // Draco files carry attribute accessors without a bufferView: validation alone would say "Missing data".
+    let path = quantized_gltf(&dir, &["KHR_draco_mesh_compression"]);
+    let text =
+        std::fs::read_to_string(&path).unwrap().replace(r#""bufferView":0,"#, "").replace(r#""bufferView":1,"#, "");
+    std::fs::write(&path, text).unwrap();
+    let err = load_gltf(&path, 1.0).unwrap_err().to_string();
+    assert!(err.contains("KHR_draco_mesh_compression"), "{err}");
+}

@@ -79,6 +79,9 @@ pub struct Cli {
     /// App: window size in points, `WIDTHxHEIGHT` (default 1400x860; 1024x640 on a software rasterizer).
     #[arg(long = "window-size", value_name = "WxH")]
     pub window_size: Option<String>,
+    /// App: a long run of this many seconds (lights animated, every technique in turn, memory printed).
+    #[arg(long, hide = true)]
+    pub soak_secs: Option<f32>,
     /// App: orbit the camera continuously (UI frame-rate measurement).
     #[arg(long, hide = true)]
     pub orbit_demo: bool,

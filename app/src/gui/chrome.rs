@@ -36,6 +36,8 @@ pub struct Chrome {
     pub ui_frame_ms: VecDeque<f64>,
     /// The selection of the last UI frame: a new one brings the light inspector forward.
     pub last_selected: Option<usize>,
+    /// False: every file dialog is answered with Cancel (tests driving the app; `Startup::no_file_dialogs`).
+    pub file_dialogs: bool,
 }
 
 impl Chrome {
@@ -53,6 +55,7 @@ impl Chrome {
             status: String::new(),
             ui_frame_ms: VecDeque::new(),
             last_selected: None,
+            file_dialogs: true,
         }
     }
 }

@@ -266,6 +266,12 @@ impl History {
             None => false,
         }
     }
+    /// How many edits can be undone.
+    pub fn depth(&self) -> usize {
+        self.undo.len()
+    }
+    /// The most edits kept: older ones are dropped.
+    pub const LIMIT: usize = HISTORY_LIMIT;
     pub fn can_undo(&self) -> bool {
         !self.undo.is_empty()
     }

@@ -12,9 +12,14 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
                 if ui.button("Open scene or model…").clicked() {
-                    if let Some(path) = rfd::FileDialog::new()
-                        .add_filter("ShadowLab scenes and models", &["ron", "obj", "gltf", "glb"])
-                        .pick_file()
+                    let dialogs = app.chrome.file_dialogs;
+                    if let Some(path) = dialogs
+                        .then(|| {
+                            rfd::FileDialog::new()
+                                .add_filter("ShadowLab scenes and models", &["ron", "obj", "gltf", "glb"])
+                                .pick_file()
+                        })
+                        .flatten()
                     {
                         app.open_path(&path);
                     }
@@ -33,7 +38,11 @@ pub fn menu_bar(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
                 });
                 ui.separator();
                 if ui.button("Save scene file…").clicked() {
-                    if let Some(path) = rfd::FileDialog::new().add_filter("ShadowLab scene", &["ron"]).save_file() {
+                    let dialogs = app.chrome.file_dialogs;
+                    let path = dialogs
+                        .then(|| rfd::FileDialog::new().add_filter("ShadowLab scene", &["ron"]).save_file())
+                        .flatten();
+                    if let Some(path) = path {
                         match app.save_scene_file(&path) {
                             Ok(()) => app.toast(format!("saved {}", path.display())),
                             Err(e) => app.error(format!("save failed, nothing was overwritten: {e:#}")),

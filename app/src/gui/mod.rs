@@ -27,6 +27,7 @@ pub mod panels;
 pub mod recovery;
 pub mod session;
 pub mod session_times;
+pub mod soak;
 pub mod start;
 pub mod sweep;
 pub mod tiles;
@@ -73,6 +74,11 @@ pub struct Startup {
     pub builtin: Option<String>,
     /// Start with these techniques, parameters, view and comparison target.
     pub start: StartState,
+    /// Answer every file dialog with Cancel (tests that drive the app with random input).
+    pub no_file_dialogs: bool,
+    /// A long run of this many seconds: lights animated, techniques switched in turn, memory printed
+    /// ([`soak`]); quits at the end.
+    pub soak_secs: Option<f32>,
     /// Window size in points.
     pub window_size: Option<(f32, f32)>,
     /// When the GPU device is lost, start a new ShadowLab on the saved recovery file and close this one
@@ -180,6 +186,8 @@ pub struct ShadowLabApp {
     lifecycle: Lifecycle,
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
+    /// A long run in progress (`Startup::soak_secs`).
+    soak: Option<soak::Soak>,
 }
 
 /// The window's life: where its files go, its clocks, screenshots of it, quitting after a time, GPU errors
@@ -225,12 +233,13 @@ impl ShadowLabApp {
                 ui_frames: 0,
                 window_shot: Default::default(),
                 exit_screenshot: startup.screenshot.clone(),
-                quit_after_secs: startup.quit_after_secs,
+                quit_after_secs: startup.soak_secs.or(startup.quit_after_secs),
                 quitting: false,
                 uncaptured_errors: Default::default(),
                 relaunch_on_device_loss: startup.relaunch_on_device_loss,
             },
             recovery: None,
+            soak: startup.soak_secs.map(|_| soak::Soak::new()),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -245,6 +254,7 @@ impl ShadowLabApp {
         if let Some(path) = startup.path {
             app.open_path(&path);
         }
+        app.chrome.file_dialogs = !startup.no_file_dialogs;
         app.apply_start(startup.start);
         Ok(app)
     }
@@ -423,6 +433,9 @@ impl eframe::App for ShadowLabApp {
             if !self.lifecycle.quitting && self.lifecycle.started.elapsed().as_secs_f32() >= secs {
                 self.lifecycle.quitting = true;
                 println!("{}", self.exit_line());
+                if let Some(summary) = self.soak_summary() {
+                    println!("{summary}");
+                }
                 let t = self.lifecycle.started.elapsed().as_secs_f64();
                 eprintln!(
                     "UI frames: {} in {t:.1} s ({:.1} fps)",
@@ -437,6 +450,7 @@ impl eframe::App for ShadowLabApp {
             }
             ctx.request_repaint();
         }
+        self.soak_frame();
         self.handle_dropped_files(&ctx);
         self.handle_shortcuts(&ctx);
         if self.session.selected != self.chrome.last_selected {
