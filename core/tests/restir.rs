@@ -343,7 +343,17 @@ fn the_per_pixel_maps_show_the_final_reservoirs() {
         );
         assert!(t.overlay_legend(l).len() >= 2, "{layer} has a legend");
     }
-    assert_eq!(t.explain().len(), 6);
+    // Six steps, each with parameter values the parameters' own kinds accept.
+    let steps = t.explain();
+    assert_eq!(steps.len(), 6);
+    let kinds = t.params();
+    for step in &steps {
+        for (key, text) in step.params {
+            let param =
+                kinds.iter().find(|p| p.key == *key).unwrap_or_else(|| panic!("{}: no parameter {key}", step.title));
+            param.kind.parse(key, text).unwrap_or_else(|e| panic!("{}: {e}", step.title));
+        }
+    }
     // Off: no readback step, no maps.
     let mut off = restir(&r, &[("inspect", ParamValue::Bool(false))]);
     let (_, report) = frame(&mut r, &mut off, &camera, &lights);
