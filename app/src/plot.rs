@@ -156,7 +156,6 @@ pub fn tradeoff_plot(
             series.push(&p.series);
         }
     }
-    let max_ms = points.iter().map(|p| p.ms).chain(target.map(|t| t.1)).fold(0.0, f64::max).max(1e-6) * 1.1;
     let max_err = points.iter().map(|p| p.error).filter(|e| e.is_finite()).fold(0.0, f64::max).max(1e-9) * 1.1;
     // The panels' x axes: time per frame, and the work count when one is asked for.
     let mut panels: Vec<(&str, bool)> = vec![("time per frame (ms)", true)];
@@ -180,15 +179,22 @@ pub fn tradeoff_plot(
             RGBColor(23, 190, 207),
         ];
         for (area, &(x_label, time)) in areas.iter().zip(&panels) {
-            let x_of = |p: &TradeoffPoint| x_of(p, time);
-            let max_x = if time { max_ms } else { points.iter().map(x_of).fold(0.0, f64::max).max(1.0) * 1.1 };
+            // A log axis: times and work counts span orders of magnitude (an unshadowed frame and a ray-traced
+            // one); a zero (no such work) is drawn at the axis' left end.
+            let xs = points.iter().map(|p| x_of(p, time)).chain(target.filter(|_| time).map(|t| t.1));
+            let (lo, hi) = xs
+                .filter(|x| *x > 0.0 && x.is_finite())
+                .fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+            let (lo, hi) = if hi > 0.0 { (lo / 1.5, hi * 1.5) } else { (0.1, 10.0) };
+            let x_of = |p: &TradeoffPoint| x_of(p, time).max(lo);
             let mut chart = ChartBuilder::on(area)
                 .margin(14)
                 .x_label_area_size(44)
                 .y_label_area_size(74)
-                .build_cartesian_2d(0.0..max_x, 0.0..max_err)
+                .build_cartesian_2d((lo..hi).log_scale(), 0.0..max_err)
                 .map_err(|e| err(&e))?;
-            chart.configure_mesh().x_desc(x_label).y_desc(error_label).draw().map_err(|e| err(&e))?;
+            let x_desc = format!("{x_label}, log scale");
+            chart.configure_mesh().x_desc(x_desc).y_desc(error_label).draw().map_err(|e| err(&e))?;
             if let Some((name, ms)) = target.filter(|_| time) {
                 chart
                     .draw_series(DashedLineSeries::new(vec![(ms, 0.0), (ms, max_err)], 8, 5, BLACK.stroke_width(1)))

@@ -150,8 +150,19 @@ pub fn run(args: TradeoffArgs) -> Result<()> {
         bail!("--indirect-param given without an --indirect technique");
     }
     let goal = goal(&args)?;
-    let tries: Vec<TrySpec> =
+    let mut tries: Vec<TrySpec> =
         args.tries.iter().map(|t| TrySpec::parse(t, &args.direct, &args.frame.indirect)).collect::<Result<_>>()?;
+    // A try over `--indirect`'s technique takes `--indirect-param`s too, under the values it names itself.
+    for t in tries.iter_mut().filter(|t| t.indirect == args.frame.indirect && t.indirect != "none") {
+        for pair in &args.frame.indirect_params {
+            let (k, v) =
+                pair.split_once('=').ok_or_else(|| anyhow!("--indirect-param '{pair}': expected KEY=VALUE"))?;
+            let key = format!("{}{}", tradeoff::INDIRECT_PREFIX, k.trim());
+            if t.params.iter().all(|(existing, _)| *existing != key) {
+                t.params.push((key, vec![v.trim().to_string()]));
+            }
+        }
+    }
     let grid: usize = tries.iter().map(TrySpec::setting_count).sum();
     for t in &tries {
         crate::measure::check_combinations(&t.params).with_context(|| format!("--try '{}'", t.label()))?;

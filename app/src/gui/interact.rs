@@ -177,9 +177,11 @@ impl ShadowLabApp {
         // Frames an Explain step set up (its parameter values) are not the user's configurations: the session
         // table leaves them out.
         self.views.session_times.recording = self.chrome.explain.step.is_none();
+        let render_start = Instant::now();
         if let Err(e) = self.views.render(&self.session, rect.size() * ppp, ppp, interacting) {
             self.chrome.status = format!("render error: {e:#}");
         }
+        self.views.ui_frame_render_ms += render_start.elapsed().as_secs_f64() * 1000.0;
         if self.session.view.mode == ViewMode::Difference {
             if let Err(e) = self.views.update_difference(&self.session, ui.ctx()) {
                 self.chrome.status = format!("difference: {e:#}");

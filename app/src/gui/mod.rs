@@ -202,9 +202,58 @@ struct Lifecycle {
     exit_screenshot: Option<PathBuf>,
     quit_after_secs: Option<f32>,
     quitting: bool,
+    /// Where the UI frames' time went (printed at quit).
+    breakdown: FrameBreakdown,
     /// wgpu errors outside any error scope (egui's own painting, say), shown instead of panicking.
     uncaptured_errors: Arc<std::sync::Mutex<Vec<String>>>,
     relaunch_on_device_loss: bool,
+}
+
+/// Where a UI frame's time goes, from one `ui` call to the next: our rendering ([`Views::render`]), the rest of
+/// building the UI in `ui` (panels, overlays' primitives, egui's layout), and what eframe does between two `ui`
+/// calls (egui's tessellation, the wgpu painting of the window, presentation and waiting for the next frame).
+#[derive(Default)]
+struct FrameBreakdown {
+    /// Per UI frame: (interval to the next one, ui() total, our rendering), in ms.
+    frames: Vec<(f64, f64, f64)>,
+    /// The last frame's (ui() total, our rendering), waiting for the next frame's start.
+    last: Option<(f64, f64)>,
+}
+
+impl FrameBreakdown {
+    /// A frame started `interval` ms after the last one started.
+    fn next_frame(&mut self, interval: f64) {
+        if let Some((ui, render)) = self.last.take() {
+            if self.frames.len() < 100_000 {
+                self.frames.push((interval, ui, render));
+            }
+        }
+    }
+
+    /// The frame that started last spent `ui` ms in ui(), `render` of them in our rendering.
+    fn frame_done(&mut self, ui: f64, render: f64) {
+        self.last = Some((ui, render));
+    }
+
+    /// "UI frame (median of N): 120.3 ms = our rendering 80.1 + the rest of ui() 10.2 + tessellation, painting and
+    /// presentation 30.0" (the parts are medians of their own; their sum is near the interval's median).
+    fn text(&self) -> Option<String> {
+        // The first frames build fonts and pipelines: left out.
+        let frames = self.frames.get(10..).filter(|f| !f.is_empty())?;
+        let median = |f: &dyn Fn(&(f64, f64, f64)) -> f64| {
+            let mut v: Vec<f64> = frames.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let (interval, ui, render) = (median(&|f| f.0), median(&|f| f.1), median(&|f| f.2));
+        let outside = median(&|f| (f.0 - f.1).max(0.0));
+        Some(format!(
+            "UI frame (median of {}): {interval:.1} ms = our rendering {render:.1} + the rest of ui() {:.1} + egui's \
+             tessellation, painting and presentation (between ui() calls) {outside:.1}",
+            frames.len(),
+            (ui - render).max(0.0)
+        ))
+    }
 }
 
 fn default_data_dir() -> PathBuf {
@@ -231,6 +280,7 @@ impl ShadowLabApp {
                 started,
                 last_frame: Instant::now(),
                 ui_frames: 0,
+                breakdown: FrameBreakdown::default(),
                 window_shot: Default::default(),
                 exit_screenshot: startup.screenshot.clone(),
                 quit_after_secs: startup.soak_secs.or(startup.quit_after_secs),
@@ -405,6 +455,8 @@ impl eframe::App for ShadowLabApp {
         self.lifecycle.ui_frames += 1;
         let now = Instant::now();
         let dt = now.duration_since(self.lifecycle.last_frame).as_secs_f64() * 1000.0;
+        self.views.ui_frame_render_ms = 0.0;
+        self.lifecycle.breakdown.next_frame(dt);
         self.lifecycle.last_frame = now;
         self.chrome.ui_frame_ms.push_back(dt);
         if self.chrome.ui_frame_ms.len() > 120 {
@@ -442,6 +494,9 @@ impl eframe::App for ShadowLabApp {
                     self.lifecycle.ui_frames,
                     self.lifecycle.ui_frames as f64 / t
                 );
+                if let Some(text) = self.lifecycle.breakdown.text() {
+                    eprintln!("{text}");
+                }
                 if self.lifecycle.exit_screenshot.is_some() {
                     self.request_window_screenshot(&ctx);
                 } else {
@@ -478,6 +533,8 @@ impl eframe::App for ShadowLabApp {
         }
         self.chrome.layout.save_if_changed(&self.lifecycle.data_dir, &ctx);
         self.chrome.toasts.ui(&ctx);
+        let ui_ms = now.elapsed().as_secs_f64() * 1000.0;
+        self.lifecycle.breakdown.frame_done(ui_ms, self.views.ui_frame_render_ms);
     }
 
     fn on_exit(&mut self) {

@@ -20,13 +20,15 @@ pub struct Soak {
     next_switch: f64,
     next_report: f64,
     switches: usize,
-    /// The first report: (resident MiB, GPU allocated MiB, GPU reserved MiB).
+    /// The first report once every technique ran (after one cycle of switches: before it, creating the
+    /// techniques' pipelines and pools is growth of no concern): (resident MiB, GPU allocated, GPU reserved).
     first: Option<(f64, f64, f64)>,
+    first_t: f64,
 }
 
 impl Soak {
     pub fn new() -> Soak {
-        Soak { started: Instant::now(), next_switch: 0.0, next_report: 0.0, switches: 0, first: None }
+        Soak { started: Instant::now(), next_switch: 0.0, next_report: 0.0, switches: 0, first: None, first_t: 0.0 }
     }
 }
 
@@ -57,11 +59,12 @@ impl ShadowLabApp {
         }
         if t >= soak.next_report {
             soak.next_report += REPORT_SECS;
-            let soak_first = soak.first;
+            let wanted = soak.first.is_none() && soak.switches > REGISTRY.len();
             let line = self.memory_line(t);
-            if let (Some(line), None) = (&line, soak_first) {
+            if let (Some(line), true) = (&line, wanted) {
                 if let Some(soak) = self.soak.as_mut() {
                     soak.first = Some(line.1);
+                    soak.first_t = t;
                 }
             }
             if let Some((text, _)) = line {
@@ -93,8 +96,9 @@ impl ShadowLabApp {
         let (rss0, allocated0, reserved0) = soak.first?;
         let growth = |a: f64, b: f64| (b / a - 1.0) * 100.0;
         Some(format!(
-            "{now}\nmemory growth over {t:.0} s ({} technique switches): rss {:+.1} %, gpu_allocated {:+.1} %, \
-             gpu_reserved {:+.1} %",
+            "{now}\nmemory growth from t={:.0}s (every technique has run) to t={t:.0}s ({} technique switches): rss \
+             {:+.1} %, gpu_allocated {:+.1} %, gpu_reserved {:+.1} %",
+            soak.first_t,
             soak.switches,
             growth(rss0, rss),
             growth(allocated0, allocated),

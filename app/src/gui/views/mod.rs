@@ -69,6 +69,9 @@ pub struct Views {
     pub last_view_pixels: egui::Vec2,
     /// The last complete frame's auto-exposure: (scale, log-average luminance), shown in the Render panel.
     pub metered_exposure: Option<(f32, f32)>,
+    /// Milliseconds of this UI frame spent in [`Views::render`] (our rendering: the steps submitted and waited
+    /// for, readbacks), for the UI frame's breakdown (`crate::gui::FrameBreakdown`).
+    pub ui_frame_render_ms: f64,
 }
 
 impl Views {
@@ -89,6 +92,7 @@ impl Views {
             legends: Vec::new(),
             last_view_pixels: egui::vec2(640.0, 360.0),
             metered_exposure: None,
+            ui_frame_render_ms: 0.0,
         }
     }
 
