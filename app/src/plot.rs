@@ -194,7 +194,26 @@ pub fn tradeoff_plot(
                 .build_cartesian_2d((lo..hi).log_scale(), 0.0..max_err)
                 .map_err(|e| err(&e))?;
             let x_desc = format!("{x_label}, log scale");
-            chart.configure_mesh().x_desc(x_desc).y_desc(error_label).draw().map_err(|e| err(&e))?;
+            // Compact labels: a log axis of work counts otherwise runs "4000000.05000000.0" together.
+            let compact = |v: &f64| {
+                let (n, suffix) = match v.abs() {
+                    a if a >= 1e9 => (format!("{:.2}", v / 1e9), "G"),
+                    a if a >= 1e6 => (format!("{:.2}", v / 1e6), "M"),
+                    a if a >= 1e4 => (format!("{:.0}", v / 1e3), "k"),
+                    a if a >= 10.0 => (format!("{v:.0}"), ""),
+                    _ => (format!("{v:.2}"), ""),
+                };
+                let n = if n.contains('.') { n.trim_end_matches('0').trim_end_matches('.') } else { &n };
+                format!("{n}{suffix}")
+            };
+            chart
+                .configure_mesh()
+                .x_desc(x_desc)
+                .y_desc(error_label)
+                .x_labels(6)
+                .x_label_formatter(&|v| compact(v))
+                .draw()
+                .map_err(|e| err(&e))?;
             if let Some((name, ms)) = target.filter(|_| time) {
                 chart
                     .draw_series(DashedLineSeries::new(vec![(ms, 0.0), (ms, max_err)], 8, 5, BLACK.stroke_width(1)))
