@@ -413,9 +413,13 @@ mod tests {
         let i = text.find("    indirect:").expect("the field is written");
         let j = i + text[i..].find("\n    ),\n").expect("the field ends") + "\n    ),\n".len();
         let text = format!("{}{}", &text[..i], &text[j..]);
-        assert!(!text.contains("indirect"), "{text}");
+        assert!(!text.contains("\n    indirect:"), "{text}");
+        // Nor has an older file the view's `against_indirect` (the target's indirect technique): the view's own.
+        let text = text.replace("        against_indirect: None,\n", "");
+        assert!(!text.contains("against_indirect"), "{text}");
         let (back, warnings) = SceneFile::from_ron(&text).unwrap();
         assert_eq!(back.indirect, IndirectSettings::default());
+        assert_eq!(back.view.against_indirect, None);
         assert!(warnings.is_empty(), "{warnings:?}");
     }
 
