@@ -1333,6 +1333,27 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     let s = &h.state().session;
     assert_eq!(s.technique, "lightcluster", "Tune loads the pick's technique");
     assert_eq!(s.params["lightcluster"]["d_init"], ParamValue::Float(value.parse().unwrap()), "and its d_init");
+
+    // Within an error instead: every configuration fits, the pick is the fastest.
+    {
+        let input = &mut h.state_mut().chrome.tradeoff_input;
+        input.use_budget = false;
+        input.use_max_error = true;
+        input.max_error = 1e9;
+    }
+    h.get_by_label("Run trade-off").click_accesskit();
+    h.run_steps(2);
+    let started = std::time::Instant::now();
+    while h.state_mut().views.tradeoff.as_mut().is_some_and(|t| t.poll()) {
+        assert!(started.elapsed().as_secs() < 120, "the trade-off finishes");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    let t = h.state().views.tradeoff.as_ref().unwrap();
+    assert!(matches!(t.goal, shadowlab::tradeoff::Goal::MaxError(_)), "{:?}", t.goal);
+    let points = t.points();
+    let pick = t.pick().expect("everything fits");
+    assert!(points.iter().all(|p| p.ms >= points[pick].ms), "the fastest is picked");
 }
 
 /// A small deterministic generator (xorshift64*), so a failing random run can be replayed from its seed.

@@ -33,11 +33,21 @@ pub struct TradeoffInput {
     pub metric: ErrorMetric,
     pub use_budget: bool,
     pub budget_ms: f64,
+    /// The fastest configuration within this error (in `metric`), instead of the lowest error within the time.
+    pub use_max_error: bool,
+    pub max_error: f64,
 }
 
 impl Default for TradeoffInput {
     fn default() -> Self {
-        TradeoffInput { tries: BTreeMap::new(), metric: ErrorMetric::Rmse, use_budget: false, budget_ms: 100.0 }
+        TradeoffInput {
+            tries: BTreeMap::new(),
+            metric: ErrorMetric::Rmse,
+            use_budget: false,
+            budget_ms: 100.0,
+            use_max_error: false,
+            max_error: 0.05,
+        }
     }
 }
 
@@ -143,7 +153,19 @@ pub fn tradeoff_ui(
              monotone in it) instead of rendering every value",
         );
         ui.add_enabled(input.use_budget, egui::DragValue::new(&mut input.budget_ms).range(0.01..=1e6).suffix(" ms"));
+        if ui
+            .checkbox(&mut input.use_max_error, "or within error")
+            .on_hover_text("The fastest configuration whose error is at most this, by the same bisection")
+            .changed()
+            && input.use_max_error
+        {
+            input.use_budget = false;
+        }
+        ui.add_enabled(input.use_max_error, egui::DragValue::new(&mut input.max_error).range(0.0..=1e3).speed(0.001));
     });
+    if input.use_budget {
+        input.use_max_error = false;
+    }
     let running = views.tradeoff.as_mut().is_some_and(|t| t.poll());
     let (mut run, mut cancel) = (false, false);
     ui.horizontal(|ui| {
@@ -285,7 +307,10 @@ pub fn tradeoff_ui(
             }
         }
         (_, true, None) => {
-            ui.label("nothing fits the budget");
+            ui.label(match t.goal {
+                Goal::MaxError(e) => format!("nothing is within {} {e}", t.metric.name()),
+                _ => "nothing fits the budget".to_string(),
+            });
         }
     }
     if let Some(i) = clicked {
@@ -298,6 +323,8 @@ pub fn tradeoff_ui(
 fn goal(input: &TradeoffInput) -> Goal {
     if input.use_budget {
         Goal::BudgetMs(input.budget_ms)
+    } else if input.use_max_error {
+        Goal::MaxError(input.max_error)
     } else {
         Goal::All
     }
