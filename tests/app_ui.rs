@@ -335,7 +335,7 @@ fn sweep_panel_runs_in_the_background_and_can_be_cancelled() {
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
     let s = h.state().views.sweep.as_ref().unwrap();
-    assert!(s.error.is_none(), "{:?}", s.error);
+    assert!(s.worker.error.is_none(), "{:?}", s.worker.error);
     assert_eq!(s.rows.len(), 3);
     assert!(s.rows.windows(2).all(|w| w[0].value < w[1].value));
     assert!(s.rows.iter().all(|r| r.ms > 0.0 && r.rmse > 0.0 && r.reference_ms > 0.0));
@@ -1321,7 +1321,7 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     }
     h.run_steps(2);
     let t = h.state().views.tradeoff.as_ref().expect("a trade-off ran");
-    assert!(t.error.is_none(), "{:?}", t.error);
+    assert!(t.worker.error.is_none(), "{:?}", t.worker.error);
     // Every d_init fits a budget of 1e6 ms: the two ends tell so, and nothing else is rendered.
     assert_eq!(t.rows.len(), 2, "{:?}", t.rows);
     let pick = t.pick().expect("a pick within the budget");

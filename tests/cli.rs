@@ -967,3 +967,10 @@ fn tradeoff_tunes_to_a_budget_with_few_frames() {
     assert_fails_with(&with(&["--try", "lightcluster d_init=-3"]), "d_init");
     assert_fails_with(&with(&["--try", "reference", "--against", "raytraced bias=0.01,0.02"]), "the target takes one");
 }
+
+#[test]
+fn app_times_must_be_seconds() {
+    // Refused before any window opens: a NaN would never quit, a negative one at once.
+    assert_fails_with(&["--quit-after", "nan"], "--quit-after NaN");
+    assert_fails_with(&["--soak-secs=-3"], "--soak-secs -3");
+}

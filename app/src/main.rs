@@ -27,6 +27,13 @@ fn main() -> ExitCode {
         Some(Ok(s)) => Some(s),
         None => None,
     };
+    // A NaN or negative time would never (or at once) quit: refused, like a bad window size.
+    for (name, secs) in [("--quit-after", args.quit_after), ("--soak-secs", args.soak_secs)] {
+        if let Some(v) = secs.filter(|v| !(v.is_finite() && *v >= 0.0)) {
+            eprintln!("error: {name} {v}: give a number of seconds of 0 or more");
+            return ExitCode::FAILURE;
+        }
+    }
     let result = match args.command {
         Some(command) => cli::run(command),
         None => gui::run(gui::Startup {

@@ -13,6 +13,37 @@ use shadowlab_core::technique::{INDIRECT_REGISTRY, REGISTRY};
 
 use crate::measure::{sweep_values, IndirectChoice};
 
+/// The error a trade-off measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Metric {
+    Rmse,
+    Flip,
+    Shadow,
+}
+
+impl Metric {
+    pub const ALL: [Metric; 3] = [Metric::Rmse, Metric::Flip, Metric::Shadow];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::Rmse => "RMSE",
+            Metric::Flip => "FLIP",
+            Metric::Shadow => "shadow error",
+        }
+    }
+
+    /// The metric's value, or why it has none.
+    pub fn of(self, m: &shadowlab_core::compare::Metrics) -> Result<f64> {
+        match self {
+            Metric::Rmse => Ok(m.rmse),
+            Metric::Flip => m.flip_mean.ok_or_else(|| anyhow!("FLIP was not computed")),
+            Metric::Shadow => m.shadow_intensity_error.ok_or_else(|| {
+                anyhow!("the shadow error needs lit pixels (unshadowed light above the ambient); this view has none")
+            }),
+        }
+    }
+}
+
 /// Prefix of an indirect technique's parameter in a try (`indirect.vals=2,8`).
 pub const INDIRECT_PREFIX: &str = "indirect.";
 

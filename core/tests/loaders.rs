@@ -818,7 +818,23 @@ fn gltf_with_khr_mesh_quantization_loads_dequantised() {
 }
 
 #[test]
-fn gltf_requiring_an_unsupported_extension_is_refused_by_name_before_validation() {
+fn gltf_requiring_basisu_is_refused_by_name_before_validation() {
+    let dir = std::env::temp_dir().join("shadowlab-basisu");
+    std::fs::create_dir_all(&dir).unwrap();
+    // KHR_texture_basisu as exporters write it: the texture's image only in the extension, no core `source`;
+    // validated first, the file would be refused as "textures[0].source: Missing data".
+    let path = quantized_gltf(&dir, &["KHR_texture_basisu"]);
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        r#""scene":0,"#,
+        r#""images":[{"uri":"t.ktx2"}],"textures":[{"extensions":{"KHR_texture_basisu":{"source":0}}}],"scene":0,"#,
+    );
+    std::fs::write(&path, text).unwrap();
+    let err = load_gltf(&path, 1.0).unwrap_err().to_string();
+    assert!(err.contains("unsupported extension KHR_texture_basisu"), "{err}");
+}
+
+#[test]
+fn gltf_requiring_draco_is_refused_by_name() {
     let dir = std::env::temp_dir().join("shadowlab-draco");
     std::fs::create_dir_all(&dir).unwrap();
     // Draco files carry attribute accessors without a bufferView: validation alone would say "Missing data".

@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 
 use anyhow::{anyhow, bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use shadowlab_core::technique::{self, work::WORK_KEYS};
 use shadowlab_core::timing::common_clock;
 
@@ -15,7 +15,7 @@ use super::progress::Progress;
 use super::setup::setup;
 use crate::files::{check_output_path, write_atomic};
 use crate::measure::{apply_indirect, apply_params, IndirectChoice, Rendered, TimingSummary};
-use crate::tradeoff::{self, Goal, Point, TrySpec};
+use crate::tradeoff::{self, Goal, Metric, Point, TrySpec};
 
 #[derive(Args, Debug)]
 pub struct TradeoffArgs {
@@ -63,35 +63,6 @@ pub struct TradeoffArgs {
     /// A PNG plot of error against time (and work), one colour per try, the Pareto front drawn.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-}
-
-/// The error a trade-off measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Metric {
-    Rmse,
-    Flip,
-    Shadow,
-}
-
-impl Metric {
-    pub fn name(self) -> &'static str {
-        match self {
-            Metric::Rmse => "RMSE",
-            Metric::Flip => "FLIP",
-            Metric::Shadow => "shadow error",
-        }
-    }
-
-    /// The metric's value, or why it has none.
-    pub fn of(self, m: &shadowlab_core::compare::Metrics) -> Result<f64> {
-        match self {
-            Metric::Rmse => Ok(m.rmse),
-            Metric::Flip => m.flip_mean.ok_or_else(|| anyhow!("FLIP was not computed")),
-            Metric::Shadow => m.shadow_intensity_error.ok_or_else(|| {
-                anyhow!("the shadow error needs lit pixels (unshadowed light above the ambient); this view has none")
-            }),
-        }
-    }
 }
 
 /// One rendered configuration and what was measured of it.

@@ -4,12 +4,11 @@
 //! image completely, now, in a renderer of their own on the view's device at the view's render resolution (the
 //! window waits: seconds on a software rasterizer).
 
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use anyhow::{anyhow, Context, Result};
 use eframe::egui;
-use shadowlab_core::technique::{Overlay, ParamValue};
+use shadowlab_core::technique::Overlay;
 use shadowlab_core::Renderer;
 
 use super::camera::CameraMode;
@@ -19,23 +18,9 @@ use crate::figure::{self, FigurePane};
 use crate::measure::{self, DiffKind, IndirectChoice};
 use crate::sequence::{self, Motion};
 
-fn param_strings(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
-    params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
-}
-
 impl ShadowLabApp {
     fn indirect_choice(&self) -> IndirectChoice {
-        self.indirect_choice_of(self.session.indirect.technique.as_deref())
-    }
-
-    /// `key`'s indirect technique with the parameters the user set for it (or none).
-    fn indirect_choice_of(&self, key: Option<&str>) -> IndirectChoice {
-        match key {
-            Some(k) => {
-                IndirectChoice { key: k.to_string(), params: param_strings(self.session.indirect.params.get(k)) }
-            }
-            None => IndirectChoice::none(),
-        }
+        self.session.indirect_choice_of(self.session.indirect.technique.as_deref())
     }
 
     /// A renderer of its own at the view's full render resolution.
@@ -52,7 +37,7 @@ impl ShadowLabApp {
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
         let no_progress = &mut |_: &str| {};
-        let params = param_strings(self.session.params.get(&self.session.technique));
+        let params = self.session.param_strings(&self.session.technique);
         let tech = measure::render_technique(
             &mut renderer,
             &self.session.technique,
@@ -76,8 +61,8 @@ impl ShadowLabApp {
             renderer.set_held_exposure(scale, average)?;
         }
         let against = self.session.view.compare_against.clone();
-        let against_params = param_strings(self.session.params.get(&against));
-        let against_indirect = self.indirect_choice_of(self.session.against_indirect_key());
+        let against_params = self.session.param_strings(&against);
+        let against_indirect = self.session.indirect_choice_of(self.session.against_indirect_key());
         let target = measure::render_technique(
             &mut renderer,
             &against,
@@ -167,7 +152,7 @@ impl ShadowLabApp {
         };
         let mut renderer = self.capture_renderer()?;
         let indirect = self.indirect_choice();
-        let params = param_strings(self.session.params.get(&self.session.technique));
+        let params = self.session.param_strings(&self.session.technique);
         let name = self.screenshot_name(match motion {
             Motion::Orbit => "orbit",
             Motion::Lights => "lights",

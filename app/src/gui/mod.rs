@@ -33,6 +33,7 @@ pub mod sweep;
 pub mod tiles;
 pub mod tradeoff_run;
 pub mod views;
+pub mod worker;
 
 use std::path::PathBuf;
 use std::sync::Arc;

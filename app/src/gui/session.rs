@@ -287,6 +287,21 @@ impl Session {
         }
     }
 
+    /// The parameters the user set for technique `key`, as `key=value` (what the CLI's `--param` takes).
+    pub fn param_strings(&self, key: &str) -> Vec<String> {
+        pairs(self.params.get(key))
+    }
+
+    /// Indirect technique `key` (None: none) with the parameters the user set for it.
+    pub fn indirect_choice_of(&self, key: Option<&str>) -> crate::measure::IndirectChoice {
+        match key {
+            Some(k) => {
+                crate::measure::IndirectChoice { key: k.to_string(), params: pairs(self.indirect.params.get(k)) }
+            }
+            None => crate::measure::IndirectChoice::none(),
+        }
+    }
+
     /// The comparison target's indirect technique key (None: direct light only): the view's own unless the
     /// user chose another for the target ([`ViewSettings::against_indirect`]).
     pub fn against_indirect_key(&self) -> Option<&str> {
@@ -357,4 +372,9 @@ impl Session {
             }
         }
     }
+}
+
+/// Parameter values as `key=value`.
+fn pairs(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
+    params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
 }

@@ -4,9 +4,6 @@
 //! against the parameter while it runs. Cancel stops it after the current setting.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Receiver};
-use std::sync::Arc;
-use std::thread::JoinHandle;
 
 use anyhow::{anyhow, Result};
 use shadowlab_core::compare::{self, CompareOptions, Image};
@@ -14,6 +11,8 @@ use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::timing::{common_clock, TimingSource};
 use shadowlab_core::{GpuContext, RenderSettings, Renderer};
+
+use super::worker::Worker;
 
 /// One finished setting.
 #[derive(Clone, Debug)]
@@ -26,22 +25,12 @@ pub struct SweepRow {
     pub clock: TimingSource,
 }
 
-pub enum SweepMessage {
-    Row(SweepRow),
-    Done,
-    Failed(String),
-}
-
 /// A sweep in progress or finished.
 pub struct Sweep {
     pub key: String,
     pub rows: Vec<SweepRow>,
     pub total: usize,
-    pub finished: bool,
-    pub error: Option<String>,
-    cancel: Arc<AtomicBool>,
-    receiver: Receiver<SweepMessage>,
-    worker: Option<JoinHandle<()>>,
+    pub worker: Worker<SweepRow>,
 }
 
 /// What the worker renders.
@@ -74,7 +63,7 @@ fn number(v: &ParamValue) -> f64 {
     }
 }
 
-fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Result<()> {
+fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepRow)) -> Result<()> {
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
     let mut renderer = Renderer::for_scene(&job.gpu, job.scene.clone(), job.layouts.clone(), settings)?;
@@ -114,64 +103,31 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepMessage)) -> Resul
         let m = compare::compare(&image, &reference_image, Some(&mask), &options)?;
         // Both sides in one clock: the timestamps only when both frames used them.
         let clock = common_clock(report.timing.comparable_source(), reference_report.timing.comparable_source());
-        send(SweepMessage::Row(SweepRow {
+        send(SweepRow {
             value: number(value),
             ms: report.frame_ms_in(clock),
             rmse: m.rmse,
             reference_ms: reference_report.frame_ms_in(clock),
             clock,
-        }));
+        });
     }
     Ok(())
 }
 
 impl Sweep {
     pub fn start(job: SweepJob) -> Sweep {
-        let (tx, rx) = channel();
-        let cancel = Arc::new(AtomicBool::new(false));
-        let key = job.key.clone();
-        let total = job.values.len();
-        let flag = cancel.clone();
-        let worker = std::thread::spawn(move || {
-            let send = |m| {
-                let _ = tx.send(m);
-            };
-            match run(job, &flag, &send) {
-                Ok(()) => send(SweepMessage::Done),
-                Err(e) => send(SweepMessage::Failed(format!("{e:#}"))),
-            }
-        });
-        Sweep { key, rows: Vec::new(), total, finished: false, error: None, cancel, receiver: rx, worker: Some(worker) }
+        let (key, total) = (job.key.clone(), job.values.len());
+        Sweep { key, rows: Vec::new(), total, worker: Worker::start(move |cancel, send| run(job, cancel, send)) }
     }
 
     /// Collect what the worker sent; true while it runs.
     pub fn poll(&mut self) -> bool {
-        while let Ok(m) = self.receiver.try_recv() {
-            match m {
-                SweepMessage::Row(r) => self.rows.push(r),
-                SweepMessage::Done => self.finished = true,
-                SweepMessage::Failed(e) => {
-                    self.error = Some(e);
-                    self.finished = true;
-                }
-            }
-        }
-        if self.finished {
-            if let Some(w) = self.worker.take() {
-                let _ = w.join();
-            }
-        }
-        !self.finished
+        self.rows.extend(self.worker.poll());
+        !self.worker.finished
     }
 
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
-    }
-}
-
-impl Drop for Sweep {
-    fn drop(&mut self) {
-        self.cancel();
+        self.worker.cancel();
     }
 }
 

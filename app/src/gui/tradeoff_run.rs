@@ -5,9 +5,7 @@
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{channel, Receiver};
 use std::sync::Arc;
-use std::thread::JoinHandle;
 
 use anyhow::{anyhow, Result};
 use shadowlab_core::compare::{self, CompareOptions, Image};
@@ -16,28 +14,9 @@ use shadowlab_core::technique::Technique;
 use shadowlab_core::timing::{common_clock, TimingSource};
 use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer};
 
+use super::worker::Worker;
 use crate::measure::IndirectChoice;
-use crate::tradeoff::{self, Goal, Point, Setting, TrySpec};
-
-/// The error a trade-off measures, as the app offers it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ErrorMetric {
-    Rmse,
-    Flip,
-    Shadow,
-}
-
-impl ErrorMetric {
-    pub const ALL: [ErrorMetric; 3] = [ErrorMetric::Rmse, ErrorMetric::Flip, ErrorMetric::Shadow];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ErrorMetric::Rmse => "RMSE",
-            ErrorMetric::Flip => "FLIP",
-            ErrorMetric::Shadow => "shadow error",
-        }
-    }
-}
+use crate::tradeoff::{self, Goal, Metric, Point, Setting, TrySpec};
 
 /// A frame's time in both clocks, so rows are compared in the clock all of them (and the target) used.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,11 +53,10 @@ pub struct TradeoffRow {
     pub error: f64,
 }
 
+/// What the worker sends: the target's time, then each configuration.
 pub enum TradeoffMessage {
     Target(FrameTimes),
     Row(TradeoffRow),
-    Done,
-    Failed(String),
 }
 
 /// What the worker renders: the view as the sweep takes it, the tries and the target.
@@ -95,24 +73,20 @@ pub struct TradeoffJob {
     pub against: String,
     pub against_params: Vec<String>,
     pub against_indirect: IndirectChoice,
-    pub metric: ErrorMetric,
+    pub metric: Metric,
     pub goal: Goal,
 }
 
 /// A trade-off in progress or finished.
 pub struct Tradeoff {
     pub tries: Vec<TrySpec>,
-    pub metric: ErrorMetric,
+    pub metric: Metric,
     pub goal: Goal,
     pub rows: Vec<TradeoffRow>,
     pub target: Option<FrameTimes>,
     /// About how many configurations it renders ([`tradeoff::expected_renders`]).
     pub expected: usize,
-    pub finished: bool,
-    pub error: Option<String>,
-    cancel: Arc<AtomicBool>,
-    receiver: Receiver<TradeoffMessage>,
-    worker: Option<JoinHandle<()>>,
+    pub worker: Worker<TradeoffMessage>,
 }
 
 fn render(
@@ -140,7 +114,7 @@ fn run(job: TradeoffJob, cancel: &AtomicBool, send: &dyn Fn(TradeoffMessage)) ->
     send(TradeoffMessage::Target(FrameTimes::of(&target_report)));
     let mask = renderer.read_geometry_mask()?;
     // The shadow error needs the view's unshadowed and ambient-only images.
-    let inputs = if job.metric == ErrorMetric::Shadow {
+    let inputs = if job.metric == Metric::Shadow {
         Some(crate::measure::compare_inputs(&mut renderer, &job.camera, &job.lights)?)
     } else {
         None
@@ -160,31 +134,18 @@ fn run(job: TradeoffJob, cancel: &AtomicBool, send: &dyn Fn(TradeoffMessage)) ->
         crate::measure::apply_params(technique.as_mut(), None, &params)?;
         let indirect = tradeoff::indirect_choice(&spec.indirect, setting);
         let (image, report) = render(&mut renderer, technique.as_mut(), &indirect, &job.camera, &job.lights)?;
-        let error = match job.metric {
-            ErrorMetric::Rmse | ErrorMetric::Flip => {
-                let options = CompareOptions { flip: job.metric == ErrorMetric::Flip, ..Default::default() };
-                let m = compare::compare(&image, &target_image, Some(&mask), &options)?;
-                if job.metric == ErrorMetric::Flip {
-                    m.flip_mean.unwrap_or(f64::NAN)
-                } else {
-                    m.rmse
-                }
+        let m = match &inputs {
+            // The shadow error needs the visibility factors of both images.
+            Some(inputs) => {
+                let kind = crate::measure::DiffKind::Absolute;
+                crate::measure::compare_images(&image, &target_image, inputs, kind, 1.0, false, 1.0)?.0
             }
-            ErrorMetric::Shadow => {
-                let inputs = inputs.as_ref().expect("made for the shadow error");
-                let (m, _) = crate::measure::compare_images(
-                    &image,
-                    &target_image,
-                    inputs,
-                    crate::measure::DiffKind::Absolute,
-                    1.0,
-                    false,
-                    1.0,
-                )?;
-                m.shadow_intensity_error
-                    .ok_or_else(|| anyhow!("the shadow error needs lit pixels; this view has none"))?
+            None => {
+                let options = CompareOptions { flip: job.metric == Metric::Flip, ..Default::default() };
+                compare::compare(&image, &target_image, Some(&mask), &options)?
             }
         };
+        let error = job.metric.of(&m)?;
         let times = FrameTimes::of(&report);
         let clock = common_clock(times.source, target_report.timing.comparable_source());
         send(TradeoffMessage::Row(TradeoffRow { try_index: t, setting: setting.clone(), times, error }));
@@ -196,58 +157,25 @@ fn run(job: TradeoffJob, cancel: &AtomicBool, send: &dyn Fn(TradeoffMessage)) ->
 
 impl Tradeoff {
     pub fn start(job: TradeoffJob) -> Tradeoff {
-        let (tx, rx) = channel();
-        let cancel = Arc::new(AtomicBool::new(false));
-        let flag = cancel.clone();
         let (tries, metric, goal) = (job.tries.clone(), job.metric, job.goal);
         let expected = tradeoff::expected_renders(&tries, goal);
-        let worker = std::thread::spawn(move || {
-            let send = |m| {
-                let _ = tx.send(m);
-            };
-            match run(job, &flag, &send) {
-                Ok(()) => send(TradeoffMessage::Done),
-                Err(e) => send(TradeoffMessage::Failed(format!("{e:#}"))),
-            }
-        });
-        Tradeoff {
-            tries,
-            metric,
-            goal,
-            rows: Vec::new(),
-            target: None,
-            expected,
-            finished: false,
-            error: None,
-            cancel,
-            receiver: rx,
-            worker: Some(worker),
-        }
+        let worker = Worker::start(move |cancel, send| run(job, cancel, send));
+        Tradeoff { tries, metric, goal, rows: Vec::new(), target: None, expected, worker }
     }
 
     /// Collect what the worker sent; true while it runs.
     pub fn poll(&mut self) -> bool {
-        while let Ok(m) = self.receiver.try_recv() {
+        for m in self.worker.poll() {
             match m {
                 TradeoffMessage::Target(t) => self.target = Some(t),
                 TradeoffMessage::Row(r) => self.rows.push(r),
-                TradeoffMessage::Done => self.finished = true,
-                TradeoffMessage::Failed(e) => {
-                    self.error = Some(e);
-                    self.finished = true;
-                }
             }
         }
-        if self.finished {
-            if let Some(w) = self.worker.take() {
-                let _ = w.join();
-            }
-        }
-        !self.finished
+        !self.worker.finished
     }
 
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        self.worker.cancel();
     }
 
     /// The clock every row and the target used (timestamps only when all did).
@@ -265,11 +193,5 @@ impl Tradeoff {
     /// The row the goal picks (a budget's lowest error, a maximum error's fastest), once finished.
     pub fn pick(&self) -> Option<usize> {
         tradeoff::pick(&self.points(), self.goal)
-    }
-}
-
-impl Drop for Tradeoff {
-    fn drop(&mut self) {
-        self.cancel();
     }
 }

@@ -125,6 +125,10 @@ const UNSUPPORTED_GEOMETRY_EXTENSIONS: &[&str] = &[
     "EXT_texture_avif",
 ];
 
+/// Extensions this loader reads (the `gltf` crate's validation does not know every one of them).
+const UNDERSTOOD_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_mesh_quantization", "KHR_texture_transform"];
+
 /// Load a `.gltf` (external or embedded buffers) or `.glb` file: every mesh of the default scene with its node
 /// transform baked, base colour factor/texture, emissive, and `KHR_lights_punctual` point lights.
 pub fn load_gltf(path: &Path, unit_scale: f32) -> Result<Scene, LoadError> {
@@ -230,10 +234,13 @@ fn validate(document: &gltf::Document) -> Result<(), String> {
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().to_string();
-        // The crate knows no KHR_mesh_quantization, which this loader reads (integer and normalised
-        // attributes, dequantised by the node transforms): not an error here.
+        // An extension the crate does not know but this loader reads (KHR_mesh_quantization: integer and
+        // normalised attributes, dequantised by the node transforms) is not an error here.
         let understood = path.starts_with("extensionsRequired")
-            && root.extensions_required.get(index_of(&path)).is_some_and(|e| e == "KHR_mesh_quantization");
+            && root
+                .extensions_required
+                .get(index_of(&path))
+                .is_some_and(|e| UNDERSTOOD_EXTENSIONS.contains(&e.as_str()));
         if !understood {
             errors.push(format!("{path}: {error}"));
         }
@@ -299,13 +306,7 @@ impl Loader<'_> {
     }
 
     fn understands(&self, extension: &str) -> bool {
-        matches!(
-            extension,
-            "KHR_lights_punctual"
-                | "KHR_materials_emissive_strength"
-                | "KHR_mesh_quantization"
-                | "KHR_texture_transform"
-        )
+        UNDERSTOOD_EXTENSIONS.contains(&extension)
     }
 
     /// One scene material per glTF material, in file order, with their base colour textures.

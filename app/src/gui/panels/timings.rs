@@ -338,7 +338,7 @@ pub fn sweep_ui(
             ui.add(egui::ProgressBar::new(s.rows.len() as f32 / s.total.max(1) as f32).show_percentage());
             ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
         }
-        if let Some(e) = &s.error {
+        if let Some(e) = &s.worker.error {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
         }
         if !s.rows.is_empty() {

@@ -11,9 +11,8 @@ use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
 
 use crate::gui::chrome::Toasts;
 use crate::gui::session::Session;
-use crate::gui::tradeoff_run::ErrorMetric;
 use crate::gui::views::Views;
-use crate::tradeoff::{self, Goal, TrySpec};
+use crate::tradeoff::{self, Goal, Metric, TrySpec};
 
 /// One technique of the trade-off: ticked or not, and the range of the parameter it is tried over.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,7 +29,7 @@ pub struct TryInput {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TradeoffInput {
     pub tries: BTreeMap<String, TryInput>,
-    pub metric: ErrorMetric,
+    pub metric: Metric,
     pub use_budget: bool,
     pub budget_ms: f64,
     /// The fastest configuration within this error (in `metric`), instead of the lowest error within the time.
@@ -42,7 +41,7 @@ impl Default for TradeoffInput {
     fn default() -> Self {
         TradeoffInput {
             tries: BTreeMap::new(),
-            metric: ErrorMetric::Rmse,
+            metric: Metric::Rmse,
             use_budget: false,
             budget_ms: 100.0,
             use_max_error: false,
@@ -143,7 +142,7 @@ pub fn tradeoff_ui(
     }
     ui.horizontal(|ui| {
         ui.label("error");
-        for m in ErrorMetric::ALL {
+        for m in Metric::ALL {
             ui.selectable_value(&mut input.metric, m, m.name());
         }
     });
@@ -219,12 +218,12 @@ pub fn tradeoff_ui(
         )));
         ui.ctx().request_repaint_after(std::time::Duration::from_millis(200));
     }
-    if let Some(e) = &t.error {
+    if let Some(e) = &t.worker.error {
         ui.colored_label(egui::Color32::LIGHT_RED, e);
     }
     let points = t.points();
     let front = tradeoff::pareto(&points);
-    let pick = if t.finished { t.pick() } else { None };
+    let pick = if t.worker.finished { t.pick() } else { None };
     let clock = t.clock();
     let mut clicked = None;
     let response = Plot::new("tradeoff")
@@ -289,7 +288,7 @@ pub fn tradeoff_ui(
         );
         response.response.on_hover_text_at_pointer(format!("{text}\nclick: load this configuration"));
     }
-    match (t.goal, t.finished, pick) {
+    match (t.goal, t.worker.finished, pick) {
         (Goal::All, ..) | (_, false, _) => {}
         (_, true, Some(i)) => {
             let r = &t.rows[i];

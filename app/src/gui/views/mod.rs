@@ -110,22 +110,13 @@ impl Views {
         &mut self,
         session: &Session,
         tries: Vec<crate::tradeoff::TrySpec>,
-        metric: super::tradeoff_run::ErrorMetric,
+        metric: crate::tradeoff::Metric,
         goal: crate::tradeoff::Goal,
     ) -> Result<()> {
         let gpu = self.gpu.as_ref().ok_or_else(|| anyhow!("no GPU"))?;
-        let strings = |p: Option<&std::collections::BTreeMap<String, ParamValue>>| -> Vec<String> {
-            p.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
-        };
-        let base_params =
-            tries.iter().map(|t| (t.technique.clone(), strings(session.params.get(&t.technique)))).collect();
+        let base_params = tries.iter().map(|t| (t.technique.clone(), session.param_strings(&t.technique))).collect();
         let against = session.view.compare_against.clone();
-        let against_indirect = match session.against_indirect_key() {
-            Some(k) => {
-                crate::measure::IndirectChoice { key: k.to_string(), params: strings(session.indirect.params.get(k)) }
-            }
-            None => crate::measure::IndirectChoice::none(),
-        };
+        let against_indirect = session.indirect_choice_of(session.against_indirect_key());
         self.tradeoff = Some(super::tradeoff_run::Tradeoff::start(super::tradeoff_run::TradeoffJob {
             gpu: gpu.ctx.clone(),
             scene: gpu.main.renderer.shared_scene(),
@@ -135,7 +126,7 @@ impl Views {
             settings: gpu.main.renderer.settings().clone(),
             tries,
             base_params,
-            against_params: strings(session.params.get(&against)),
+            against_params: session.param_strings(&against),
             against,
             against_indirect,
             metric,
