@@ -89,17 +89,10 @@ pub fn tradeoff_ui(
         crate::gui::views::technique_pair(&session.view.compare_against, session.against_indirect_key())
     ));
     let Some(gpu) = &mut views.gpu else { return };
-    // The technique's parameters, from the main view's instances.
+    // The parameters of the ticked techniques only, from the main view's instances (asking every registered
+    // technique would create each one's pipelines just to list them).
     let mut specs = BTreeMap::new();
     for entry in REGISTRY {
-        if let Ok(t) = gpu.main.technique(entry.key) {
-            specs.insert(entry.key, t.params());
-        }
-    }
-    for entry in REGISTRY {
-        let params = &specs[entry.key];
-        let numeric: Vec<_> =
-            params.iter().filter(|p| matches!(p.kind, ParamKind::Float { .. } | ParamKind::Int { .. })).collect();
         let default_on = entry.key == session.technique;
         let t = input.tries.entry(entry.key.to_string()).or_insert_with(|| TryInput {
             on: default_on,
@@ -108,6 +101,18 @@ pub fn tradeoff_ui(
             to: 1.0,
             count: 4,
         });
+        if t.on {
+            if let Ok(technique) = gpu.main.technique(entry.key) {
+                specs.insert(entry.key, technique.params());
+            }
+        }
+    }
+    for entry in REGISTRY {
+        let none = Vec::new();
+        let params = specs.get(entry.key).unwrap_or(&none);
+        let numeric: Vec<_> =
+            params.iter().filter(|p| matches!(p.kind, ParamKind::Float { .. } | ParamKind::Int { .. })).collect();
+        let t = input.tries.get_mut(entry.key).expect("inserted above");
         ui.horizontal(|ui| {
             ui.checkbox(&mut t.on, entry.key).on_hover_text(format!("{} ({})", entry.label, entry.role.name()));
             if !t.on {
@@ -175,7 +180,7 @@ pub fn tradeoff_ui(
         let mut tries = Vec::new();
         for entry in REGISTRY {
             let Some(t) = input.tries.get(entry.key).filter(|t| t.on) else { continue };
-            let param = t.param.as_ref().and_then(|k| specs[entry.key].iter().find(|p| p.key == k.as_str()));
+            let param = t.param.as_ref().and_then(|k| specs.get(entry.key)?.iter().find(|p| p.key == k.as_str()));
             let params = match param {
                 Some(p) => vec![(p.key.to_string(), vec![values_text(&p.kind, t.from, t.to, t.count)])],
                 None => Vec::new(),
