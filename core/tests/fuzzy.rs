@@ -262,3 +262,59 @@ fn the_explain_steps_of_fuzzy_and_val_name_layers_they_have() {
         }
     }
 }
+
+/// The points of `layer` in `technique`'s overlays.
+fn layer_points(technique: &dyn shadowlab_core::technique::Technique, lights: &[PointLight], layer: &str) -> Vec<Vec3> {
+    use shadowlab_core::technique::Overlay;
+    let layers = technique.overlays(lights);
+    let layer = layers.into_iter().find(|l| l.name == layer).unwrap_or_else(|| panic!("no layer '{layer}'"));
+    layer
+        .primitives
+        .iter()
+        .filter_map(|o| if let Overlay::Point { position, .. } = o { Some(*position) } else { None })
+        .collect()
+}
+
+#[test]
+fn indirect_overlays_follow_moved_lights_as_the_next_frame_shows_them() {
+    // The preview's overlay stages (`update_overlays`, run while a light is dragged) on a fresh instance that
+    // never rendered: for the frame's lights they give the clusters the frame found (the CPU twins of the GPU
+    // k-means), and for moved lights the ones the next frame finds, before it runs.
+    use shadowlab_core::technique::OverlayUpdate;
+    let scene = room();
+    let first = lights();
+    let moved = vec![white_light(Vec3::new(-0.6, 2.2, -0.4), 8.0, 30.0)];
+    for (key, layer) in [("val", "val centres"), ("fuzzy", "vpl cluster representatives")] {
+        let mut rendered = Shot::indirect(&scene, &first, settings(64), key).render_keeping();
+        let renderer = &mut rendered.renderer;
+        let camera = scene.camera;
+        let mut follower = create_indirect(renderer, key, &[]);
+        let update = renderer.update_overlays(follower.as_mut(), &camera, &first);
+        // 64 VPLs: the preview's VPLs are the frame's (no note). An instance that never rendered has no
+        // shading-point clusters to show.
+        assert!(matches!(update, OverlayUpdate::Live { note: None, .. }), "{key}: {update:?}");
+        assert!(!update.is_stale(layer), "{key}: {update:?}");
+        assert_eq!(update.is_stale("shading-point clusters"), key == "fuzzy", "{key}: {update:?}");
+        let close =
+            |a: &[Vec3], b: &[Vec3]| a.len() == b.len() && a.iter().zip(b).all(|(p, q)| (*p - *q).length() < 1e-3);
+        let framed = layer_points(renderer.indirect().unwrap(), &first, layer);
+        let followed = layer_points(follower.as_ref(), &first, layer);
+        assert!(!framed.is_empty() && close(&framed, &followed), "{key}: {framed:?} against {followed:?}");
+        renderer.update_overlays(follower.as_mut(), &camera, &moved);
+        let during = layer_points(follower.as_ref(), &moved, layer);
+        assert!(!close(&during, &framed), "{key}: the overlay did not change for the moved light");
+        let mut direct = create(renderer, "unshadowed", &[]);
+        frame(renderer, direct.as_mut(), &camera, &moved);
+        let next = layer_points(renderer.indirect().unwrap(), &moved, layer);
+        assert!(close(&next, &during), "{key}: the next frame shows {next:?}, the preview showed {during:?}");
+        // The rendered instance: its shading-point clusters are live while only a light moves, and said to be
+        // stale (of the last frame's G-buffer) once the camera moved.
+        let update = renderer.update_indirect_overlays(&camera, &first).unwrap();
+        assert!(!update.is_stale("shading-point clusters") && !update.is_stale(layer), "{key}: {update:?}");
+        let mut turned = camera;
+        turned.position += Vec3::new(0.3, 0.0, 0.0);
+        let update = renderer.update_indirect_overlays(&turned, &moved).unwrap();
+        assert_eq!(update.is_stale("shading-point clusters"), key == "fuzzy", "{key}: {update:?}");
+        assert!(!update.is_stale(layer), "{key}: {update:?}");
+    }
+}

@@ -4,12 +4,48 @@ use super::*;
 
 impl Renderer {
     /// Let `technique` run its overlay stages for `camera` and `lights` without rendering (the app's preview
-    /// while a light or the camera moves): the same light culling and aspect as a frame of this renderer.
-    /// True when the technique's overlays now follow them ([`Technique::update_overlays`]).
-    pub fn update_overlays(&self, technique: &mut dyn Technique, camera: &Camera, lights: &[PointLight]) -> bool {
+    /// while a light or the camera moves): the same light culling and aspect as a frame of this renderer, and
+    /// for a technique that uses VPLs the VPLs of these lights at the preview's size (the fixed set, when one
+    /// was given; else at most [`crate::vpl::PREVIEW_VPLS`] of the same sequence).
+    pub fn update_overlays(
+        &self,
+        technique: &mut dyn Technique,
+        camera: &Camera,
+        lights: &[PointLight],
+    ) -> crate::technique::OverlayUpdate {
         let frustum = Frustum::from_clip_from_world(&camera.clip_from_world(self.aspect()));
         let visible: Vec<usize> = lights::visible_indices(lights, &frustum).collect();
-        technique.update_overlays(&crate::technique::OverlayContext { camera, frustum, lights, visible: &visible })
+        let asked = self.settings.vpl.count;
+        let (vpls, vpl_samples) = if !technique.uses_vpls() {
+            (std::sync::Arc::new(VplSet::default()), (0, 0))
+        } else if self.fixed_vpls {
+            (self.vpls.set.clone(), (asked, asked))
+        } else {
+            let preview = crate::vpl::VplSettings { count: asked.min(crate::vpl::PREVIEW_VPLS), ..self.settings.vpl };
+            let (bvh, _) = self.scene.bvh(&self.gpu);
+            (std::sync::Arc::new(crate::vpl::generate(&bvh, lights, &preview)), (preview.count, asked))
+        };
+        technique.update_overlays(&crate::technique::OverlayContext {
+            camera,
+            frustum,
+            lights,
+            visible: &visible,
+            vpls: &vpls,
+            vpl_samples,
+            scene_bounds: self.scene.bounds,
+        })
+    }
+
+    /// [`Renderer::update_overlays`] for this renderer's own indirect technique (None without one).
+    pub fn update_indirect_overlays(
+        &mut self,
+        camera: &Camera,
+        lights: &[PointLight],
+    ) -> Option<crate::technique::OverlayUpdate> {
+        let mut technique = self.indirect.take()?;
+        let update = self.update_overlays(technique.as_mut(), camera, lights);
+        self.indirect = Some(technique);
+        Some(update)
     }
 
     pub(super) fn rebind_tonemap(&mut self) {

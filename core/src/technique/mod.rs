@@ -154,6 +154,59 @@ pub struct OverlayContext<'a> {
     pub lights: &'a [PointLight],
     /// Indices of the lights whose range touches the view frustum, as a frame's light culling finds them.
     pub visible: &'a [usize],
+    /// The VPLs of these lights for a technique that [uses VPLs](Technique::uses_vpls) (empty otherwise), at the
+    /// preview's size: at most [`crate::vpl::PREVIEW_VPLS`] of the frame's `N` ([`OverlayContext::vpl_samples`]).
+    pub vpls: &'a std::sync::Arc<crate::vpl::VplSet>,
+    /// The VPL samples `vpls` was drawn from and the frame's `N` (fewer when `N` is past the preview's size).
+    pub vpl_samples: (u32, u32),
+    /// The scene's bounds (what the clusterings normalise by).
+    pub scene_bounds: crate::scene::Aabb,
+}
+
+impl OverlayContext<'_> {
+    /// What to say in a legend when the VPLs are fewer than a frame's.
+    pub fn vpl_note(&self) -> Option<String> {
+        let (used, asked) = self.vpl_samples;
+        (used < asked).then(|| format!("while moving: from {used} of {asked} VPL samples (the preview's size)"))
+    }
+}
+
+/// What [`Technique::update_overlays`] made of a technique's overlays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum OverlayUpdate {
+    /// The stages did not run: every layer shows the last complete frame.
+    #[default]
+    Stale,
+    /// The stages ran for the new lights and camera.
+    Live {
+        /// How the live layers differ from a frame's (made at the preview's size), said in their legends.
+        note: Option<String>,
+        /// Layers that did not follow (their stages need a frame, e.g. the G-buffer of a moved camera).
+        stale_layers: Vec<&'static str>,
+    },
+}
+
+impl OverlayUpdate {
+    /// Live, as a frame makes them.
+    pub fn live() -> OverlayUpdate {
+        OverlayUpdate::Live { note: None, stale_layers: Vec::new() }
+    }
+
+    /// Whether `layer` still shows the last complete frame.
+    pub fn is_stale(&self, layer: &str) -> bool {
+        match self {
+            OverlayUpdate::Stale => true,
+            OverlayUpdate::Live { stale_layers, .. } => stale_layers.contains(&layer),
+        }
+    }
+
+    /// The note for the legend of a live `layer`.
+    pub fn note(&self, layer: &str) -> Option<&str> {
+        match self {
+            OverlayUpdate::Live { note: Some(n), .. } if !self.is_stale(layer) => Some(n),
+            _ => None,
+        }
+    }
 }
 
 pub trait Technique {
@@ -183,11 +236,11 @@ pub trait Technique {
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer>;
     /// Run the stages that make the overlays again for `ctx`'s lights and camera, without rendering, so the
     /// overlays follow a dragged light or camera in the same UI frame while the preview renders the image.
-    /// True when the overlays now show `ctx` (or never depended on the lights and camera); false (the default)
-    /// when they still show the last complete frame. Only called between frames: the next `prepare` starts
-    /// from scratch.
-    fn update_overlays(&mut self, _ctx: &OverlayContext) -> bool {
-        false
+    /// Which layers now show `ctx` ([`OverlayUpdate::Stale`], the default: all still show the last complete
+    /// frame). Only called between frames: the next `prepare` starts from scratch (and no warm start carries
+    /// what this run found into a frame).
+    fn update_overlays(&mut self, _ctx: &OverlayContext) -> OverlayUpdate {
+        OverlayUpdate::Stale
     }
     /// [`Technique::overlays`] with primitives only in the layers `shown(name, visible_by_default)` accepts; the
     /// others keep their name and default and no primitives (the layer list needs them). The app asks this every

@@ -45,6 +45,10 @@ pub const RSM_RESOLUTION: u32 = 256;
 pub const MAX_VPLS: u32 = 65_536;
 /// Largest `--bounces`.
 pub const MAX_BOUNCES: u32 = 8;
+/// Most VPLs the overlay stages of an indirect technique use while a light or the camera moves (the preview):
+/// the default `N`, so at the defaults the preview's overlays are a frame's; past it, the first `PREVIEW_VPLS`
+/// samples of the same sequence, so the overlays stay within a UI frame's time.
+pub const PREVIEW_VPLS: u32 = 1024;
 
 /// Where VPLs come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -18,7 +18,7 @@ use eframe::{egui, egui_wgpu};
 use glam::Vec3;
 use shadowlab_core::renderer::overlay::OverlayStyle;
 use shadowlab_core::scene::PointLight;
-use shadowlab_core::technique::{Glyph, LegendEntry, Overlay, OverlayLayer, ParamValue, Technique};
+use shadowlab_core::technique::{Glyph, LegendEntry, Overlay, OverlayLayer, OverlayUpdate, ParamValue, Technique};
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
 
@@ -190,34 +190,38 @@ impl Views {
 
     /// The overlay primitives of the current technique that the user has switched on, plus the selection, and
     /// the legend of each of those layers (as the layers describe themselves through their technique).
-    /// `stale` (direct, indirect): the technique's layers show its last complete frame, not these lights (the
-    /// preview while dragging, for a technique whose overlay stages did not run again): said in their legends.
+    /// `updates` (direct, indirect): what the preview's overlay stages made of each technique's layers while
+    /// dragging; a layer that still shows the last complete frame, or was made at the preview's size, says so
+    /// in its legend.
     fn overlay_primitives(
         &mut self,
         session: &Session,
         lights: &[PointLight],
-        stale: (bool, bool),
+        updates: &(OverlayUpdate, OverlayUpdate),
     ) -> (Vec<Overlay>, Vec<(String, Vec<LegendEntry>)>) {
         let mut out = Vec::new();
         let mut legends = Vec::new();
         let overlays = &session.view.overlays;
         let is_on = |layer: &OverlayLayer| *overlays.get(layer.name).unwrap_or(&layer.visible_by_default);
-        let mut take = |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>, stale: bool| {
-            for layer in layers.into_iter().filter(|l| is_on(l)) {
-                let mut legend = technique.overlay_legend(&layer);
-                if stale {
-                    legend.push(LegendEntry::new(Glyph::Rect, [0.7, 0.7, 0.7, 1.0], STALE_NOTE));
+        let mut take =
+            |technique: &dyn Technique, layers: Vec<OverlayLayer>, out: &mut Vec<Overlay>, update: &OverlayUpdate| {
+                for layer in layers.into_iter().filter(|l| is_on(l)) {
+                    let mut legend = technique.overlay_legend(&layer);
+                    if update.is_stale(layer.name) {
+                        legend.push(LegendEntry::new(Glyph::Rect, [0.7, 0.7, 0.7, 1.0], STALE_NOTE));
+                    } else if let Some(note) = update.note(layer.name) {
+                        legend.push(LegendEntry::new(Glyph::Rect, [0.7, 0.7, 0.7, 1.0], note));
+                    }
+                    legends.push((layer.name.to_string(), legend));
+                    out.extend(layer.primitives);
                 }
-                legends.push((layer.name.to_string(), legend));
-                out.extend(layer.primitives);
-            }
-        };
+            };
         let shown = |name: &str, default: bool| *overlays.get(name).unwrap_or(&default);
         let Some(gpu) = &mut self.gpu else { return (out, Vec::new()) };
         if let Ok(technique) = gpu.main.technique(&session.technique) {
             // Only the shown layers are built (INSM's meshes cost a readback).
             let layers = technique.overlays_shown(lights, &shown);
-            take(technique.as_ref(), layers, &mut out, stale.0);
+            take(technique.as_ref(), layers, &mut out, &updates.0);
         }
         // The reference's light ranges over any technique that has no such layer of its own.
         let own_ranges = gpu
@@ -228,14 +232,14 @@ impl Views {
             if let Ok(reference) = gpu.main.technique(REFERENCE) {
                 let layers = reference.overlays(lights).into_iter().filter(|l| l.name == "light ranges").collect();
                 // Drawn from the lights themselves: always live.
-                take(reference.as_ref(), layers, &mut out, false);
+                take(reference.as_ref(), layers, &mut out, &OverlayUpdate::live());
             }
         }
         if let Some(key) = session.indirect.technique.clone() {
             if let Ok(t) = gpu.main.indirect_technique(&key) {
                 let t = t.borrow();
                 let layers = t.overlays_shown(lights, &shown);
-                take(t.as_ref(), layers, &mut out, stale.1);
+                take(t.as_ref(), layers, &mut out, &updates.1);
             }
         }
         // A selected light's group (its cluster): the primitives at its members stay, the rest is dimmed.
@@ -314,15 +318,14 @@ impl Views {
         let camera = session.camera.camera();
         // While the user drags, the preview renders the image, and the technique's overlay stages run again
         // for the new lights and camera (LightCluster's clustering), so its overlays follow in this UI frame.
-        let stale = match (&mut self.gpu, interacting) {
+        let updates = match (&mut self.gpu, interacting) {
             (Some(gpu), true) => {
                 let indirect = session.indirect.technique.as_deref();
-                let (direct, indirect) = gpu.main.update_overlays(&session.technique, indirect, &camera, &lights)?;
-                (!direct, !indirect)
+                gpu.main.update_overlays(&session.technique, indirect, &camera, &lights)?
             }
-            _ => (false, false),
+            _ => (OverlayUpdate::live(), OverlayUpdate::live()),
         };
-        let (mut overlays, legends) = self.overlay_primitives(session, &lights, stale);
+        let (mut overlays, legends) = self.overlay_primitives(session, &lights, &updates);
         self.legends = legends;
         let technique = if interacting { preview_technique().to_string() } else { session.technique.clone() };
         let two = session.view.mode != ViewMode::Single;

@@ -21,8 +21,8 @@ use eframe::{egui, egui_wgpu};
 use shadowlab_core::renderer::FrameJob;
 use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::{
-    CameraPose, FrameContext, LegendEntry, LightDetails, Overlay, OverlayLayer, Param, ParamError, ParamValue,
-    Technique, TechniqueCounts,
+    CameraPose, FrameContext, LegendEntry, LightDetails, Overlay, OverlayLayer, OverlayUpdate, Param, ParamError,
+    ParamValue, Technique, TechniqueCounts,
 };
 use shadowlab_core::timing::PassTime;
 use shadowlab_core::GpuError;
@@ -203,25 +203,25 @@ impl View {
     }
 
     /// Run the overlay stages of `key` (and of the indirect technique `indirect`) for `camera` and `lights`
-    /// without rendering, while the preview renders the image: whether each one's overlays now follow them
-    /// (direct, indirect).
+    /// without rendering, while the preview renders the image: what each one's overlays now show (direct,
+    /// indirect).
     pub fn update_overlays(
         &mut self,
         key: &str,
         indirect: Option<&str>,
         camera: &shadowlab_core::scene::Camera,
         lights: &[PointLight],
-    ) -> Result<(bool, bool)> {
+    ) -> Result<(OverlayUpdate, OverlayUpdate)> {
         self.technique(key)?;
         let technique = self.techniques.get_mut(key).ok_or_else(|| anyhow!("unknown technique '{key}'"))?;
         let direct = self.renderer.update_overlays(technique.as_mut(), camera, lights);
         let indirect = match indirect {
             Some(k) => {
                 let t = self.indirect_technique(k)?;
-                let live = self.renderer.update_overlays(t.borrow_mut().as_mut(), camera, lights);
-                live
+                let update = self.renderer.update_overlays(t.borrow_mut().as_mut(), camera, lights);
+                update
             }
-            None => true,
+            None => OverlayUpdate::live(),
         };
         Ok((direct, indirect))
     }

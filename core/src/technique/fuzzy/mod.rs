@@ -154,6 +154,8 @@ pub struct FuzzyClustering {
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
     last_step: &'static str,
+    /// The camera of the last frame: the shading-point clusters are of its view.
+    frame_camera: Option<crate::scene::Camera>,
 }
 
 impl FuzzyClustering {
@@ -223,6 +225,7 @@ impl FuzzyClustering {
             shade_uniform: uniform("fuzzy shading params", std::mem::size_of::<ShadeUniform>() as u64),
             ray_pass,
             vpls: Arc::default(),
+            frame_camera: None,
             mode: ClusterMode::Both,
             light_count: 0,
             sp_count: 0,
@@ -241,14 +244,13 @@ impl FuzzyClustering {
 
     fn kmeans_params(
         &self,
-        ctx: &FrameContext,
+        bounds: crate::scene::Aabb,
         clusters: usize,
         width: u32,
         height: u32,
         gamma: u32,
         f: usize,
     ) -> KMeansParams {
-        let bounds = ctx.scene.bounds;
         // The shading points of the view may lie a little outside the scene's bounds (depth reconstruction):
         // the grid clamps them into its border cells, which keeps the search exact.
         KMeansParams {
@@ -390,8 +392,13 @@ impl Technique for FuzzyClustering {
         self.overlay_layers(lights)
     }
 
+    fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
+        self.follow(ctx)
+    }
+
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
+        self.frame_camera = Some(*ctx.camera);
         self.scene_size = ctx.scene.bounds.size().length().max(1e-6);
         self.mode = self.params.cluster_mode();
         let (w, h) = ctx.size;
@@ -420,7 +427,7 @@ impl Technique for FuzzyClustering {
         // Steps 2-4: both clusterings in one submission.
         let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
         if vpl_clustered {
-            let kp = self.kmeans_params(ctx, self.params.k_vpl as usize, n as u32, 1, 1, 1);
+            let kp = self.kmeans_params(ctx.scene.bounds, self.params.k_vpl as usize, n as u32, 1, 1, 1);
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, &mut encoder, &ctx.vpls.buffer.buffer, &kp, Some(max_flux))?;
         }
@@ -440,7 +447,7 @@ impl Technique for FuzzyClustering {
                 pass.set_bind_group(1, &group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             });
-            let kp = self.kmeans_params(ctx, self.params.sp_clusters(pixels), w, h, self.params.gamma, f);
+            let kp = self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f);
             let points = self.sp_points.as_ref().expect("ensured");
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, &mut encoder, points, &kp, None)?;
         }

@@ -145,6 +145,53 @@ impl FuzzyClustering {
         }
     }
 
+    /// The overlays while a light or the camera moves: step 2 again on the CPU twin ([`kmeans::cluster`], the
+    /// GPU run's algorithm) over the preview's VPLs, so the VPL clusters and their representatives follow a
+    /// dragged light in the same UI frame. The shading-point clusters are of the last frame's G-buffer: live
+    /// while only lights move, stale once the camera moved; the probe's rays (step 5) are always stale.
+    pub(super) fn follow(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
+        const SP_LAYERS: [&str; 3] = [
+            "shading-point clusters",
+            "shading-point clusters (blended as the visibility mode weighs them)",
+            "shading-point centroids",
+        ];
+        self.vpls = ctx.vpls.clone();
+        self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
+        let vpls = &self.vpls.vpls;
+        if self.params.cluster_mode() != ClusterMode::ShadingPoints && !vpls.is_empty() {
+            let points: Vec<kmeans::Point> =
+                vpls.iter().map(|v| kmeans::Point { position: v.position, normal: v.normal, valid: true }).collect();
+            let kp = self.kmeans_params(ctx.scene_bounds, self.params.k_vpl as usize, vpls.len() as u32, 1, 1, 1);
+            let c = kmeans::cluster(&points, &kp);
+            let mut flux = vec![Vec3::ZERO; c.centroids.len()];
+            for (m, v) in vpls.iter().enumerate() {
+                if let Some(&k) = c.assignment.get(m * c.fuzziness).filter(|&&k| k != u32::MAX) {
+                    flux[k as usize] += v.flux;
+                }
+            }
+            // As `rep_finish` of `fuzzy/kmeans.wgsl` stores a cluster: its representative's position, the members'
+            // mean normal and count, their summed flux.
+            self.inspection.vpl_clusters = (0..c.centroids.len())
+                .map(|k| match c.representative[k] {
+                    Some(r) if c.members[k] > 0 => gpu::GpuPoint {
+                        position: vpls[r as usize].position.extend(1.0).to_array(),
+                        normal: c.member_normal[k].extend(c.members[k] as f32).to_array(),
+                        flux: flux[k].extend(0.0).to_array(),
+                    },
+                    _ => gpu::GpuPoint { normal: [0.0, 0.0, 1.0, 0.0], ..Default::default() },
+                })
+                .collect();
+            if self.params.inspect {
+                self.inspection.vpl_assignment = (0..vpls.len()).map(|m| c.assignment[m * c.fuzziness]).collect();
+            }
+        }
+        let mut stale_layers = vec!["probe: clusters and visibility rays (green visible, red blocked)"];
+        if self.frame_camera.as_ref() != Some(ctx.camera) {
+            stale_layers.extend(SP_LAYERS);
+        }
+        crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers }
+    }
+
     pub(super) fn overlay_layers(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
         let ins = &self.inspection;
         let half = self.scene_size * 0.004;

@@ -470,7 +470,7 @@ impl Technique for LightCluster {
     }
 
     /// Step 1 again (about 0.1 ms for hundreds of lights), so the clusters follow a dragged light or camera.
-    fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> bool {
+    fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
         let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
         let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
         self.clusterer.cluster_visible_into(
@@ -480,7 +480,7 @@ impl Technique for LightCluster {
             &cluster_params,
             &mut self.clustering,
         );
-        true
+        crate::technique::OverlayUpdate::live()
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

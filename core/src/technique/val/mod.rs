@@ -252,6 +252,19 @@ impl VirtualAreaLights {
     }
 }
 
+impl VirtualAreaLights {
+    /// Step 2's k-means settings for this frame's scene size.
+    fn kmeans_params(&self) -> KMeansParams {
+        KMeansParams {
+            vals: (self.params.vals as usize).min(MAX_VALS),
+            iterations: self.params.iterations,
+            w_x: self.params.w_x,
+            w_a: self.params.w_a,
+            scene_length: self.scene_size * self.params.length_fraction,
+        }
+    }
+}
+
 impl Technique for VirtualAreaLights {
     fn key(&self) -> &'static str {
         "val"
@@ -421,6 +434,15 @@ impl Technique for VirtualAreaLights {
         true
     }
 
+    /// Step 2 again on the CPU twin (no warm start, so the next frame is not changed by it) for the preview's
+    /// VPLs: the VALs follow a dragged light in the same UI frame (1,024 VPLs into 30 VALs: about a millisecond).
+    fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
+        self.vpls = ctx.vpls.clone();
+        self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
+        self.clustering = kmeans::cluster(&self.vpls.vpls, &self.kmeans_params(), None);
+        crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers: Vec::new() }
+    }
+
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
         let bounds = ctx.scene.bounds;
@@ -429,13 +451,7 @@ impl Technique for VirtualAreaLights {
         let n = vpls.len();
         // Step 2: clustering.
         let start = std::time::Instant::now();
-        let kp = KMeansParams {
-            vals: (self.params.vals as usize).min(MAX_VALS),
-            iterations: self.params.iterations,
-            w_x: self.params.w_x,
-            w_a: self.params.w_a,
-            scene_length: self.scene_size * self.params.length_fraction,
-        };
+        let kp = self.kmeans_params();
         let warm = (self.params.warm_start && !self.previous_centres.is_empty()).then_some(&self.previous_centres[..]);
         // The GPU k-means restarts from the initial assignment only; warm starts run on the CPU.
         self.gpu_map = self.params.clustering == "gpu" && warm.is_none() && !vpls.is_empty();
