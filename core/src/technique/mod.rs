@@ -20,6 +20,7 @@ pub mod registry;
 
 pub mod fuzzy;
 pub mod insm;
+pub mod ism;
 pub mod lightcluster;
 pub mod pathtraced;
 pub mod raytraced;
