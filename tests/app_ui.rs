@@ -1299,7 +1299,11 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
 fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     use shadowlab::gui::panels::tradeoff::TryInput;
     use shadowlab_core::technique::ParamValue;
-    let mut h = start("tradeoff", "cornell");
+    // A window tall enough for the plot to be scrolled into the Sweep pane.
+    let startup = Startup { data_dir: Some(data_dir("tradeoff")), synchronous: true, ..Default::default() };
+    let mut h = harness_sized(startup, (1200.0, 900.0));
+    h.state_mut().load_builtin("cornell");
+    h.run_steps(3);
     h.state_mut().chrome.layout.focus(Pane::Sweep);
     h.run_steps(2);
     {
@@ -1354,6 +1358,52 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     let points = t.points();
     let pick = t.pick().expect("everything fits");
     assert!(points.iter().all(|p| p.ms >= points[pick].ms), "the fastest is picked");
+
+    // Against a work count: the rows carry the frame's counts and the plot draws them on that axis.
+    let key = t.work_keys().into_iter().find(|k| k == "depth_triangles").expect("a depth-triangle count");
+    let rows: Vec<(String, f64)> = t.rows.iter().map(|r| (r.setting[0].1.clone(), r.work[&key])).collect();
+    h.state_mut().chrome.tradeoff_input.x_axis = Some(key.clone());
+    h.run_steps(2);
+    // Clicking a point loads its configuration: the one that is not the view's now.
+    let loaded = h.state().session.params["lightcluster"]["d_init"].clone();
+    let i = rows.iter().position(|(v, _)| ParamValue::Float(v.parse().unwrap()) != loaded).expect("another row");
+    // The view on another technique (the panel above the plot changes with it), then scroll the Sweep pane until the plot (below the section's inputs) is on screen.
+    h.state_mut().session.technique = "reference".into();
+    h.run_steps(3);
+    let pane = h.state().chrome.layout.rect(Pane::Sweep).expect("the sweep pane is laid out");
+    for _ in 0..20 {
+        if h.state().chrome.tradeoff_input.drawn.iter().all(|p| pane.shrink(4.0).contains(*p)) {
+            break;
+        }
+        move_to(&mut h, pane.center());
+        h.event(egui::Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: egui::vec2(0.0, -40.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Wheel,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.run_steps(2);
+    }
+    // Smooth scrolling settles, and the plot's bounds with it.
+    h.run_steps(20);
+    let drawn = h.state().chrome.tradeoff_input.drawn.clone();
+    assert_eq!(drawn.len(), rows.len());
+    assert!(drawn.iter().all(|p| pane.contains(*p)), "the plot is on screen: {drawn:?} in {pane:?}");
+    assert!(
+        drawn
+            .iter()
+            .zip(&rows)
+            .all(|(a, b)| drawn.iter().zip(&rows).all(|(c, d)| (a.x < c.x) == (b.1 < d.1) || b.1 == d.1)),
+        "points drawn in the order of their counts: {drawn:?} {rows:?}"
+    );
+    move_to(&mut h, drawn[i]);
+    press(&mut h, drawn[i], true, egui::Modifiers::NONE);
+    press(&mut h, drawn[i], false, egui::Modifiers::NONE);
+    h.run_steps(2);
+    let s = &h.state().session;
+    assert_eq!(s.technique, "lightcluster", "a click on a point loads its technique");
+    assert_eq!(s.params["lightcluster"]["d_init"], ParamValue::Float(rows[i].0.parse().unwrap()), "and its d_init");
 }
 
 /// A small deterministic generator (xorshift64*), so a failing random run can be replayed from its seed.

@@ -51,6 +51,9 @@ pub struct TradeoffRow {
     pub setting: Setting,
     pub times: FrameTimes,
     pub error: f64,
+    /// The frame's work counts, the direct and the indirect technique's summed per key (as `tradeoff --work-axis`
+    /// plots them).
+    pub work: std::collections::BTreeMap<String, f64>,
 }
 
 /// What the worker sends: the target's time, then each configuration.
@@ -148,7 +151,11 @@ fn run(job: TradeoffJob, cancel: &AtomicBool, send: &dyn Fn(TradeoffMessage)) ->
         let error = job.metric.of(&m)?;
         let times = FrameTimes::of(&report);
         let clock = common_clock(times.source, target_report.timing.comparable_source());
-        send(TradeoffMessage::Row(TradeoffRow { try_index: t, setting: setting.clone(), times, error }));
+        let mut work = report.work.clone();
+        for (k, v) in report.indirect.iter().flat_map(|i| &i.work) {
+            *work.entry(k.clone()).or_default() += v;
+        }
+        send(TradeoffMessage::Row(TradeoffRow { try_index: t, setting: setting.clone(), times, error, work }));
         Ok(Point { ms: times.ms_in(clock), error })
     };
     tradeoff::search(&job.tries, job.goal, &mut eval, &|| cancel.load(Ordering::Relaxed))?;
@@ -188,6 +195,13 @@ impl Tradeoff {
     pub fn points(&self) -> Vec<Point> {
         let clock = self.clock();
         self.rows.iter().map(|r| Point { ms: r.times.ms_in(clock), error: r.error }).collect()
+    }
+
+    /// The work counts some row has a non-zero value of (the plot's other x axes).
+    pub fn work_keys(&self) -> Vec<String> {
+        let keys: std::collections::BTreeSet<&String> =
+            self.rows.iter().flat_map(|r| r.work.iter().filter(|(_, v)| **v != 0.0).map(|(k, _)| k)).collect();
+        keys.into_iter().cloned().collect()
     }
 
     /// The row the goal picks (a budget's lowest error, a maximum error's fastest), once finished.

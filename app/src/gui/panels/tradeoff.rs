@@ -35,6 +35,10 @@ pub struct TradeoffInput {
     /// The fastest configuration within this error (in `metric`), instead of the lowest error within the time.
     pub use_max_error: bool,
     pub max_error: f64,
+    /// The plot's x axis: None for the time per frame, else a work count (`shadowlab tradeoff --work-axis`).
+    pub x_axis: Option<String>,
+    /// Where the last UI frame drew each row's point on screen (what a pointer hovers and clicks).
+    pub drawn: Vec<egui::Pos2>,
 }
 
 impl Default for TradeoffInput {
@@ -46,6 +50,8 @@ impl Default for TradeoffInput {
             budget_ms: 100.0,
             use_max_error: false,
             max_error: 0.05,
+            x_axis: None,
+            drawn: Vec::new(),
         }
     }
 }
@@ -227,46 +233,72 @@ pub fn tradeoff_ui(
         ui.colored_label(egui::Color32::LIGHT_RED, e);
     }
     let points = t.points();
-    let front = tradeoff::pareto(&points);
     let pick = if t.worker.finished { t.pick() } else { None };
     let clock = t.clock();
+    // The x axis: the time per frame, or a work count of the rows (the front is drawn in the axes shown).
+    let work_keys = t.work_keys();
+    if input.x_axis.as_ref().is_some_and(|k| !work_keys.contains(k)) {
+        input.x_axis = None;
+    }
+    let time_label = format!("ms per frame ({})", clock.name());
+    ui.horizontal(|ui| {
+        ui.label("x axis");
+        egui::ComboBox::from_id_salt("tradeoff x axis")
+            .selected_text(input.x_axis.clone().unwrap_or_else(|| time_label.clone()))
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut input.x_axis, None, time_label.as_str());
+                for k in &work_keys {
+                    ui.selectable_value(&mut input.x_axis, Some(k.clone()), k.as_str());
+                }
+            });
+    });
+    let shown: Vec<tradeoff::Point> = match &input.x_axis {
+        None => points.clone(),
+        Some(k) => t
+            .rows
+            .iter()
+            .zip(&points)
+            .map(|(r, p)| tradeoff::Point { ms: r.work.get(k).copied().unwrap_or(0.0), error: p.error })
+            .collect(),
+    };
+    let front = tradeoff::pareto(&shown);
     let mut clicked = None;
-    let response = Plot::new("tradeoff")
+    // As wide as the pane shows (a wide row above must not push the plot past its right edge).
+    let width = (ui.clip_rect().right() - ui.cursor().left()).min(ui.available_width()).max(120.0);
+    // One plot per x axis (each with its own bounds); the wheel scrolls the pane, not the plot (drag pans it).
+    let response = Plot::new(("tradeoff", input.x_axis.clone()))
+        .allow_scroll(false)
+        .width(width)
         .height(180.0)
-        .x_axis_label(format!("ms per frame ({})", clock.name()))
+        .x_axis_label(input.x_axis.clone().unwrap_or(time_label))
         .y_axis_label(t.metric.name())
         .include_x(0.0)
         .include_y(0.0)
         .show(ui, |plot| {
-            if let Some(target) = t.target {
+            if let (Some(target), None) = (t.target, &input.x_axis) {
                 plot.vline(VLine::new("target", target.ms_in(clock)).color(egui::Color32::GRAY));
             }
             let mut line: Vec<[f64; 2]> =
-                points.iter().zip(&front).filter(|(_, f)| **f).map(|(p, _)| [p.ms, p.error]).collect();
+                shown.iter().zip(&front).filter(|(_, f)| **f).map(|(p, _)| [p.ms, p.error]).collect();
             line.sort_by(|a, b| a[0].total_cmp(&b[0]));
             if line.len() > 1 {
                 plot.line(Line::new("Pareto front", PlotPoints::from(line)).color(egui::Color32::WHITE));
             }
             for (i, spec) in t.tries.iter().enumerate() {
-                let pts: Vec<[f64; 2]> = t
-                    .rows
-                    .iter()
-                    .zip(&points)
-                    .filter(|(r, _)| r.try_index == i)
-                    .map(|(_, p)| [p.ms, p.error])
-                    .collect();
+                let pts: Vec<[f64; 2]> =
+                    t.rows.iter().zip(&shown).filter(|(r, _)| r.try_index == i).map(|(_, p)| [p.ms, p.error]).collect();
                 let color = COLORS[i % COLORS.len()];
                 plot.points(Points::new(spec.label(), PlotPoints::from(pts)).radius(4.0).color(color));
             }
             if let Some(i) = pick {
-                let p = [points[i].ms, points[i].error];
+                let p = [shown[i].ms, shown[i].error];
                 let ring = Points::new("pick", PlotPoints::from(vec![p])).shape(MarkerShape::Circle).filled(false);
                 plot.points(ring.radius(9.0).color(egui::Color32::YELLOW));
             }
             // The configuration nearest the pointer (in screen space), for the tooltip and a click.
             let pointer = plot.response().hover_pos();
             let nearest = pointer.and_then(|at| {
-                points
+                shown
                     .iter()
                     .enumerate()
                     .map(|(i, p)| (i, plot.screen_from_plot(PlotPoint::new(p.ms, p.error)).distance(at)))
@@ -277,19 +309,23 @@ pub fn tradeoff_ui(
             if plot.response().clicked() {
                 clicked = nearest;
             }
-            nearest
+            let drawn = shown.iter().map(|p| plot.screen_from_plot(PlotPoint::new(p.ms, p.error))).collect();
+            (nearest, drawn)
         });
-    if let Some(i) = response.inner {
+    let (nearest, drawn) = response.inner;
+    input.drawn = drawn;
+    if let Some(i) = nearest {
         let r = &t.rows[i];
+        let work = input.x_axis.as_ref().map(|k| format!(", {k} {}", shown[i].ms)).unwrap_or_default();
         let text = format!(
-            "{} {}\n{:.2} ms ({}), {} {:.5}{}",
+            "{} {}\n{:.2} ms ({}){work}, {} {:.5}{}",
             t.tries[r.try_index].label(),
             tradeoff::setting_text(&r.setting),
             points[i].ms,
             clock.name(),
             t.metric.name(),
             r.error,
-            if front[i] { "\non the Pareto front" } else { "" }
+            if front[i] { "\non the Pareto front (in the axes shown)" } else { "" }
         );
         response.response.on_hover_text_at_pointer(format!("{text}\nclick: load this configuration"));
     }
