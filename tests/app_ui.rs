@@ -1295,9 +1295,24 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
     bad.get_by_label_contains("--app-against-indirect 'magic'");
 }
 
+/// Click "Run trade-off" (scrolled into the Sweep pane) and wait for the worker to finish.
+fn run_tradeoff(h: &mut Harness<'static, ShadowLabApp>) {
+    h.get_by_label("Run trade-off").scroll_to_me();
+    h.run_steps(2);
+    h.get_by_label("Run trade-off").click_accesskit();
+    h.run_steps(2);
+    assert!(h.state().views.tradeoff.is_some(), "the trade-off started");
+    let started = std::time::Instant::now();
+    while h.state_mut().views.tradeoff.as_mut().is_some_and(|t| t.poll()) {
+        assert!(started.elapsed().as_secs() < 120, "the trade-off finishes");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+}
+
 #[test]
 fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
-    use shadowlab::gui::panels::tradeoff::TryInput;
+    use shadowlab::gui::panels::tradeoff::{ParamRange, TryInput};
     use shadowlab_core::technique::ParamValue;
     // A window tall enough for the plot to be scrolled into the Sweep pane.
     let startup = Startup { data_dir: Some(data_dir("tradeoff")), synchronous: true, ..Default::default() };
@@ -1308,21 +1323,13 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     h.run_steps(2);
     {
         let input = &mut h.state_mut().chrome.tradeoff_input;
-        let lc = TryInput { on: true, param: Some("d_init".into()), from: 0.2, to: 1.6, count: 8 };
-        input.tries.insert("lightcluster".into(), lc);
-        input.tries.insert("reference".into(), TryInput { on: false, param: None, from: 0.0, to: 1.0, count: 2 });
+        let d_init = ParamRange { key: "d_init".into(), from: 0.2, to: 1.6, count: 8 };
+        input.tries.insert("lightcluster".into(), TryInput { on: true, params: vec![d_init] });
+        input.tries.insert("reference".into(), TryInput::default());
         input.use_budget = true;
         input.budget_ms = 1e6;
     }
-    h.get_by_label("Run trade-off").click_accesskit();
-    h.run_steps(2);
-    assert!(h.state().views.tradeoff.is_some(), "the trade-off started");
-    let started = std::time::Instant::now();
-    while h.state_mut().views.tradeoff.as_mut().is_some_and(|t| t.poll()) {
-        assert!(started.elapsed().as_secs() < 120, "the trade-off finishes");
-        std::thread::sleep(std::time::Duration::from_millis(50));
-        h.step();
-    }
+    run_tradeoff(&mut h);
     h.run_steps(2);
     let t = h.state().views.tradeoff.as_ref().expect("a trade-off ran");
     assert!(t.worker.error.is_none(), "{:?}", t.worker.error);
@@ -1345,14 +1352,7 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
         input.use_max_error = true;
         input.max_error = 1e9;
     }
-    h.get_by_label("Run trade-off").click_accesskit();
-    h.run_steps(2);
-    let started = std::time::Instant::now();
-    while h.state_mut().views.tradeoff.as_mut().is_some_and(|t| t.poll()) {
-        assert!(started.elapsed().as_secs() < 120, "the trade-off finishes");
-        std::thread::sleep(std::time::Duration::from_millis(50));
-        h.step();
-    }
+    run_tradeoff(&mut h);
     let t = h.state().views.tradeoff.as_ref().unwrap();
     assert!(matches!(t.goal, shadowlab::tradeoff::Goal::MaxError(_)), "{:?}", t.goal);
     let points = t.points();
@@ -1404,6 +1404,25 @@ fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
     let s = &h.state().session;
     assert_eq!(s.technique, "lightcluster", "a click on a point loads its technique");
     assert_eq!(s.params["lightcluster"]["d_init"], ParamValue::Float(rows[i].0.parse().unwrap()), "and its d_init");
+
+    // Two parameters, a numeric one and a choice: every combination is rendered.
+    {
+        let input = &mut h.state_mut().chrome.tradeoff_input;
+        input.use_max_error = false;
+        let d_init = ParamRange { key: "d_init".into(), from: 0.4, to: 1.2, count: 2 };
+        let filter = ParamRange { key: "filter".into(), from: 0.0, to: 1.0, count: 2 };
+        input.tries.insert("lightcluster".into(), TryInput { on: true, params: vec![d_init, filter] });
+    }
+    run_tradeoff(&mut h);
+    let t = h.state().views.tradeoff.as_ref().unwrap();
+    let mut settings: Vec<String> = t.rows.iter().map(|r| shadowlab::tradeoff::setting_text(&r.setting)).collect();
+    settings.sort();
+    assert_eq!(
+        settings,
+        ["d_init=0.4 filter=pcf", "d_init=0.4 filter=pcss", "d_init=1.2 filter=pcf", "d_init=1.2 filter=pcss"],
+        "{:?}",
+        t.rows
+    );
 }
 
 /// A small deterministic generator (xorshift64*), so a failing random run can be replayed from its seed.

@@ -14,15 +14,43 @@ use crate::gui::session::Session;
 use crate::gui::views::Views;
 use crate::tradeoff::{self, Goal, Metric, TrySpec};
 
-/// One technique of the trade-off: ticked or not, and the range of the parameter it is tried over.
-#[derive(Clone, Debug, PartialEq)]
+/// One technique of the trade-off: ticked or not, and the parameters it is tried over (none: as set); the
+/// configurations are every combination of their values.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TryInput {
     pub on: bool,
-    /// The swept numeric parameter, None for the technique as set.
-    pub param: Option<String>,
+    pub params: Vec<ParamRange>,
+}
+
+/// A parameter of a try: a numeric one over `count` values from `from` to `to`, a choice over all its options,
+/// a flag over both.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamRange {
+    pub key: String,
     pub from: f64,
     pub to: f64,
     pub count: usize,
+}
+
+impl ParamRange {
+    /// The range a parameter starts with: its whole span (an integer's up to 16 times its minimum).
+    pub fn of(key: &str, kind: &ParamKind) -> ParamRange {
+        let (from, to) = match *kind {
+            ParamKind::Float { min, max } => (min as f64, max as f64),
+            ParamKind::Int { min, max } => (min as f64, (max as f64).min(min as f64 * 16.0).max(min as f64 + 1.0)),
+            _ => (0.0, 1.0),
+        };
+        ParamRange { key: key.to_string(), from, to, count: 4 }
+    }
+
+    /// Its values as `--try` takes them (`0.2,0.6,1.0`; `pcf,pcss`; `true,false`).
+    fn values(&self, kind: &ParamKind) -> String {
+        match kind {
+            ParamKind::Choice(options) => options.join(","),
+            ParamKind::Bool => "false,true".to_string(),
+            _ => values_text(kind, self.from, self.to, self.count),
+        }
+    }
 }
 
 /// What the Trade-off section edits.
@@ -100,13 +128,10 @@ pub fn tradeoff_ui(
     let mut specs = BTreeMap::new();
     for entry in REGISTRY {
         let default_on = entry.key == session.technique;
-        let t = input.tries.entry(entry.key.to_string()).or_insert_with(|| TryInput {
-            on: default_on,
-            param: None,
-            from: 0.0,
-            to: 1.0,
-            count: 4,
-        });
+        let t = input
+            .tries
+            .entry(entry.key.to_string())
+            .or_insert_with(|| TryInput { on: default_on, ..Default::default() });
         if t.on {
             if let Ok(technique) = gpu.main.technique(entry.key) {
                 specs.insert(entry.key, technique.params());
@@ -116,40 +141,68 @@ pub fn tradeoff_ui(
     for entry in REGISTRY {
         let none = Vec::new();
         let params = specs.get(entry.key).unwrap_or(&none);
-        let numeric: Vec<_> =
-            params.iter().filter(|p| matches!(p.kind, ParamKind::Float { .. } | ParamKind::Int { .. })).collect();
         let t = input.tries.get_mut(entry.key).expect("inserted above");
         ui.horizontal(|ui| {
             ui.checkbox(&mut t.on, entry.key).on_hover_text(format!("{} ({})", entry.label, entry.role.name()));
-            if !t.on {
-                return;
-            }
-            let before = t.param.clone();
-            egui::ComboBox::from_id_salt(("tradeoff param", entry.key))
-                .selected_text(t.param.clone().unwrap_or_else(|| "as set".into()))
-                .show_ui(ui, |ui| {
-                    ui.selectable_value(&mut t.param, None, "as set");
-                    for p in &numeric {
-                        ui.selectable_value(&mut t.param, Some(p.key.to_string()), p.label);
-                    }
-                });
-            if t.param != before {
-                if let Some(p) = numeric.iter().find(|p| Some(p.key) == t.param.as_deref()) {
-                    (t.from, t.to) = match p.kind {
-                        ParamKind::Float { min, max } => (min as f64, max as f64),
-                        ParamKind::Int { min, max } => {
-                            (min as f64, (max as f64).min(min as f64 * 16.0).max(min as f64 + 1.0))
-                        }
-                        _ => (0.0, 1.0),
-                    };
-                }
-            }
-            if t.param.is_some() {
-                ui.add(egui::DragValue::new(&mut t.from).speed(0.01).prefix("from "));
-                ui.add(egui::DragValue::new(&mut t.to).speed(0.01).prefix("to "));
-                ui.add(egui::DragValue::new(&mut t.count).range(2..=32).prefix("values "));
+            if t.on && t.params.is_empty() {
+                ui.weak("as set");
             }
         });
+        if !t.on {
+            continue;
+        }
+        let mut remove = None;
+        for (i, range) in t.params.iter_mut().enumerate() {
+            ui.horizontal(|ui| {
+                ui.add_space(18.0);
+                let before = range.key.clone();
+                let label = params.iter().find(|p| p.key == range.key).map_or(range.key.as_str(), |p| p.label);
+                egui::ComboBox::from_id_salt(("tradeoff param", entry.key, i)).selected_text(label).show_ui(ui, |ui| {
+                    for p in params.iter().filter(|p| !matches!(p.kind, ParamKind::Cameras { .. })) {
+                        ui.selectable_value(&mut range.key, p.key.to_string(), p.label);
+                    }
+                });
+                let Some(p) = params.iter().find(|p| p.key == range.key) else { return };
+                if range.key != before {
+                    *range = ParamRange::of(p.key, &p.kind);
+                }
+                match &p.kind {
+                    ParamKind::Float { .. } | ParamKind::Int { .. } => {
+                        ui.add(egui::DragValue::new(&mut range.from).speed(0.01).prefix("from "));
+                        ui.add(egui::DragValue::new(&mut range.to).speed(0.01).prefix("to "));
+                        ui.add(egui::DragValue::new(&mut range.count).range(2..=32).prefix("values "));
+                    }
+                    ParamKind::Choice(options) => {
+                        ui.weak(options.join(", "));
+                    }
+                    ParamKind::Bool => {
+                        ui.weak("off, on");
+                    }
+                    ParamKind::Cameras { .. } => {}
+                }
+                if ui.small_button("x").on_hover_text("Try this technique without varying this parameter").clicked() {
+                    remove = Some(i);
+                }
+            });
+        }
+        if let Some(i) = remove {
+            t.params.remove(i);
+        }
+        let unused = params
+            .iter()
+            .find(|p| !matches!(p.kind, ParamKind::Cameras { .. }) && !t.params.iter().any(|r| r.key == p.key));
+        if let Some(p) = unused {
+            ui.horizontal(|ui| {
+                ui.add_space(18.0);
+                if ui
+                    .small_button("+ parameter")
+                    .on_hover_text("Vary one more parameter: every combination of the values is tried")
+                    .clicked()
+                {
+                    t.params.push(ParamRange::of(p.key, &p.kind));
+                }
+            });
+        }
     }
     ui.horizontal(|ui| {
         ui.label("error");
@@ -186,11 +239,15 @@ pub fn tradeoff_ui(
         let mut tries = Vec::new();
         for entry in REGISTRY {
             let Some(t) = input.tries.get(entry.key).filter(|t| t.on) else { continue };
-            let param = t.param.as_ref().and_then(|k| specs.get(entry.key)?.iter().find(|p| p.key == k.as_str()));
-            let params = match param {
-                Some(p) => vec![(p.key.to_string(), vec![values_text(&p.kind, t.from, t.to, t.count)])],
-                None => Vec::new(),
-            };
+            let known = specs.get(entry.key);
+            let params: Vec<(String, Vec<String>)> = t
+                .params
+                .iter()
+                .filter_map(|r| {
+                    let p = known?.iter().find(|p| p.key == r.key)?;
+                    Some((r.key.clone(), vec![r.values(&p.kind)]))
+                })
+                .collect();
             let text = std::iter::once(entry.key.to_string())
                 .chain(params.iter().map(|(k, v)| format!("{k}={}", v[0])))
                 .collect::<Vec<_>>()
