@@ -64,9 +64,7 @@ pub struct FrameArgs {
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
-    /// Indirect technique added to the direct one: none, vpl-shadowmaps, vpl-raytraced, vpl-unshadowed,
-    /// pathtraced.
-    #[arg(long, default_value = "none")]
+    #[arg(long, default_value = "none", help = super::registry_help("Indirect technique added to the direct one, none or one of", true))]
     pub indirect: String,
     /// A parameter of the indirect technique, `key=value` (in `sweep`: `key=VALUES` like `--param`); repeatable.
     #[arg(long = "indirect-param", value_name = "KEY=VALUE")]
@@ -109,7 +107,7 @@ impl FrameArgs {
 /// The technique and its comparison target, shared by `compare` and `sweep`.
 #[derive(Args, Debug)]
 pub struct TargetArgs {
-    #[arg(long, default_value = "lightcluster")]
+    #[arg(long, default_value = "lightcluster", help = super::registry_help("Technique", false))]
     pub technique: String,
     /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
     #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
@@ -156,8 +154,7 @@ pub fn check_indirect(key: &str) -> Result<()> {
 /// The direct technique of `render`, `animate` and `sequence`: its key and its parameters.
 #[derive(Args, Debug)]
 pub struct TechniqueChoice {
-    /// Technique key (reference, lightcluster, unshadowed, ...).
-    #[arg(long, default_value = technique::REFERENCE)]
+    #[arg(long, default_value = technique::REFERENCE, help = super::registry_help("Technique", false))]
     pub technique: String,
     /// A technique parameter, `key=value`; repeatable.
     #[arg(long = "param", value_name = "KEY=VALUE")]
