@@ -360,3 +360,30 @@ fn the_per_pixel_maps_show_the_final_reservoirs() {
     assert!(!report.steps.iter().any(|s| s.name == "restir readback"), "{:?}", report.steps);
     assert!(off.pixel_ids(&positions).is_none());
 }
+
+#[test]
+fn a_progressive_frame_shows_the_mean_of_the_frames_so_far() {
+    // Two ReSTIR frames into a rendered frame of four: the HDR target shows their mean (what a rendered frame of
+    // two ReSTIR frames shows), not a quarter-lit image or nothing; the last step leaves the mean of all four.
+    let (scene, lights) = plate();
+    let mut r = renderer(&scene, linear_settings(W, H));
+    let camera = scene.camera;
+    let mut t = restir(&r, &[("frames", int(4))]);
+    let mut job = r.begin_frame(&mut t, &camera, &lights).unwrap();
+    for _ in 0..2 {
+        assert!(!r.advance(&mut job, &mut t, 1).unwrap());
+    }
+    let partial = r.read_hdr().unwrap();
+    while !r.advance(&mut job, &mut t, 1).unwrap() {}
+    r.finish_frame(job, &t).unwrap();
+    let full = r.read_hdr().unwrap();
+    let mut two = restir(&r, &[("frames", int(2))]);
+    let expected = frame(&mut r, &mut two, &camera, &lights).0;
+    let scale = rmse(&expected, &vec![[0.0; 4]; expected.len()]);
+    let off = rmse(&partial, &expected);
+    assert!(off < 2e-3 * scale, "after 2 of 4 frames: RMSE {off} from the mean of 2 frames (image RMS {scale})");
+    assert!(rmse(&full, &partial) > 10.0 * off, "the last step changed nothing");
+    let mut four = restir(&r, &[("frames", int(4))]);
+    let whole = frame(&mut r, &mut four, &camera, &lights).0;
+    assert!(rmse(&full, &whole) < 1e-6 * scale, "a progressive frame ends where a whole one does");
+}

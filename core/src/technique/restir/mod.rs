@@ -27,7 +27,9 @@
 //! 4. Spatial reuse ([`Restir::spatial_pass`], `restir/spatial.wgsl`): `spatial` (5) neighbours uniform in a
 //!    disc of `radius` (30) pixels, rejected by the same depth and normal test, combined the same way; then one
 //!    shadow ray from the pixel to the final `y` (`W = 0` when blocked).
-//! 5. Shading ([`Restir::shade_pass`], `restir/shade.wgsl`): `f(y) W / frames` added into the HDR target.
+//! 5. Shading ([`Restir::shade_pass`], `restir/shade.wgsl`): `f(y) W / frames` summed in f32; after frames 1,
+//!    2, 4, ... and the last, the running mean's change added into the HDR target ([`Restir::output_pass`]), so
+//!    a progressive display shows the mean so far.
 //!
 //! `bias_mode`: `biased` normalises every combination by `1/M` (Algorithm 4: darker where neighbours see other
 //! lights, e.g. at shadow edges); `unbiased` by the paper's `1/Z` (Algorithm 6): `Z` is the sum of the `M` of
@@ -172,7 +174,7 @@ pub struct Restir {
     shade_layout: wgpu::BindGroupLayout,
     /// `FrameUniform`, bound by every compute pass.
     uniform: wgpu::Buffer,
-    /// The pass adding the mean into the HDR target.
+    /// The pass adding the running mean's change into the HDR target after every ReSTIR frame.
     output: ShadePass,
     /// Every light of the frame, in the frame's order (invalid ones zeroed: they light nothing).
     lights: GrowableBuffer,
@@ -279,7 +281,7 @@ impl Technique for Restir {
         }
         self.last_step = "restir frame";
         let history = self.history.filter(|_| self.params.history > 0);
-        let uniform = self.frame_uniform(ctx, history, step == 0);
+        let uniform = self.frame_uniform(ctx, history, step);
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         self.candidates_pass(ctx, encoder);
         if history.is_some() {
@@ -287,7 +289,7 @@ impl Technique for Restir {
         }
         self.spatial_pass(ctx, encoder);
         self.shade_pass(ctx, encoder);
-        if step + 1 == self.frames {
+        if Self::shows(step, self.frames) {
             self.output_pass(ctx, encoder);
         }
         self.history = Some(History {

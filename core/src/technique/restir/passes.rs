@@ -42,8 +42,10 @@ pub(super) struct FrameUniform {
     normal_cos: f32,
     first_frame: u32,
     tiled: u32,
+    shown_scale: f32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<FrameUniform>() == 144);
+const _: () = assert!(std::mem::size_of::<FrameUniform>() == 160);
 
 /// The two reservoir buffers of a size: this frame's per pixel (steps 1-3) and the final ones (step 4), which
 /// the shading reads and the next frame's temporal reuse reprojects onto.
@@ -53,6 +55,10 @@ pub(super) struct Reservoirs {
     pub(super) last: wgpu::Buffer,
     /// The mean of the rendered frame's ReSTIR frames, linear RGBA f32 per pixel.
     pub(super) mean: wgpu::Buffer,
+    /// What the HDR target holds of the mean so far (the running mean of the ReSTIR frames done), and what this
+    /// step's output adds to it.
+    pub(super) shown: wgpu::Buffer,
+    pub(super) delta: wgpu::Buffer,
 }
 
 /// The bind groups of a frame: into `working` (candidates, temporal: reads `last`), into `last` (spatial: reads
@@ -90,7 +96,14 @@ impl Restir {
         let spatial_pipeline = pipeline(&SPATIAL, "spatial_main");
         let shade_entries = [
             SceneBvh::layout_entries(),
-            vec![storage_entry(2), uniform_entry(4), storage_entry(5), storage_rw_entry(7)],
+            vec![
+                storage_entry(2),
+                uniform_entry(4),
+                storage_entry(5),
+                storage_rw_entry(7),
+                storage_rw_entry(8),
+                storage_rw_entry(9),
+            ],
         ]
         .concat();
         let shade_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -220,6 +233,8 @@ impl Restir {
             working: buffer("restir reservoirs", bytes),
             last: buffer("restir final reservoirs", bytes),
             mean: buffer("restir mean", pixels * 16),
+            shown: buffer("restir shown mean", pixels * 16),
+            delta: buffer("restir output delta", pixels * 16),
         });
         self.groups = None;
         self.history = None;
@@ -259,13 +274,15 @@ impl Restir {
                     wgpu::BindGroupEntry { binding: 4, resource: self.uniform.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 5, resource: res.last.as_entire_binding() },
                     wgpu::BindGroupEntry { binding: 7, resource: res.mean.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 8, resource: res.shown.as_entire_binding() },
+                    wgpu::BindGroupEntry { binding: 9, resource: res.delta.as_entire_binding() },
                 ],
             ]
             .concat(),
         });
         let output = self
             .output
-            .bind_group(ctx.gpu, &[wgpu::BindGroupEntry { binding: 0, resource: res.mean.as_entire_binding() }]);
+            .bind_group(ctx.gpu, &[wgpu::BindGroupEntry { binding: 0, resource: res.delta.as_entire_binding() }]);
         self.groups = Some(Groups {
             to_working: group(&res.last, &res.working),
             to_last: group(&res.working, &res.last),
@@ -276,12 +293,15 @@ impl Restir {
 
     /// The uniform of ReSTIR frame `frame_index` from the frame's camera, reusing `history` when there is one;
     /// `first_frame` starts the mean over.
-    pub(super) fn frame_uniform(
-        &self,
-        ctx: &FrameContext,
-        history: Option<History>,
-        first_frame: bool,
-    ) -> FrameUniform {
+    /// Whether the HDR target shows the running mean after ReSTIR frame `step` of `frames`: after frames 1, 2, 4,
+    /// 8, ... and the last.
+    pub(super) fn shows(step: usize, frames: usize) -> bool {
+        (step + 1).is_power_of_two() || step + 1 == frames
+    }
+
+    /// The uniform of ReSTIR frame `step` (0-based) of the rendered frame.
+    pub(super) fn frame_uniform(&self, ctx: &FrameContext, history: Option<History>, step: usize) -> FrameUniform {
+        let first_frame = step == 0;
         let p = &self.params;
         let prev = history.unwrap_or(History {
             clip_from_world: ctx.camera.clip_from_world(ctx.aspect),
@@ -306,6 +326,13 @@ impl Restir {
             normal_cos: p.normal_threshold_deg.to_radians().cos(),
             first_frame: first_frame as u32,
             tiled: (p.source == Source::Tiles) as u32,
+            // The sum so far of `step + 1` frames each weighted 1/frames, shown as their mean (0: not shown).
+            shown_scale: if Self::shows(step, p.frames.max(1) as usize) {
+                p.frames.max(1) as f32 / (step + 1) as f32
+            } else {
+                0.0
+            },
+            _pad: [0; 3],
         }
     }
 
@@ -357,7 +384,8 @@ impl Restir {
         self.dispatch(ctx, encoder, "restir shade", &self.shade_pipeline, &self.groups().shade);
     }
 
-    /// After the last ReSTIR frame: the mean into the HDR target.
+    /// After each ReSTIR frame: the change of the running mean into the HDR target, so a progressive display
+    /// shows the mean so far and the last step leaves the mean of all.
     pub(super) fn output_pass(&self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
         self.output.encode(ctx, encoder, "restir output", &self.groups().output, None);
     }

@@ -61,6 +61,11 @@ struct RestirFrame {
     first_frame: u32,
     // 1: candidates drawn uniformly from the pixel's tile list instead of the source table
     tiled: u32,
+    // frames / (this frame's index + 1): the sum so far shown as the mean so far
+    shown_scale: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(2) var<storage, read> lights: array<Light>;
