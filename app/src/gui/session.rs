@@ -49,6 +49,10 @@ pub enum DragTarget {
     },
 }
 
+/// Pixels the preview renders while a light or the camera moves (about 400x240 at 16:10), whatever the view's
+/// size: what it costs stays the same as the window grows.
+pub const PREVIEW_PIXELS: f32 = 96_000.0;
+
 /// What the user edits: the parts a scene file saves ([`Session::scene_file_data`]) and the editing state
 /// around them.
 pub struct Session {
@@ -252,7 +256,12 @@ impl Session {
     // ----- rendering -----
 
     pub fn render_settings(&self, size: Vec2, preview: bool) -> RenderSettings {
-        let scale = self.view.resolution_scale.clamp(0.1, 2.0) * if preview { 0.35 } else { 1.0 };
+        let mut scale = self.view.resolution_scale.clamp(0.1, 2.0);
+        if preview {
+            // A fixed pixel budget, whatever the view's size: a large window previews as fast as a small one.
+            let pixels = (size.x * size.y).max(1.0);
+            scale = scale.min((PREVIEW_PIXELS / pixels).sqrt());
+        }
         RenderSettings {
             width: ((size.x * scale) as u32).clamp(16, 4096),
             height: ((size.y * scale) as u32).clamp(16, 4096),
@@ -377,4 +386,26 @@ impl Session {
 /// Parameter values as `key=value`.
 fn pairs(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
     params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_moving_preview_renders_a_fixed_pixel_budget_whatever_the_view_size() {
+        let session = Session::new(Scene::builtin("cornell").unwrap());
+        let pixels = |s: &RenderSettings| (s.width * s.height) as f32;
+        for (w, h) in [(1400.0, 860.0), (1024.0, 640.0), (2560.0, 1440.0)] {
+            let preview = session.render_settings(Vec2::new(w, h), true);
+            let full = session.render_settings(Vec2::new(w, h), false);
+            assert!((pixels(&preview) - PREVIEW_PIXELS).abs() < 0.02 * PREVIEW_PIXELS, "{w}x{h}: {preview:?}");
+            let aspect = |s: &RenderSettings| s.width as f32 / s.height as f32;
+            assert!((aspect(&preview) - w / h).abs() < 0.02, "{w}x{h}: the preview keeps the view's shape");
+            assert_eq!((full.width, full.height), (w as u32, h as u32));
+        }
+        // A view smaller than the budget previews at its own size.
+        let small = session.render_settings(Vec2::new(200.0, 150.0), true);
+        assert_eq!((small.width, small.height), (200, 150));
+    }
 }
