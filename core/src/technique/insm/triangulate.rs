@@ -178,18 +178,32 @@ impl SampledImage<'_> {
         self.samples[(y * self.resolution + x) as usize].truncate()
     }
 
-    /// `IsConnected` for one edge (a, b): both valid, both second differences below `epsilon` (relative).
+    /// `IsConnected` for one edge (a, b): both valid, and the second differences at a and at b do not show a
+    /// step between them: one known below `epsilon` (relative), or both known of the same sign (a crease or a
+    /// ridge), or neither known and one outside the image or the first difference below `epsilon`.
+    /// The twin of `edge_connected` in the shader, which says why this deviates from the paper's "both below".
     pub fn edge_connected(&self, a: (i64, i64), b: (i64, i64), epsilon: f32) -> bool {
         let za = self.z(a.0, a.1);
         let zb = self.z(b.0, b.1);
-        if za <= 0.0 || zb <= 0.0 {
+        // epsilon 0 connects nothing (as the paper's test does): the way to switch the reconstruction off.
+        if za <= 0.0 || zb <= 0.0 || epsilon <= 0.0 {
             return false;
         }
         let d = (b.0 - a.0, b.1 - a.1);
-        let ok = |prev: f32, mid: f32, next: f32| {
-            prev < 0.0 || next < 0.0 || (prev + next - 2.0 * mid).abs() < epsilon * mid
-        };
-        ok(self.z(a.0 - d.0, a.1 - d.1), za, zb) && ok(za, zb, self.z(b.0 + d.0, b.1 + d.1))
+        let (z_before, z_after) = (self.z(a.0 - d.0, a.1 - d.1), self.z(b.0 + d.0, b.1 + d.1));
+        let (known_a, known_b) = (z_before > 0.0, z_after > 0.0);
+        let (s_a, s_b) = (z_before + zb - 2.0 * za, za + z_after - 2.0 * zb);
+        let ok_a = known_a && s_a.abs() < epsilon * za;
+        let ok_b = known_b && s_b.abs() < epsilon * zb;
+        if ok_a || ok_b {
+            return true;
+        }
+        match (known_a, known_b) {
+            (true, true) => (s_a > 0.0) == (s_b > 0.0),
+            // Outside the image (-1) gives no information and does not object, as in the paper's test.
+            (false, false) => z_before < 0.0 || z_after < 0.0 || (za - zb).abs() < epsilon * za.max(zb),
+            _ => false,
+        }
     }
 
     /// The kept triangles of neighbourhood `(u, v)` (Algorithm 2, lines 2-5), as sample indices.
@@ -397,11 +411,38 @@ mod tests {
             let xs: Vec<u32> = t.iter().map(|&i| i % 8).collect();
             assert!(xs.iter().all(|&x| x < 4) || xs.iter().all(|&x| x >= 4), "triangle {t:?} spans the step");
         }
-        // The paper's test also drops the edges next to the step (their second difference sees it): the
-        // neighbourhoods at columns 2, 3 and 4 lose their triangles, columns 0, 1, 5 and 6 keep theirs.
-        assert_eq!(tris.len(), 2 * 7 * (2 + 2));
+        // Only the edges across the step go (both second differences fail, with opposite signs): in the inner
+        // rows the neighbourhoods of column 3 lose their triangles, every other column keeps them, so each side
+        // keeps its last sample (the paper's half-sample erosion). The paper's "both below ε" also dropped
+        // columns 2 and 4. (In the first and last rows a diagonal next to the step has one outer sample outside
+        // the image and the other across the step: it is dropped, the ambiguous case.)
+        let inner = |t: &&[u32; 3]| t.iter().all(|&i| (1..7).contains(&(i / 8)));
+        assert_eq!(tris.iter().filter(inner).count(), 2 * 5 * 6);
         let dropped = img.dropped_edges(0.05);
-        assert!(dropped.iter().any(|e| e.from.x == 3.0 && e.to.x == 4.0));
+        let across = |e: &DroppedEdge| e.from.x == 3.0 && e.to.x == 4.0;
+        assert!(dropped.iter().all(|e| across(e) || e.from.y == 0.0 || e.to.y == 7.0), "{dropped:?}");
+        assert_eq!(dropped.iter().filter(|e| across(e)).count(), 8 + 7, "the step's horizontal and diagonal edges");
+    }
+
+    #[test]
+    fn creases_and_narrow_ridges_stay_closed() {
+        // A crease (a roof: inverse depth rising then falling, the kink between x = 3 and x = 4): every edge
+        // stays, so light cannot leak along a box's edges or a room's corners.
+        let roof = image(8, |x, _| if x < 4 { 0.5 + 0.05 * x as f32 } else { 0.5 + 0.05 * (7 - x) as f32 });
+        let img = SampledImage { resolution: 8, samples: &roof };
+        let inner = |t: &&[u32; 3]| t.iter().all(|&i| (1..7).contains(&(i / 8)));
+        assert_eq!(img.triangles(0.01).iter().filter(inner).count(), 2 * 7 * 5);
+        // A plate two samples wide in front of the ground is kept (its two sides' lines meet between them); a
+        // one-sample spike is not bridged to the ground.
+        let plate = image(8, |x, _| if x == 3 || x == 4 { 1.0 } else { 0.25 });
+        let img = SampledImage { resolution: 8, samples: &plate };
+        let tris = img.triangles(0.01);
+        let on_plate = |t: &[u32; 3]| t.iter().all(|&i| i % 8 == 3 || i % 8 == 4);
+        assert_eq!(tris.iter().filter(|t| on_plate(t)).filter(inner).count(), 2 * 5);
+        assert!(tris.iter().all(|t| on_plate(t) || t.iter().all(|&i| i % 8 != 3 && i % 8 != 4)));
+        let spike = image(8, |x, _| if x == 3 { 1.0 } else { 0.25 });
+        let img = SampledImage { resolution: 8, samples: &spike };
+        assert!(img.triangles(0.01).iter().all(|t| t.iter().all(|&i| i % 8 != 3)));
     }
 
     #[test]
