@@ -148,11 +148,17 @@ fn shade_light(s: Surface, light: Light) -> vec3<f32> {
     if n_dot_l <= 0.0 {
         return vec3<f32>(0.0);
     }
+    return surface_brdf(s, l) * light.radiance * (attenuation(distance, light.range) * n_dot_l * spot_factor(light, -l));
+}
+
+// The surface's BRDF for light arriving from the unit direction `l`: Lambert, plus normalised Blinn-Phong when
+// enabled.
+fn surface_brdf(s: Surface, l: vec3<f32>) -> vec3<f32> {
     var brdf = s.albedo / PI;
     if frame.ambient.w > 0.5 && s.specular > 0.0 {
         let v = normalize(frame.camera_position.xyz - s.position);
         let h = normalize(l + v);
         brdf += vec3<f32>(s.specular * (s.shininess + 8.0) / (8.0 * PI) * pow(max(dot(s.normal, h), 0.0), s.shininess));
     }
-    return brdf * light.radiance * (attenuation(distance, light.range) * n_dot_l * spot_factor(light, -l));
+    return brdf;
 }

@@ -74,6 +74,21 @@ pub const PER_LIGHT_SHADE: WgslModule = crate::wgsl!(
 pub const VPL_BLUR: WgslModule = crate::wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_blur.wgsl"]);
 
 /// Every shared composed module (the renderer services' passes and the VPL gathers several techniques use).
+/// The directional-light service (`renderer/directional.rs`): visibility by its orthographic map, or by rays.
+pub const DIRECTIONAL_SHADOWMAP: WgslModule = crate::wgsl!(
+    "directional_shadowmap",
+    ["shaders/common.wgsl", "shaders/directional_shadowmap.wgsl", "shaders/directional_light.wgsl"]
+);
+pub const DIRECTIONAL_TRACED: WgslModule = crate::wgsl!(
+    "directional_traced",
+    [
+        "shaders/common.wgsl",
+        "shaders/raytrace_bvh.wgsl",
+        "shaders/directional_traced.wgsl",
+        "shaders/directional_light.wgsl"
+    ]
+);
+
 pub const MODULES: &[WgslModule] = &[
     GBUFFER,
     SHADOW_DEPTH,
@@ -89,4 +104,6 @@ pub const MODULES: &[WgslModule] = &[
     VPL_GATHER_PARABOLOID,
     VPL_BLUR,
     PER_LIGHT_SHADE,
+    DIRECTIONAL_SHADOWMAP,
+    DIRECTIONAL_TRACED,
 ];

@@ -135,6 +135,7 @@ fn sponza_stand_in() -> Scene {
         materials: Vec::new(),
         textures: Vec::new(),
         lights: Vec::new(),
+        directional: vec![],
         camera: Camera::framing(&bounds),
         bounds,
         warnings: Vec::new(),

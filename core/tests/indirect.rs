@@ -36,6 +36,7 @@ fn scene_of(name: &str, meshes: Vec<Mesh>, albedo: f32, camera: Camera) -> Scene
         materials: vec![m],
         textures: vec![],
         lights: vec![],
+        directional: vec![],
         camera,
         bounds: Aabb::EMPTY,
         warnings: vec![],

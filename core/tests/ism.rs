@@ -56,6 +56,7 @@ fn box_scene() -> (Scene, Vec<PointLight>) {
         materials: vec![grey],
         textures: vec![],
         lights: vec![],
+        directional: vec![],
         camera: Camera::look_at(Vec3::new(0.0, 5.0, 3.0), Vec3::new(0.0, 0.0, 0.2), 55f32.to_radians(), 0.1, 30.0),
         bounds: Aabb::EMPTY,
         warnings: vec![],

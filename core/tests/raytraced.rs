@@ -383,6 +383,7 @@ fn edge_scene() -> Scene {
         materials: vec![grey],
         textures: vec![],
         lights: vec![],
+        directional: vec![],
         camera: Camera::look_at(Vec3::new(1.2, 0.9, 0.0), Vec3::new(-0.3, 0.0, 0.0), 70f32.to_radians(), 0.05, 50.0),
         bounds: Aabb::EMPTY,
         warnings: vec![],

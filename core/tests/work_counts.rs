@@ -25,6 +25,7 @@ fn floor() -> Scene {
         materials: vec![grey],
         textures: vec![],
         lights: vec![],
+        directional: vec![],
         // From 5 above, tilted a little (a camera looking straight down has no up): the view spans about
         // +-3 units, well inside the floor.
         camera: Camera::look_at(Vec3::new(0.0, 5.0, 0.3), Vec3::ZERO, 60f32.to_radians(), 0.1, 50.0),

@@ -35,6 +35,8 @@ pub struct GpuScene {
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
     pub(crate) bvh_cell: std::sync::OnceLock<Arc<SceneBvh>>,
+    /// The scene's valid directional lights (the renderer's directional-light service shades them).
+    pub directional: Vec<crate::scene::DirectionalLight>,
 }
 
 impl GpuScene {
@@ -158,6 +160,13 @@ impl GpuScene {
             bounds: geometry.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             material_albedo,
             bvh_cell: std::sync::OnceLock::new(),
+            directional: scene
+                .directional
+                .iter()
+                .filter(|d| d.is_valid())
+                .take(crate::scene::MAX_DIRECTIONAL_LIGHTS)
+                .map(|d| crate::scene::DirectionalLight { direction: d.direction.normalize(), ..*d })
+                .collect(),
             vertex_buffer,
             uv1_buffer,
             index_buffer,

@@ -9,6 +9,7 @@
 
 pub mod cube_params;
 pub mod cube_shadows;
+pub mod directional;
 mod display;
 pub mod exposure;
 pub mod gpu_data;
@@ -77,6 +78,8 @@ pub struct Renderer {
     light_spheres: Vec<[f32; 4]>,
     /// What only the GPU knows of a frame's work (work_counters.rs).
     work_counters: work_counters::WorkCounters,
+    /// The scene's directional lights, added to every direct technique's frame.
+    directional: directional::DirectionalLights,
     /// True when [`Renderer::set_fixed_vpls`] gave the VPLs.
     fixed_vpls: bool,
 }
@@ -461,6 +464,15 @@ impl Renderer {
             encoder.clear_buffer(&self.indirect_buffer, 0, None);
         }
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
+        if !self.scene.directional.is_empty() {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            let mode = technique.directional_visibility();
+            let (scene, timer) = (&self.scene, &self.timer);
+            if self.directional.render_maps(&self.gpu, scene, camera, aspect, mode, timer, &mut encoder) {
+                self.directional.shade(&self.context(camera, lights), &mut encoder)?;
+            }
+            self.timer.submit(&self.gpu, encoder, "directional lights")?;
+        }
 
         self.visible_lights.update(&self.gpu, lights, &frustum);
         // GPU work a technique submits and waits for in `prepare` is its CPU stages' time (timing.rs).

@@ -161,6 +161,7 @@ mod tests {
             materials: vec![Material::default()],
             textures: vec![],
             lights: vec![],
+            directional: vec![],
             camera: crate::Camera::look_at(Vec3::ONE, Vec3::ZERO, 1.0, 0.1, 100.0),
             bounds: Aabb::EMPTY,
             warnings: vec![],

@@ -182,6 +182,7 @@ fn load_from_bytes(path: &Path, bytes: &[u8], unit_scale: f32) -> Result<Scene, 
             materials: Vec::new(),
             textures: Vec::new(),
             lights: Vec::new(),
+            directional: Vec::new(),
             camera: Camera::framing(&Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) }),
             bounds: Aabb::EMPTY,
             warnings: Vec::new(),
@@ -499,7 +500,23 @@ impl Loader<'_> {
                 self.scene.lights.push(light);
             }
             gltf::khr_lights_punctual::Kind::Directional => {
-                self.warn(format!("directional light '{name}' skipped (only point lights are supported)"));
+                let max = crate::scene::MAX_DIRECTIONAL_LIGHTS;
+                if self.scene.directional.len() >= max {
+                    self.warn(format!("directional light '{name}' skipped: at most {max} directional lights"));
+                    return;
+                }
+                // Lux over the same lumens per watt as the point lights' candela; it shines down -Z.
+                let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z);
+                let light = crate::scene::DirectionalLight {
+                    direction,
+                    color: Vec3::from(light.color()),
+                    illuminance: intensity,
+                };
+                if light.is_valid() {
+                    self.scene.directional.push(light);
+                } else {
+                    self.warn(format!("directional light '{name}': colour or direction not usable; skipped"));
+                }
             }
         }
     }

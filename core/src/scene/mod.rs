@@ -168,6 +168,32 @@ impl Spot {
     }
 }
 
+/// Most directional lights a scene keeps (the rest are dropped by the loader with a warning).
+pub const MAX_DIRECTIONAL_LIGHTS: usize = 4;
+
+/// A light at infinity: parallel rays along `direction` with irradiance `illuminance` (W/m² in the renderer's
+/// units: glTF's lux over the loader's lumens per watt) on a surface facing it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DirectionalLight {
+    /// The direction the light travels (unit length): from the light towards the scene.
+    pub direction: Vec3,
+    /// Linear RGB colour.
+    pub color: Vec3,
+    pub illuminance: f32,
+}
+
+impl DirectionalLight {
+    /// True when every field is finite, the direction is not zero and the illuminance and colour are >= 0.
+    pub fn is_valid(&self) -> bool {
+        self.direction.is_finite()
+            && self.direction.length_squared() > 1e-12
+            && self.color.is_finite()
+            && self.color.min_element() >= 0.0
+            && self.illuminance.is_finite()
+            && self.illuminance >= 0.0
+    }
+}
+
 /// A point light, omnidirectional or a spot. Radiance falls off smoothly to zero at `range` (the papers' `L_att`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointLight {
@@ -288,6 +314,9 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<TextureImage>,
     pub lights: Vec<PointLight>,
+    /// Lights at infinity (a glTF sun): shaded by the renderer's directional-light service for every direct
+    /// technique ([`crate::renderer::directional`]), at most [`MAX_DIRECTIONAL_LIGHTS`].
+    pub directional: Vec<DirectionalLight>,
     pub camera: Camera,
     pub bounds: Aabb,
     /// Recoverable problems met while loading (missing MTL, missing texture, ...), for the user to see.

@@ -36,6 +36,7 @@ pub fn load_obj(path: &Path, unit_scale: f32) -> Result<Scene, LoadError> {
         materials: Vec::with_capacity(mtl_materials.len() + 1),
         textures: Vec::new(),
         lights: Vec::new(),
+        directional: Vec::new(),
         camera: Camera::framing(&Aabb { min: Vec3::splat(-1.0), max: Vec3::splat(1.0) }),
         bounds: Aabb::EMPTY,
         warnings,

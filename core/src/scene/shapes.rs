@@ -62,6 +62,7 @@ impl SceneBuilder {
             materials: self.materials,
             textures: Vec::new(),
             lights,
+            directional: Vec::new(),
             camera,
             // `finalize` computes the bounds.
             bounds: Aabb::EMPTY,

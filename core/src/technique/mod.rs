@@ -50,6 +50,7 @@ use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::renderer::cube_shadows::{CubeAtlas, CubeStats};
+pub use crate::renderer::directional::DirectionalVisibility;
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
 use crate::renderer::lights::VisibleLights;
@@ -242,6 +243,11 @@ pub trait Technique {
     /// what this run found into a frame).
     fn update_overlays(&mut self, _ctx: &OverlayContext) -> OverlayUpdate {
         OverlayUpdate::Stale
+    }
+    /// How this technique's frames see the scene's directional lights (the renderer's service shades them for
+    /// every technique, [`crate::renderer::directional`]): by the orthographic shadow map unless overridden.
+    fn directional_visibility(&self) -> DirectionalVisibility {
+        DirectionalVisibility::ShadowMap
     }
     /// [`Technique::overlays`] with primitives only in the layers `shown(name, visible_by_default)` accepts; the
     /// others keep their name and default and no primitives (the layer list needs them). The app asks this every

@@ -62,6 +62,7 @@ pub fn plane_and_occluder() -> Scene {
         materials: vec![grey],
         textures: vec![],
         lights: vec![],
+        directional: vec![],
         camera: Camera::look_at(Vec3::new(0.0, 6.0, 5.0), Vec3::new(0.0, 0.0, 0.5), 60f32.to_radians(), 0.1, 50.0),
         bounds: Aabb::EMPTY,
         warnings: vec![],

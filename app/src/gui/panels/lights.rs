@@ -114,6 +114,19 @@ pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
         ui.label("lights");
         ui.label(format!("{}", session.lights.len()));
         ui.end_row();
+        if !session.scene.directional.is_empty() {
+            ui.label("directional lights").on_hover_text(
+                "From the model file (a glTF sun): shaded for every technique, with the orthographic shadow map \
+                 (the ray tracer and ReSTIR: shadow rays; the preview: none); they make no VPLs",
+            );
+            ui.vertical(|ui| {
+                for d in &session.scene.directional {
+                    let v = d.direction;
+                    ui.label(format!("towards ({:.2}, {:.2}, {:.2}), {:.3} W/m²", v.x, v.y, v.z, d.illuminance));
+                }
+            });
+            ui.end_row();
+        }
         ui.label("bounds");
         ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
         ui.end_row();

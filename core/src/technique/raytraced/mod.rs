@@ -264,6 +264,11 @@ impl Technique for Raytraced {
         Ok(())
     }
 
+    /// Directional lights: the ground truth: one shadow ray per pixel, as for its point lights.
+    fn directional_visibility(&self) -> super::DirectionalVisibility {
+        super::DirectionalVisibility::Traced
+    }
+
     fn step_label(&self) -> &'static str {
         "ray traced shading"
     }

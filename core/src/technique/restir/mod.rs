@@ -300,6 +300,11 @@ impl Technique for Restir {
         Ok(())
     }
 
+    /// Directional lights: its visibility is ray traced: one shadow ray per pixel (a sun needs no resampling).
+    fn directional_visibility(&self) -> super::DirectionalVisibility {
+        super::DirectionalVisibility::Traced
+    }
+
     fn step_label(&self) -> &'static str {
         self.last_step
     }

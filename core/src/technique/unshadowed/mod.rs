@@ -112,6 +112,11 @@ impl Technique for Unshadowed {
         Ok(())
     }
 
+    /// Directional lights: the preview: no visibility, as for its point lights.
+    fn directional_visibility(&self) -> super::DirectionalVisibility {
+        super::DirectionalVisibility::None
+    }
+
     fn step_label(&self) -> &'static str {
         "shading"
     }
