@@ -9,21 +9,35 @@ use shadowlab_core::compare::Metrics;
 
 /// Space around and between the panes, in pixels.
 pub const GAP: u32 = 8;
-/// Height of the title line.
+/// Height of a one-line title; every further line (a title wider than the figure wraps) adds [`TITLE_LINE`].
 pub const TITLE_HEIGHT: u32 = 30;
-/// Height of one caption line; every pane has [`CAPTION_LINES`] of them.
+pub const TITLE_LINE: u32 = 22;
+/// Height of one caption line; every pane has room for at least [`CAPTION_LINES`] of them (more when a caption
+/// wraps: lines wider than the pane break at spaces, and the figure grows).
 pub const LINE_HEIGHT: u32 = 18;
 pub const CAPTION_LINES: u32 = 3;
+/// Text sizes in pixels.
+const TITLE_SIZE: f32 = 18.0;
+const CAPTION_SIZE: f32 = 14.0;
 
-/// One image of a figure and the lines of its caption (at most [`CAPTION_LINES`] are drawn).
+/// One image of a figure and the lines of its caption.
 pub struct FigurePane {
     pub image: RgbaImage,
     pub caption: Vec<String>,
 }
 
-/// The size of a figure of `panes` panes of `width` x `height`.
+/// The size of a figure of `panes` panes of `width` x `height` with a one-line title and captions of at most
+/// [`CAPTION_LINES`] lines.
 pub fn figure_size(width: u32, height: u32, panes: u32) -> (u32, u32) {
-    (panes * width + (panes + 1) * GAP, TITLE_HEIGHT + height + GAP + CAPTION_LINES * LINE_HEIGHT + GAP)
+    figure_size_for(width, height, panes, 1, CAPTION_LINES)
+}
+
+/// The size of a figure whose title takes `title_lines` and whose longest caption `caption_lines` (at least
+/// [`CAPTION_LINES`] are reserved).
+pub fn figure_size_for(width: u32, height: u32, panes: u32, title_lines: u32, caption_lines: u32) -> (u32, u32) {
+    let title = TITLE_HEIGHT + title_lines.saturating_sub(1) * TITLE_LINE;
+    let captions = caption_lines.max(CAPTION_LINES) * LINE_HEIGHT;
+    (panes * width + (panes + 1) * GAP, title + height + GAP + captions + GAP)
 }
 
 /// The metrics as two caption lines (short enough for panes of 320 pixels).
@@ -51,7 +65,16 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
     if w == 0 || h == 0 {
         return Err(anyhow!("a figure's images must not be empty"));
     }
-    let (fw, fh) = figure_size(w, h, panes.len() as u32);
+    // Text wider than its room wraps at spaces (and what the font cannot draw is replaced): the figure grows.
+    let fw = figure_size(w, h, panes.len() as u32).0;
+    let title_lines = crate::plot::wrap(title, TITLE_SIZE, (fw - 2 * GAP) as f32);
+    let captions: Vec<Vec<String>> = panes
+        .iter()
+        .map(|p| p.caption.iter().flat_map(|line| crate::plot::wrap(line, CAPTION_SIZE, w as f32)).collect())
+        .collect();
+    let caption_lines = captions.iter().map(Vec::len).max().unwrap_or(0) as u32;
+    let (fw, fh) = figure_size_for(w, h, panes.len() as u32, title_lines.len() as u32, caption_lines);
+    let title_height = TITLE_HEIGHT + (title_lines.len() as u32).saturating_sub(1) * TITLE_LINE;
     let mut rgb = vec![255u8; (fw * fh * 3) as usize];
     for (i, pane) in panes.iter().enumerate() {
         let scaled;
@@ -63,7 +86,7 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
         };
         let x0 = GAP + i as u32 * (w + GAP);
         for (x, y, p) in image.enumerate_pixels() {
-            let at = (((TITLE_HEIGHT + y) * fw + x0 + x) * 3) as usize;
+            let at = (((title_height + y) * fw + x0 + x) * 3) as usize;
             rgb[at..at + 3].copy_from_slice(&p.0[..3]);
         }
     }
@@ -71,13 +94,16 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
     let err = |e: &dyn std::fmt::Display| anyhow!("cannot draw the figure's text: {e}");
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (fw, fh)).into_drawing_area();
-        let font = |size: u32| ("sans-serif", size).into_font().color(&BLACK);
-        root.draw(&Text::new(title.to_string(), (GAP as i32, 6), font(18))).map_err(|e| err(&e))?;
-        for (i, pane) in panes.iter().enumerate() {
+        let font = |size: f32| ("sans-serif", size as u32).into_font().color(&BLACK);
+        for (j, line) in title_lines.iter().enumerate() {
+            let y = 6 + (j as u32 * TITLE_LINE) as i32;
+            root.draw(&Text::new(line.clone(), (GAP as i32, y), font(TITLE_SIZE))).map_err(|e| err(&e))?;
+        }
+        for (i, caption) in captions.iter().enumerate() {
             let x = (GAP + i as u32 * (w + GAP)) as i32;
-            for (j, line) in pane.caption.iter().take(CAPTION_LINES as usize).enumerate() {
-                let y = (TITLE_HEIGHT + h + GAP / 2 + j as u32 * LINE_HEIGHT) as i32;
-                root.draw(&Text::new(line.clone(), (x, y), font(14))).map_err(|e| err(&e))?;
+            for (j, line) in caption.iter().enumerate() {
+                let y = (title_height + h + GAP / 2 + j as u32 * LINE_HEIGHT) as i32;
+                root.draw(&Text::new(line.clone(), (x, y), font(CAPTION_SIZE))).map_err(|e| err(&e))?;
             }
         }
         root.present().map_err(|e| err(&e))?;
@@ -93,13 +119,13 @@ mod tests {
     #[test]
     fn a_figure_has_its_panes_side_by_side_under_the_title() {
         let pane = |c: u8| FigurePane {
-            image: RgbaImage::from_pixel(40, 30, image::Rgba([c, 0, 0, 255])),
+            image: RgbaImage::from_pixel(120, 30, image::Rgba([c, 0, 0, 255])),
             caption: vec![format!("pane {c}"), "second line".into()],
         };
         let fig = compose("title", &[pane(50), pane(150), pane(250)]).unwrap();
-        assert_eq!(fig.dimensions(), figure_size(40, 30, 3));
+        assert_eq!(fig.dimensions(), figure_size(120, 30, 3));
         for (i, c) in [50u8, 150, 250].iter().enumerate() {
-            let x = GAP + i as u32 * (40 + GAP) + 20;
+            let x = GAP + i as u32 * (120 + GAP) + 20;
             assert_eq!(fig.get_pixel(x, TITLE_HEIGHT + 15).0, [*c, 0, 0, 255], "pane {i} in place");
         }
         // Some caption text is drawn (dark pixels under the images).
@@ -109,5 +135,32 @@ mod tests {
             .count();
         assert!(caption_dark > 20, "{caption_dark} dark caption pixels");
         assert!(compose("empty", &[]).is_err());
+    }
+
+    #[test]
+    fn long_captions_wrap_within_their_pane_and_missing_glyphs_are_replaced() {
+        let long = "485.2 ms (median of 1, GPU timestamps), x1.71 against the reference's 830.1 ms".to_string();
+        let pane = |c: u8| FigurePane {
+            image: RgbaImage::from_pixel(120, 60, image::Rgba([c, c, c, 255])),
+            caption: vec![long.clone(), "|difference| x4 (dark blue 0 → red 0.25)".into()],
+        };
+        let title = "cornell · 32 lights · 160x90 · llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu) and more words";
+        let fig = compose(title, &[pane(50), pane(150)]).unwrap();
+        // The captions wrapped into more lines than reserved, and the title into two: the figure grew.
+        let (w, h) = figure_size(120, 60, 2);
+        assert_eq!(fig.width(), w);
+        assert!(fig.height() > h, "{} not above {h}", fig.height());
+        // No caption pixel of the first pane spills into the gap before the second.
+        let gap_x = GAP + 120 + GAP / 2;
+        let title_lines = crate::plot::wrap(title, TITLE_SIZE, (w - 2 * GAP) as f32).len() as u32;
+        assert!(title_lines >= 2);
+        let images_end = TITLE_HEIGHT + (title_lines - 1) * TITLE_LINE + 60;
+        let spilled = (images_end..fig.height()).filter(|&y| fig.get_pixel(gap_x, y).0[0] < 200).count();
+        assert_eq!(spilled, 0, "caption text in the gap between panes");
+        for line in crate::plot::wrap(&long, CAPTION_SIZE, 120.0) {
+            assert!(crate::plot::text_width(&line, CAPTION_SIZE) <= 120.0 || !line.contains(' '), "{line}");
+        }
+        // The arrow the font lacks is drawn as ASCII; what it has is kept.
+        assert_eq!(crate::plot::drawable("0 → 1 · ×2 Δ"), "0 -> 1 · ×2 Δ");
     }
 }

@@ -18,6 +18,61 @@ pub struct PlotRow {
     pub rmse: Option<f64>,
 }
 
+/// The font figures and plots draw with (egui's Ubuntu Light), for its metrics.
+fn metrics_font() -> &'static ab_glyph::FontRef<'static> {
+    static FONT: std::sync::OnceLock<ab_glyph::FontRef<'static>> = std::sync::OnceLock::new();
+    FONT.get_or_init(|| {
+        ab_glyph::FontRef::try_from_slice(epaint_default_fonts::UBUNTU_LIGHT).expect("egui's font parses")
+    })
+}
+
+/// `text` with what the font has no glyph for replaced: arrows by ASCII ones, anything else by `?` (the font
+/// would draw an empty box).
+pub(crate) fn drawable(text: &str) -> String {
+    use ab_glyph::Font;
+    let font = metrics_font();
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_whitespace() || font.glyph_id(c).0 != 0 {
+            out.push(c);
+        } else {
+            out.push_str(match c {
+                '→' => "->",
+                '←' => "<-",
+                '↔' => "<->",
+                _ => "?",
+            });
+        }
+    }
+    out
+}
+
+/// The width in pixels of `text` drawn at `size` pixels.
+pub(crate) fn text_width(text: &str, size: f32) -> f32 {
+    use ab_glyph::{Font, ScaleFont};
+    let font = metrics_font().as_scaled(ab_glyph::PxScale::from(size));
+    text.chars().map(|c| font.h_advance(font.glyph_id(c))).sum()
+}
+
+/// `text` (made [`drawable`]) broken at spaces into lines of at most `max_width` pixels at `size` (a word wider
+/// than that stays whole on its line).
+pub(crate) fn wrap(text: &str, size: f32, max_width: f32) -> Vec<String> {
+    let text = drawable(text);
+    let mut lines = Vec::new();
+    let mut line = String::new();
+    for word in text.split(' ') {
+        let candidate = if line.is_empty() { word.to_string() } else { format!("{line} {word}") };
+        if !line.is_empty() && text_width(&candidate, size) > max_width {
+            lines.push(std::mem::take(&mut line));
+            line = word.to_string();
+        } else {
+            line = candidate;
+        }
+    }
+    lines.push(line);
+    lines
+}
+
 pub(crate) fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
