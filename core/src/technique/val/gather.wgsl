@@ -142,6 +142,42 @@ fn val_occluder(m: u32, t: vec2<f32>, near: f32, far: f32) -> f32 {
     return near + stored * (far - near);
 }
 
+// The receiver around a VAL map's lookup: a point of its plane (the map's frame), the plane's normal, the
+// receiver's biased depth, the world size of a map texel there, and the distance to the map's centre.
+struct ReceiverPlane {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    receiver: f32,
+    texel: f32,
+    distance: f32,
+}
+
+// The depth a filter sample at texel `t`, `offset` texels from the receiver's, is compared with: the receiver's
+// plane along the sample's direction (the paraboloid inverted: uv -> (2 uv, 1 - |uv|^2) / (1 + |uv|^2)), kept
+// within 4 texels of depth per texel of offset of the receiver's own depth (a grazing plane runs off to
+// infinity), less `slope_bias` texels per texel of offset for curvature (a concave receiver, as inside the closed
+// sphere, bends toward the VAL away from its tangent plane). A deviation from the earlier
+// `receiver - offset * slope_bias * texel`, which also had to cover the plane's own slope (`slope_bias = 2`)
+// and so, on a flat receiver, let occluders up to `2 offset` texels in front of it through: the wide kernels of
+// large VALs leaked light (Sponza, 30 VALs: see docs/techniques/val.md). Directions that miss the plane keep
+// the earlier form.
+fn receiver_depth(r: ReceiverPlane, t: vec2<f32>, offset: f32) -> f32 {
+    let res = f32(val_params.resolution);
+    let uv = vec2<f32>(t.x / res * 2.0 - 1.0, 1.0 - 2.0 * t.y / res);
+    let r2 = dot(uv, uv);
+    let w = vec3<f32>(2.0 * uv, 1.0 - r2) / (1.0 + r2);
+    let curvature = offset * r.texel * val_params.slope_bias;
+    let den = dot(r.normal, w);
+    if abs(den) > 1e-6 {
+        let along = dot(r.normal, r.point) / den;
+        if along > 0.0 {
+            let reach = 4.0 * offset * r.texel;
+            return r.receiver + clamp(along - r.distance, -reach, reach) - curvature;
+        }
+    }
+    return r.receiver - curvature;
+}
+
 fn val_visibility(s: Surface, m: u32) -> f32 {
     let val = vals[m];
     if val.normal.w < 0.5 {
@@ -185,7 +221,12 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
         return cssm_visibility(m, t, d, (receiver - near) / max(far - near, 1e-20), search_cssm, delta, near, far);
     }
     // World size of a texel at the receiver: the bias of a sample grows with its offset.
-    let texel_world = d * 2.0 / res * (1.0 + dir.z) * val_params.slope_bias;
+    let texel_world = d * 2.0 / res * (1.0 + dir.z);
+    // The receiver's plane in the map's frame: a sample is compared with the plane's depth along its own
+    // direction (a receiver-plane depth bias), so a flat receiver tilted against the map needs no slope
+    // allowance; `slope_bias` is left for curved receivers (see receiver_depth).
+    let receiver_normal = vec3<f32>(dot(s.normal, basis[0]), dot(s.normal, basis[1]), dot(s.normal, basis[2]));
+    let plane = ReceiverPlane(local, receiver_normal, receiver, texel_world, d);
     let grid = max(val_params.grid, 2u);
     // The VAL's half-size seen from the receiver: blockers further off-axis than the VAL's edge cannot hide it.
     let search = max(atan(0.5 * delta / d) / PI * res, 1.0);
@@ -195,7 +236,7 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
         for (var i = 0u; i < grid; i++) {
             let o = (vec2<f32>(f32(i), f32(j)) / f32(grid - 1u) - 0.5) * search;
             let z = val_occluder(m, t + o, near, far);
-            if z < receiver - length(o) * texel_world {
+            if z < receiver_depth(plane, t + o, length(o)) {
                 z_sum += z;
                 blockers += 1.0;
             }
@@ -214,7 +255,7 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     for (var j = 0u; j < grid; j++) {
         for (var i = 0u; i < grid; i++) {
             let o = (vec2<f32>(f32(i), f32(j)) / f32(grid - 1u) - 0.5) * width;
-            lit += select(0.0, 1.0, receiver - length(o) * texel_world <= val_occluder(m, t + o, near, far));
+            lit += select(0.0, 1.0, receiver_depth(plane, t + o, length(o)) <= val_occluder(m, t + o, near, far));
         }
     }
     return lit / f32(grid * grid);

@@ -125,7 +125,16 @@ pub fn cluster(vpls: &[Vpl], params: &KMeansParams, warm_start: Option<&[(Vec3, 
     for (a, v) in assignment.iter_mut().zip(vpls) {
         *a = nearest(params, v, &centres);
     }
-    // Step 5: means of the final members and their bounding rectangles.
+    // Step 5: their bounding rectangles.
+    let vals = vals_of(vpls, &centres, &assignment);
+    let non_empty = vals.iter().filter(|v| v.count > 0).count();
+    Clustering { vals, assignment, non_empty }
+}
+
+/// Step 5: VALs at `centres` (position, unit normal) with the members `assignment` gives them: counts, flux and
+/// the bounding rectangle of the members' projection on the plane perpendicular to the normal (section 6).
+pub fn vals_of(vpls: &[Vpl], centres: &[(Vec3, Vec3)], assignment: &[u32]) -> Vec<Val> {
+    let m = centres.len();
     let mut vals: Vec<Val> = centres
         .iter()
         .map(|&(position, normal)| {
@@ -162,8 +171,7 @@ pub fn cluster(vpls: &[Vpl], params: &KMeansParams, warm_start: Option<&[(Vec3, 
             val.offset_v = 0.5 * (b.3 + b.2);
         }
     }
-    let non_empty = vals.iter().filter(|v| v.count > 0).count();
-    Clustering { vals, assignment, non_empty }
+    vals
 }
 
 #[cfg(test)]

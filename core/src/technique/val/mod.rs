@@ -47,6 +47,7 @@
 pub mod cssm;
 pub mod gpu_kmeans;
 pub mod kmeans;
+pub mod split;
 
 use std::sync::Arc;
 
@@ -141,6 +142,14 @@ pub struct ValParams {
     pub clustering: String,
     /// CSSM: the receiver's normalised depth is moved toward the VAL by this share of the map's depth range.
     pub cssm_offset: f32,
+    /// Refine the k-means result by bisecting VALs across surfaces ([`split`]); off: the paper's k-means alone.
+    pub split: bool,
+    /// [`split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
+    pub kmeans_share: f32,
+    /// [`split`]: the largest normal cone of a VAL, degrees.
+    pub max_cone_degrees: f32,
+    /// [`split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
+    pub max_depth: f32,
 }
 
 impl Default for ValParams {
@@ -160,13 +169,17 @@ impl Default for ValParams {
             grid: 5,
             bias_world: 0.01,
             normal_offset_texels: 1.5,
-            slope_bias: 2.0,
+            slope_bias: 1.0,
             interleave: false,
             warm_start: false,
             vpls_per_step: crate::vpl::MAX_VPLS,
             clustering: "gpu".into(),
             solo: -1,
             cssm_offset: 0.12,
+            split: true,
+            kmeans_share: 0.5,
+            max_cone_degrees: 30.0,
+            max_depth: 0.1,
         }
     }
 }
@@ -255,13 +268,35 @@ impl VirtualAreaLights {
 impl VirtualAreaLights {
     /// Step 2's k-means settings for this frame's scene size.
     fn kmeans_params(&self) -> KMeansParams {
+        let m = (self.params.vals as usize).min(MAX_VALS);
         KMeansParams {
-            vals: (self.params.vals as usize).min(MAX_VALS),
+            vals: if self.params.split {
+                ((m as f32 * self.params.kmeans_share).ceil() as usize).clamp(1, m)
+            } else {
+                m
+            },
             iterations: self.params.iterations,
             w_x: self.params.w_x,
             w_a: self.params.w_a,
             scene_length: self.scene_size * self.params.length_fraction,
         }
+    }
+
+    /// Step 2's refinement ([`split`]) of a k-means result, shared by the frame and the overlays' preview.
+    fn refine(&self, vpls: &[crate::vpl::Vpl], base: Clustering) -> Clustering {
+        if !self.params.split {
+            return base;
+        }
+        let m = (self.params.vals as usize).min(MAX_VALS);
+        let sp = split::SplitParams {
+            vals: m,
+            max_cone: self.params.max_cone_degrees.to_radians(),
+            max_depth: self.params.max_depth,
+            // The maps' own offset from the VAL's plane (see `prepare`): spreads below it are not depth.
+            min_depth: self.scene_size * 2e-3,
+            iterations: 8,
+        };
+        split::split(vpls, &self.kmeans_params(), &sp, &base)
     }
 }
 
@@ -319,6 +354,37 @@ impl Technique for VirtualAreaLights {
                        weighs position more against the normals' angle",
                 kind: ParamKind::Float { min: 1e-3, max: 10.0 },
                 value: ParamValue::Float(p.length_fraction),
+            },
+            Param {
+                key: "split",
+                label: "Split VALs across surfaces",
+                help: "Bisect VALs whose normals or depths spread too far (corners, columns) until there are M; off: \
+                       the paper's k-means alone",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.split),
+            },
+            Param {
+                key: "kmeans_share",
+                label: "k-means share of M",
+                help: "split: k-means clusters into this share of M VALs, bisection fills up to M",
+                kind: ParamKind::Float { min: 0.01, max: 1.0 },
+                value: ParamValue::Float(p.kmeans_share),
+            },
+            Param {
+                key: "max_cone",
+                label: "Max normal cone (deg)",
+                help: "split: a VAL whose VPL normals are farther than this from its normal is bisected first",
+                kind: ParamKind::Float { min: 0.0, max: 180.0 },
+                value: ParamValue::Float(p.max_cone_degrees),
+            },
+            Param {
+                key: "max_depth",
+                label: "Max depth spread",
+                help:
+                    "split: a VAL whose VPLs spread along its normal by more than this share of its size is bisected \
+                       next",
+                kind: ParamKind::Float { min: 0.0, max: 100.0 },
+                value: ParamValue::Float(p.max_depth),
             },
             Param {
                 key: "visibility",
@@ -425,6 +491,10 @@ impl Technique for VirtualAreaLights {
             ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
             ("solo", ParamValue::Int(v)) => p.solo = *v as i32,
             ("cssm_offset", ParamValue::Float(v)) => p.cssm_offset = *v,
+            ("split", ParamValue::Bool(v)) => p.split = *v,
+            ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
+            ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
+            ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())
@@ -439,7 +509,8 @@ impl Technique for VirtualAreaLights {
     fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
         self.vpls = ctx.vpls.clone();
         self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
-        self.clustering = kmeans::cluster(&self.vpls.vpls, &self.kmeans_params(), None);
+        let base = kmeans::cluster(&self.vpls.vpls, &self.kmeans_params(), None);
+        self.clustering = self.refine(&self.vpls.vpls, base);
         crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers: Vec::new() }
     }
 
@@ -455,11 +526,15 @@ impl Technique for VirtualAreaLights {
         let warm = (self.params.warm_start && !self.previous_centres.is_empty()).then_some(&self.previous_centres[..]);
         // The GPU k-means restarts from the initial assignment only; warm starts run on the CPU.
         self.gpu_map = self.params.clustering == "gpu" && warm.is_none() && !vpls.is_empty();
-        self.clustering = if self.gpu_map {
+        let base = if self.gpu_map {
             self.gpu_kmeans.run(ctx.gpu, ctx.timer, &ctx.vpls.buffer.buffer, vpls, &kp, bounds.min, bounds.size())?
         } else {
             kmeans::cluster(vpls, &kp, warm)
         };
+        let k_means_vals = base.vals.len();
+        self.clustering = self.refine(vpls, base);
+        // A refined `C` is the CPU's: the GPU k-means' buffer holds the unrefined one.
+        self.gpu_map &= !self.params.split;
         self.previous_centres = self.clustering.vals.iter().map(|v| (v.position, v.normal)).collect();
         self.clustering_ms = start.elapsed().as_secs_f64() * 1000.0;
         let m = self.clustering.vals.len();
@@ -474,6 +549,7 @@ impl Technique for VirtualAreaLights {
         self.counts.figures.insert("vpls".into(), n as f64);
         self.counts.figures.insert("vals".into(), self.clustering.non_empty as f64);
         self.counts.figures.insert("iterations".into(), self.params.iterations as f64);
+        self.counts.figures.insert("kmeans_vals".into(), k_means_vals as f64);
         if n == 0 || m == 0 {
             self.batches = 0;
             return Ok(0);
