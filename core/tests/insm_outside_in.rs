@@ -3,8 +3,8 @@
 //! paper's metric (mean shadow intensity error, from visibility factors against the unshadowed frame).
 //!
 //! Before the connectivity fix (`insm/triangulate.wgsl`, `edge_connected`) the paper's "both second differences
-//! below ε" eroded every surface by a sample and a half and cracked every crease: the 1 m plate, 2-4 samples
-//! wide in the box placement's maps, vanished and INSM rendered the unshadowed image.
+//! below ε" eroded every surface by a sample and a half (the paper reports half a sample): the 1 m plate, 3-4
+//! samples wide in the box placement's 128² maps, vanished and INSM rendered the unshadowed image.
 
 mod common;
 
@@ -59,14 +59,16 @@ fn the_default_box_placement_casts_the_plates_shadow() {
     let open = Image::new(W, H, open).unwrap();
     let res = [("shadow_res", ParamValue::Int(256))];
     let reference = visibility(&mut r, "reference", &res, &scene.camera, &lights, &open);
-    // INSM exactly as a user gets it, the per-light resolution aside.
-    let insm = visibility(&mut r, "insm", &res, &scene.camera, &lights, &open);
+    // INSM as a user gets it (the paper's box placement), the per-light resolution aside, at 256²: the plate is
+    // then 6-8 samples wide in the maps (at 128² it is 3-4 and the half-sample erosion left nothing of it).
+    let params = [("shadow_res", ParamValue::Int(256)), ("insm_res", ParamValue::Int(256))];
+    let insm = visibility(&mut r, "insm", &params, &scene.camera, &lights, &open);
     let (err, shadow_insm, shadow_ref) = errors(&insm, &reference);
-    // Measured: the reference's mean shadow (1 - V over the image) is 1.03 %; INSM's 0.75 % at an error of
-    // 0.28 %. Before the fix INSM cast none (0 %, error 1.03 %). What is left is the paper's half-sample erosion:
-    // the plate is 3-4 samples wide in the box placement's maps (cameras 10-14 m away, 120 degrees).
+    // Measured: the reference's mean shadow (1 - V over the image) is 1.03 %; INSM's 0.98 % at an error of
+    // 0.06 %. With the paper's "both second differences below ε" (a sample and a half of erosion): 0.27 % at an
+    // error of 0.77 %; at 128² it cast none at all.
     eprintln!("error {err}, shadow INSM {shadow_insm}, reference {shadow_ref}");
     assert!(shadow_ref > 0.005, "the plate shadows {shadow_ref}");
-    assert!(shadow_insm > 0.6 * shadow_ref, "INSM casts {shadow_insm} of the reference's {shadow_ref} shadow");
-    assert!(err < 0.4 * shadow_ref, "shadow intensity error {err} against the reference's shadow {shadow_ref}");
+    assert!(shadow_insm > 0.8 * shadow_ref, "INSM casts {shadow_insm} of the reference's {shadow_ref} shadow");
+    assert!(err < 0.2 * shadow_ref, "shadow intensity error {err} against the reference's shadow {shadow_ref}");
 }

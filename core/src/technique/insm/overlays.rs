@@ -25,8 +25,8 @@ impl Insm {
             },
             ExplainStep {
                 title: "3. Their meshes",
-                text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge kept \
-                       only where the second difference of depth is below ε. Red: dropped edges. Beyond the paper, \
+                text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge dropped \
+                       only where the second differences of depth show a step across it (ε). Red: dropped edges. Beyond the paper, \
                        planar tiles are merged (adaptive) and a map leaves out what another map reconstructs more \
                        finely (drop_covered).",
                 layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
