@@ -81,6 +81,17 @@ pub struct RunShape {
     pub fuzziness: usize,
 }
 
+impl RunShape {
+    /// What a run of `params` is sized for (known before it is encoded, so a frame can be planned).
+    pub fn of(params: &KMeansParams) -> RunShape {
+        let points = params.width as usize * params.height as usize;
+        let g = params.gamma.max(1) as usize;
+        let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
+        let clusters = params.clusters.min(samples).min(MAX_CLUSTERS);
+        RunShape { points, clusters, fuzziness: params.fuzziness.clamp(1, MAX_F) }
+    }
+}
+
 pub struct GpuKMeans {
     label: &'static str,
     kernels: Kernels,
@@ -162,11 +173,9 @@ impl GpuKMeans {
         params: &KMeansParams,
         max_flux: Option<f32>,
     ) -> Result<RunShape, GpuError> {
-        let m = params.width as usize * params.height as usize;
+        let RunShape { points: m, clusters: k, fuzziness: f } = RunShape::of(params);
         let g = params.gamma.max(1) as usize;
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
-        let k = params.clusters.min(samples).min(MAX_CLUSTERS);
-        let f = params.fuzziness.clamp(1, MAX_F);
         let (cell, dims) = grid_shape(params.bounds_extent, k);
         let cells = (dims[0] * dims[1] * dims[2]) as u64;
         let assignment_bytes = m as u64 * f as u64 * 8;

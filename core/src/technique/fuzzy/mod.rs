@@ -20,6 +20,12 @@
 //!    geometry term toward the light and the visibility `V~`: `hard` (its nearest cluster's), `fuzzy`
 //!    (equation 8, the mean over its `F` clusters) or `weighted` (equations 9-10, inverse-distance weights).
 //!
+//! Steps of a rendered frame: the first encodes steps 2-4 (the shading points and both clusterings, sized in
+//! `prepare` from their settings, so nothing waits for them), then step 5 in blocks of rows, step 6 in batches
+//! of lights, and a last step reads the clusters back for the counts (and, with `inspect`, the assignments for
+//! the overlays and the probe) after the frame's GPU work. (The clustering was read back in `prepare`, a wait of
+//! 170-200 ms in the middle of the frame on a 143k-triangle interior at 240x160.)
+//!
 //! Ablations (section 4): `cluster = sp` (every VPL is a light, SPs clustered: Fig. 7), `vpl` (VPLs clustered,
 //! every pixel traces its own rays to the VPL clusters' representatives: Fig. 9, the shared VPL gather with
 //! ray-traced visibility), `both` (the method, Fig. 10).
@@ -150,7 +156,10 @@ pub struct FuzzyClustering {
     scene_size: f32,
     inspection: Inspection,
     counts: TechniqueCounts,
-    /// Wall time of the clusterings, from their submission to the clusters read back.
+    /// The clusterings this frame's first step encodes (steps 2-4): the VPLs' and the shading points'
+    /// k-means settings.
+    pending: (Option<KMeansParams>, Option<KMeansParams>),
+    /// Wall time of the last step's readback of the clusters (and the inspection's maps).
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
     last_step: &'static str,
@@ -237,6 +246,7 @@ impl FuzzyClustering {
             scene_size: 1.0,
             inspection: Inspection::default(),
             counts: TechniqueCounts::default(),
+            pending: (None, None),
             readback_ms: 0.0,
             last_step: "fuzzy shading",
         }
@@ -278,6 +288,94 @@ impl FuzzyClustering {
 
     /// The per-pixel maps of the read-back shading-point clusters: the nearest cluster's ID, and the F clusters'
     /// colours blended by the visibility mode's weights.
+    /// Steps 2-4, the frame's first step: the shading points from the G-buffer, both clusterings.
+    fn cluster_step(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) -> Result<(), GpuError> {
+        let (vpl_kp, sp_kp) = self.pending;
+        if let Some(kp) = &vpl_kp {
+            let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
+            self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, &ctx.vpls.buffer.buffer, kp, Some(max_flux))?;
+        }
+        if let Some(kp) = &sp_kp {
+            let pixels = ctx.size.0 as u64 * ctx.size.1 as u64;
+            gpu::ensure_storage(&mut self.sp_points, ctx.gpu, "fuzzy shading points", pixels * 48);
+            let points = self.sp_points.as_ref().expect("ensured");
+            let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("fuzzy shading points"),
+                layout: &self.points_layout,
+                entries: &[wgpu::BindGroupEntry { binding: 0, resource: points.as_entire_binding() }],
+            });
+            let (x, y) = crate::renderer::vpl_gather::pixel_workgroups(ctx.size);
+            ctx.timer.compute_pass(encoder, "fuzzy shading points", |pass| {
+                pass.set_pipeline(&self.points_pipeline);
+                pass.set_bind_group(0, ctx.screen_bind_group, &[]);
+                pass.set_bind_group(1, &group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            });
+            let points = self.sp_points.as_ref().expect("ensured");
+            self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp, None)?;
+        }
+        Ok(())
+    }
+
+    /// The last step: the clusters read back for the counts (and, with `inspect`, the assignments for the
+    /// overlays and the probe), after the frame's GPU work, so no step waits for the clustering.
+    fn readback_step(&mut self, ctx: &FrameContext) -> Result<(), GpuError> {
+        let start = std::time::Instant::now();
+        let (vpl_clustered, sp_clustered) = (self.pending.0.is_some(), self.pending.1.is_some());
+        let inspect = self.params.inspect;
+        if vpl_clustered {
+            self.inspection.vpl_clusters = self.vpl_kmeans.read_clusters(ctx.gpu)?;
+            if inspect {
+                self.inspection.vpl_assignment = self.vpl_kmeans.read_assignment(ctx.gpu)?.0;
+            }
+        }
+        if sp_clustered {
+            self.inspection.sp_clusters = self.sp_kmeans.read_clusters(ctx.gpu)?;
+            if inspect {
+                self.inspection.sp_centroids = self.sp_kmeans.read_centroids(ctx.gpu)?;
+                let (a, inv) = self.sp_kmeans.read_assignment(ctx.gpu)?;
+                self.inspection.sp_assignment = a;
+                self.inspection.sp_inverse = inv;
+            }
+        }
+        let live = |c: &[GpuPoint]| c.iter().filter(|p| p.exists()).count();
+        if vpl_clustered {
+            self.counts.figures.insert("k_vpl".into(), live(&self.inspection.vpl_clusters) as f64);
+        }
+        if sp_clustered {
+            let sp_live = live(&self.inspection.sp_clusters);
+            let members: u32 = self.inspection.sp_clusters.iter().map(|c| c.members()).sum();
+            self.counts.figures.insert("shading points".into(), members as f64);
+            self.counts.figures.insert("k_sp".into(), sp_live as f64);
+            self.counts.figures.insert("shadow rays".into(), (sp_live * self.light_count) as f64);
+            // Step 5's rays: one per live shading-point cluster and live light (the kernel skips dead ones; a
+            // pair closer than twice the bias, which traces none, is counted all the same).
+            let lights_live = if vpl_clustered { live(&self.inspection.vpl_clusters) } else { self.light_count };
+            self.counts.work.shadow_rays = (sp_live * lights_live) as u64;
+            if inspect {
+                self.build_pixel_maps();
+                if self.params.probe_x >= 0 && self.params.probe_y >= 0 {
+                    let lights: Vec<GpuPoint> = match self.mode {
+                        ClusterMode::ShadingPoints => self
+                            .vpls
+                            .vpls
+                            .iter()
+                            .map(|v| GpuPoint {
+                                position: v.position.extend(1.0).to_array(),
+                                normal: v.normal.extend(1.0).to_array(),
+                                flux: v.flux.extend(0.0).to_array(),
+                            })
+                            .collect(),
+                        _ => self.inspection.vpl_clusters.clone(),
+                    };
+                    self.inspection.probe = self.probe_overlay(ctx, &lights);
+                }
+            }
+        }
+        self.readback_ms = start.elapsed().as_secs_f64() * 1000.0;
+        Ok(())
+    }
+
     fn build_pixel_maps(&mut self) {
         let ins = &mut self.inspection;
         let (w, h) = ins.size;
@@ -424,69 +522,27 @@ impl Technique for FuzzyClustering {
         }
         self.bvh = Some(bvh);
 
-        // Steps 2-4: both clusterings in one submission.
-        let mut encoder = ctx.gpu.device.create_command_encoder(&Default::default());
-        if vpl_clustered {
-            let kp = self.kmeans_params(ctx.scene.bounds, self.params.k_vpl as usize, n as u32, 1, 1, 1);
-            let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
-            self.vpl_kmeans.encode(ctx.gpu, ctx.timer, &mut encoder, &ctx.vpls.buffer.buffer, &kp, Some(max_flux))?;
-        }
-        if sp_clustered {
+        // Steps 2-4 are the frame's first step ([`FuzzyClustering::cluster_step`]); their sizes are known now, so
+        // the frame is planned without waiting for them (the clusters are read back in its last step).
+        let vpl_kp =
+            vpl_clustered.then(|| self.kmeans_params(ctx.scene.bounds, self.params.k_vpl as usize, n as u32, 1, 1, 1));
+        let sp_kp = sp_clustered.then(|| {
             let f = (self.params.fuzziness as usize).clamp(1, MAX_F);
-            gpu::ensure_storage(&mut self.sp_points, ctx.gpu, "fuzzy shading points", pixels as u64 * 48);
-            let points = self.sp_points.as_ref().expect("ensured");
-            let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("fuzzy shading points"),
-                layout: &self.points_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: points.as_entire_binding() }],
-            });
-            let (x, y) = crate::renderer::vpl_gather::pixel_workgroups(ctx.size);
-            ctx.timer.compute_pass(&mut encoder, "fuzzy shading points", |pass| {
-                pass.set_pipeline(&self.points_pipeline);
-                pass.set_bind_group(0, ctx.screen_bind_group, &[]);
-                pass.set_bind_group(1, &group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-            });
-            let kp = self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f);
-            let points = self.sp_points.as_ref().expect("ensured");
-            self.sp_kmeans.encode(ctx.gpu, ctx.timer, &mut encoder, points, &kp, None)?;
+            self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f)
+        });
+        if let Some(kp) = &vpl_kp {
+            self.vpl_kmeans.shape = gpu::RunShape::of(kp);
         }
-        // Timed from the submission to the clusters read back: the clustering's GPU work and the readback (the
-        // GPU timestamps of lavapipe are unreliable; this wall time is not). The work submitted before (the
-        // G-buffer, the direct technique's steps) is waited for first, so it is not counted here; the readback
-        // below waits for the queue anyway.
-        ctx.gpu.wait_idle()?;
-        let start = std::time::Instant::now();
-        ctx.gpu.queue.submit([encoder.finish()]);
-
-        // Read back what the counts and overlays need.
-        let inspect = self.params.inspect;
-        if vpl_clustered {
-            self.inspection.vpl_clusters = self.vpl_kmeans.read_clusters(ctx.gpu)?;
-            if inspect {
-                self.inspection.vpl_assignment = self.vpl_kmeans.read_assignment(ctx.gpu)?.0;
-            }
+        if let Some(kp) = &sp_kp {
+            self.sp_kmeans.shape = gpu::RunShape::of(kp);
         }
-        if sp_clustered {
-            self.inspection.sp_clusters = self.sp_kmeans.read_clusters(ctx.gpu)?;
-            if inspect {
-                self.inspection.sp_centroids = self.sp_kmeans.read_centroids(ctx.gpu)?;
-                let (a, inv) = self.sp_kmeans.read_assignment(ctx.gpu)?;
-                self.inspection.sp_assignment = a;
-                self.inspection.sp_inverse = inv;
-            }
-        }
-        self.readback_ms = start.elapsed().as_secs_f64() * 1000.0;
-        let live = |c: &[GpuPoint]| c.iter().filter(|p| p.exists()).count();
+        self.pending = (vpl_kp, sp_kp);
 
         // The plan: visibility steps (rows of SP clusters), then shading steps (batches of lights).
         self.light_count = if vpl_clustered { self.vpl_kmeans.shape.clusters } else { n };
         self.lights_per_step = (self.params.lights_per_step as usize).min(ctx.max_lights_per_step).max(1);
         self.shade_steps = self.light_count.div_ceil(self.lights_per_step);
         self.counts.figures.insert("lights shaded".into(), self.light_count as f64);
-        if vpl_clustered {
-            self.counts.figures.insert("k_vpl".into(), live(&self.inspection.vpl_clusters) as f64);
-        }
         if sp_clustered {
             self.sp_count = self.sp_kmeans.shape.clusters;
             self.words_per_row = self.light_count.div_ceil(32).max(1);
@@ -512,15 +568,6 @@ impl Technique for FuzzyClustering {
             let rays_per_row = self.words_per_row * 32;
             self.rows_per_step = ((self.params.rays_per_step as usize) / rays_per_row).max(1);
             self.vis_steps = self.sp_count.div_ceil(self.rows_per_step);
-            let sp_live = live(&self.inspection.sp_clusters);
-            let members: u32 = self.inspection.sp_clusters.iter().map(|c| c.members()).sum();
-            self.counts.figures.insert("shading points".into(), members as f64);
-            self.counts.figures.insert("k_sp".into(), sp_live as f64);
-            self.counts.figures.insert("shadow rays".into(), (sp_live * self.light_count) as f64);
-            // Step 5's rays, decided here: one per live shading-point cluster and live light (the kernel skips
-            // dead ones; a pair closer than twice the bias, which traces none, is counted all the same).
-            let lights_live = if vpl_clustered { live(&self.inspection.vpl_clusters) } else { self.light_count };
-            self.counts.work.shadow_rays = (sp_live * lights_live) as u64;
             if self.mode == ClusterMode::ShadingPoints {
                 // The lights are the VPLs: upload them behind the representatives.
                 let gpu_vpls: Vec<GpuVpl> = self.vpls.vpls.iter().map(GpuVpl::new).collect();
@@ -535,26 +582,8 @@ impl Technique for FuzzyClustering {
             self.counts.figures.insert("shadow rays (at most)".into(), (pixels * self.light_count) as f64);
         }
         self.counts.batches = self.shade_steps;
-        if inspect && sp_clustered {
-            self.build_pixel_maps();
-            if self.params.probe_x >= 0 && self.params.probe_y >= 0 {
-                let lights: Vec<GpuPoint> = match self.mode {
-                    ClusterMode::ShadingPoints => self
-                        .vpls
-                        .vpls
-                        .iter()
-                        .map(|v| GpuPoint {
-                            position: v.position.extend(1.0).to_array(),
-                            normal: v.normal.extend(1.0).to_array(),
-                            flux: v.flux.extend(0.0).to_array(),
-                        })
-                        .collect(),
-                    _ => self.inspection.vpl_clusters.clone(),
-                };
-                self.inspection.probe = self.probe_overlay(ctx, &lights);
-            }
-        }
-        Ok(self.vis_steps + self.shade_steps)
+        // The clustering step, visibility and shading, and the readback.
+        Ok(1 + self.vis_steps + self.shade_steps + 1)
     }
 
     fn encode_step(
@@ -563,6 +592,15 @@ impl Technique for FuzzyClustering {
         step: usize,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
+        if step == 0 {
+            self.last_step = "fuzzy clustering";
+            return self.cluster_step(ctx, encoder);
+        }
+        let step = step - 1;
+        if step == self.vis_steps + self.shade_steps {
+            self.last_step = "fuzzy readback";
+            return self.readback_step(ctx);
+        }
         self.last_step = if step < self.vis_steps { "fuzzy visibility" } else { "fuzzy shading" };
         if step < self.vis_steps {
             // Step 5: a block of SP clusters' rows of visibility bits.
@@ -660,6 +698,6 @@ impl Technique for FuzzyClustering {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        vec![PassTime { name: "fuzzy clustering + readback".into(), ms: self.readback_ms, count: 1 }]
+        vec![PassTime { name: "fuzzy readback".into(), ms: self.readback_ms, count: 1 }]
     }
 }
