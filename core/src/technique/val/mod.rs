@@ -177,8 +177,8 @@ impl Default for ValParams {
             solo: -1,
             cssm_offset: 0.12,
             split: true,
-            kmeans_share: 0.5,
-            max_cone_degrees: 30.0,
+            kmeans_share: 0.0,
+            max_cone_degrees: 180.0,
             max_depth: 0.1,
         }
     }
@@ -291,9 +291,7 @@ impl VirtualAreaLights {
         let sp = split::SplitParams {
             vals: m,
             max_cone: self.params.max_cone_degrees.to_radians(),
-            max_depth: self.params.max_depth,
-            // The maps' own offset from the VAL's plane (see `prepare`): spreads below it are not depth.
-            min_depth: self.scene_size * 2e-3,
+            max_depth: self.params.max_depth * self.scene_size * self.params.length_fraction,
             iterations: 8,
         };
         split::split(vpls, &self.kmeans_params(), &sp, &base)
@@ -367,7 +365,7 @@ impl Technique for VirtualAreaLights {
                 key: "kmeans_share",
                 label: "k-means share of M",
                 help: "split: k-means clusters into this share of M VALs, bisection fills up to M",
-                kind: ParamKind::Float { min: 0.01, max: 1.0 },
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
                 value: ParamValue::Float(p.kmeans_share),
             },
             Param {
