@@ -95,6 +95,10 @@ pub struct FrameArgs {
     /// is the same; for measuring what the tiled light lists save).
     #[arg(long)]
     pub no_light_tiles: bool,
+    /// Draw every chunk in a light's range into its cube map instead of only those between it and the view's
+    /// surfaces (receiver-aware caster culling; the image is the same; for measuring what it saves).
+    #[arg(long)]
+    pub no_receiver_culling: bool,
 }
 
 impl FrameArgs {

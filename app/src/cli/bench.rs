@@ -115,6 +115,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             component: "total".into(),
             indirect_gain: 1.0,
             no_light_tiles: false,
+            no_receiver_culling: false,
         };
         eprintln!("{}: loading", s.name);
         let (gpu, mut renderer, _scene, lights, camera) = setup(&s.scene, &frame)?;

@@ -101,6 +101,7 @@ pub fn setup(
         component,
         indirect_gain: frame.indirect_gain,
         light_tiles: !frame.no_light_tiles,
+        receiver_culling: !frame.no_receiver_culling,
         ..Default::default()
     };
     settings.validate()?;

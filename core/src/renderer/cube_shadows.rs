@@ -16,7 +16,7 @@ use glam::Vec3;
 use super::gpu_data::MatrixUniform;
 use crate::accel::gpu_scene::GpuScene;
 use crate::gpu::GpuContext;
-use crate::math::CUBE_FACES;
+use crate::math::{Aabb, CUBE_FACES};
 use crate::scene::chunks::{merge_draw_ranges, Chunk};
 use crate::shaders;
 use crate::timing::PassTimer;
@@ -50,6 +50,39 @@ pub struct CubeGeometry<'a> {
     /// The materials of geometry that has them (the scene's; None for INSM's meshes): chunks of a cut-out
     /// material are drawn alpha-tested, so leaves cast leaf-shaped shadows.
     pub cutouts: Option<Cutouts<'a>>,
+    /// The bounds of every point the maps are looked up from this frame ([`receiver_bounds`]; with `cull`).
+    /// Receiver-aware caster culling: a shadow ray from a receiver `r` to a caster's centre `c` lies in the
+    /// convex hull of `c` and the receivers within its range, so a chunk outside the box of `c` and those
+    /// receivers occludes nothing that is looked up, and is not drawn (exact: the images do not change). A
+    /// caster with no receiver in its range draws nothing. None: every chunk in range (maps looked up from
+    /// anywhere).
+    pub receivers: Option<Aabb>,
+}
+
+/// The box of the surfaces a frame of `camera` (at `aspect`) can shade: its view frustum's corners' box within
+/// the scene's box (a superset of the frustum's part of the scene). None when the view holds nothing of it.
+pub fn receiver_bounds(camera: &crate::scene::Camera, aspect: f32, scene: &Aabb) -> Option<Aabb> {
+    if scene.is_empty() || !scene.min.is_finite() || !scene.max.is_finite() {
+        return None;
+    }
+    let clip_from_world = camera.clip_from_world(aspect);
+    if !crate::math::Frustum::from_clip_from_world(&clip_from_world).intersects_aabb(scene) {
+        return None;
+    }
+    let world_from_clip = clip_from_world.inverse();
+    let corners = (0..8).map(|i| {
+        let ndc = glam::Vec4::new(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { 0.0 } else { 1.0 },
+            1.0,
+        );
+        let w = world_from_clip * ndc;
+        w.truncate() / w.w
+    });
+    let frustum = Aabb::from_points(corners);
+    let inside = frustum.intersection(scene);
+    (frustum.min.is_finite() && frustum.max.is_finite() && !inside.is_empty()).then_some(inside)
 }
 
 /// Per material: its bind group (`GpuScene::material_layout`) and whether it is cut out (alpha-tested).
@@ -150,6 +183,7 @@ impl GpuScene {
             triangle_count: self.triangle_count,
             cull: true,
             cutouts: Some(Cutouts { bind_groups: &self.material_bind_groups, masked: &self.material_cutout }),
+            receivers: None,
         }
     }
 }
@@ -659,14 +693,24 @@ impl CubeShadowRenderer {
             CubeStats { cubes: casters.len(), texels_written: casters.len() as u64 * 6 * r * r, ..Default::default() };
         let mut lists = DrawLists::default();
         for (ci, caster) in casters.iter().enumerate() {
-            // A chunk outside the caster's range sphere is culled for all six faces at once.
+            // A chunk outside the caster's range sphere, or outside the box of the caster and the receivers in
+            // its range, is culled for all six faces at once.
+            let hull = geometry.receivers.map(|r| {
+                let range = Aabb { min: caster.position - caster.far, max: caster.position + caster.far };
+                let seen = r.intersection(&range);
+                (!seen.is_empty()).then(|| seen.union(&Aabb { min: caster.position, max: caster.position }))
+            });
             self.visible.clear();
             self.visible.extend(
                 geometry
                     .chunks
                     .iter()
                     .enumerate()
-                    .filter(|(_, c)| !cull || c.bounds.intersects_sphere(caster.position, caster.far))
+                    .filter(|(_, c)| {
+                        !cull
+                            || (c.bounds.intersects_sphere(caster.position, caster.far)
+                                && hull.is_none_or(|h| h.is_some_and(|h| c.bounds.intersects(&h))))
+                    })
                     .map(|(i, _)| i as u32),
             );
             for (fi, face) in CUBE_FACES.iter().enumerate() {

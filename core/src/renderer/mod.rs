@@ -307,6 +307,11 @@ impl Renderer {
             visible_lights: &self.visible_lights,
             light_tiles: &self.light_tiles,
             light_tiles_enabled: self.settings.light_tiles,
+            receivers: self
+                .settings
+                .receiver_culling
+                .then(|| cube_shadows::receiver_bounds(camera, aspect, &self.scene.bounds))
+                .flatten(),
             max_lights_per_step: match self.settings.max_lights_per_step {
                 0 => usize::MAX,
                 n => n,

@@ -111,7 +111,7 @@ impl PerLightShadows {
             .iter()
             .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
             .collect();
-        let geometry = CubeGeometry { cull: params.cull, ..geometry };
+        let geometry = CubeGeometry { cull: params.cull, receivers: ctx.receivers, ..geometry };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
 
         let atlas = self.cubes.atlas().expect("prepare sized the atlas");

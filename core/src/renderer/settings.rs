@@ -48,6 +48,10 @@ pub struct RenderSettings {
     /// Tiled light lists ([`light_tiles`]): shading passes visit only the lights (clusters) that reach their
     /// pixel's 16x16 tile. The image is the same either way; off loops over every light of a batch.
     pub light_tiles: bool,
+    /// Receiver-aware caster culling in the cube shadow maps ([`crate::renderer::cube_shadows::receiver_bounds`]):
+    /// a chunk that cannot lie between a light and the view's surfaces in its range is not drawn. The image is
+    /// the same either way; off is for measuring what it saves.
+    pub receiver_culling: bool,
 }
 
 impl RenderSettings {
@@ -125,6 +129,7 @@ impl Default for RenderSettings {
             component: Component::Total,
             indirect_gain: 1.0,
             light_tiles: true,
+            receiver_culling: true,
         }
     }
 }

@@ -90,6 +90,10 @@ pub struct FrameContext<'a> {
     pub light_tiles: &'a TileLists,
     /// [`crate::renderer::RenderSettings::light_tiles`]: techniques that bin their own spheres follow it too.
     pub light_tiles_enabled: bool,
+    /// The bounds of the surfaces this frame shades (the view frustum within the scene's box), for receiver-aware
+    /// caster culling in shadow maps ([`crate::renderer::cube_shadows::CubeGeometry::receivers`]); None when
+    /// the render setting is off.
+    pub receivers: Option<crate::scene::Aabb>,
 }
 
 /// What a technique did in a frame, for the frame report.

@@ -597,6 +597,8 @@ impl Technique for Insm {
             triangle_count: self.mesh_triangles,
             cull: true,
             cutouts: None,
+            // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).
+            receivers: None,
         };
         let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.params.cube);
         self.counts.add_cube_stats(&stats);

@@ -402,7 +402,8 @@ impl Technique for LightCluster {
             .iter()
             .map(|c| CubeCaster { position: Vec3::from_array(c.position), near: c.shadow_near, far: c.c_att })
             .collect();
-        let geometry = CubeGeometry { cull: self.params.cube.cull, ..ctx.scene.cube_geometry() };
+        let geometry =
+            CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..ctx.scene.cube_geometry() };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
         self.counts.add_cube_stats(&stats);
 
