@@ -282,7 +282,9 @@ fn compare_writes_a_difference_image_and_metrics() {
     assert_eq!((img.width(), img.height()), (96, 64));
     // The figure: technique, reference and difference side by side, with captions.
     let fig = image::open(&figure).unwrap();
-    assert_eq!((fig.width(), fig.height()), shadowlab::figure::figure_size(96, 64, 3));
+    // Captions wrap within 96-pixel panes: the figure is as wide as three panes and at least as tall.
+    let (fw, fh) = shadowlab::figure::figure_size(96, 64, 3);
+    assert!(fig.width() == fw && fig.height() >= fh, "{}x{}", fig.width(), fig.height());
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0);
     assert!(r["metrics"]["flip_mean"].as_f64().is_some());
@@ -833,7 +835,8 @@ fn fuzzy_clustering_traces_particles_by_default_and_sweeps_its_time_split() {
         "wall_speedup",
         "indirect.pass.fuzzy visibility_ms",
         "indirect.pass.fuzzy shading_ms",
-        "cpu.fuzzy clustering + readback_ms",
+        "indirect.pass.fuzzy clustering_ms",
+        "indirect.pass.fuzzy readback_ms",
         "indirect.figure.k_sp",
     ] {
         assert!(header.contains(&column), "no column {column} in {header:?}");

@@ -9,9 +9,8 @@ use shadowlab_core::compare::Metrics;
 
 /// Space around and between the panes, in pixels.
 pub const GAP: u32 = 8;
-/// Height of a one-line title; every further line (a title wider than the figure wraps) adds [`TITLE_LINE`].
+/// Height of the title line (a title wider than the figure is cut with "…", so the panes always start here).
 pub const TITLE_HEIGHT: u32 = 30;
-pub const TITLE_LINE: u32 = 22;
 /// Height of one caption line; every pane has room for at least [`CAPTION_LINES`] of them (more when a caption
 /// wraps: lines wider than the pane break at spaces, and the figure grows).
 pub const LINE_HEIGHT: u32 = 18;
@@ -26,18 +25,16 @@ pub struct FigurePane {
     pub caption: Vec<String>,
 }
 
-/// The size of a figure of `panes` panes of `width` x `height` with a one-line title and captions of at most
-/// [`CAPTION_LINES`] lines.
+/// The size of a figure of `panes` panes of `width` x `height` whose captions take at most [`CAPTION_LINES`]
+/// lines (a longer one makes the figure taller: [`figure_size_for`]).
 pub fn figure_size(width: u32, height: u32, panes: u32) -> (u32, u32) {
-    figure_size_for(width, height, panes, 1, CAPTION_LINES)
+    figure_size_for(width, height, panes, CAPTION_LINES)
 }
 
-/// The size of a figure whose title takes `title_lines` and whose longest caption `caption_lines` (at least
-/// [`CAPTION_LINES`] are reserved).
-pub fn figure_size_for(width: u32, height: u32, panes: u32, title_lines: u32, caption_lines: u32) -> (u32, u32) {
-    let title = TITLE_HEIGHT + title_lines.saturating_sub(1) * TITLE_LINE;
+/// The size of a figure whose longest caption takes `caption_lines` (at least [`CAPTION_LINES`] are reserved).
+pub fn figure_size_for(width: u32, height: u32, panes: u32, caption_lines: u32) -> (u32, u32) {
     let captions = caption_lines.max(CAPTION_LINES) * LINE_HEIGHT;
-    (panes * width + (panes + 1) * GAP, title + height + GAP + captions + GAP)
+    (panes * width + (panes + 1) * GAP, TITLE_HEIGHT + height + GAP + captions + GAP)
 }
 
 /// The metrics as two caption lines (short enough for panes of 320 pixels).
@@ -65,16 +62,16 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
     if w == 0 || h == 0 {
         return Err(anyhow!("a figure's images must not be empty"));
     }
-    // Text wider than its room wraps at spaces (and what the font cannot draw is replaced): the figure grows.
+    // Captions wider than their pane wrap at spaces (the figure grows), a title wider than the figure is cut,
+    // and what the font cannot draw is replaced.
     let fw = figure_size(w, h, panes.len() as u32).0;
-    let title_lines = crate::plot::wrap(title, TITLE_SIZE, (fw - 2 * GAP) as f32);
+    let title = crate::plot::truncate(title, TITLE_SIZE, (fw - 2 * GAP) as f32);
     let captions: Vec<Vec<String>> = panes
         .iter()
         .map(|p| p.caption.iter().flat_map(|line| crate::plot::wrap(line, CAPTION_SIZE, w as f32)).collect())
         .collect();
     let caption_lines = captions.iter().map(Vec::len).max().unwrap_or(0) as u32;
-    let (fw, fh) = figure_size_for(w, h, panes.len() as u32, title_lines.len() as u32, caption_lines);
-    let title_height = TITLE_HEIGHT + (title_lines.len() as u32).saturating_sub(1) * TITLE_LINE;
+    let (fw, fh) = figure_size_for(w, h, panes.len() as u32, caption_lines);
     let mut rgb = vec![255u8; (fw * fh * 3) as usize];
     for (i, pane) in panes.iter().enumerate() {
         let scaled;
@@ -86,7 +83,7 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
         };
         let x0 = GAP + i as u32 * (w + GAP);
         for (x, y, p) in image.enumerate_pixels() {
-            let at = (((title_height + y) * fw + x0 + x) * 3) as usize;
+            let at = (((TITLE_HEIGHT + y) * fw + x0 + x) * 3) as usize;
             rgb[at..at + 3].copy_from_slice(&p.0[..3]);
         }
     }
@@ -95,14 +92,11 @@ pub fn compose(title: &str, panes: &[FigurePane]) -> Result<RgbaImage> {
     {
         let root = BitMapBackend::with_buffer(&mut rgb, (fw, fh)).into_drawing_area();
         let font = |size: f32| ("sans-serif", size as u32).into_font().color(&BLACK);
-        for (j, line) in title_lines.iter().enumerate() {
-            let y = 6 + (j as u32 * TITLE_LINE) as i32;
-            root.draw(&Text::new(line.clone(), (GAP as i32, y), font(TITLE_SIZE))).map_err(|e| err(&e))?;
-        }
+        root.draw(&Text::new(title, (GAP as i32, 6), font(TITLE_SIZE))).map_err(|e| err(&e))?;
         for (i, caption) in captions.iter().enumerate() {
             let x = (GAP + i as u32 * (w + GAP)) as i32;
             for (j, line) in caption.iter().enumerate() {
-                let y = (title_height + h + GAP / 2 + j as u32 * LINE_HEIGHT) as i32;
+                let y = (TITLE_HEIGHT + h + GAP / 2 + j as u32 * LINE_HEIGHT) as i32;
                 root.draw(&Text::new(line.clone(), (x, y), font(CAPTION_SIZE))).map_err(|e| err(&e))?;
             }
         }
@@ -146,16 +140,15 @@ mod tests {
         };
         let title = "cornell · 32 lights · 160x90 · llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu) and more words";
         let fig = compose(title, &[pane(50), pane(150)]).unwrap();
-        // The captions wrapped into more lines than reserved, and the title into two: the figure grew.
+        // The captions wrapped into more lines than reserved: the figure grew; the title was cut to fit.
         let (w, h) = figure_size(120, 60, 2);
         assert_eq!(fig.width(), w);
         assert!(fig.height() > h, "{} not above {h}", fig.height());
+        let cut = crate::plot::truncate(title, TITLE_SIZE, (w - 2 * GAP) as f32);
+        assert!(cut.ends_with('…') && crate::plot::text_width(&cut, TITLE_SIZE) <= (w - 2 * GAP) as f32, "{cut}");
         // No caption pixel of the first pane spills into the gap before the second.
         let gap_x = GAP + 120 + GAP / 2;
-        let title_lines = crate::plot::wrap(title, TITLE_SIZE, (w - 2 * GAP) as f32).len() as u32;
-        assert!(title_lines >= 2);
-        let images_end = TITLE_HEIGHT + (title_lines - 1) * TITLE_LINE + 60;
-        let spilled = (images_end..fig.height()).filter(|&y| fig.get_pixel(gap_x, y).0[0] < 200).count();
+        let spilled = (TITLE_HEIGHT + 60..fig.height()).filter(|&y| fig.get_pixel(gap_x, y).0[0] < 200).count();
         assert_eq!(spilled, 0, "caption text in the gap between panes");
         for line in crate::plot::wrap(&long, CAPTION_SIZE, 120.0) {
             assert!(crate::plot::text_width(&line, CAPTION_SIZE) <= 120.0 || !line.contains(' '), "{line}");

@@ -73,6 +73,24 @@ pub(crate) fn wrap(text: &str, size: f32, max_width: f32) -> Vec<String> {
     lines
 }
 
+/// `text` (made [`drawable`]) cut to at most `max_width` pixels at `size`, ending in "…" when cut.
+pub(crate) fn truncate(text: &str, size: f32, max_width: f32) -> String {
+    let text = drawable(text);
+    if text_width(&text, size) <= max_width {
+        return text;
+    }
+    let mut out = String::new();
+    for c in text.chars() {
+        let next = format!("{out}{c}…");
+        if text_width(&next, size) > max_width {
+            break;
+        }
+        out.push(c);
+    }
+    out.push('…');
+    out
+}
+
 pub(crate) fn register_font() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
