@@ -32,10 +32,17 @@
 //!   contact shadows leak: measured on the plane-and-wall test scene, relative RMSE against exact visibility
 //!   0.047 for CSSM against 0.053 for none at all, which is why `pcss` (explicit depth tests, `2 grid^2`
 //!   texel reads per pixel and VAL) stays the default.
-//! - Filter samples get a bias that grows with their offset from the receiver's texel (`slope_bias`), a
-//!   receiver-plane bias: without it a wide PCSS kernel on a curved or sloped receiver finds the receiver
-//!   itself closer than the centre sample and shadows it (measured on the closed-sphere test: 25 % too dark
-//!   without, within 3 % with `slope_bias = 2`).
+//! - Step 2 is refined ([`split`], issue 23): VALs are bisected, those whose VPLs spread along their normal by
+//!   more than `max_depth` L first, until there are M, starting from one VAL by default (`kmeans_share = 0`;
+//!   the VALs for M + 1 are then those for M with one bisected, which is what makes the error fall with M
+//!   on the real scenes, measured in docs/techniques/val.md). VALs across corners and layers were the leaks of
+//!   the paper's Fig. 7. `split = off` is the paper's k-means alone.
+//! - PCSS filter samples are compared with the receiver's plane along their own direction (a receiver-plane
+//!   depth bias, `receiver_depth` in `val/gather.wgsl`) less `slope_bias` texels of depth per texel of offset
+//!   for curvature. The earlier form, the receiver's own depth less `2` texels per texel of offset, also had
+//!   to cover the plane's slope, so on flat receivers the wide kernels of large VALs let occluders through
+//!   (Sponza, 30 VALs, bisection from k-means for M / 2 with a 30 degree cone rule: FLIP 0.25 -> 0.157); the closed-sphere test (a concave receiver) stays within
+//!   3 % with `slope_bias = 1`.
 //! - VAL maps ignore geometry closer than a tenth of the VAL's size to its centre (the paper's Fig. 7: a
 //!   cluster centre can lie inside geometry; "geometry located near the cluster center has to be ignored").
 //!   The paper gives no amount; on Sponza with 30 VALs FLIP against per-VPL maps was 0.28 at a tenth, 0.37 at
@@ -423,8 +430,8 @@ impl Technique for VirtualAreaLights {
             Param {
                 key: "slope_bias",
                 label: "Slope bias",
-                help: "Extra bias of a filter sample per texel of offset, in texel footprints (curved and sloped \
-                       receivers otherwise shadow themselves in a wide kernel)",
+                help: "Bias of a filter sample below the receiver's plane per texel of offset, in texel \
+                       footprints (curved receivers otherwise shadow themselves in a wide kernel)",
                 kind: ParamKind::Float { min: 0.0, max: 16.0 },
                 value: ParamValue::Float(p.slope_bias),
             },
