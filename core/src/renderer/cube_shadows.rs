@@ -34,6 +34,17 @@ pub struct CubeCaster {
     pub position: Vec3,
     pub near: f32,
     pub far: f32,
+    /// How far from a receiver its lookups into this map reach, in world units (normal offset, filter taps,
+    /// PCSS's search): receiver-aware culling keeps every chunk that far around the receivers.
+    pub lookup_radius: f32,
+}
+
+impl CubeCaster {
+    /// A hard-shadow lookup's reach: `normal_offset_texels` plus two texels of a `resolution`-texel face at the
+    /// range `far`, plus the depth bias.
+    pub fn hard_lookup_radius(far: f32, resolution: u32, normal_offset_texels: f32, bias_world: f32) -> f32 {
+        (normal_offset_texels.max(0.0) + 2.0) * 2.0 * far / resolution.max(1) as f32 + bias_world.max(0.0)
+    }
 }
 
 /// Geometry drawn into cube maps: positions (`Float32x3` at offset 0 of each `vertex_stride`-byte vertex), `u32`
@@ -698,7 +709,9 @@ impl CubeShadowRenderer {
             let hull = geometry.receivers.map(|r| {
                 let range = Aabb { min: caster.position - caster.far, max: caster.position + caster.far };
                 let seen = r.intersection(&range);
-                (!seen.is_empty()).then(|| seen.union(&Aabb { min: caster.position, max: caster.position }))
+                let reach = Vec3::splat(caster.lookup_radius.max(0.0));
+                let looked_up = Aabb { min: seen.min - reach, max: seen.max + reach };
+                (!seen.is_empty()).then(|| looked_up.union(&Aabb { min: caster.position, max: caster.position }))
             });
             self.visible.clear();
             self.visible.extend(

@@ -107,9 +107,20 @@ impl PerLightShadows {
     ) -> CubeStats {
         let first = batch * self.batch_size;
         let last = (first + self.batch_size).min(self.visible_count);
+        let res = self.cubes.atlas().map_or(1, |a| a.resolution);
         let casters: Vec<CubeCaster> = ctx.visible_lights.gpu[first..last]
             .iter()
-            .map(|l| CubeCaster { position: Vec3::from_array(l.position), near: l.shadow_near, far: l.range })
+            .map(|l| CubeCaster {
+                position: Vec3::from_array(l.position),
+                near: l.shadow_near,
+                far: l.range,
+                lookup_radius: CubeCaster::hard_lookup_radius(
+                    l.range,
+                    res,
+                    params.normal_offset_texels,
+                    params.bias_world,
+                ),
+            })
             .collect();
         let geometry = CubeGeometry { cull: params.cull, receivers: ctx.receivers, ..geometry };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);

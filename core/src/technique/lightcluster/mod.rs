@@ -398,9 +398,21 @@ impl Technique for LightCluster {
         // Step 3: this batch's cluster cube maps, then its shading.
         let first = step * self.batch_size;
         let last = (first + self.batch_size).min(self.gpu_clusters.len());
+        let res = self.cubes.atlas().map_or(1, |a| a.resolution);
         let casters: Vec<CubeCaster> = self.gpu_clusters[first..last]
             .iter()
-            .map(|c| CubeCaster { position: Vec3::from_array(c.position), near: c.shadow_near, far: c.c_att })
+            .map(|c| {
+                let p = &self.params.cube;
+                let hard = CubeCaster::hard_lookup_radius(c.c_att, res, p.normal_offset_texels, p.bias_world);
+                // PCF and PCSS tap within 4 d_min of the receiver (`shade.wgsl`: the filter radius is capped
+                // there, the blocker search is d_min wide).
+                CubeCaster {
+                    position: Vec3::from_array(c.position),
+                    near: c.shadow_near,
+                    far: c.c_att,
+                    lookup_radius: hard + 4.0 * c.radius,
+                }
+            })
             .collect();
         let geometry =
             CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..ctx.scene.cube_geometry() };
