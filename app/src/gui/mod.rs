@@ -101,7 +101,7 @@ pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
         let a = adapter.limits();
         wgpu::DeviceDescriptor {
             label: Some("shadowlab"),
-            required_features: adapter.features() & shadowlab_core::gpu::TIMER_FEATURES,
+            required_features: adapter.features() & shadowlab_core::gpu::OPTIONAL_FEATURES,
             required_limits: wgpu::Limits {
                 max_texture_dimension_2d: a.max_texture_dimension_2d.max(8192).min(a.max_texture_dimension_2d),
                 max_storage_buffer_binding_size: a.max_storage_buffer_binding_size,

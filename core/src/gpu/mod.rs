@@ -23,6 +23,9 @@ pub struct GpuContext {
 
 /// The timer features ShadowLab uses when an adapter offers them.
 pub const TIMER_FEATURES: wgpu::Features = wgpu_profiler::GpuProfiler::ALL_WGPU_TIMER_FEATURES;
+/// Every optional feature ShadowLab requests when an adapter offers it: the timers, and blending into an f32
+/// HDR target (`SharedLayouts::hdr_format`).
+pub const OPTIONAL_FEATURES: wgpu::Features = TIMER_FEATURES.union(wgpu::Features::FLOAT32_BLENDABLE);
 
 impl GpuContext {
     /// Create a device without a window. Honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`), `WGPU_ADAPTER_NAME` and
@@ -51,7 +54,7 @@ impl GpuContext {
         }
         let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, None))
             .map_err(|_| GpuError::NoAdapter)?;
-        let features = adapter.features() & TIMER_FEATURES;
+        let features = adapter.features() & OPTIONAL_FEATURES;
         let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
         let limits = wgpu::Limits {
             max_texture_array_layers: adapter.limits().max_texture_array_layers,

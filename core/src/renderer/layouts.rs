@@ -17,7 +17,17 @@ pub struct SharedLayouts {
 }
 
 impl SharedLayouts {
-    pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+    /// The HDR radiance target's format on `device`: `Rgba32Float` where the device can blend it
+    /// (`FLOAT32_BLENDABLE`, requested whenever the adapter has it), else `Rgba16Float`. Every shading pass adds
+    /// its batch of lights into this target, and an f16 target rounds each sum to 11 bits, so its image would
+    /// depend on how the lights are batched (docs/techniques/reference.md); f32 keeps that below 1e-6.
+    pub fn hdr_format(device: &wgpu::Device) -> wgpu::TextureFormat {
+        if device.features().contains(wgpu::Features::FLOAT32_BLENDABLE) {
+            wgpu::TextureFormat::Rgba32Float
+        } else {
+            wgpu::TextureFormat::Rgba16Float
+        }
+    }
     pub const OUTPUT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
     pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
     pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;

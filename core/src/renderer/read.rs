@@ -52,6 +52,11 @@ impl Renderer {
     pub fn read_component(&self, component: Component) -> Result<Vec<[f32; 4]>, GpuError> {
         let t = &self.targets;
         let direct = || -> Result<Vec<[f32; 4]>, GpuError> {
+            if t.hdr_texture.format() == wgpu::TextureFormat::Rgba32Float {
+                let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 16)?;
+                let values: &[f32] = bytemuck::cast_slice(&bytes);
+                return Ok(values.chunks_exact(4).map(|v| [v[0], v[1], v[2], v[3]]).collect());
+            }
             let bytes = readback::read_texture(&self.gpu, &t.hdr_texture, t.width, t.height, 8)?;
             Ok(bytes
                 .chunks_exact(8)

@@ -80,8 +80,14 @@ impl Renderer {
             cache: None,
         });
         let ambient_module = crate::gpu::pipeline::create_module(device, "ambient", shaders::AMBIENT.source);
-        let ambient_pipeline =
-            layouts.fullscreen_pipeline(device, "ambient", &ambient_module, &[], SharedLayouts::HDR_FORMAT, false);
+        let ambient_pipeline = layouts.fullscreen_pipeline(
+            device,
+            "ambient",
+            &ambient_module,
+            &[],
+            SharedLayouts::hdr_format(device),
+            false,
+        );
         let tonemap_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
             entries: &[

@@ -39,7 +39,8 @@ impl ShadePass {
         if reads_tiles {
             groups.push(&layouts.light_tiles);
         }
-        let pipeline = layouts.fullscreen_pipeline(device, label, &shader, &groups, SharedLayouts::HDR_FORMAT, true);
+        let pipeline =
+            layouts.fullscreen_pipeline(device, label, &shader, &groups, SharedLayouts::hdr_format(device), true);
         let batch_uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents: bytemuck::bytes_of(&<U as bytemuck::Zeroable>::zeroed()),

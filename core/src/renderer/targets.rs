@@ -55,7 +55,7 @@ fn plain_view(gpu: &GpuContext) -> bool {
 impl FrameTargets {
     pub fn new(gpu: &GpuContext, width: u32, height: u32) -> FrameTargets {
         let view = |t: wgpu::Texture| t.create_view(&Default::default());
-        let hdr_texture = target(gpu, "hdr", width, height, SharedLayouts::HDR_FORMAT, true);
+        let hdr_texture = target(gpu, "hdr", width, height, SharedLayouts::hdr_format(&gpu.device), true);
         let output_texture = target(gpu, "output", width, height, SharedLayouts::OUTPUT_FORMAT, true);
         let depth_texture = target(gpu, "gbuffer depth", width, height, SharedLayouts::DEPTH_FORMAT, true);
         FrameTargets {

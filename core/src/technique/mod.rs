@@ -65,7 +65,7 @@ pub struct FrameContext<'a> {
     pub layouts: &'a SharedLayouts,
     /// Group 0 of every full-screen pass: the frame uniform and the G-buffer (see `common.wgsl`).
     pub screen_bind_group: &'a wgpu::BindGroup,
-    /// HDR radiance target (`SharedLayouts::HDR_FORMAT`); techniques add their lights' radiance into it.
+    /// HDR radiance target (`SharedLayouts::hdr_format`); techniques add their lights' radiance into it.
     pub hdr_view: &'a wgpu::TextureView,
     pub camera: &'a Camera,
     pub aspect: f32,
