@@ -228,6 +228,17 @@ impl Aabb {
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
+    /// The eight corners.
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
     /// The box both boxes hold (empty when they do not overlap).
     pub fn intersection(&self, o: &Aabb) -> Aabb {
         Aabb { min: self.min.max(o.min), max: self.max.min(o.max) }

@@ -9,10 +9,13 @@
 //!
 //! Culling (lavapipe is vertex-bound, so triangles are what costs):
 //! 1. a chunk is drawn for a caster only if its bounds touch the caster's range sphere,
-//! 2. and for a face only if its bounds touch the face's 90 degree pyramid.
+//! 2. and for a face only if its bounds touch the face's 90 degree pyramid,
+//! 3. and, with [`CubeGeometry::receivers`], only if they touch the box of the caster and the receivers its
+//!    lookups reach (receiver-aware caster culling, exact).
 
 use glam::Vec3;
 
+pub use super::cube_atlas::{CubeAtlas, CubeStats, DistanceReader, TileProjection};
 use super::gpu_data::MatrixUniform;
 use crate::accel::gpu_scene::GpuScene;
 use crate::gpu::GpuContext;
@@ -197,120 +200,6 @@ impl GpuScene {
             receivers: None,
         }
     }
-}
-
-/// The atlas of the current batch, as the shading passes see it.
-pub struct CubeAtlas {
-    pub texture: wgpu::Texture,
-    pub view: wgpu::TextureView,
-    pub resolution: u32,
-    pub tiles_per_row: u32,
-    /// Cube maps it holds.
-    pub capacity: usize,
-    /// Square tiles it holds (6 per cube map).
-    pub tiles: usize,
-    /// How each tile was last rendered (None: not rendered since the atlas was cleared), so that its stored
-    /// depths can be read back as world distances (the app's shadow-map inspector).
-    pub projections: Vec<Option<TileProjection>>,
-}
-
-impl CubeAtlas {
-    /// Forget every tile's projection when a pass clears the atlas; then record `projections` from `first_tile`.
-    fn record_projections(
-        &mut self,
-        clear: bool,
-        first_tile: usize,
-        projections: impl Iterator<Item = TileProjection>,
-    ) {
-        if clear {
-            self.projections.clear();
-        }
-        self.projections.resize(self.tiles, None);
-        for (i, p) in projections.enumerate() {
-            if let Some(slot) = self.projections.get_mut(first_tile + i) {
-                *slot = Some(p);
-            }
-        }
-    }
-}
-
-/// How a tile of an atlas maps world points to stored depth, and back.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum TileProjection {
-    /// A perspective view, `clip_from_world` (a cube map's face: 90°, near..far; INSM's intermediate images):
-    /// hardware depth (`cube_depth_to_distance` in cube_shadow.wgsl inverts it along a cube face's axis).
-    Perspective { clip_from_world: glam::Mat4 },
-    /// A paraboloid map (paraboloid_depth.wgsl): depth `(d - near) / (far - near)` of the distance d from `centre`.
-    Paraboloid { centre: Vec3, near: f32, far: f32 },
-}
-
-impl TileProjection {
-    /// The point the map looks from (a cube map's light, a view's camera, a paraboloid's centre).
-    pub fn eye(&self) -> Vec3 {
-        match *self {
-            // The eye is where clip x, y and w vanish: world_from_clip · (0, 0, 1, 0), dehomogenised.
-            TileProjection::Perspective { clip_from_world } => {
-                let e = clip_from_world.as_dmat4().inverse() * glam::DVec4::Z;
-                (e.truncate() / e.w).as_vec3()
-            }
-            TileProjection::Paraboloid { centre, .. } => centre,
-        }
-    }
-
-    /// The world distance from [`Self::eye`] to what texel (u, v) of a `resolution`-texel square tile saw,
-    /// given the depth stored there; None for an empty texel (depth 1: nothing within the far plane).
-    pub fn distance(&self, u: u32, v: u32, resolution: u32, depth: f32) -> Option<f32> {
-        self.reader(resolution).distance(u, v, depth)
-    }
-
-    /// [`Self::distance`] for many texels of one tile (the inverse matrix computed once).
-    pub fn reader(&self, resolution: u32) -> DistanceReader {
-        let world_from_clip = match *self {
-            TileProjection::Perspective { clip_from_world } => Some(clip_from_world.as_dmat4().inverse()),
-            TileProjection::Paraboloid { .. } => None,
-        };
-        let eye = world_from_clip.map(|m| {
-            let e = m * glam::DVec4::Z;
-            e.truncate() / e.w
-        });
-        DistanceReader { projection: *self, world_from_clip, eye, resolution: resolution.max(1) as f64 }
-    }
-}
-
-/// Reads one tile's depths as distances ([`TileProjection::reader`]).
-pub struct DistanceReader {
-    projection: TileProjection,
-    world_from_clip: Option<glam::DMat4>,
-    eye: Option<glam::DVec3>,
-    resolution: f64,
-}
-
-impl DistanceReader {
-    pub fn distance(&self, u: u32, v: u32, depth: f32) -> Option<f32> {
-        if !(0.0..1.0).contains(&depth) {
-            return None;
-        }
-        match (self.projection, self.world_from_clip, self.eye) {
-            (TileProjection::Paraboloid { near, far, .. }, _, _) => Some(near + depth * (far - near)),
-            (TileProjection::Perspective { .. }, Some(world_from_clip), Some(eye)) => {
-                let ndc_x = (u as f64 + 0.5) / self.resolution * 2.0 - 1.0;
-                let ndc_y = 1.0 - (v as f64 + 0.5) / self.resolution * 2.0;
-                let p = world_from_clip * glam::DVec4::new(ndc_x, ndc_y, depth as f64, 1.0);
-                Some((p.truncate() / p.w).distance(eye) as f32)
-            }
-            _ => None,
-        }
-    }
-}
-
-/// Triangles drawn and culled by one `render` call.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CubeStats {
-    pub cubes: usize,
-    /// Depth texels the maps cover (6 faces of resolution² per cube map, resolution² per paraboloid map).
-    pub texels_written: u64,
-    pub triangles_submitted: u64,
-    pub triangles_culled: u64,
 }
 
 /// One paraboloid shadow map to render (a VPL's hemisphere): its centre, the direction it faces and its depth

@@ -83,57 +83,23 @@ const _: () = assert!(std::mem::size_of::<DirectionalUniform>() == 16 + 112 * MA
 /// scene's part of `camera`'s view (at `aspect`) in x-y and all of `scene` in depth (0 nearest the light).
 /// None when the view holds nothing of the scene.
 pub fn fit(direction: Vec3, camera: &Camera, aspect: f32, scene: &Aabb) -> Option<Mat4> {
-    if !scene.min.is_finite() || !scene.max.is_finite() || scene.min.cmpgt(scene.max).any() {
-        return None;
-    }
-    if !crate::math::Frustum::from_clip_from_world(&camera.clip_from_world(aspect)).intersects_aabb(scene) {
-        return None;
-    }
+    // The receivers: the view frustum's box within the scene's (the shadow maps' receiver-aware culling uses
+    // the same bound).
+    let receivers = crate::renderer::cube_shadows::receiver_bounds(camera, aspect, scene)?;
     let (right, up) = direction.any_orthonormal_pair();
     let to_light = |p: Vec3| Vec3::new(p.dot(right), p.dot(up), p.dot(direction));
-    let corners = |b: Aabb| {
-        (0..8).map(move |i| {
-            Vec3::new(
-                if i & 1 == 0 { b.min.x } else { b.max.x },
-                if i & 2 == 0 { b.min.y } else { b.max.y },
-                if i & 4 == 0 { b.min.z } else { b.max.z },
-            )
-        })
-    };
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for p in corners(*scene).map(to_light) {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    // The view frustum's corners, its far plane no further than the scene reaches, clipped to the scene's box.
-    let diagonal = scene.size().length().max(1e-6);
-    let far = camera.z_far.min(camera.position.distance(scene.center()) + diagonal).max(camera.near * 2.0);
-    let view = Camera { z_far: far, ..*camera };
-    let world_from_clip = view.clip_from_world(aspect).inverse();
-    let (mut vlo, mut vhi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for i in 0..8 {
-        let ndc = Vec4::new(
-            if i & 1 == 0 { -1.0 } else { 1.0 },
-            if i & 2 == 0 { -1.0 } else { 1.0 },
-            if i & 4 == 0 { 0.0 } else { 1.0 },
-            1.0,
-        );
-        let w = world_from_clip * ndc;
-        let p = (w.truncate() / w.w).clamp(scene.min, scene.max);
-        let q = to_light(p);
-        vlo = vlo.min(q);
-        vhi = vhi.max(q);
-    }
-    let (x0, x1) = (vlo.x.max(lo.x), vhi.x.min(hi.x));
-    let (y0, y1) = (vlo.y.max(lo.y), vhi.y.min(hi.y));
+    let light_box = |b: &Aabb| Aabb::from_points(b.corners().map(to_light));
+    // x-y: the receivers; depth: the whole scene towards the light (every caster between it and them).
+    let (xy, depth) = (light_box(&receivers), light_box(scene));
+    let (x0, x1, y0, y1) = (xy.min.x, xy.max.x, xy.min.y, xy.max.y);
     if !(x1 > x0 && y1 > y0) {
         return None;
     }
     // A little margin, so the PCF's neighbours of a border receiver are inside the map.
     let pad = 2.0 / RESOLUTION as f32;
     let (cx, cy, hx, hy) = ((x0 + x1) * 0.5, (y0 + y1) * 0.5, (x1 - x0) * (0.5 + pad), (y1 - y0) * (0.5 + pad));
-    let depth_pad = 1e-3 * diagonal;
-    let (z0, z1) = (lo.z - depth_pad, hi.z + depth_pad);
+    let depth_pad = 1e-3 * scene.size().length().max(1e-6);
+    let (z0, z1) = (depth.min.z - depth_pad, depth.max.z + depth_pad);
     // clip = ((x - cx) / hx, (y - cy) / hy, (z - z0) / (z1 - z0), 1), x, y, z the light-frame coordinates.
     let row = |axis: Vec3, scale: f32, offset: f32| (axis * scale).extend(-offset * scale);
     let rx = row(right, 1.0 / hx, cx);

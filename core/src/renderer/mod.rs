@@ -7,6 +7,7 @@
 //! advanced a few steps at a time ([`Renderer::begin_frame`], [`Renderer::advance`], [`Renderer::finish_frame`])
 //! so an interactive app stays responsive while a slow technique accumulates.
 
+pub mod cube_atlas;
 pub mod cube_params;
 pub mod cube_shadows;
 pub mod directional;

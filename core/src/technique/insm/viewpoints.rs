@@ -49,7 +49,7 @@ impl Viewpoint {
 
     /// Near and far planes that hold the whole of `bounds` in front of this viewpoint.
     pub fn depth_range(&self, bounds: &Aabb) -> (f32, f32) {
-        let far = corners(bounds).iter().map(|c| c.distance(self.position)).fold(0.0f32, f32::max).max(1e-3) * 1.01;
+        let far = bounds.corners().iter().map(|c| c.distance(self.position)).fold(0.0f32, f32::max).max(1e-3) * 1.01;
         (far * 1e-3, far)
     }
 
@@ -66,22 +66,12 @@ impl Viewpoint {
     }
 }
 
-/// The eight corners of a box.
-pub fn corners(b: &Aabb) -> [Vec3; 8] {
-    std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 { b.min.x } else { b.max.x },
-            if i & 2 == 0 { b.min.y } else { b.max.y },
-            if i & 4 == 0 { b.min.z } else { b.max.z },
-        )
-    })
-}
-
 /// The field of view (degrees) a camera at `position` looking at `target` needs to see all of `bounds`, clamped
 /// to 30..=[`MAX_AUTO_FOV_DEG`].
 fn fov_to_fit(position: Vec3, target: Vec3, bounds: &Aabb) -> f32 {
     let f = (target - position).normalize_or(Vec3::NEG_Z);
-    let max_angle = corners(bounds)
+    let max_angle = bounds
+        .corners()
         .iter()
         .map(|c| {
             let d = *c - position;
@@ -255,7 +245,7 @@ mod tests {
         assert!(fov < 40.0, "{fov}");
         let vp = Viewpoint { fov_y_deg: fov, ..far };
         let m = vp.clip_from_world(&b);
-        for c in corners(&b) {
+        for c in b.corners() {
             let p = m.project_point3(c);
             assert!(p.x.abs() <= 1.0 && p.y.abs() <= 1.0 && (0.0..=1.0).contains(&p.z), "{c} -> {p}");
         }
