@@ -54,6 +54,7 @@
 pub mod cssm;
 pub mod gpu_kmeans;
 pub mod kmeans;
+mod overlays;
 pub mod split;
 
 use std::sync::Arc;
@@ -680,57 +681,11 @@ impl Technique for VirtualAreaLights {
     }
 
     fn explain(&self) -> Vec<super::ExplainStep> {
-        use super::ExplainStep;
-        vec![
-            ExplainStep {
-                title: "1. VPLs",
-                text: "The lights' reflective shadow maps leave virtual point lights on the surfaces they light.",
-                layers: &["vpls by val"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "2. Clustering into VALs",
-                text: "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
-                       VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle.",
-                layers: &["vpls by val", "val rectangles", "val normals", "val centres"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "3. A paraboloid map per VAL",
-                text: "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps).",
-                layers: &["val centres", "val normals"],
-                shows_shadow_maps: true,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "4-5. Soft visibility and shading",
-                text:
-                    "Each pixel computes every VAL's soft visibility once (CSSM, PCSS or hard) and sums all VPLs, each \
-                       with its VAL's visibility; set 'Show one VAL' to see one VAL's contribution alone.",
-                layers: &[],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-        ]
+        self.explain_steps()
     }
 
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        use super::{Glyph, LegendEntry};
-        let palette = index_color(0);
-        let mut legend = match layer.name {
-            "vpls by val" => vec![LegendEntry::new(Glyph::Palette, palette, "a VPL, in its VAL's colour")],
-            "val rectangles" => {
-                vec![LegendEntry::new(Glyph::Rect, palette, "a VAL's area: its VPLs' bounding rectangle")]
-            }
-            "val normals" => vec![LegendEntry::new(Glyph::Line, palette, "a VAL's mean normal")],
-            "val centres" => vec![LegendEntry::new(Glyph::Dot, palette, "a VAL's centre: its VPLs' mean position")],
-            "vpl -> val" => vec![LegendEntry::new(Glyph::Line, palette, "a VPL joined to its VAL's centre")],
-            _ => super::light_layer_legend(layer).unwrap_or_default(),
-        };
-        legend.extend(layer.summary());
-        legend
+        self.legend_of(layer)
     }
 
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
@@ -746,88 +701,14 @@ impl Technique for VirtualAreaLights {
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {
-        let c = &self.clustering;
-        let vals = c.vals.iter().enumerate().filter(|(_, v)| v.count > 0);
-        let centres = vals.map(|(index, v)| super::HoverPoint { layer: "val centres", position: v.position, index });
-        // The VPLs the "vpls by val" layer draws (every n-th past 4,096, as it does).
-        let stride = self.vpls.vpls.len().div_ceil(4096).max(1);
-        let vpls = self.vpls.vpls.iter().enumerate().step_by(stride);
-        centres
-            .chain(vpls.map(|(index, v)| super::HoverPoint { layer: "vpls by val", position: v.position, index }))
-            .collect()
+        self.hover_list()
     }
 
     fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {
-        let c = &self.clustering;
-        match layer {
-            "val centres" => {
-                let Some(v) = c.vals.get(index) else { return Vec::new() };
-                vec![
-                    format!("VAL {index} ({} with VPLs)", c.non_empty),
-                    format!("{} VPLs, flux ({:.3}, {:.3}, {:.3})", v.count, v.flux.x, v.flux.y, v.flux.z),
-                    format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
-                    format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
-                ]
-            }
-            "vpls by val" => {
-                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
-                if let Some(k) = c.assignment.get(index) {
-                    lines.push(format!("in VAL {k}"));
-                }
-                lines
-            }
-            _ => Vec::new(),
-        }
+        self.hover_text(layer, index)
     }
 
-    fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let vpls = &self.vpls.vpls;
-        let c = &self.clustering;
-        let half = self.scene_size * 0.004;
-        let stride = vpls.len().div_ceil(4096).max(1);
-        let by_val: Vec<Overlay> = vpls
-            .iter()
-            .zip(&c.assignment)
-            .step_by(stride)
-            .map(|(v, &k)| {
-                let (t, b) = v.normal.any_orthonormal_pair();
-                Overlay::Rect { center: v.position, half_u: t * half, half_v: b * half, color: index_color(k as usize) }
-            })
-            .collect();
-        let live = || c.vals.iter().enumerate().filter(|(_, v)| v.count > 0);
-        let rects: Vec<Overlay> = live()
-            .map(|(k, v)| Overlay::Rect {
-                center: v.position + v.axis_u * v.offset_u + v.axis_v * v.offset_v,
-                half_u: v.axis_u * v.half_u.max(half),
-                half_v: v.axis_v * v.half_v.max(half),
-                color: index_color(k),
-            })
-            .collect();
-        let normals: Vec<Overlay> = live()
-            .map(|(k, v)| Overlay::Line {
-                from: v.position,
-                to: v.position + v.normal * (self.scene_size * 0.03),
-                color: index_color(k),
-            })
-            .collect();
-        let centres: Vec<Overlay> = live()
-            .map(|(k, v)| Overlay::Point { position: v.position, color: index_color(k), radius_px: 5.0 })
-            .collect();
-        let lines: Vec<Overlay> = vpls
-            .iter()
-            .zip(&c.assignment)
-            .step_by(stride)
-            .map(|(v, &k)| {
-                let [r, g, b, _] = index_color(k as usize);
-                Overlay::Line { from: v.position, to: c.vals[k as usize].position, color: [r, g, b, 0.35] }
-            })
-            .collect();
-        vec![
-            OverlayLayer { name: "vpls by val", visible_by_default: true, primitives: by_val },
-            OverlayLayer { name: "val rectangles", visible_by_default: true, primitives: rects },
-            OverlayLayer { name: "val normals", visible_by_default: true, primitives: normals },
-            OverlayLayer { name: "val centres", visible_by_default: true, primitives: centres },
-            OverlayLayer { name: "vpl -> val", visible_by_default: false, primitives: lines },
-        ]
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        self.overlay_layers(lights)
     }
 }
