@@ -4,6 +4,15 @@
 
 use glam::Vec3;
 
+/// How `tiles` square tiles of `resolution` texels are laid out in an atlas on `device`: as many columns as a
+/// square needs, at most what the device's largest texture allows, and the rows that takes.
+pub fn atlas_grid(device: &wgpu::Device, resolution: u32, tiles: usize) -> (u32, u32) {
+    let max_per_row = (device.limits().max_texture_dimension_2d / resolution.max(1)).max(1);
+    let tiles = tiles.max(1) as u32;
+    let tiles_per_row = ((tiles as f32).sqrt().ceil() as u32).clamp(1, max_per_row);
+    (tiles_per_row, tiles.div_ceil(tiles_per_row))
+}
+
 /// The atlas of the current batch, as the shading passes see it.
 pub struct CubeAtlas {
     pub texture: wgpu::Texture,

@@ -493,12 +493,8 @@ impl CubeShadowRenderer {
                 return false;
             }
         }
-        let max_dim = gpu.device.limits().max_texture_dimension_2d;
-        let max_tiles_per_row = (max_dim / resolution).max(1);
+        let (tiles_per_row, rows) = super::cube_atlas::atlas_grid(&gpu.device, resolution, tiles);
         let tiles = tiles.max(1) as u32;
-        // A near-square atlas: as many columns as needed for a square, at most what the device allows.
-        let tiles_per_row = ((tiles as f32).sqrt().ceil() as u32).clamp(1, max_tiles_per_row);
-        let rows = tiles.div_ceil(tiles_per_row);
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("cube shadow atlas"),
             size: wgpu::Extent3d {

@@ -314,9 +314,7 @@ impl IsmMaps {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let max_per_row = (device.limits().max_texture_dimension_2d / resolution).max(1);
-        let tiles_per_row = ((tiles as f32).sqrt().ceil() as u32).clamp(1, max_per_row);
-        let rows = (tiles as u32).div_ceil(tiles_per_row);
+        let (tiles_per_row, rows) = crate::renderer::cube_atlas::atlas_grid(device, resolution, tiles);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("ism atlas"),
             size: wgpu::Extent3d {
