@@ -18,7 +18,9 @@ impl Renderer {
         let asked = self.settings.vpl.count;
         let (vpls, vpl_samples) = if !technique.uses_vpls() {
             (std::sync::Arc::new(VplSet::default()), (0, 0))
-        } else if self.fixed_vpls {
+        } else if self.fixed_vpls || self.vpls_are_of(lights) {
+            // The last frame's own set (the camera moves, the lights do not): a technique that made its
+            // overlays from this very set has nothing to redo.
             (self.vpls.set.clone(), (asked, asked))
         } else {
             let preview = crate::vpl::VplSettings { count: asked.min(crate::vpl::PREVIEW_VPLS), ..self.settings.vpl };

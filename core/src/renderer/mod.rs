@@ -264,6 +264,15 @@ impl Renderer {
         true
     }
 
+    /// Whether the last frame's VPLs were generated for these lights with the current settings and scene.
+    fn vpls_are_of(&self, lights: &[PointLight]) -> bool {
+        self.vpls.key.as_ref().is_some_and(|(l, settings, scene)| {
+            l.as_slice() == lights
+                && *settings == self.settings.vpl
+                && *scene == std::sync::Arc::as_ptr(&self.scene.geometry) as usize
+        })
+    }
+
     /// The VPLs of the last frame (empty without an indirect technique).
     pub fn vpls(&self) -> &VplSet {
         &self.vpls.set

@@ -155,10 +155,12 @@ impl FuzzyClustering {
             "shading-point clusters (blended as the visibility mode weighs them)",
             "shading-point centroids",
         ];
+        // The VPL clusters were made from this very set (the last frame's, the lights unmoved): kept.
+        let same_set = Arc::ptr_eq(&self.vpls, ctx.vpls);
         self.vpls = ctx.vpls.clone();
         self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
         let vpls = &self.vpls.vpls;
-        if self.params.cluster_mode() != ClusterMode::ShadingPoints && !vpls.is_empty() {
+        if !same_set && self.params.cluster_mode() != ClusterMode::ShadingPoints && !vpls.is_empty() {
             let points: Vec<kmeans::Point> =
                 vpls.iter().map(|v| kmeans::Point { position: v.position, normal: v.normal, valid: true }).collect();
             let kp = self.kmeans_params(ctx.scene_bounds, self.params.k_vpl as usize, vpls.len() as u32, 1, 1, 1);

@@ -513,6 +513,10 @@ impl Technique for VirtualAreaLights {
     /// Step 2 again on the CPU twin (no warm start, so the next frame is not changed by it) for the preview's
     /// VPLs: the VALs follow a dragged light in the same UI frame (1,024 VPLs into 30 VALs: about a millisecond).
     fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
+        if Arc::ptr_eq(&self.vpls, ctx.vpls) {
+            // The VALs were made from this very set (the last frame's, the lights unmoved): nothing to redo.
+            return crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers: Vec::new() };
+        }
         self.vpls = ctx.vpls.clone();
         self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
         let base = kmeans::cluster(&self.vpls.vpls, &self.kmeans_params(), None);
