@@ -1456,7 +1456,7 @@ fn key(h: &mut Harness<'static, ShadowLabApp>, key: egui::Key, modifiers: egui::
 /// Nothing may panic, and undoing every edit brings the lights back to where they were when the history was
 /// last empty (the start, or the last scene loaded).
 fn random_use(seed: u64, events: usize) {
-    use shadowlab::gui::document::{History, ViewMode};
+    use shadowlab::gui::document::{ViewMode, HISTORY_LIMIT};
     use shadowlab_core::technique::{INDIRECT_REGISTRY, REGISTRY};
     let mut h = harness(Startup {
         data_dir: Some(data_dir(&format!("random-{seed}"))),
@@ -1535,7 +1535,7 @@ fn random_use(seed: u64, events: usize) {
         if s.history.depth() == 0 {
             baseline = s.lights.clone();
         }
-        overflowed |= s.history.depth() >= History::LIMIT;
+        overflowed |= s.history.depth() >= HISTORY_LIMIT;
     }
     h.run_steps(2);
     while h.state().session.history.can_undo() {
@@ -1554,4 +1554,70 @@ fn the_app_survives_random_use_and_undo_restores_the_lights() {
     let events = std::env::var("SHADOWLAB_RANDOM_EVENTS").ok().and_then(|v| v.parse().ok()).unwrap_or(150);
     let seed = std::env::var("SHADOWLAB_RANDOM_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(7);
     random_use(seed, events);
+}
+
+#[test]
+fn suns_are_added_aimed_undone_and_saved_in_the_scene_file() {
+    // Issue 25: the Lights panel adds a directional light, the views shade it, undo removes it, and a scene
+    // file keeps it.
+    let dir = data_dir("suns");
+    let mut h = start("suns", "cornell");
+    assert!(h.state().session.suns.is_empty(), "the built-in Cornell box has no sun");
+    let mean = |h: &Harness<'static, ShadowLabApp>| {
+        let gpu = h.state().views.gpu.as_ref().unwrap();
+        let hdr = gpu.main.renderer.read_hdr().unwrap();
+        hdr.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / hdr.len() as f64
+    };
+    let passes = |h: &Harness<'static, ShadowLabApp>| {
+        let gpu = h.state().views.gpu.as_ref().unwrap();
+        gpu.main
+            .last_report
+            .as_ref()
+            .expect("a complete frame")
+            .passes
+            .iter()
+            .map(|p| p.name.clone())
+            .collect::<Vec<_>>()
+    };
+    let unlit = mean(&h);
+    assert!(!passes(&h).iter().any(|p| p.contains("directional")));
+
+    h.state_mut().chrome.layout.focus(Pane::Lights);
+    h.run_steps(2);
+    let add = h.get_by_label("+ sun");
+    add.scroll_to_me();
+    add.click_accesskit();
+    h.run_steps(4);
+    let suns = h.state().session.suns.clone();
+    assert_eq!(suns.len(), 1, "the button added a sun");
+    let (_, elevation) = shadowlab::gui::panels::lights::sun_angles(suns[0].direction);
+    assert!((elevation - 50.0).abs() < 1e-3, "{elevation}");
+    // From behind the viewer: it shines the way the camera looks.
+    assert!(suns[0].direction.dot(h.state().session.camera.camera().forward()) > 0.3, "{:?}", suns[0].direction);
+    assert!(passes(&h).iter().any(|p| p.contains("directional")), "the sun is shaded: {:?}", passes(&h));
+    // The sun through the box's open front lights its floor.
+    let lit = mean(&h);
+    assert!(lit > unlit * 1.001, "the sun adds light: {unlit} -> {lit}");
+    assert!(h.query_all_by_label_contains("azimuth").count() >= 1, "the sun's angles are edited in the panel");
+
+    // Saved and loaded in a fresh app with the scene.
+    let file = dir.join("sunny.ron");
+    h.state_mut().save_scene_file(&file).unwrap();
+    let mut fresh = harness(Startup {
+        path: Some(file.clone()),
+        data_dir: Some(dir.clone()),
+        synchronous: true,
+        ..Default::default()
+    });
+    fresh.run_steps(3);
+    assert_eq!(fresh.state().session.suns, suns, "the scene file keeps the sun");
+
+    // Undo removes it, redo brings it back.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(3);
+    assert!(h.state().session.suns.is_empty(), "Ctrl+Z removes the sun");
+    assert!(!passes(&h).iter().any(|p| p.contains("directional")), "{:?}", passes(&h));
+    h.key_press_modifiers(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
+    h.run_steps(3);
+    assert_eq!(h.state().session.suns, suns, "Ctrl+Shift+Z adds it again");
 }

@@ -13,8 +13,13 @@
 //!
 //! Whatever the clock, a report also carries the sum of the wall-clock steps and, where the adapter has them,
 //! the sum of the timestamps, so two reports are always comparable in one clock ([`common_clock`]).
+//!
+//! A step is waited for in one of two ways ([`StepWait`]): the CLI and the tests block on each step; the app
+//! submits and goes on, and a thread of the timer's waits for the step and notes when it completed
+//! ([`StepWait::Deferred`]), so the UI thread never waits for a progressive step.
 
-use std::time::Instant;
+use std::sync::{mpsc, Arc, Condvar, Mutex, OnceLock};
+use std::time::{Duration, Instant};
 
 use serde::Serialize;
 use wgpu_profiler::{GpuProfiler, GpuProfilerSettings, GpuTimerQueryResult};
@@ -168,6 +173,88 @@ pub struct FrameTimes {
     pub timing: FrameTiming,
 }
 
+/// How [`PassTimer::submit`] waits for a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum StepWait {
+    /// Drain the queue, submit, wait for the step: its wall time is its own (the CLI, sweeps and tests).
+    #[default]
+    Blocking,
+    /// Submit and return. A thread of the timer's waits for the step and notes when it completed; its wall
+    /// time runs from when it could start (submitted, and everything submitted before it done) to its
+    /// completion, so other work on the queue (the app's painting) stays out of it. Only the thread that
+    /// waits blocks: the app's UI thread polls [`PassTimer::steps_in_flight`]. Not on the GL backend, whose
+    /// waits hold the GL context's lock (every other call of the UI thread would wait behind them).
+    Deferred,
+}
+
+/// The wall time of a deferred step, once its waiter saw it complete (an error when the wait failed).
+type StepSlot = Arc<OnceLock<Result<f64, String>>>;
+
+struct Waiting {
+    /// The submission just before the step's: done when everything submitted before the step is.
+    before: wgpu::SubmissionIndex,
+    step: wgpu::SubmissionIndex,
+    submitted: Instant,
+    slot: StepSlot,
+}
+
+/// The thread that waits for deferred steps, and how many it has not seen complete.
+struct StepWaiter {
+    jobs: mpsc::Sender<Waiting>,
+    pending: Arc<(Mutex<usize>, Condvar)>,
+}
+
+impl StepWaiter {
+    fn new(device: wgpu::Device) -> StepWaiter {
+        let (jobs, rx) = mpsc::channel::<Waiting>();
+        let pending = Arc::new((Mutex::new(0usize), Condvar::new()));
+        let counter = pending.clone();
+        std::thread::Builder::new()
+            .name("shadowlab step waiter".into())
+            .spawn(move || {
+                // Ends when the timer (the sender) is dropped.
+                for w in rx {
+                    let wait = |index: wgpu::SubmissionIndex| {
+                        device
+                            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+                            .map(|_| Instant::now())
+                            .map_err(|e| format!("waiting for a step failed: {e}"))
+                    };
+                    let wall = wait(w.before).and_then(|ready| {
+                        let done = wait(w.step)?;
+                        Ok(done.duration_since(ready.max(w.submitted)).as_secs_f64() * 1000.0)
+                    });
+                    let _ = w.slot.set(wall);
+                    let (count, changed) = &*counter;
+                    if let Ok(mut n) = count.lock() {
+                        *n = n.saturating_sub(1);
+                    }
+                    changed.notify_all();
+                }
+            })
+            .expect("a thread can be spawned");
+        StepWaiter { jobs, pending }
+    }
+
+    fn in_flight(&self) -> usize {
+        self.pending.0.lock().map_or(0, |n| *n)
+    }
+
+    /// Wait until the thread has seen every step it was given complete (the GPU is idle when this is called,
+    /// so this is the thread's own bookkeeping: it fails after `timeout` instead of hanging).
+    fn drain(&self, timeout: Duration) -> Result<(), GpuError> {
+        let (count, changed) = &*self.pending;
+        let guard = count.lock().map_err(|_| GpuError::Validation("the step waiter's lock is poisoned".into()))?;
+        let (n, _) = changed
+            .wait_timeout_while(guard, timeout, |n| *n > 0)
+            .map_err(|_| GpuError::Validation("the step waiter's lock is poisoned".into()))?;
+        if *n > 0 {
+            return Err(GpuError::Validation(format!("{} steps were not seen to complete in {timeout:?}", *n)));
+        }
+        Ok(())
+    }
+}
+
 /// The step index of a query recorded in a CPU stage.
 const IN_STAGE: usize = usize::MAX;
 
@@ -192,6 +279,11 @@ pub struct PassTimer {
     /// While set, the labels of recorded passes are the indirect technique's.
     indirect: std::cell::Cell<bool>,
     indirect_labels: std::cell::RefCell<std::collections::BTreeSet<String>>,
+    wait: StepWait,
+    /// Started by the first deferred step.
+    waiter: Option<StepWaiter>,
+    /// The frame's deferred steps (index into `steps`) and their wall times to come.
+    deferred: Vec<(usize, StepSlot)>,
 }
 
 impl PassTimer {
@@ -214,7 +306,40 @@ impl PassTimer {
             in_stage: std::cell::Cell::new(false),
             indirect: std::cell::Cell::new(false),
             indirect_labels: Default::default(),
+            wait: StepWait::Blocking,
+            waiter: None,
+            deferred: Vec::new(),
         })
+    }
+
+    /// Choose how steps are waited for from the next one on; returns the way chosen (always
+    /// [`StepWait::Blocking`] on the GL backend, see [`StepWait::Deferred`]).
+    pub fn set_step_wait(&mut self, gpu: &GpuContext, wait: StepWait) -> StepWait {
+        self.wait = if gpu.adapter_info.backend == wgpu::Backend::Gl { StepWait::Blocking } else { wait };
+        self.wait
+    }
+
+    pub fn step_wait(&self) -> StepWait {
+        self.wait
+    }
+
+    /// Deferred steps submitted and not yet seen to complete (0 when steps block).
+    pub fn steps_in_flight(&self) -> usize {
+        self.waiter.as_ref().map_or(0, StepWaiter::in_flight)
+    }
+
+    /// How many steps the current frame has submitted.
+    pub fn frame_steps(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// The wall time of the current frame's step `i` once it has completed (a deferred step in flight has none
+    /// yet): what a caller sizing its next steps can go by.
+    pub fn frame_step_ms(&self, i: usize) -> Option<f64> {
+        match self.deferred.iter().find(|(j, _)| *j == i) {
+            Some((_, slot)) => slot.get().and_then(|r| r.as_ref().ok().copied()),
+            None => self.steps.get(i).map(|s| s.wall_ms),
+        }
     }
 
     /// Choose the clock for the rest of the run (forgets an earlier `auto` decision).
@@ -310,6 +435,28 @@ impl PassTimer {
             self.indirect_labels.borrow_mut().insert(step_label.to_string());
         }
         let command_buffer = encoder.finish();
+        if self.wait == StepWait::Deferred {
+            let waiter = self.waiter.get_or_insert_with(|| StepWaiter::new(gpu.device.clone()));
+            // An empty submission marks the end of what was queued before the step (the app's painting).
+            let before = gpu.queue.submit([]);
+            let submitted = Instant::now();
+            let step = gpu.queue.submit([command_buffer]);
+            let slot: StepSlot = Arc::new(OnceLock::new());
+            self.steps.push(Step { label: step_label.to_string(), wall_ms: f64::NAN });
+            self.deferred.push((self.steps.len() - 1, slot.clone()));
+            if let Ok(mut n) = waiter.pending.0.lock() {
+                *n += 1;
+            }
+            if waiter.jobs.send(Waiting { before, step, submitted, slot: slot.clone() }).is_err() {
+                // The thread is gone (it cannot be, short of a panic in wgpu): wait here instead.
+                if let Ok(mut n) = waiter.pending.0.lock() {
+                    *n = n.saturating_sub(1);
+                }
+                gpu.wait_idle()?;
+                let _ = slot.set(Ok(submitted.elapsed().as_secs_f64() * 1000.0));
+            }
+            return Ok(());
+        }
         // Drain whatever else is queued first (the app's own UI painting shares the queue), so the step's wall
         // time is its own.
         gpu.wait_idle()?;
@@ -328,6 +475,12 @@ impl PassTimer {
         gpu.queue.submit([encoder.finish()]);
         self.profiler.end_frame().map_err(|e| GpuError::Validation(format!("timer: {e}")))?;
         gpu.wait_idle()?;
+        if let Err(e) = self.collect_deferred() {
+            self.steps.clear();
+            self.query_steps.borrow_mut().clear();
+            let _ = self.profiler.process_finished_frame(gpu.queue.get_timestamp_period());
+            return Err(e);
+        }
         let results = self.profiler.process_finished_frame(gpu.queue.get_timestamp_period());
         let steps = std::mem::take(&mut self.steps);
         let query_steps = std::mem::take(&mut *self.query_steps.borrow_mut());
@@ -385,6 +538,29 @@ impl PassTimer {
             TimingSource::WallClockSteps => step_times.clone(),
         };
         Ok(FrameTimes { passes, steps: step_times, stage_passes, timing })
+    }
+}
+
+impl PassTimer {
+    /// Fill in the wall times of the frame's deferred steps (call once the GPU is idle).
+    fn collect_deferred(&mut self) -> Result<(), GpuError> {
+        if self.deferred.is_empty() {
+            return Ok(());
+        }
+        if let Some(waiter) = &self.waiter {
+            waiter.drain(Duration::from_secs(10))?;
+        }
+        for (i, slot) in std::mem::take(&mut self.deferred) {
+            let wall = match slot.get() {
+                Some(Ok(ms)) => *ms,
+                Some(Err(e)) => return Err(GpuError::Validation(e.clone())),
+                None => return Err(GpuError::Validation("a deferred step's completion was not seen".into())),
+            };
+            if let Some(step) = self.steps.get_mut(i) {
+                step.wall_ms = wall;
+            }
+        }
+        Ok(())
     }
 }
 

@@ -102,3 +102,40 @@ fn every_direct_technique_renders_the_sun() {
         }
     }
 }
+
+#[test]
+fn set_directional_lights_replaces_the_scenes_suns_and_refuses_bad_ones() {
+    // The app's sun editing: a scene without suns lit by one set on the renderer, exactly as a scene that has
+    // it; a bad list changes nothing; an empty one removes the scene's.
+    let settings = linear_settings(W, H);
+    let with_sun = Shot::direct(&sunlit(), &[], settings.clone(), "reference").render().0;
+    let scene = plane_and_occluder();
+    let mut r = renderer(&scene, settings.clone());
+    assert!(r.directional_lights().is_empty());
+    let ambient = frame_of(&mut r, "reference", &[], &scene.camera, &[]).0;
+    r.set_directional_lights(&[sun()]).unwrap();
+    let (set, report) = frame_of(&mut r, "reference", &[], &scene.camera, &[]);
+    let worst = set.iter().zip(&with_sun).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max));
+    assert!(worst.fold(0.0, f32::max) < 1e-5, "a sun set on the renderer renders as the scene's own");
+    assert!(report.passes.iter().any(|p| p.name.contains("directional")), "{:?}", report.passes);
+
+    let bad = [
+        DirectionalLight { direction: Vec3::ZERO, ..sun() },
+        DirectionalLight { illuminance: f32::NAN, ..sun() },
+        DirectionalLight { color: Vec3::new(-1.0, 1.0, 1.0), ..sun() },
+    ];
+    for b in bad {
+        let e = r.set_directional_lights(&[b]).unwrap_err().to_string();
+        assert!(e.contains("directional light 0"), "{e}");
+    }
+    let e = r.set_directional_lights(&[sun(); MAX_DIRECTIONAL_LIGHTS + 1]).unwrap_err().to_string();
+    assert!(e.contains("at most 4"), "{e}");
+    assert_eq!(r.directional_lights(), &[sun()], "a refused list leaves the lights as they were");
+
+    let mut r = renderer(&sunlit(), settings);
+    assert_eq!(r.directional_lights().len(), 1, "the scene's suns to begin with");
+    r.set_directional_lights(&[]).unwrap();
+    let none = frame_of(&mut r, "reference", &[], &scene.camera, &[]).0;
+    let worst = none.iter().zip(&ambient).map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f32::max));
+    assert!(worst.fold(0.0, f32::max) < 1e-6, "no sun: the ambient image");
+}

@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{Camera, PointLight, SceneSource};
+use shadowlab_core::scene::{Camera, DirectionalLight, PointLight, SceneSource};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::VplSettings;
 
@@ -176,9 +176,13 @@ pub struct SceneFile {
     /// Indirect light; absent in files of version 1 (= none).
     #[serde(default)]
     pub indirect: IndirectSettings,
+    /// The directional lights (suns) as the user left them; absent in older files (= the model's own).
+    #[serde(default)]
+    pub directional: Option<Vec<DirectionalLight>>,
 }
 
-const KNOWN_FIELDS: &[&str] = &["version", "scene", "lights", "camera", "technique", "params", "view", "indirect"];
+const KNOWN_FIELDS: &[&str] =
+    &["version", "scene", "lights", "camera", "technique", "params", "view", "indirect", "directional"];
 
 impl SceneFile {
     pub fn to_ron(&self) -> Result<String> {
@@ -212,6 +216,15 @@ impl SceneFile {
         if !file.camera.is_valid() {
             bail!("the camera has non-finite or degenerate values");
         }
+        if let Some(suns) = &file.directional {
+            if let Some(i) = suns.iter().position(|l| !l.is_valid()) {
+                bail!("directional light {i} has a zero or non-finite direction, or a negative or non-finite value");
+            }
+            let max = shadowlab_core::scene::MAX_DIRECTIONAL_LIGHTS;
+            if suns.len() > max {
+                bail!("the file has {} directional lights; the limit is {max}", suns.len());
+            }
+        }
         file.indirect.validate()?;
         file.view.validate()?;
         Ok((file, warnings))
@@ -229,26 +242,32 @@ impl SceneFile {
     }
 }
 
-/// Undo/redo of light edits, as snapshots of the light list.
-#[derive(Default, Debug)]
-pub struct History {
-    undo: Vec<Vec<PointLight>>,
-    redo: Vec<Vec<PointLight>>,
+/// Undo/redo of light edits, as snapshots of what the edits change (the session's point lights and suns).
+#[derive(Debug)]
+pub struct History<T> {
+    undo: Vec<T>,
+    redo: Vec<T>,
+}
+
+impl<T> Default for History<T> {
+    fn default() -> Self {
+        History { undo: Vec::new(), redo: Vec::new() }
+    }
 }
 
 /// Snapshots kept; older ones are dropped.
-const HISTORY_LIMIT: usize = 200;
+pub const HISTORY_LIMIT: usize = 200;
 
-impl History {
-    /// Call before an edit with the lights as they are.
-    pub fn record(&mut self, before: &[PointLight]) {
-        self.undo.push(before.to_vec());
+impl<T> History<T> {
+    /// Call before an edit with the state as it is.
+    pub fn record(&mut self, before: T) {
+        self.undo.push(before);
         if self.undo.len() > HISTORY_LIMIT {
             self.undo.remove(0);
         }
         self.redo.clear();
     }
-    pub fn undo(&mut self, current: &mut Vec<PointLight>) -> bool {
+    pub fn undo(&mut self, current: &mut T) -> bool {
         match self.undo.pop() {
             Some(prev) => {
                 self.redo.push(std::mem::replace(current, prev));
@@ -257,7 +276,7 @@ impl History {
             None => false,
         }
     }
-    pub fn redo(&mut self, current: &mut Vec<PointLight>) -> bool {
+    pub fn redo(&mut self, current: &mut T) -> bool {
         match self.redo.pop() {
             Some(next) => {
                 self.undo.push(std::mem::replace(current, next));
@@ -270,8 +289,6 @@ impl History {
     pub fn depth(&self) -> usize {
         self.undo.len()
     }
-    /// The most edits kept: older ones are dropped.
-    pub const LIMIT: usize = HISTORY_LIMIT;
     pub fn can_undo(&self) -> bool {
         !self.undo.is_empty()
     }
@@ -302,7 +319,33 @@ mod tests {
             )]),
             view: ViewSettings::default(),
             indirect: IndirectSettings::default(),
+            directional: Some(vec![sun()]),
         }
+    }
+
+    fn sun() -> DirectionalLight {
+        DirectionalLight { direction: Vec3::new(0.3, -1.0, 0.2).normalize(), color: Vec3::ONE, illuminance: 3.0 }
+    }
+
+    #[test]
+    fn suns_round_trip_older_files_keep_the_models_and_bad_ones_are_refused() {
+        let (back, _) = SceneFile::from_ron(&file().to_ron().unwrap()).unwrap();
+        assert_eq!(back.directional, Some(vec![sun()]));
+        let older = SceneFile { directional: None, ..file() }.to_ron().unwrap().replace("directional: None,", "");
+        assert!(!older.contains("directional"), "{older}");
+        assert_eq!(SceneFile::from_ron(&older).unwrap().0.directional, None, "no field: the model's own suns");
+        let bad = |d: DirectionalLight| SceneFile { directional: Some(vec![sun(), d]), ..file() }.to_ron().unwrap();
+        for d in [
+            DirectionalLight { direction: Vec3::ZERO, ..sun() },
+            DirectionalLight { illuminance: -1.0, ..sun() },
+            DirectionalLight { color: Vec3::new(f32::INFINITY, 1.0, 1.0), ..sun() },
+        ] {
+            let e = SceneFile::from_ron(&bad(d)).map(|_| ()).unwrap_err().to_string();
+            assert!(e.contains("directional light 1"), "{e}");
+        }
+        let many = SceneFile { directional: Some(vec![sun(); 5]), ..file() }.to_ron().unwrap();
+        let e = SceneFile::from_ron(&many).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("5 directional lights"), "{e}");
     }
 
     #[test]
@@ -463,7 +506,7 @@ mod tests {
     fn undo_redo_restore_lights() {
         let mut h = History::default();
         let mut lights = vec![PointLight::new(Vec3::ZERO, Vec3::ONE, 1.0, 1.0)];
-        h.record(&lights);
+        h.record(lights.clone());
         lights[0].position = Vec3::X;
         assert!(h.undo(&mut lights));
         assert_eq!(lights[0].position, Vec3::ZERO);

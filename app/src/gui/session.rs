@@ -9,7 +9,7 @@ use eframe::egui::Vec2;
 use glam::Vec3;
 use shadowlab_core::renderer::Component;
 use shadowlab_core::scene::layout::{self as light_layout, LightLayout};
-use shadowlab_core::scene::{PointLight, Scene};
+use shadowlab_core::scene::{DirectionalLight, PointLight, Scene};
 use shadowlab_core::technique::{CameraPose, ParamValue};
 use shadowlab_core::{AutoExposure, RenderSettings, ToneMap};
 
@@ -58,6 +58,8 @@ pub const PREVIEW_PIXELS: f32 = 96_000.0;
 pub struct Session {
     pub scene: Scene,
     pub lights: Vec<PointLight>,
+    /// The directional lights (suns): the model's own, as the user edited them, or a scene file's.
+    pub suns: Vec<DirectionalLight>,
     pub camera: CameraController,
     pub technique: String,
     /// Parameters the user set, per technique.
@@ -65,7 +67,8 @@ pub struct Session {
     /// The indirect technique, its parameters, the VPL settings and the component shown.
     pub indirect: IndirectSettings,
     pub view: ViewSettings,
-    pub history: History,
+    /// Undo/redo of the point lights and the suns together.
+    pub history: History<(Vec<PointLight>, Vec<DirectionalLight>)>,
     /// The scene file the session was opened from or last saved to.
     pub scene_file: Option<PathBuf>,
     pub selected: Option<usize>,
@@ -84,6 +87,7 @@ impl Session {
     pub fn new(scene: Scene) -> Session {
         Session {
             lights: scene.lights.clone(),
+            suns: scene.directional.clone(),
             camera: CameraController::from_camera(&scene.camera, &scene.bounds),
             scene,
             technique: shadowlab_core::technique::REFERENCE.into(),
@@ -105,6 +109,7 @@ impl Session {
     pub fn set_scene(&mut self, scene: Scene) -> Vec<String> {
         let mut notes: Vec<String> = scene.warnings.iter().map(|w| format!("warning: {w}")).collect();
         self.lights = scene.lights.clone();
+        self.suns = scene.directional.clone();
         self.layout_spec = "scene".into();
         if self.lights.is_empty() {
             // Most OBJ files and many glTF models come without lights: start lit, and say so.
@@ -126,6 +131,9 @@ impl Session {
     /// already loaded); everything in it was checked.
     pub fn apply_file(&mut self, file: SceneFile) {
         self.lights = file.lights;
+        if let Some(suns) = file.directional {
+            self.suns = suns;
+        }
         self.layout_spec = String::new();
         self.camera = CameraController::from_camera(&file.camera, &self.scene.bounds);
         self.technique = file.technique;
@@ -145,24 +153,31 @@ impl Session {
             params: self.params.clone(),
             view: self.view.clone(),
             indirect: self.indirect.clone(),
+            directional: Some(self.suns.clone()),
         }
     }
 
     // ----- lights -----
 
-    /// Record the current lights for undo; call before every light edit.
+    /// Record the current lights and suns for undo; call before every light edit.
     pub fn begin_edit(&mut self) {
-        self.history.record(&self.lights);
+        self.history.record((self.lights.clone(), self.suns.clone()));
     }
 
     pub fn undo(&mut self) {
-        if self.history.undo(&mut self.lights) {
+        let mut now = (std::mem::take(&mut self.lights), std::mem::take(&mut self.suns));
+        let undone = self.history.undo(&mut now);
+        (self.lights, self.suns) = now;
+        if undone {
             self.fix_selection();
         }
     }
 
     pub fn redo(&mut self) {
-        if self.history.redo(&mut self.lights) {
+        let mut now = (std::mem::take(&mut self.lights), std::mem::take(&mut self.suns));
+        let redone = self.history.redo(&mut now);
+        (self.lights, self.suns) = now;
+        if redone {
             self.fix_selection();
         }
     }

@@ -40,6 +40,8 @@ pub struct SweepJob {
     pub scene: std::sync::Arc<shadowlab_core::accel::gpu_scene::GpuScene>,
     pub layouts: std::sync::Arc<shadowlab_core::renderer::layouts::SharedLayouts>,
     pub lights: Vec<PointLight>,
+    /// The session's directional lights.
+    pub suns: Vec<shadowlab_core::scene::DirectionalLight>,
     pub camera: Camera,
     pub settings: RenderSettings,
     pub technique: String,
@@ -67,6 +69,7 @@ fn run(job: SweepJob, cancel: &AtomicBool, send: &dyn Fn(SweepRow)) -> Result<()
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
     let mut renderer = Renderer::for_scene(&job.gpu, job.scene.clone(), job.layouts.clone(), settings)?;
+    renderer.set_directional_lights(&job.suns)?;
     let set_indirect = |renderer: &mut Renderer, indirect: &Option<(String, Vec<(String, ParamValue)>)>| {
         let Some((key, params)) = indirect else { return renderer.set_indirect(None).map_err(anyhow::Error::from) };
         let mut t =

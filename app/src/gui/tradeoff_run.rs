@@ -68,6 +68,8 @@ pub struct TradeoffJob {
     pub scene: Arc<shadowlab_core::accel::gpu_scene::GpuScene>,
     pub layouts: Arc<shadowlab_core::renderer::layouts::SharedLayouts>,
     pub lights: Vec<PointLight>,
+    /// The session's directional lights.
+    pub suns: Vec<shadowlab_core::scene::DirectionalLight>,
     pub camera: Camera,
     pub settings: RenderSettings,
     pub tries: Vec<TrySpec>,
@@ -109,6 +111,7 @@ fn run(job: TradeoffJob, cancel: &AtomicBool, send: &dyn Fn(TradeoffMessage)) ->
     let mut settings = job.settings.clone();
     settings.max_lights_per_step = 0;
     let mut renderer = Renderer::for_scene(&job.gpu, job.scene.clone(), job.layouts.clone(), settings)?;
+    renderer.set_directional_lights(&job.suns)?;
     let mut target =
         renderer.create_technique(&job.against).ok_or_else(|| anyhow!("unknown technique '{}'", job.against))?;
     crate::measure::apply_params(target.as_mut(), None, &job.against_params)?;

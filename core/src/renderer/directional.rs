@@ -20,8 +20,11 @@
 //!      (`directional_traced.wgsl`): exact, the truth the map is measured against;
 //!    - `None` (the unshadowed preview): no visibility.
 //!
+//! The lights are the scene's (a glTF file's suns) until [`crate::renderer::Renderer::set_directional_lights`] replaces them
+//! (the app's Lights panel adds, turns and removes suns; scene files keep them).
+//!
 //! Not done: directional lights make no VPLs (the indirect techniques and the path tracer see none of their
-//! light), and the app cannot add, move or edit them (they come from the model file).
+//! light).
 
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
@@ -120,10 +123,12 @@ pub struct DirectionalLights {
     /// The mode and light count of the frame's uniform (0 lights: nothing to shade).
     mode: DirectionalVisibility,
     count: usize,
+    /// The lights shaded: the scene's, unless [`crate::renderer::Renderer::set_directional_lights`] replaced them.
+    lights: Vec<DirectionalLight>,
 }
 
 impl DirectionalLights {
-    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> DirectionalLights {
+    pub fn new(gpu: &GpuContext, layouts: &SharedLayouts, lights: &[DirectionalLight]) -> DirectionalLights {
         let mapped = ShadePass::new::<[u32; 4]>(
             gpu,
             layouts,
@@ -148,6 +153,7 @@ impl DirectionalLights {
             traced_group: None,
             mode: DirectionalVisibility::None,
             count: 0,
+            lights: lights.to_vec(),
         }
     }
 
@@ -164,8 +170,8 @@ impl DirectionalLights {
         timer: &PassTimer,
         encoder: &mut wgpu::CommandEncoder,
     ) -> bool {
-        let fitted: Vec<(DirectionalLight, Mat4)> = scene
-            .directional
+        let fitted: Vec<(DirectionalLight, Mat4)> = self
+            .lights
             .iter()
             .filter_map(|d| fit(d.direction, camera, aspect, &scene.bounds).map(|m| (*d, m)))
             .collect();
@@ -238,6 +244,15 @@ impl DirectionalLights {
             );
         }
         true
+    }
+
+    pub fn lights(&self) -> &[DirectionalLight] {
+        &self.lights
+    }
+
+    /// Replace the lights (checked by the caller).
+    pub(crate) fn set_lights(&mut self, lights: &[DirectionalLight]) {
+        self.lights = lights.to_vec();
     }
 
     /// Step 3: the frame's directional light into the HDR target (after [`Self::render_maps`] said there is

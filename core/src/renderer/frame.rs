@@ -157,7 +157,7 @@ impl Renderer {
             encoder.clear_buffer(&self.indirect_buffer, 0, None);
         }
         self.timer.submit(&self.gpu, encoder, "gbuffer + ambient")?;
-        if !self.scene.directional.is_empty() {
+        if !self.directional.lights().is_empty() {
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
             let mode = technique.directional_visibility();
             let (scene, timer) = (&self.scene, &self.timer);
@@ -318,6 +318,7 @@ impl Renderer {
             view_fingerprint: report::fingerprint(&(
                 &job.camera,
                 report::lights_fingerprint(&job.lights),
+                self.directional.lights(),
                 self.settings.work_fingerprint(),
                 self.scene.triangle_count,
                 self.scene.bounds,

@@ -124,9 +124,13 @@ impl Renderer {
 
     /// Another renderer (a second view, a sweep worker, a comparison) of this renderer's scene on the same
     /// device: the scene's buffers, textures and BVH are shared, not copied; targets and pipelines are its own.
+    /// Its directional lights are this renderer's (the scene's, or those [`Renderer::set_directional_lights`]
+    /// gave).
     pub fn new_view(&self, settings: RenderSettings) -> Result<Renderer, GpuError> {
         settings.validate()?;
-        Self::with_scene(&self.gpu, self.scene.clone(), self.layouts.clone(), settings)
+        let mut view = Self::with_scene(&self.gpu, self.scene.clone(), self.layouts.clone(), settings)?;
+        view.directional.set_lights(self.directional.lights());
+        Ok(view)
     }
 
     /// The scene on the GPU, to share with [`Renderer::set_shared_scene`] of another view.
@@ -153,7 +157,35 @@ impl Renderer {
 
     /// Show a scene another renderer uploaded (made by [`Renderer::new_view`] of it or sharing its layouts).
     pub fn set_shared_scene(&mut self, scene: std::sync::Arc<GpuScene>) {
+        self.directional.set_lights(&scene.directional);
         self.scene = scene;
+    }
+
+    /// The directional lights shaded from the next frame on: the scene's until
+    /// [`Renderer::set_directional_lights`].
+    pub fn directional_lights(&self) -> &[crate::scene::DirectionalLight] {
+        self.directional.lights()
+    }
+
+    /// Replace the scene's directional lights (the app's sun editing), at most
+    /// [`crate::scene::MAX_DIRECTIONAL_LIGHTS`], each valid ([`crate::scene::DirectionalLight::is_valid`]);
+    /// a bad list is refused and the lights stay as they were.
+    pub fn set_directional_lights(&mut self, lights: &[crate::scene::DirectionalLight]) -> Result<(), GpuError> {
+        let max = crate::scene::MAX_DIRECTIONAL_LIGHTS;
+        if lights.len() > max {
+            return Err(GpuError::InvalidSettings(format!(
+                "{} directional lights; at most {max} are shaded",
+                lights.len()
+            )));
+        }
+        if let Some(i) = lights.iter().position(|l| !l.is_valid()) {
+            return Err(GpuError::InvalidSettings(format!(
+                "directional light {i} has a zero or non-finite direction, or a negative or non-finite colour or \
+                 illuminance"
+            )));
+        }
+        self.directional.set_lights(lights);
+        Ok(())
     }
 
     pub fn gpu(&self) -> &GpuContext {
@@ -164,6 +196,33 @@ impl Renderer {
     pub fn set_timing_mode(&mut self, mode: crate::timing::TimingMode) {
         self.timer.set_mode(mode);
     }
+
+    /// Block on each step (the default) or submit and go on ([`crate::timing::StepWait`]); returns the way
+    /// chosen (steps always block on the GL backend). A caller that defers polls [`Renderer::steps_in_flight`]
+    /// and finishes a frame once it is 0 ([`Renderer::finish_frame`] waits otherwise).
+    pub fn set_step_wait(&mut self, wait: crate::timing::StepWait) -> crate::timing::StepWait {
+        self.timer.set_step_wait(&self.gpu, wait)
+    }
+
+    pub fn step_wait(&self) -> crate::timing::StepWait {
+        self.timer.step_wait()
+    }
+
+    /// Deferred steps submitted and not yet complete.
+    pub fn steps_in_flight(&self) -> usize {
+        self.timer.steps_in_flight()
+    }
+
+    /// How many steps (submissions) the current frame has made, its `begin_frame` included.
+    pub fn frame_steps(&self) -> usize {
+        self.timer.frame_steps()
+    }
+
+    /// The wall time of the current frame's step `i` once it completed, for sizing the next ones.
+    pub fn frame_step_ms(&self, i: usize) -> Option<f64> {
+        self.timer.frame_step_ms(i)
+    }
+
     pub fn settings(&self) -> &RenderSettings {
         &self.settings
     }

@@ -115,7 +115,7 @@ impl Renderer {
             false,
         );
         let work_counters = work_counters::WorkCounters::new(device);
-        let directional = directional::DirectionalLights::new(gpu, &layouts);
+        let directional = directional::DirectionalLights::new(gpu, &layouts, &gpu_scene.directional);
         let screen_bind_group = Self::screen_bind_group(device, &layouts, &frame_uniform, &targets, &work_counters);
         let indirect_buffer = create_indirect_buffer(gpu, settings.width, settings.height, false)?;
         let exposure = exposure::ExposureMeter::new(gpu, &layouts, &targets, &indirect_buffer);

@@ -96,6 +96,94 @@ pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) 
             session.lights[i] = l;
         }
     }
+    ui.separator();
+    suns_ui(session, ui);
+}
+
+/// The sun's direction of travel from the sun's azimuth (degrees from -Z towards +X) and elevation (degrees
+/// above the horizon).
+pub fn sun_direction(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
+    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+    -Vec3::new(el.cos() * az.sin(), el.sin(), -el.cos() * az.cos())
+}
+
+/// The azimuth and elevation (degrees) of the sun a light travelling along `direction` comes from.
+pub fn sun_angles(direction: Vec3) -> (f32, f32) {
+    let s = -direction.normalize_or(Vec3::NEG_Y);
+    (s.x.atan2(-s.z).to_degrees(), s.y.clamp(-1.0, 1.0).asin().to_degrees())
+}
+
+/// The directional lights: add, aim, colour and remove (undoable, saved in scene files).
+fn suns_ui(session: &mut Session, ui: &mut egui::Ui) {
+    let max = shadowlab_core::scene::MAX_DIRECTIONAL_LIGHTS;
+    ui.horizontal(|ui| {
+        ui.label(format!("Suns ({})", session.suns.len())).on_hover_text(
+            "Directional lights: shaded for every direct technique with an orthographic shadow map fitted to the \
+             view (the ray tracer and ReSTIR: shadow rays; the preview: none). They make no VPLs, so indirect \
+             light and the path tracer do not see them.",
+        );
+        let add = ui.add_enabled(session.suns.len() < max, egui::Button::new("+ sun"));
+        if add.on_disabled_hover_text(format!("at most {max} suns")).clicked() {
+            // From behind the viewer, 30 degrees to the side and 50 above the horizon: it lights what is seen.
+            let (behind, _) = sun_angles(session.camera.camera().forward());
+            let azimuth = (behind + 30.0 + 180.0).rem_euclid(360.0) - 180.0;
+            session.begin_edit();
+            session.suns.push(shadowlab_core::scene::DirectionalLight {
+                direction: sun_direction(azimuth, 50.0),
+                color: Vec3::ONE,
+                illuminance: 1.0,
+            });
+        }
+    });
+    let mut remove = None;
+    let mut committed = false;
+    let mut edited = session.suns.clone();
+    for (i, d) in edited.iter_mut().enumerate() {
+        ui.push_id(("sun", i), |ui| {
+            let (mut azimuth, mut elevation) = sun_angles(d.direction);
+            let mut rgb = d.color.to_array();
+            let mut track = |r: egui::Response| committed |= r.drag_started() || r.gained_focus();
+            ui.horizontal(|ui| {
+                ui.label(format!("{i}"));
+                let r = ui.add(
+                    egui::DragValue::new(&mut azimuth).speed(0.5).range(-180.0..=180.0).prefix("azimuth ").suffix("°"),
+                );
+                track(r);
+                let r = ui.add(
+                    egui::DragValue::new(&mut elevation)
+                        .speed(0.5)
+                        .range(-89.0..=89.0)
+                        .prefix("elevation ")
+                        .suffix("°"),
+                );
+                track(r);
+                let r = ui.color_edit_button_rgb(&mut rgb);
+                track(r);
+                if ui.small_button("remove").on_hover_text("remove this sun").clicked() {
+                    remove = Some(i);
+                }
+            });
+            let r = ui.add(
+                egui::Slider::new(&mut d.illuminance, 0.0..=1000.0)
+                    .logarithmic(true)
+                    .text("W/m²")
+                    .clamping(egui::SliderClamping::Always),
+            );
+            track(r);
+            d.direction = sun_direction(azimuth, elevation);
+            d.color = Vec3::from_array(rgb).max(Vec3::ZERO);
+        });
+    }
+    if committed {
+        session.begin_edit();
+    }
+    if let Some(i) = remove {
+        session.begin_edit();
+        edited.remove(i);
+    }
+    if edited != session.suns && edited.iter().all(|d| d.is_valid()) {
+        session.suns = edited;
+    }
 }
 
 pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
@@ -114,13 +202,14 @@ pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
         ui.label("lights");
         ui.label(format!("{}", session.lights.len()));
         ui.end_row();
-        if !session.scene.directional.is_empty() {
+        if !session.suns.is_empty() {
             ui.label("directional lights").on_hover_text(
-                "From the model file (a glTF sun): shaded for every technique, with the orthographic shadow map \
-                 (the ray tracer and ReSTIR: shadow rays; the preview: none); they make no VPLs",
+                "The model file's suns (a glTF file's directional lights) as edited in the Lights panel: shaded for \
+                 every technique, with the orthographic shadow map (the ray tracer and ReSTIR: shadow rays; the \
+                 preview: none); they make no VPLs",
             );
             ui.vertical(|ui| {
-                for d in &session.scene.directional {
+                for d in &session.suns {
                     let v = d.direction;
                     ui.label(format!("towards ({:.2}, {:.2}, {:.2}), {:.3} W/m²", v.x, v.y, v.z, d.illuminance));
                 }
@@ -131,4 +220,22 @@ pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
         ui.label(format!("{:.1} × {:.1} × {:.1} (scene units, metres)", b.size().x, b.size().y, b.size().z));
         ui.end_row();
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_suns_angles_and_direction_round_trip() {
+        for (az, el) in [(0.0, 45.0), (30.0, 50.0), (-150.0, 10.0), (179.0, 89.0), (-90.0, -20.0)] {
+            let d = sun_direction(az, el);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let (a, e) = sun_angles(d);
+            assert!((a - az).abs() < 1e-3 && (e - el).abs() < 1e-3, "({az}, {el}) -> ({a}, {e})");
+        }
+        // A sun high in the sky shines down; azimuth 0 is towards -Z, so its light travels towards +Z.
+        let d = sun_direction(0.0, 60.0);
+        assert!(d.y < -0.8 && d.z > 0.4, "{d}");
+    }
 }

@@ -19,7 +19,7 @@ use glam::Vec3;
 use shadowlab_core::renderer::overlay::OverlayStyle;
 use shadowlab_core::scene::PointLight;
 use shadowlab_core::technique::{Glyph, LegendEntry, Overlay, OverlayLayer, OverlayUpdate, ParamValue, Technique};
-use shadowlab_core::timing::PassTime;
+use shadowlab_core::timing::{PassTime, StepWait};
 use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
 
 use super::document::ViewMode;
@@ -122,6 +122,7 @@ impl Views {
             scene: gpu.main.renderer.shared_scene(),
             layouts: gpu.main.renderer.shared_layouts(),
             lights: session.animated_lights(),
+            suns: session.suns.clone(),
             camera: session.camera.camera(),
             settings: gpu.main.renderer.settings().clone(),
             tries,
@@ -355,9 +356,19 @@ impl Views {
             indirect,
             indirect_params,
             settings: settings.clone(),
+            suns: session.suns.clone(),
         };
         // While the user drags, keep the UI fluid: the preview gets a third of the budget.
         let budget = if interacting { gpu.sizer.budget_ms() / 3.0 } else { gpu.sizer.budget_ms() };
+        // Progressive steps are polled, never waited for; the moving preview's and a synchronous run's are
+        // waited for, so their image is whole in the UI frame that asked for it.
+        let wait = if interacting || !budget.is_finite() || !deferred_steps_allowed() {
+            StepWait::Blocking
+        } else {
+            StepWait::Deferred
+        };
+        gpu.main.set_step_wait(wait);
+        gpu.reference.set_step_wait(wait);
         let (spent, steps) = gpu.main.update(&gpu.render_state, &main_inputs, budget, gpu.sizer.max_lights_per_step)?;
         // The comparison view shows the technique's exposure (held, never metered itself), so the same radiance
         // looks the same on both sides of a split or side-by-side view.
@@ -403,6 +414,7 @@ impl Views {
                 params: session.params.get(reference_technique).cloned().unwrap_or_default(),
                 indirect: against_indirect,
                 indirect_params: against_indirect_params,
+                suns: session.suns.clone(),
                 settings: RenderSettings {
                     auto_exposure: match settings.auto_exposure {
                         AutoExposure::Off => AutoExposure::Off,
@@ -461,6 +473,7 @@ impl Views {
             scene: gpu.main.renderer.shared_scene(),
             layouts: gpu.main.renderer.shared_layouts(),
             lights: session.animated_lights(),
+            suns: session.suns.clone(),
             camera: session.camera.camera(),
             settings,
             technique: session.technique.clone(),
@@ -500,4 +513,11 @@ pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
         Some(i) => format!("{direct} + {i}"),
         None => direct.to_string(),
     }
+}
+
+/// False when `SHADOWLAB_STEP_WAIT=blocking`: every progressive step is waited for, as before steps were
+/// polled (for A/B measurements of the UI's frame rate while a frame renders).
+fn deferred_steps_allowed() -> bool {
+    static ALLOWED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ALLOWED.get_or_init(|| std::env::var("SHADOWLAB_STEP_WAIT").map_or(true, |v| v.trim() != "blocking"))
 }

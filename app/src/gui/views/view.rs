@@ -19,12 +19,12 @@ use std::time::Instant;
 use anyhow::{anyhow, Result};
 use eframe::{egui, egui_wgpu};
 use shadowlab_core::renderer::FrameJob;
-use shadowlab_core::scene::{Camera, PointLight, Scene};
+use shadowlab_core::scene::{Camera, DirectionalLight, PointLight, Scene};
 use shadowlab_core::technique::{
     CameraPose, FrameContext, LegendEntry, LightDetails, Overlay, OverlayLayer, OverlayUpdate, Param, ParamError,
     ParamValue, Technique, TechniqueCounts,
 };
-use shadowlab_core::timing::PassTime;
+use shadowlab_core::timing::{PassTime, StepWait};
 use shadowlab_core::GpuError;
 use shadowlab_core::{FrameReport, GpuContext, RenderSettings, Renderer};
 
@@ -46,6 +46,8 @@ pub struct FrameInputs {
     pub indirect: Option<String>,
     pub indirect_params: BTreeMap<String, ParamValue>,
     pub settings: RenderSettings,
+    /// The session's directional lights (the renderer's are replaced by them).
+    pub suns: Vec<DirectionalLight>,
 }
 
 impl FrameInputs {
@@ -61,6 +63,15 @@ impl FrameInputs {
             floats(&l.position.to_array());
             floats(&l.color.to_array());
             floats(&[l.intensity, l.range]);
+            if let Some(spot) = &l.spot {
+                floats(&spot.direction.to_array());
+                floats(&[spot.inner_angle, spot.outer_angle]);
+            }
+        }
+        for d in &self.suns {
+            floats(&d.direction.to_array());
+            floats(&d.color.to_array());
+            floats(&[d.illuminance]);
         }
         self.technique.hash(&mut h);
         self.indirect.hash(&mut h);
@@ -150,6 +161,10 @@ pub struct View {
     /// Progress of the current frame, 0..1 (1 when complete).
     pub progress: f32,
     pub size: (u32, u32),
+    /// Deferred steps: the frame's steps (first, count) submitted by the last UI frame that submitted any...
+    batch: Option<(usize, usize)>,
+    /// ...and, once they completed, the slowest one's ms and their count: the next batch's size.
+    step_estimate: Option<(f64, usize)>,
 }
 
 impl View {
@@ -186,6 +201,8 @@ impl View {
             new_report: false,
             progress: 0.0,
             size: (64, 64),
+            batch: None,
+            step_estimate: None,
         })
     }
 
@@ -323,6 +340,9 @@ impl View {
                 self.renderer.cancel_frame(job)?;
             }
             self.ensure_size(render_state, &inputs.settings)?;
+            if self.renderer.directional_lights() != inputs.suns.as_slice() {
+                self.renderer.set_directional_lights(&inputs.suns)?;
+            }
             let mut settings = self.renderer.settings().clone();
             settings.max_lights_per_step = max_lights_per_step;
             self.renderer.set_settings(settings)?;
@@ -348,21 +368,53 @@ impl View {
             self.techniques.insert(key_name, technique);
             self.job = Some((job?, inputs.technique.clone()));
             self.key = key;
+            (self.batch, self.step_estimate) = (None, None);
             self.progress = 0.0;
         }
+        // GPU work this UI frame gave the queue: waited for (blocking), or estimated from the last step that
+        // completed (deferred), for the step sizer.
+        let mut gpu_ms = 0.0;
         if let Some((mut job, name)) = self.job.take() {
             let mut technique = self.techniques.remove(name.as_str()).ok_or_else(|| anyhow!("technique vanished"))?;
+            let deferred = self.renderer.step_wait() == StepWait::Deferred;
             let result = (|| -> Result<()> {
+                if deferred {
+                    // Poll, never wait: while the last UI frame's steps run, this one submits nothing. Then
+                    // about `budget_ms` of steps, by the time the last completed step took.
+                    if self.renderer.steps_in_flight() > 0 {
+                        return Ok(());
+                    }
+                    // The last batch is done: its slowest step sizes the next batch, which at most doubles.
+                    if let Some((first, n)) = self.batch.take() {
+                        let slowest =
+                            (first..first + n).filter_map(|i| self.renderer.frame_step_ms(i)).fold(0.0, f64::max);
+                        self.step_estimate = Some((slowest.max(0.1), n));
+                    }
+                    let n = match self.step_estimate {
+                        None => 1,
+                        Some((ms, last)) => ((budget_ms / ms) as usize).clamp(1, (2 * last).min(MAX_DEFERRED_STEPS)),
+                    };
+                    let first = self.renderer.frame_steps();
+                    while !job.is_done() && steps < n {
+                        self.renderer.advance(&mut job, technique.as_mut(), 1)?;
+                        steps += 1;
+                    }
+                    self.batch = Some((first, steps));
+                    gpu_ms = self.step_estimate.map_or(budget_ms, |(ms, _)| ms) * steps as f64;
+                    return Ok(());
+                }
                 while !job.is_done() && start.elapsed().as_secs_f64() * 1000.0 < budget_ms {
                     self.renderer.advance(&mut job, technique.as_mut(), 1)?;
                     steps += 1;
                     // Wait, so this UI frame pays for exactly the work it submitted.
                     self.renderer.gpu().wait_idle()?;
                 }
+                gpu_ms = start.elapsed().as_secs_f64() * 1000.0;
                 Ok(())
             })();
             self.progress = job.progress();
-            if result.is_ok() && job.is_done() {
+            // A deferred frame is finished once its last step is seen complete (finishing waits otherwise).
+            if result.is_ok() && job.is_done() && self.renderer.steps_in_flight() == 0 {
                 self.last_report = Some(self.renderer.finish_frame(job, technique.as_ref())?);
                 self.new_report = true;
                 self.progress = 1.0;
@@ -376,7 +428,16 @@ impl View {
             // Overlays are drawn over the output each UI frame; start again from the clean image.
             self.renderer.preview_tonemap()?;
         }
-        Ok((start.elapsed().as_secs_f64() * 1000.0, steps))
+        Ok((if steps > 0 { gpu_ms } else { start.elapsed().as_secs_f64() * 1000.0 }, steps))
+    }
+
+    /// Submit progressive steps and go on (polling them each UI frame) or wait for each (the moving preview,
+    /// whose image is shown in the UI frame that asked for it, and synchronous runs). Steps always wait on
+    /// the GL backend.
+    pub fn set_step_wait(&mut self, wait: StepWait) {
+        if self.renderer.step_wait() != wait {
+            self.renderer.set_step_wait(wait);
+        }
     }
 
     pub fn overlays(&mut self, camera: &Camera, primitives: &[Overlay], x_ray: bool) -> Result<()> {
@@ -399,6 +460,10 @@ impl View {
         self.job.is_none() && self.key != 0
     }
 }
+
+/// At most this many deferred steps a UI frame (steps of a few lights on a fast GPU would otherwise queue a
+/// whole frame at once, and a camera move would wait for all of it).
+const MAX_DEFERRED_STEPS: usize = 64;
 
 /// Steps get larger when they are fast and smaller when they are slow, so each UI frame does about
 /// `FRAME_BUDGET_MS` of GPU work.
