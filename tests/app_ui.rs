@@ -43,6 +43,16 @@ fn harness_sized(startup: Startup, size: (f32, f32)) -> Harness<'static, ShadowL
     h
 }
 
+/// A fresh app opened on a saved scene file, as a user reopening it would see it.
+fn reopen(file: &std::path::Path, dir: &std::path::Path) -> Harness<'static, ShadowLabApp> {
+    harness(Startup {
+        path: Some(file.to_path_buf()),
+        data_dir: Some(dir.to_path_buf()),
+        synchronous: true,
+        ..Default::default()
+    })
+}
+
 fn start(name: &str, scene: &str) -> Harness<'static, ShadowLabApp> {
     let mut h = harness(Startup { data_dir: Some(data_dir(name)), synchronous: true, ..Default::default() });
     h.state_mut().load_builtin(scene);
@@ -178,12 +188,7 @@ fn edit_session_select_move_undo_redo_save_and_reload() {
     h.state_mut().save_scene_file(&file).unwrap();
     let saved_lights = h.state().session.lights.clone();
     let saved_camera = h.state().session.camera.camera();
-    let mut fresh = harness(Startup {
-        path: Some(file.clone()),
-        data_dir: Some(dir.clone()),
-        synchronous: true,
-        ..Default::default()
-    });
+    let mut fresh = reopen(&file, &dir);
     fresh.run_steps(2);
     assert_eq!(fresh.state().session.scene.name, "cornell");
     assert_eq!(fresh.state().session.lights, saved_lights);
@@ -533,12 +538,7 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     // Saved and reloaded with the scene file.
     let file = dir.join("insm.ron");
     h.state_mut().save_scene_file(&file).unwrap();
-    let mut fresh = harness(Startup {
-        path: Some(file.clone()),
-        data_dir: Some(dir.clone()),
-        synchronous: true,
-        ..Default::default()
-    });
+    let mut fresh = reopen(&file, &dir);
     fresh.run_steps(2);
     assert_eq!(fresh.state().session.technique, "insm");
     assert_eq!(fresh.state().session.params["insm"]["viewpoints"], ParamValue::Cameras(edited.clone()));
@@ -635,12 +635,7 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     let file = dir.join("indirect.ron");
     h.state_mut().save_scene_file(&file).unwrap();
     let saved = h.state().session.indirect.clone();
-    let mut fresh = harness(Startup {
-        path: Some(file.clone()),
-        data_dir: Some(dir.clone()),
-        synchronous: true,
-        ..Default::default()
-    });
+    let mut fresh = reopen(&file, &dir);
     fresh.run_steps(3);
     assert_eq!(fresh.state().session.indirect, saved);
     let report = fresh.state().views.gpu.as_ref().unwrap().main.last_report.clone().unwrap();
@@ -1603,12 +1598,7 @@ fn suns_are_added_aimed_undone_and_saved_in_the_scene_file() {
     // Saved and loaded in a fresh app with the scene.
     let file = dir.join("sunny.ron");
     h.state_mut().save_scene_file(&file).unwrap();
-    let mut fresh = harness(Startup {
-        path: Some(file.clone()),
-        data_dir: Some(dir.clone()),
-        synchronous: true,
-        ..Default::default()
-    });
+    let mut fresh = reopen(&file, &dir);
     fresh.run_steps(3);
     assert_eq!(fresh.state().session.suns, suns, "the scene file keeps the sun");
 
