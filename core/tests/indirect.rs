@@ -6,7 +6,9 @@ mod common;
 use common::*;
 use glam::{Vec2, Vec3, Vec4};
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{attenuation, Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource};
+use shadowlab_core::scene::{
+    attenuation, Aabb, Camera, DirectionalLight, Material, Mesh, PointLight, Scene, SceneSource,
+};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::{self, Vpl, VplSet, VplSettings, VplSource};
 use shadowlab_core::{RenderSettings, Renderer, ToneMap};
@@ -113,7 +115,7 @@ fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
     let mut totals = Vec::new();
     for source in [VplSource::Rsm, VplSource::Traced] {
         let s = VplSettings { count: 1024, source, ..Default::default() };
-        let set = vpl::generate(&bvh, &[light], &s);
+        let set = vpl::generate(&bvh, &[light], &[], &s);
         assert!(!set.vpls.is_empty());
         let flux = set.total_flux();
         // Colour carried: red = 1, green = 0.5, blue = 0.25 of the light.
@@ -142,16 +144,16 @@ fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little(
     let light = PointLight::new(Vec3::new(0.3, 2.0, -0.2), Vec3::ONE, 5.0, 50.0);
     for source in [VplSource::Rsm, VplSource::Traced] {
         let s = VplSettings { count: 256, source, bounces: 3, ..Default::default() };
-        let a = vpl::generate(&bvh, &[light], &s);
-        let b = vpl::generate(&bvh, &[light], &s);
+        let a = vpl::generate(&bvh, &[light], &[], &s);
+        let b = vpl::generate(&bvh, &[light], &[], &s);
         assert_eq!(a, b, "{source:?}: not deterministic");
-        let c = vpl::generate(&bvh, &[light], &VplSettings { seed: 7, ..s });
+        let c = vpl::generate(&bvh, &[light], &[], &VplSettings { seed: 7, ..s });
         assert_ne!(a.vpls, c.vpls, "{source:?}: the seed changes nothing");
         // Quasi-random coherence: moving the light 1 cm moves the first-bounce VPLs by centimetres, not metres.
         let mut moved = light;
         moved.position.x += 0.01;
-        let m = vpl::generate(&bvh, &[moved], &VplSettings { bounces: 1, ..s });
-        let a1 = vpl::generate(&bvh, &[light], &VplSettings { bounces: 1, ..s });
+        let m = vpl::generate(&bvh, &[moved], &[], &VplSettings { bounces: 1, ..s });
+        let a1 = vpl::generate(&bvh, &[light], &[], &VplSettings { bounces: 1, ..s });
         assert_eq!(m.vpls.len(), a1.vpls.len());
         let worst = a1.vpls.iter().zip(&m.vpls).map(|(p, q)| p.position.distance(q.position)).fold(0.0, f32::max);
         assert!(worst < 0.05, "{source:?}: a VPL jumped {worst} m");
@@ -168,17 +170,17 @@ fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error(
     // Below the plane and facing nowhere it is single-sided? No: planes are hit from both sides; a light far
     // outside the scene with a short range reaches nothing.
     let away = PointLight::new(Vec3::new(0.0, 100.0, 0.0), Vec3::ONE, 5.0, 1.0);
-    let set = vpl::generate(&bvh, &[away], &VplSettings::default());
+    let set = vpl::generate(&bvh, &[away], &[], &VplSettings::default());
     assert!(set.vpls.is_empty() && set.misses == set.samples && set.samples > 0);
-    let none = vpl::generate(&bvh, &[], &VplSettings::default());
+    let none = vpl::generate(&bvh, &[], &[], &VplSettings::default());
     assert!(none.vpls.is_empty());
-    let zero = vpl::generate(&bvh, &[away], &VplSettings { count: 0, ..Default::default() });
+    let zero = vpl::generate(&bvh, &[away], &[], &VplSettings { count: 0, ..Default::default() });
     assert!(zero.vpls.is_empty() && zero.samples == 0);
     let black = plane_scene(8.0, 0.0);
     let black_gpu = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &black, &layout);
     let (black_bvh, _) = black_gpu.bvh(&gpu);
     let light = PointLight::new(Vec3::new(0.0, 2.0, 0.0), Vec3::ONE, 5.0, 50.0);
-    assert!(vpl::generate(&black_bvh, &[light], &VplSettings::default()).vpls.is_empty());
+    assert!(vpl::generate(&black_bvh, &[light], &[], &VplSettings::default()).vpls.is_empty());
     // A million VPLs is refused with a message naming the limit.
     let err = VplSettings { count: 1_000_000, ..Default::default() }.validate().unwrap_err();
     assert!(err.contains("65536"), "{err}");
@@ -236,7 +238,7 @@ fn one_vpl() -> (Scene, VplSet, Vpl) {
         light: 0,
         from: Vec3::new(0.2, 3.0, 0.1),
     };
-    let set = VplSet { settings: None, vpls: vec![v], samples: 1, misses: 0 };
+    let set = VplSet { settings: None, vpls: vec![v], samples: 1, misses: 0, point_lights: 1 };
     (scene, set, v)
 }
 
@@ -445,7 +447,7 @@ fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
     }
     expected *= 0.5 * 0.9; // albedo, and the red of warm white (1, 0.9, 0.75) is 1: use green
     for source in [VplSource::Rsm, VplSource::Traced] {
-        let set = vpl::generate(&bvh, &[spot], &VplSettings { count: 2048, source, ..Default::default() });
+        let set = vpl::generate(&bvh, &[spot], &[], &VplSettings { count: 2048, source, ..Default::default() });
         assert!(!set.vpls.is_empty());
         for v in &set.vpls {
             let angle = (v.position - spot.position).normalize().dot(cone.direction).acos();
@@ -457,7 +459,7 @@ fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
     }
     // A zero cone lights nothing and makes no VPL: a defined, dark image.
     let zero = spot_over_plane(0.0);
-    let set = vpl::generate(&bvh, &[zero], &VplSettings::default());
+    let set = vpl::generate(&bvh, &[zero], &[], &VplSettings::default());
     assert!(set.vpls.iter().all(|v| v.flux.max_element() < 1e-6 * spot.intensity));
     let (hdr, _) =
         Shot::indirect(&scene, &[zero], settings(Component::Total, VplSettings::default()), "vpl-raytraced").render();
@@ -526,4 +528,86 @@ fn a_light_exactly_on_a_surface_gives_no_nan_in_any_direct_technique() {
         assert!(hdr.iter().all(|p| p.iter().all(|c| c.is_finite())), "{key}: a NaN or infinite pixel");
         assert!(hdr.iter().any(|p| p[0] > 0.0), "{key}: nothing lit");
     }
+}
+
+// --- Directional lights (suns) ----------------------------------------------------------------------------------
+
+fn sun(direction: Vec3, color: Vec3, illuminance: f32) -> DirectionalLight {
+    DirectionalLight { direction: direction.normalize(), color, illuminance }
+}
+
+#[test]
+fn sun_vpls_carry_the_flux_the_plane_reflects_alone_and_beside_a_point_light() {
+    let (side, albedo) = (8.0, 0.6);
+    let scene = plane_scene(side, albedo);
+    let gpu = gpu();
+    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
+        &gpu,
+        &scene,
+        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
+    );
+    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let d = Vec3::new(0.3, -1.0, 0.2).normalize();
+    let suns = [sun(d, Vec3::new(1.0, 0.5, 0.25), 2.0)];
+    // The plane intercepts E times its area projected along the sun's direction, and reflects rho of it.
+    let sun_expected = albedo as f64 * 2.0 * (side * side) as f64 * (-d.y) as f64;
+    let light = PointLight::new(Vec3::new(0.0, 2.0, 0.0), Vec3::new(1.0, 0.5, 0.25), 10.0, 50.0);
+    let point_expected = albedo as f64 * intercepted_flux(10.0, 50.0, 2.0, side);
+    for source in [VplSource::Rsm, VplSource::Traced] {
+        let s = VplSettings { count: 4096, source, ..Default::default() };
+        let set = vpl::generate(&bvh, &[], &suns, &s);
+        assert!(!set.vpls.is_empty(), "{source:?}: a sun over a plane made no VPLs");
+        // Rays through the aperture's parts beside the plane miss it.
+        assert!(set.misses > 0 && set.misses < set.samples);
+        let red = set.total_flux().x as f64;
+        let err = (red - sun_expected).abs() / sun_expected;
+        eprintln!("{source:?}: sun VPL flux {red:.4} vs reflected {sun_expected:.4}");
+        assert!(err < 0.01, "{source:?}: sun VPL flux {red:.4} vs reflected {sun_expected:.4} ({:.2} %)", err * 100.0);
+        assert!(set.vpls.iter().all(|v| v.position.y.abs() < 1e-4 && v.normal.y > 0.99 && v.light == 0));
+        assert_eq!(set.light_name(0), "sun 0");
+        // Beside a point light the samples are shared by power, and the total is both lights' reflected flux.
+        let both = vpl::generate(&bvh, &[light], &suns, &s);
+        assert_eq!(both.point_lights, 1);
+        let from_sun = both.vpls.iter().filter(|v| v.light == 1).count();
+        assert!(
+            from_sun > 0 && from_sun < both.vpls.len(),
+            "{source:?}: {from_sun} of {} from the sun",
+            both.vpls.len()
+        );
+        let red = both.total_flux().x as f64;
+        let expected = sun_expected + point_expected;
+        let err = (red - expected).abs() / expected;
+        assert!(err < 0.03, "{source:?}: flux of both {red:.4} vs {expected:.4} ({:.2} %)", err * 100.0);
+        assert_eq!(both.light_name(0), "light 0");
+        assert_eq!(both.light_name(1), "sun 0");
+    }
+    // A sun of zero illuminance or with a non-finite direction makes nothing.
+    let dark = [sun(d, Vec3::ONE, 0.0), sun(Vec3::new(f32::NAN, -1.0, 0.0), Vec3::ONE, 1.0)];
+    let none = vpl::generate(&bvh, &[], &dark, &VplSettings::default());
+    assert!(none.vpls.is_empty() && none.samples == 0);
+}
+
+/// The room of [`room`] lit by a sun only: the one-bounce indirect light the path tracer (which sees the sun
+/// by a shadow ray at each bounce point) and the VPL ray tracer (which gathers the sun's VPLs) agree on.
+#[test]
+fn a_suns_indirect_light_is_seen_by_the_vpl_gathers_and_the_path_tracer_alike() {
+    let mut scene = room();
+    scene.directional = vec![sun(Vec3::new(0.2, -1.0, -0.5), Vec3::ONE, 3.0)];
+    let vs = VplSettings { count: 1024, clamp_world: 0.05, ..Default::default() };
+    let mean = |hdr: &[[f32; 4]]| hdr.iter().map(|p| p[0] as f64).sum::<f64>() / hdr.len() as f64;
+    let (traced, report) = Shot::indirect(&scene, &[], settings(Component::Indirect, vs), "vpl-raytraced").render();
+    assert!(report.indirect.as_ref().unwrap().vpls > 0, "the sun made no VPLs");
+    let (paths, _) = Shot::indirect(&scene, &[], settings(Component::Indirect, vs), "pathtraced")
+        .params(&[("samples", ParamValue::Int(256)), ("samples_per_step", ParamValue::Int(64))])
+        .render();
+    let (a, b) = (mean(&traced), mean(&paths));
+    eprintln!("mean indirect from the sun: VPL ray tracer {a:.5}, path tracer {b:.5}");
+    assert!(a > 0.0 && b > 0.0, "no indirect light from the sun: VPLs {a}, paths {b}");
+    let err = (a - b).abs() / b;
+    if err >= 0.03 {
+        save_hdr("sun-room-vpl-raytraced-actual.png", W, H, &traced, 0.5 / b as f32);
+        save_hdr("sun-room-pathtraced-actual.png", W, H, &paths, 0.5 / b as f32);
+    }
+    assert!(err < 0.03, "mean indirect from the sun: VPL ray tracer {a:.5}, path tracer {b:.5} ({:.2} %)", err * 100.0);
+    assert!(traced.iter().chain(&paths).all(|p| p.iter().all(|c| c.is_finite())));
 }

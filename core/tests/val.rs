@@ -94,7 +94,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
     let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
     let (bvh, _) = gpu_scene.bvh(&gpu);
     let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0), white_light(Vec3::new(-2.0, 1.0, 1.0), 4.0, 30.0)];
-    let set = shadowlab_core::vpl::generate(&bvh, &lights, &VplSettings { count: 1024, ..Default::default() });
+    let set = shadowlab_core::vpl::generate(&bvh, &lights, &[], &VplSettings { count: 1024, ..Default::default() });
     let gpu_vpls: Vec<shadowlab_core::vpl::GpuVpl> = set.vpls.iter().map(shadowlab_core::vpl::GpuVpl::new).collect();
     let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: None,

@@ -23,8 +23,8 @@
 //! The lights are the scene's (a glTF file's suns) until [`crate::renderer::Renderer::set_directional_lights`] replaces them
 //! (the app's Lights panel adds, turns and removes suns; scene files keep them).
 //!
-//! Not done: directional lights make no VPLs (the indirect techniques and the path tracer see none of their
-//! light).
+//! Indirect light: the suns make VPLs too ([`crate::vpl`]: an orthographic RSM or parallel particles), so every
+//! indirect technique sees them, and the path tracer adds each sun with a shadow ray at every bounce point.
 
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;

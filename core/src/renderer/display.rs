@@ -25,7 +25,10 @@ impl Renderer {
         } else {
             let preview = crate::vpl::VplSettings { count: asked.min(crate::vpl::PREVIEW_VPLS), ..self.settings.vpl };
             let (bvh, _) = self.scene.bvh(&self.gpu);
-            (std::sync::Arc::new(crate::vpl::generate(&bvh, lights, &preview)), (preview.count, asked))
+            (
+                std::sync::Arc::new(crate::vpl::generate(&bvh, lights, self.directional.lights(), &preview)),
+                (preview.count, asked),
+            )
         };
         technique.update_overlays(&crate::technique::OverlayContext {
             camera,

@@ -310,12 +310,13 @@ impl Renderer {
             self.vpls.key = None;
             return true;
         }
-        let key = (lights.to_vec(), self.settings.vpl, std::sync::Arc::as_ptr(&self.scene.geometry) as usize);
+        let suns = self.directional.lights().to_vec();
+        let key = (lights.to_vec(), suns, self.settings.vpl, std::sync::Arc::as_ptr(&self.scene.geometry) as usize);
         if self.vpls.key.as_ref() == Some(&key) {
             return false;
         }
         let (bvh, _) = self.scene.bvh(&self.gpu);
-        let set = crate::vpl::generate(&bvh, lights, &self.settings.vpl);
+        let set = crate::vpl::generate(&bvh, lights, &key.1, &self.settings.vpl);
         let gpu: Vec<GpuVpl> = set.vpls.iter().map(GpuVpl::new).collect();
         self.vpls.buffer.write(&self.gpu, &gpu);
         self.vpls.set = std::sync::Arc::new(set);
@@ -323,10 +324,11 @@ impl Renderer {
         true
     }
 
-    /// Whether the last frame's VPLs were generated for these lights with the current settings and scene.
+    /// Whether the last frame's VPLs were generated for these lights and the current suns, settings and scene.
     fn vpls_are_of(&self, lights: &[PointLight]) -> bool {
-        self.vpls.key.as_ref().is_some_and(|(l, settings, scene)| {
+        self.vpls.key.as_ref().is_some_and(|(l, suns, settings, scene)| {
             l.as_slice() == lights
+                && suns.as_slice() == self.directional.lights()
                 && *settings == self.settings.vpl
                 && *scene == std::sync::Arc::as_ptr(&self.scene.geometry) as usize
         })
@@ -368,6 +370,7 @@ impl Renderer {
             aspect,
             frustum: Frustum::from_clip_from_world(&camera.clip_from_world(aspect)),
             lights,
+            directional_lights: self.directional.lights(),
             timer: &self.timer,
             size: (self.settings.width, self.settings.height),
             indirect_buffer: &self.indirect_buffer,

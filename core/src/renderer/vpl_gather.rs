@@ -266,7 +266,7 @@ pub fn vpl_details(set: &VplSet, index: usize) -> Vec<String> {
     let f = v.flux;
     vec![
         format!("VPL {index} of {}", set.vpls.len()),
-        format!("from light {}", v.light),
+        format!("from {}", set.light_name(v.light)),
         format!("flux ({:.3}, {:.3}, {:.3})", f.x, f.y, f.z),
         format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
     ]

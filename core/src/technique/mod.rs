@@ -71,6 +71,10 @@ pub struct FrameContext<'a> {
     pub aspect: f32,
     pub frustum: Frustum,
     pub lights: &'a [PointLight],
+    /// The suns (at most [`crate::scene::MAX_DIRECTIONAL_LIGHTS`]). The renderer shades their direct light for
+    /// every technique ([`crate::renderer::directional`]) and makes VPLs of them; a technique reads them only
+    /// for light it computes itself (the path tracer's bounce).
+    pub directional_lights: &'a [crate::scene::DirectionalLight],
     pub timer: &'a PassTimer,
     /// Upper bound on the lights (or clusters, cube maps) one step may handle, so an interactive caller can keep
     /// each step short; `usize::MAX` when unlimited. Never changes the image, only how the work is split.

@@ -20,6 +20,15 @@
 //! Spot lights: `rsm` draws texels of one face covering the cone (a cube beyond 80 degrees), `traced` draws
 //! directions uniformly within the cone; both weight by the cone's falloff.
 //!
+//! Directional lights (suns, [`DirectionalLight`]): parallel rays along the sun's direction through a square
+//! (`rsm`: Dachsbacher's orthographic RSM, [`RSM_RESOLUTION`]² texels over the square that covers the scene's
+//! bounding sphere `(c, R)` seen from the sun) or a disc (`traced`: uniform points of the disc of radius `R`
+//! perpendicular to the direction), started outside the sphere. A sample of area `A / N_sun` (`A` the square's
+//! `4R^2` or the disc's `pi R^2`) carries the flux `E * A / N_sun` through it, whatever the orientation of the
+//! surface it meets (the surface's projected area is the sample's); rays that miss the scene count as misses.
+//! A sun's power, for sharing the samples, is `E * A` times its mean colour: the flux it sends through the
+//! scene's bounding sphere.
+//!
 //! Both share the `N` samples among the lights in proportion to their power (the first Halton dimension picks
 //! a light through the cumulative power table), and both are quasi-random: a small move of a light moves its
 //! VPLs a little (Dong section 5.2 relies on it for temporal coherence).
@@ -36,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::accel::scene_bvh::SceneBvh;
 use crate::gpu::buffer::GrowableBuffer;
-use crate::scene::{attenuation, PointLight};
+use crate::scene::{attenuation, DirectionalLight, PointLight};
 
 /// The side of each face of a light's reflective shadow map.
 pub const RSM_RESOLUTION: u32 = 256;
@@ -123,7 +132,8 @@ pub struct Vpl {
     pub normal: Vec3,
     /// Reflected flux, linear RGB (already times the surface's albedo).
     pub flux: Vec3,
-    /// The light it came from.
+    /// The light it came from: an index into the point lights, or `point lights + k` for sun `k` (see
+    /// [`VplSet::light_name`]).
     pub light: u32,
     /// Where the light reaching it left from (the light, or the previous bounce): for the overlays.
     pub from: Vec3,
@@ -158,9 +168,19 @@ pub struct VplSet {
     pub samples: u32,
     /// Samples that hit nothing (open scenes).
     pub misses: u32,
+    /// The point lights the set was made from: VPLs with `light` at or past it came from the suns.
+    pub point_lights: u32,
 }
 
 impl VplSet {
+    /// "light i" or "sun k": where VPL light index `light` came from.
+    pub fn light_name(&self, light: u32) -> String {
+        match light.checked_sub(self.point_lights) {
+            Some(k) => format!("sun {k}"),
+            None => format!("light {light}"),
+        }
+    }
+
     pub fn total_flux(&self) -> Vec3 {
         self.vpls.iter().map(|v| v.flux).sum()
     }
@@ -246,10 +266,98 @@ fn ray_epsilon(bvh: &SceneBvh) -> f32 {
     (b.length() * 1e-5).max(1e-6)
 }
 
-/// Generate the VPLs of `lights` in the scene of `bvh`. Deterministic: the same inputs give the same set.
-pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -> VplSet {
-    let mut set = VplSet { settings: Some(*settings), ..Default::default() };
-    let powers: Vec<f32> = lights.iter().map(light_power).collect();
+/// The square (`rsm`) or disc (`traced`) a sun's samples start from: perpendicular to its direction, covering
+/// the scene's bounding sphere, outside it towards the sun.
+struct SunAperture {
+    /// Centre of the aperture (on the sun's side of the sphere).
+    origin: Vec3,
+    /// Unit axes of its plane.
+    u: Vec3,
+    v: Vec3,
+    /// The bounding sphere's radius.
+    radius: f32,
+    /// Its area: `4 R^2` (square) or `pi R^2` (disc).
+    area: f32,
+}
+
+impl SunAperture {
+    fn new(bvh: &SceneBvh, sun: &DirectionalLight, source: VplSource) -> Option<SunAperture> {
+        let root = bvh.cpu.nodes.first()?;
+        let (min, max) = (Vec3::from_array(root.min), Vec3::from_array(root.max));
+        let centre = (min + max) * 0.5;
+        let radius = ((max - min).length() * 0.5).max(1e-6);
+        let dir = sun.direction.try_normalize()?;
+        let (u, v) = dir.any_orthonormal_pair();
+        let area = match source {
+            VplSource::Rsm => 4.0 * radius * radius,
+            VplSource::Traced => std::f32::consts::PI * radius * radius,
+        };
+        (centre.is_finite() && radius.is_finite()).then_some(SunAperture {
+            origin: centre - dir * (radius * 1.01),
+            u,
+            v,
+            radius,
+            area,
+        })
+    }
+
+    /// The start of sample `(a, b)` in [0, 1)^2: an RSM texel's centre, or a uniform point of the disc.
+    fn point(&self, source: VplSource, a: f32, b: f32) -> Vec3 {
+        let (s, t) = match source {
+            VplSource::Rsm => {
+                let r = RSM_RESOLUTION;
+                let texel = |x: f32| (((x * r as f32) as u32).min(r - 1) as f32 + 0.5) / r as f32 * 2.0 - 1.0;
+                (texel(a), texel(b))
+            }
+            VplSource::Traced => {
+                let (r, phi) = (a.sqrt(), 2.0 * std::f32::consts::PI * b);
+                (r * phi.cos(), r * phi.sin())
+            }
+        };
+        self.origin + (self.u * s + self.v * t) * self.radius
+    }
+}
+
+/// What the samples are shared among: the point lights, then the suns.
+enum Emitter<'a> {
+    Point(&'a PointLight),
+    Sun(&'a DirectionalLight, SunAperture),
+}
+
+impl Emitter<'_> {
+    fn power(&self) -> f32 {
+        match self {
+            Emitter::Point(l) => light_power(l),
+            Emitter::Sun(sun, aperture) if sun.is_valid() => {
+                let p = sun.illuminance * aperture.area * (sun.color.x + sun.color.y + sun.color.z) / 3.0;
+                if p.is_finite() {
+                    p
+                } else {
+                    0.0
+                }
+            }
+            Emitter::Sun(..) => 0.0,
+        }
+    }
+}
+
+/// Generate the VPLs of `lights` and `suns` in the scene of `bvh`. Deterministic: the same inputs give the same
+/// set.
+pub fn generate(bvh: &SceneBvh, lights: &[PointLight], suns: &[DirectionalLight], settings: &VplSettings) -> VplSet {
+    let mut set = VplSet { settings: Some(*settings), point_lights: lights.len() as u32, ..Default::default() };
+    let mut emitters: Vec<Emitter> = lights.iter().map(Emitter::Point).collect();
+    for sun in suns {
+        // A sun whose aperture cannot be made (an empty scene) still takes its index, with no power.
+        let aperture = SunAperture::new(bvh, sun, settings.source).unwrap_or(SunAperture {
+            origin: Vec3::ZERO,
+            u: Vec3::X,
+            v: Vec3::Y,
+            radius: 0.0,
+            area: 0.0,
+        });
+        emitters.push(Emitter::Sun(sun, aperture));
+    }
+    let powers: Vec<f32> = emitters.iter().map(Emitter::power).collect();
     let total: f32 = powers.iter().sum();
     if settings.count == 0 || !(total > 0.0 && total.is_finite()) || bvh.cpu.triangles.is_empty() {
         return set;
@@ -273,48 +381,33 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -
         ];
         // Dimension 0 picks a light by power; its rank within the light's share spreads the light's own samples
         // (rescaled to [0, 1)) so they stay stratified.
-        let li = cdf.partition_point(|&c| c <= u[0]).min(lights.len() - 1);
-        let light = &lights[li];
+        let li = cdf.partition_point(|&c| c <= u[0]).min(emitters.len() - 1);
         let p_light = powers[li] / total;
         if p_light <= 0.0 {
             continue;
         }
-        let intensity = light.color * light.intensity;
-        // dir, and the radiant intensity divided by the pdf of picking that direction (per steradian).
-        let (dir, weight) = match (settings.source, light.spot) {
-            (VplSource::Traced, None) => (sphere_direction(u[1], u[2]), 4.0 * std::f32::consts::PI),
-            (VplSource::Traced, Some(spot)) => {
-                (cone_direction(spot.direction, spot.outer_angle, u[1], u[2]), emission_solid_angle(light))
+        // The first hit, where the light reaching it left from, and the flux reaching it.
+        let (hit, from, flux) = match &emitters[li] {
+            Emitter::Point(light) => {
+                let Some((hit, flux)) = point_sample(bvh, light, settings.source, &u, n as f32 * p_light, &mut set)
+                else {
+                    continue;
+                };
+                (hit, light.position, flux)
             }
-            (VplSource::Rsm, Some(spot)) if spot.outer_angle <= SPOT_RSM_MAX_ANGLE => {
-                let r = RSM_RESOLUTION;
-                let x = ((u[2] * r as f32) as u32).min(r - 1);
-                let y = ((u[3] * r as f32) as u32).min(r - 1);
-                let (dir, omega) = rsm_spot_texel(spot.direction, spot.outer_angle.tan(), x, y);
-                (dir, omega * (r * r) as f32)
-            }
-            (VplSource::Rsm, _) => {
-                let r = RSM_RESOLUTION;
-                let face = ((u[1] * 6.0) as u32).min(5);
-                let x = ((u[2] * r as f32) as u32).min(r - 1);
-                let y = ((u[3] * r as f32) as u32).min(r - 1);
-                let (dir, omega) = rsm_texel(face, x, y);
-                (dir, omega * (6 * r * r) as f32)
+            Emitter::Sun(sun, aperture) => {
+                set.samples += 1;
+                let origin = aperture.point(settings.source, u[2], u[3]);
+                let dir = sun.direction.normalize();
+                let Some(hit) = bvh.closest_hit(origin, dir, f32::INFINITY) else {
+                    set.misses += 1;
+                    continue;
+                };
+                (hit, origin, sun.color * (sun.illuminance * aperture.area / (n as f32 * p_light)))
             }
         };
-        set.samples += 1;
-        let Some(hit) = bvh.closest_hit(light.position, dir, light.range) else {
-            set.misses += 1;
-            continue;
-        };
-        let d = hit.t;
-        // Flux reaching the surface through this sample's share of the sphere.
-        let cone = light.cone_factor(dir);
-        if cone <= 0.0 {
-            continue;
-        }
-        let mut flux = intensity * (weight * cone * attenuation(d, light.range) * d * d / (n as f32 * p_light));
-        let mut from = light.position;
+        let mut flux = flux;
+        let mut from = from;
         let mut hit = hit;
         for bounce in 0..settings.bounces {
             let reflected = flux * hit.albedo;
@@ -346,10 +439,57 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], settings: &VplSettings) -
     set
 }
 
+/// One sample of a point light: the first surface along a direction drawn from `u` and the flux reaching it
+/// (None for a miss, counted in `set`, or a direction outside a spot's cone). `share` is `N * p_light`.
+fn point_sample(
+    bvh: &SceneBvh,
+    light: &PointLight,
+    source: VplSource,
+    u: &[f32; 4],
+    share: f32,
+    set: &mut VplSet,
+) -> Option<(crate::accel::scene_bvh::SurfaceHit, Vec3)> {
+    let intensity = light.color * light.intensity;
+    // dir, and the radiant intensity divided by the pdf of picking that direction (per steradian).
+    let (dir, weight) = match (source, light.spot) {
+        (VplSource::Traced, None) => (sphere_direction(u[1], u[2]), 4.0 * std::f32::consts::PI),
+        (VplSource::Traced, Some(spot)) => {
+            (cone_direction(spot.direction, spot.outer_angle, u[1], u[2]), emission_solid_angle(light))
+        }
+        (VplSource::Rsm, Some(spot)) if spot.outer_angle <= SPOT_RSM_MAX_ANGLE => {
+            let r = RSM_RESOLUTION;
+            let x = ((u[2] * r as f32) as u32).min(r - 1);
+            let y = ((u[3] * r as f32) as u32).min(r - 1);
+            let (dir, omega) = rsm_spot_texel(spot.direction, spot.outer_angle.tan(), x, y);
+            (dir, omega * (r * r) as f32)
+        }
+        (VplSource::Rsm, _) => {
+            let r = RSM_RESOLUTION;
+            let face = ((u[1] * 6.0) as u32).min(5);
+            let x = ((u[2] * r as f32) as u32).min(r - 1);
+            let y = ((u[3] * r as f32) as u32).min(r - 1);
+            let (dir, omega) = rsm_texel(face, x, y);
+            (dir, omega * (6 * r * r) as f32)
+        }
+    };
+    set.samples += 1;
+    let Some(hit) = bvh.closest_hit(light.position, dir, light.range) else {
+        set.misses += 1;
+        return None;
+    };
+    let d = hit.t;
+    // Flux reaching the surface through this sample's share of the sphere.
+    let cone = light.cone_factor(dir);
+    if cone <= 0.0 {
+        return None;
+    }
+    Some((hit, intensity * (weight * cone * attenuation(d, light.range) * d * d / share)))
+}
+
 /// The VPLs of the current frame, on the CPU and the GPU (`array<Vpl>`, `vpl_common.wgsl`).
 pub struct VplFrame {
     pub set: std::sync::Arc<VplSet>,
     pub buffer: GrowableBuffer,
     /// What the set was generated from (lights, settings, scene geometry), so an unchanged frame reuses it.
-    pub(crate) key: Option<(Vec<PointLight>, VplSettings, usize)>,
+    pub(crate) key: Option<(Vec<PointLight>, Vec<DirectionalLight>, VplSettings, usize)>,
 }

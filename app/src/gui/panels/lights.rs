@@ -119,8 +119,8 @@ fn suns_ui(session: &mut Session, ui: &mut egui::Ui) {
     ui.horizontal(|ui| {
         ui.label(format!("Suns ({})", session.suns.len())).on_hover_text(
             "Directional lights: shaded for every direct technique with an orthographic shadow map fitted to the \
-             view (the ray tracer and ReSTIR: shadow rays; the preview: none). They make no VPLs, so indirect \
-             light and the path tracer do not see them.",
+             view (the ray tracer and ReSTIR: shadow rays; the preview: none). Their light also makes VPLs \
+             (an orthographic RSM or parallel particles), and the path tracer sees them at every bounce.",
         );
         let add = ui.add_enabled(session.suns.len() < max, egui::Button::new("+ sun"));
         if add.on_disabled_hover_text(format!("at most {max} suns")).clicked() {
@@ -206,7 +206,7 @@ pub fn stats_ui(session: &Session, ui: &mut egui::Ui) {
             ui.label("directional lights").on_hover_text(
                 "The model file's suns (a glTF file's directional lights) as edited in the Lights panel: shaded for \
                  every technique, with the orthographic shadow map (the ray tracer and ReSTIR: shadow rays; the \
-                 preview: none); they make no VPLs",
+                 preview: none), and a share of the VPLs",
             );
             ui.vertical(|ui| {
                 for d in &session.suns {

@@ -6,6 +6,8 @@
 //! 2. the closest hit `y` through the scene BVH (the renderer's service),
 //! 3. direct light at `y` from one light picked in proportion to its power, with a shadow ray:
 //!    `L(y -> x) = rho(y)/pi * I * attenuation(d) * cos(theta_y) / p_light`,
+//!    plus every sun's (at most four, each with its own shadow ray along the sun's direction):
+//!    `L_sun(y -> x) = rho(y)/pi * E * cos(theta_y) * V`,
 //! 4. the estimate `rho(x) * L(y -> x)`, averaged over `samples`.
 //!
 //! Progressive: each step adds `samples_per_step` samples (weighted by `1/samples`), so the app shows the
@@ -30,7 +32,7 @@ use crate::renderer::gpu_data::GpuLight;
 use crate::renderer::layouts::compute_pipeline;
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::pixel_workgroups;
-use crate::scene::PointLight;
+use crate::scene::{PointLight, MAX_DIRECTIONAL_LIGHTS};
 use crate::timing::PassTime;
 
 use crate::shaders::WgslModule;
@@ -56,9 +58,15 @@ struct PtStepUniform {
     light_count: u32,
     bias: f32,
     seed: u32,
-    _pad: [u32; 2],
+    sun_count: u32,
+    /// Length of a sun's shadow ray: twice the scene's diagonal.
+    sun_ray_length: f32,
+    /// Per sun, the direction its light travels (xyz).
+    sun_direction: [[f32; 4]; MAX_DIRECTIONAL_LIGHTS],
+    /// Per sun, colour times illuminance (xyz).
+    sun_radiance: [[f32; 4]; MAX_DIRECTIONAL_LIGHTS],
 }
-const _: () = assert!(std::mem::size_of::<PtStepUniform>() == 32);
+const _: () = assert!(std::mem::size_of::<PtStepUniform>() == 32 + 32 * MAX_DIRECTIONAL_LIGHTS);
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct PathTracedParams {
@@ -85,6 +93,9 @@ pub struct PathTraced {
     lights: GrowableBuffer,
     bvh: Option<Arc<SceneBvh>>,
     light_count: u32,
+    /// The frame's valid suns: (direction, colour times illuminance), and their shadow rays' length.
+    suns: Vec<([f32; 4], [f32; 4])>,
+    sun_ray_length: f32,
     steps: usize,
     counts: TechniqueCounts,
     build_ms: Option<f64>,
@@ -123,6 +134,8 @@ impl PathTraced {
             lights: GrowableBuffer::new(device, "pathtrace lights", 32 * 16),
             bvh: None,
             light_count: 0,
+            suns: Vec::new(),
+            sun_ray_length: 0.0,
             steps: 0,
             counts: TechniqueCounts::default(),
             build_ms: None,
@@ -197,8 +210,20 @@ impl Technique for PathTraced {
         }
         self.light_count = gpu_lights.len() as u32;
         self.lights.write(ctx.gpu, &gpu_lights);
+        self.suns = ctx
+            .directional_lights
+            .iter()
+            .filter(|d| d.is_valid() && d.illuminance > 0.0)
+            .take(MAX_DIRECTIONAL_LIGHTS)
+            .map(|d| (d.direction.normalize().extend(0.0).to_array(), (d.color * d.illuminance).extend(0.0).to_array()))
+            .collect();
+        self.sun_ray_length = 2.0 * ctx.scene.bounds.size().length().max(1e-6);
         let p = &self.params;
-        self.steps = if self.light_count == 0 { 0 } else { p.samples.div_ceil(p.samples_per_step.max(1)) as usize };
+        self.steps = if self.light_count == 0 && self.suns.is_empty() {
+            0
+        } else {
+            p.samples.div_ceil(p.samples_per_step.max(1)) as usize
+        };
         self.counts = TechniqueCounts { lights_visible: gpu_lights.len(), batches: self.steps, ..Default::default() };
         self.counts.figures.insert("samples".into(), p.samples as f64);
         Ok(self.steps)
@@ -213,15 +238,22 @@ impl Technique for PathTraced {
         let p = &self.params;
         let per_step = p.samples_per_step.max(1);
         let first = step as u32 * per_step;
-        let uniform = PtStepUniform {
+        let mut uniform = PtStepUniform {
             first_sample: first,
             sample_count: per_step.min(p.samples - first),
             total_samples: p.samples,
             light_count: self.light_count,
             bias: p.bias,
             seed: p.seed,
-            _pad: [0; 2],
+            sun_count: self.suns.len() as u32,
+            sun_ray_length: self.sun_ray_length,
+            sun_direction: [[0.0; 4]; MAX_DIRECTIONAL_LIGHTS],
+            sun_radiance: [[0.0; 4]; MAX_DIRECTIONAL_LIGHTS],
         };
+        for (k, (direction, radiance)) in self.suns.iter().enumerate() {
+            uniform.sun_direction[k] = *direction;
+            uniform.sun_radiance[k] = *radiance;
+        }
         ctx.gpu.queue.write_buffer(&self.step_uniform, 0, bytemuck::bytes_of(&uniform));
         let bvh = self.bvh.as_ref().expect("prepare set the BVH");
         let device = &ctx.gpu.device;

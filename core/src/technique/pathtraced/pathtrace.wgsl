@@ -1,8 +1,9 @@
 // One-bounce path tracing, the truth for one-bounce indirect light: per pixel and sample, a cosine-distributed
 // bounce direction around the receiver's normal, the closest hit y through the BVH (raytrace_bvh.wgsl), and
-// the direct light at y from one light picked in proportion to its power, with a shadow ray. With the cosine
-// pdf cos/pi the estimate of the reflected radiance is rho(x) * L(y -> x), and
-// L(y -> x) = rho(y)/pi * I * attenuation(d) * cos(theta_y) * V / p_light. Hits reflect their material's mean
+// the direct light at y from one light picked in proportion to its power, with a shadow ray, plus every sun's
+// with a shadow ray of its own. With the cosine pdf cos/pi the estimate of the reflected radiance is
+// rho(x) * L(y -> x), and L(y -> x) = rho(y)/pi * (I * attenuation(d) * cos(theta_y) * V / p_light
+// + sum over suns of E * cos(theta_y) * V). Hits reflect their material's mean
 // albedo, carried in the triangle's w components (see core/src/renderer/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
 // index and the seed, so a frame is reproducible. Composed after common.wgsl, raytrace_bvh.wgsl and vpl_basis.wgsl.
 // `PtStep` mirrors `PtStepUniform` in core/src/technique/pathtraced/mod.rs.
@@ -14,8 +15,11 @@ struct PtStep {
     light_count: u32,
     bias: f32,
     seed: u32,
-    _pad0: u32,
-    _pad1: u32,
+    sun_count: u32,
+    sun_ray_length: f32,
+    // Per sun: the direction its light travels, and colour times illuminance.
+    sun_direction: array<vec4<f32>, 4>,
+    sun_radiance: array<vec4<f32>, 4>,
 }
 
 // `shadow_near` holds the cumulative light-selection probability (the last light's is 1).
@@ -55,7 +59,7 @@ fn pt_pick_light(u: f32) -> u32 {
 fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
     let width = u32(frame.viewport.x);
     let height = u32(frame.viewport.y);
-    if id.x >= width || id.y >= height || step.light_count == 0u {
+    if id.x >= width || id.y >= height || (step.light_count == 0u && step.sun_count == 0u) {
         return;
     }
     let s = load_surface(vec2<i32>(id.xy));
@@ -87,6 +91,17 @@ fn pathtrace_main(@builtin(global_invocation_id) id: vec3<u32>) {
         var n_y = normalize(cross(tri.e1.xyz, tri.e2.xyz));
         if dot(n_y, dir) > 0.0 {
             n_y = -n_y;
+        }
+        let shadow_origin_y = y + n_y * eps;
+        for (var k = 0u; k < step.sun_count; k++) {
+            let l_sun = -step.sun_direction[k].xyz;
+            let cos_sun = dot(n_y, l_sun);
+            if cos_sun > 0.0 && !bvh_occluded(shadow_origin_y, l_sun, step.sun_ray_length) {
+                sum += albedo_y / PI * step.sun_radiance[k].xyz * cos_sun;
+            }
+        }
+        if step.light_count == 0u {
+            continue;
         }
         let li = pt_pick_light(pt_unit(h2));
         let p_light = lights[li].shadow_near - select(0.0, lights[max(li, 1u) - 1u].shadow_near, li > 0u);
