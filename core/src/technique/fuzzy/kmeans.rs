@@ -190,7 +190,12 @@ impl Grid {
 
     /// The `f_max` nearest compatible centroids of `(position, normal)` by equation 7, nearest first (ties: lower
     /// index), searched shell by shell from the 27 cells around the point until provably complete. Also the
-    /// nearest active centroid by position alone (the fallback when none is compatible).
+    /// nearest active centroid by position alone: the fallback when none is compatible (only then is it the
+    /// nearest: it is kept only while no compatible one is found, as on the GPU).
+    ///
+    /// Once `f_max` are found, a cell whose box lies farther than the `f_max`-th is skipped, and a farther
+    /// candidate is rejected with one comparison; neither changes the result (tested against brute force). A
+    /// border cell's box reaches to infinity outwards, since centroids beyond the bounds are binned into it.
     pub fn nearest(
         &self,
         centroids: &[Centroid],
@@ -202,22 +207,28 @@ impl Grid {
     ) -> (Vec<Candidate>, Option<Candidate>) {
         let mut best: Vec<(f32, u32)> = Vec::with_capacity(f_max + 1);
         let mut any: Option<(f32, u32)> = None;
+        let consider = |k: u32, best: &mut Vec<(f32, u32)>, any: &mut Option<(f32, u32)>| {
+            let centroid = &centroids[k as usize];
+            let d = (position - centroid.position).length();
+            if best.is_empty() && any.is_none_or(|a| (d, k) < a) {
+                *any = Some((d, k));
+            }
+            if normal.dot(centroid.normal) > n_t {
+                insert(best, f_max, (d, k));
+            }
+        };
         let c = self.cell_of(position);
         let dims = self.dims.map(|d| d as i32);
         let reach = (0..3).map(|a| c[a].max(dims[a] - 1 - c[a])).max().unwrap_or(0);
         let mut r = 0;
         loop {
             self.visit_shell(c, r, |cell| {
+                if best.len() == f_max && self.cell_distance(position, cell) > best[f_max - 1].0 {
+                    return;
+                }
                 let (s, e) = (self.start[cell] as usize, self.start[cell + 1] as usize);
                 for &k in &self.items[s..e] {
-                    let centroid = &centroids[k as usize];
-                    let d = (position - centroid.position).length();
-                    if any.is_none_or(|a| (d, k) < a) {
-                        any = Some((d, k));
-                    }
-                    if normal.dot(centroid.normal) > n_t {
-                        insert(&mut best, f_max, (d, k));
-                    }
+                    consider(k, &mut best, &mut any);
                 }
             });
             let complete = best.len() == f_max && best[f_max - 1].0 <= self.guarantee(position, c, r);
@@ -228,6 +239,24 @@ impl Grid {
             r += 1;
         }
         (best, any)
+    }
+
+    /// The distance from `p` to the box of cell `index`, a border cell's box reaching to infinity outwards.
+    fn cell_distance(&self, p: Vec3, index: usize) -> f32 {
+        let (nx, ny) = (self.dims[0] as usize, self.dims[1] as usize);
+        let c = [index % nx, (index / nx) % ny, index / (nx * ny)];
+        let mut d2 = 0.0f32;
+        for a in 0..3 {
+            let lo = if c[a] == 0 { f32::NEG_INFINITY } else { self.origin[a] + c[a] as f32 * self.cell };
+            let hi = if c[a] + 1 == self.dims[a] as usize {
+                f32::INFINITY
+            } else {
+                self.origin[a] + (c[a] + 1) as f32 * self.cell
+            };
+            let e = (lo - p[a]).max(p[a] - hi).max(0.0);
+            d2 += e * e;
+        }
+        d2.sqrt()
     }
 
     /// How far every centroid outside the block of Chebyshev radius `r` around cell `c` is from `p` at least:

@@ -112,14 +112,19 @@ fn less(d: f32, k: u32, d2: f32, k2: u32) -> bool {
     return d < d2 || (d == d2 && k < k2);
 }
 
+// The nearest by position is only used when no compatible centroid is found, so it is kept only while none is.
+// A full list rejects a farther candidate with one comparison.
 fn consider(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     let c = centroid(k);
     let d = length(p - c.position.xyz);
-    if any_k == NONE || less(d, k, any_d, any_k) {
+    if best_n == 0u && (any_k == NONE || less(d, k, any_d, any_k)) {
         any_d = d;
         any_k = k;
     }
     if dot(n, c.normal.xyz) > km.n_t {
+        if best_n == f_max && !less(d, k, best_d[f_max - 1u], best_k[f_max - 1u]) {
+            return;
+        }
         var at = best_n;
         for (var i = 0u; i < best_n; i++) {
             if less(d, k, best_d[i], best_k[i]) {
@@ -141,7 +146,22 @@ fn consider(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     }
 }
 
+// The distance from p to the box of cell c; a border cell's box reaches to infinity outwards (centroids beyond
+// the bounds are binned into it).
+fn cell_distance(c: vec3<i32>, p: vec3<f32>) -> f32 {
+    let lo = km.bounds_min.xyz + vec3<f32>(c) * km.cell;
+    let hi = lo + vec3<f32>(km.cell);
+    let top = vec3<i32>(km.dims.xyz) - 1;
+    let below = select(lo - p, vec3<f32>(0.0), c == vec3<i32>(0));
+    let above = select(p - hi, vec3<f32>(0.0), c == top);
+    return length(max(max(below, above), vec3<f32>(0.0)));
+}
+
+// A cell farther than the F-th centroid found cannot change the list once it is full.
 fn visit_cell(c: vec3<i32>, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    if best_n == f_max && cell_distance(c, p) > best_d[f_max - 1u] {
+        return;
+    }
     let i = cell_index(c);
     let s = atomicLoad(&work[starts_base() + i]);
     let e = atomicLoad(&work[starts_base() + i + 1u]);
