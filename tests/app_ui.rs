@@ -1594,6 +1594,9 @@ fn suns_are_added_aimed_undone_and_saved_in_the_scene_file() {
     let lit = mean(&h);
     assert!(lit > unlit * 1.001, "the sun adds light: {unlit} -> {lit}");
     assert!(h.query_all_by_label_contains("azimuth").count() >= 1, "the sun's angles are edited in the panel");
+    // Its arrow is a layer of the view, on by default, drawn with its legend.
+    assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "suns" && *on), "no suns layer");
+    assert!(h.state().views.legends.iter().any(|(n, _)| n == "suns"), "the suns layer is not drawn");
 
     // Saved and loaded in a fresh app with the scene.
     let file = dir.join("sunny.ron");
@@ -1606,6 +1609,7 @@ fn suns_are_added_aimed_undone_and_saved_in_the_scene_file() {
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     h.run_steps(3);
     assert!(h.state().session.suns.is_empty(), "Ctrl+Z removes the sun");
+    assert!(!h.state_mut().overlay_layers().iter().any(|(name, _)| name == "suns"), "a suns layer without suns");
     assert!(!passes(&h).iter().any(|p| p.contains("directional")), "{:?}", passes(&h));
     h.key_press_modifiers(egui::Modifiers::COMMAND | egui::Modifiers::SHIFT, egui::Key::Z);
     h.run_steps(3);

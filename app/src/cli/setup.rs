@@ -141,6 +141,10 @@ pub fn draw_overlays(
     if let Some(i) = renderer.indirect() {
         layers.extend(i.overlays(lights));
     }
+    // The suns, which the renderer shades for every technique (the app offers the same layer).
+    if !renderer.directional_lights().is_empty() {
+        layers.push(technique::sun_overlays(renderer.directional_lights(), &renderer.scene().bounds));
+    }
     for name in names {
         if !layers.iter().any(|l| l.name == name) {
             bail!(

@@ -32,8 +32,8 @@ pub mod vpl_gather;
 pub mod work;
 
 pub use overlay::{
-    index_color, light_layer_legend, light_overlay_color, light_overlays, ExplainStep, Glyph, HoverPoint, LegendEntry,
-    LightDetails, Overlay, OverlayLayer,
+    index_color, light_layer_legend, light_overlay_color, light_overlays, sun_overlays, ExplainStep, Glyph, HoverPoint,
+    LegendEntry, LightDetails, Overlay, OverlayLayer, SUNS_LAYER,
 };
 pub use params::{check_param, CameraPose, Param, ParamError, ParamKind, ParamValue};
 pub use registry::{

@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::scene::PointLight;
+use crate::scene::{Aabb, DirectionalLight, PointLight};
 
 /// Above this many spheres in one draw, the overlay renderer draws each as one horizontal circle instead of
 /// three great circles (24x fewer vertices): 100,000 range spheres would otherwise be ~600 MB of line vertices
@@ -204,6 +204,10 @@ pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
         "lights" => vec![LegendEntry::new(Glyph::Dot, white, "a light, in its colour; size grows with √intensity")],
         "light ranges" => vec![LegendEntry::new(Glyph::Circle, white, "L_att: where the light's falloff reaches 0")],
         "spot cones" => vec![LegendEntry::new(Glyph::Line, white, "a spot light's axis and cone, ¼ of L_att long")],
+        SUNS_LAYER => vec![
+            LegendEntry::new(Glyph::Line, white, "a sun, in its colour: its light travels along the arrow"),
+            LegendEntry::new(Glyph::Dot, white, "where the arrow starts: half the scene's size towards the sun"),
+        ],
         _ => return None,
     })
 }
@@ -276,4 +280,61 @@ pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
         });
     }
     layers
+}
+
+/// The name of [`sun_overlays`]' layer.
+pub const SUNS_LAYER: &str = "suns";
+
+/// The layer of the directional lights (the renderer's service shades them for every technique, so the app
+/// offers it beside every technique's layers): per sun, an arrow along its direction ending at the centre of
+/// `bounds`, half the bounds' diagonal long, in the sun's colour, and a dot where it starts. Empty without suns.
+pub fn sun_overlays(suns: &[DirectionalLight], bounds: &Aabb) -> OverlayLayer {
+    let centre = (bounds.min + bounds.max) * 0.5;
+    let size = (bounds.max - bounds.min).length();
+    let (centre, len) =
+        if centre.is_finite() && size.is_finite() && size > 0.0 { (centre, size * 0.5) } else { (Vec3::ZERO, 1.0) };
+    let primitives = suns
+        .iter()
+        .filter(|d| d.is_valid())
+        .flat_map(|d| {
+            let dir = d.direction.normalize();
+            let c = d.color / d.color.max_element().max(1e-6);
+            let color = [c.x, c.y, c.z, 1.0];
+            let from = centre - dir * len;
+            // The head: two strokes a tenth of the length back from the tip, at 25 degrees.
+            let (u, _) = dir.any_orthonormal_pair();
+            let back = -dir * (len * 0.1);
+            let side = u * (len * 0.1 * 25f32.to_radians().tan());
+            vec![
+                Overlay::Point { position: from, color, radius_px: 6.0 },
+                Overlay::Line { from, to: centre, color },
+                Overlay::Line { from: centre, to: centre + back + side, color },
+                Overlay::Line { from: centre, to: centre + back - side, color },
+            ]
+        })
+        .collect();
+    OverlayLayer { name: SUNS_LAYER, visible_by_default: true, primitives }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_suns_arrow_points_along_its_light_to_the_scenes_centre() {
+        let bounds = Aabb { min: Vec3::new(-2.0, 0.0, -2.0), max: Vec3::new(2.0, 4.0, 2.0) };
+        let d = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let sun = DirectionalLight { direction: d, color: Vec3::new(2.0, 1.0, 0.5), illuminance: 3.0 };
+        let bad = DirectionalLight { direction: Vec3::ZERO, ..sun };
+        let layer = sun_overlays(&[sun, bad], &bounds);
+        assert_eq!(layer.name, SUNS_LAYER);
+        assert!(light_layer_legend(&layer).is_some_and(|l| !l.is_empty()));
+        // One sun drawn (the invalid one is not): a dot and three strokes.
+        assert_eq!(layer.primitives.len(), 4);
+        let Overlay::Line { from, to, color } = layer.primitives[1] else { panic!("{:?}", layer.primitives[1]) };
+        assert!(to.distance(Vec3::new(0.0, 2.0, 0.0)) < 1e-5, "the arrow ends at the centre: {to}");
+        assert!((to - from).normalize().dot(d) > 0.9999, "the arrow goes the way the light travels");
+        assert_eq!(color, [1.0, 0.5, 0.25, 1.0], "in the sun's colour at full brightness");
+        assert!(sun_overlays(&[], &bounds).primitives.is_empty());
+    }
 }

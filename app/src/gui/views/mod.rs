@@ -265,6 +265,16 @@ impl Views {
                 }
             }
         }
+        // The suns (after the dimming: no light's group holds them): the renderer's service shades them for
+        // every technique, so the layer is the app's.
+        if !session.suns.is_empty() {
+            let layer = shadowlab_core::technique::sun_overlays(&session.suns, &session.scene.bounds);
+            if is_on(&layer) {
+                let legend = shadowlab_core::technique::light_layer_legend(&layer).unwrap_or_default();
+                legends.push((layer.name.to_string(), legend));
+                out.extend(layer.primitives);
+            }
+        }
         if let Some(l) = session.selected.and_then(|i| lights.get(i)) {
             out.push(Overlay::Sphere { center: l.position, radius: l.range, color: [1.0, 1.0, 0.3, 0.6] });
             out.push(Overlay::Point { position: l.position, color: [1.0, 1.0, 0.2, 1.0], radius_px: 8.0 });
@@ -296,6 +306,9 @@ impl Views {
         // The reference's light ranges, offered over a technique that has no such layer of its own (listed once).
         if session.technique != REFERENCE && names.iter().all(|(n, _)| n != "light ranges") {
             names.push(("light ranges".into(), false));
+        }
+        if !session.suns.is_empty() {
+            names.push((shadowlab_core::technique::SUNS_LAYER.into(), true));
         }
         if let Ok(t) = gpu.main.technique(&session.technique) {
             if let Some((name, _)) = t.pixel_ids(&[]) {
