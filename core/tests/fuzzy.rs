@@ -318,3 +318,32 @@ fn indirect_overlays_follow_moved_lights_as_the_next_frame_shows_them() {
         assert!(!update.is_stale(layer), "{key}: {update:?}");
     }
 }
+
+#[test]
+fn a_frame_with_the_last_frames_vpls_reuses_their_clusters_and_renders_the_same() {
+    // The renderer keeps its VPL set while the lights do not change (only the camera moves, or the same view
+    // again): fuzzy clustering then reuses the VPL clusters on the GPU instead of clustering them again.
+    let scene = room();
+    let Rendered { mut renderer, hdr: first, report } =
+        Shot::indirect(&scene, &lights(), settings(256), "fuzzy").params(&[int("k_vpl", 32)]).render_keeping();
+    let reused = |r: &shadowlab_core::FrameReport| r.indirect.as_ref().unwrap().counts.figures["vpl clusters reused"];
+    assert_eq!(reused(&report), 0.0, "the first frame clusters");
+    let mut direct = create(&renderer, "unshadowed", &[]);
+    let (again, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &lights());
+    assert!(report.indirect.as_ref().unwrap().vpls_reused);
+    assert_eq!(reused(&report), 1.0, "the same VPLs are clustered again");
+    assert!(again == first, "reused clusters render another image");
+    assert_eq!(report.indirect.as_ref().unwrap().counts.figures["k_vpl"], 32.0);
+    // A moved light makes new VPLs: clustered again, and the image changes.
+    let moved = vec![white_light(Vec3::new(-0.6, 2.2, -0.4), 8.0, 30.0)];
+    let (other, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+    assert_eq!(reused(&report), 0.0);
+    assert!(other != first);
+    // Another K_vpl with the same VPLs: clustered again.
+    renderer.indirect_mut().unwrap().set_param("k_vpl", &ParamValue::Int(16)).unwrap();
+    let (_, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+    assert_eq!(reused(&report), 0.0, "new settings reuse old clusters");
+    assert_eq!(report.indirect.as_ref().unwrap().counts.figures["k_vpl"], 16.0);
+    let (_, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+    assert_eq!(reused(&report), 1.0);
+}

@@ -159,6 +159,12 @@ pub struct FuzzyClustering {
     /// The clusterings this frame's first step encodes (steps 2-4): the VPLs' and the shading points'
     /// k-means settings.
     pending: (Option<KMeansParams>, Option<KMeansParams>),
+    /// The VPL set and settings the VPL clusters on the GPU were made from: a frame with the same set (the
+    /// renderer keeps its `Arc` while the lights and VPL settings do not change, as when only the camera moves)
+    /// and settings reuses them instead of clustering again.
+    clustered_vpls: Option<(Arc<VplSet>, KMeansParams)>,
+    /// This frame reuses the last frame's VPL clusters.
+    vpl_reused: bool,
     /// Wall time of the last step's readback of the clusters (and the inspection's maps).
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
@@ -247,6 +253,8 @@ impl FuzzyClustering {
             inspection: Inspection::default(),
             counts: TechniqueCounts::default(),
             pending: (None, None),
+            clustered_vpls: None,
+            vpl_reused: false,
             readback_ms: 0.0,
             last_step: "fuzzy shading",
         }
@@ -291,9 +299,11 @@ impl FuzzyClustering {
     /// Steps 2-4, the frame's first step: the shading points from the G-buffer, both clusterings.
     fn cluster_step(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) -> Result<(), GpuError> {
         let (vpl_kp, sp_kp) = self.pending;
-        if let Some(kp) = &vpl_kp {
+        if let Some(kp) = vpl_kp.as_ref().filter(|_| !self.vpl_reused) {
+            self.clustered_vpls = None;
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, &ctx.vpls.buffer.buffer, kp, Some(max_flux))?;
+            self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
         if let Some(kp) = &sp_kp {
             let pixels = ctx.size.0 as u64 * ctx.size.1 as u64;
@@ -530,6 +540,10 @@ impl Technique for FuzzyClustering {
             let f = (self.params.fuzziness as usize).clamp(1, MAX_F);
             self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f)
         });
+        self.vpl_reused = vpl_kp.as_ref().is_some_and(|kp| {
+            self.clustered_vpls.as_ref().is_some_and(|(set, done)| Arc::ptr_eq(set, &self.vpls) && done == kp)
+        });
+        self.counts.figures.insert("vpl clusters reused".into(), if self.vpl_reused { 1.0 } else { 0.0 });
         if let Some(kp) = &vpl_kp {
             self.vpl_kmeans.shape = gpu::RunShape::of(kp);
         }
