@@ -977,3 +977,33 @@ fn app_times_must_be_seconds() {
     assert_fails_with(&["--quit-after", "nan"], "--quit-after NaN");
     assert_fails_with(&["--soak-secs=-3"], "--soak-secs -3");
 }
+
+#[test]
+fn suns_from_the_command_line_light_the_scene_directly_and_through_vpls() {
+    let base = ["--scene", "cornell", "--lights", "random:0:1", "--width", "64", "--height", "48"];
+    let with = |name: &str, extra: &[&str]| render_ok(name, &[&base[..], extra].concat());
+    let (dark, report) = with("sun-none", &[]);
+    assert!(!report["frame"]["passes"].as_array().unwrap().iter().any(|p| p["name"] == "directional lights"));
+    // The box is open on one side: one of two opposite suns shines in.
+    let lit = ["0,40,4", "180,40,4"]
+        .iter()
+        .map(|sun| {
+            let (img, report) = with(&format!("sun-{}", &sun[..1]), &["--sun", sun]);
+            let passes = report["frame"]["passes"].as_array().unwrap();
+            assert!(passes.iter().any(|p| p["name"] == "directional lights"), "--sun {sun}: {passes:?}");
+            image_stats(&img).1
+        })
+        .fold(0.0f32, f32::max);
+    assert!(lit > image_stats(&dark).1 + 2.0, "no sun lights the box: {lit} against {}", image_stats(&dark).1);
+    // Its light makes VPLs: the indirect component of a sun-lit box without point lights is not black.
+    let indirect = ["--indirect", "vpl-raytraced", "--component", "indirect", "--vpls", "128"];
+    let (img, report) = with("sun-indirect", &[&indirect[..], &["--sun", "180,40,4", "--sun", "0,40,4"]].concat());
+    assert!(report["frame"]["indirect"]["vpls"].as_u64().unwrap() > 0, "{}", report["frame"]["indirect"]);
+    assert!(image_stats(&img).1 > 1.0, "the indirect light of the suns is black");
+    // Bad suns are refused with a message.
+    assert_fails_with(&["render", "--out", "x.png", "--sun", "1,2"], "AZIMUTH,ELEVATION,ILLUMINANCE");
+    assert_fails_with(&["render", "--out", "x.png", "--sun", "0,95,1"], "elevation");
+    assert_fails_with(&["render", "--out", "x.png", "--sun", "0,45,-1"], ">= 0");
+    let five: Vec<&str> = (0..5).flat_map(|_| ["--sun", "0,45,1"]).collect();
+    assert_fails_with(&[&["render", "--out", "x.png"][..], &five].concat(), "at most 4");
+}

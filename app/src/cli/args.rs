@@ -21,6 +21,11 @@ pub struct SceneArgs {
     /// `circles:CIRCLES:PER_CIRCLE:L_ATT`, `grid:NXxNY:L_ATT`.
     #[arg(long, default_value = "scene")]
     pub lights: String,
+    /// A sun (directional light) `AZIMUTH,ELEVATION,ILLUMINANCE[,R,G,B]`: degrees from -Z towards +X, degrees
+    /// above the horizon, W/m², linear colour (white when absent). Repeatable, at most 4; replaces the scene's
+    /// own suns.
+    #[arg(long = "sun")]
+    pub suns: Vec<String>,
 }
 
 /// Image size, camera and shading settings shared by `render`, `compare` and `sweep`.

@@ -46,7 +46,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     check_output_path(&args.out, "md")?;
     let builtin = |name: &'static str| BenchScene {
         name,
-        scene: SceneArgs { scene: name.into(), scale: 1.0, lights: "scene".into() },
+        scene: SceneArgs { scene: name.into(), scale: 1.0, lights: "scene".into(), suns: Vec::new() },
         camera: None,
         z_far: None,
     };
@@ -57,7 +57,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         if sponza.is_file() {
             suite.push(BenchScene {
                 name: "sponza",
-                scene: SceneArgs { scene: sponza.display().to_string(), scale: 1.0, lights: "paper".into() },
+                scene: SceneArgs {
+                    scene: sponza.display().to_string(),
+                    scale: 1.0,
+                    lights: "paper".into(),
+                    suns: Vec::new(),
+                },
                 camera: Some("-14,2.5,0,10,3,0"),
                 z_far: Some(30.0),
             });
@@ -71,6 +76,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     scene: conference.display().to_string(),
                     scale: 0.01,
                     lights: "random:64:3:1".into(),
+                    suns: Vec::new(),
                 },
                 camera: None,
                 z_far: None,

@@ -7,18 +7,47 @@ use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use shadowlab_core::renderer::Component;
 use shadowlab_core::scene::layout::{self, LightLayout};
-use shadowlab_core::scene::{Camera, PointLight, Scene};
+use shadowlab_core::scene::{sun_direction, Camera, DirectionalLight, PointLight, Scene, MAX_DIRECTIONAL_LIGHTS};
 use shadowlab_core::technique::{self, Technique};
 use shadowlab_core::vpl::{VplSettings, VplSource};
 use shadowlab_core::{AutoExposure, GpuContext, RenderSettings, Renderer, ToneMap};
 
 use super::args::{check_indirect, FrameArgs, SceneArgs};
 
-/// Load the scene and its lights as the arguments say.
+/// Parse `--sun AZIMUTH,ELEVATION,ILLUMINANCE[,R,G,B]` (degrees, degrees, W/m², linear colour).
+pub fn parse_sun(text: &str) -> Result<DirectionalLight> {
+    let usage = "expected AZIMUTH,ELEVATION,ILLUMINANCE[,R,G,B] (degrees from -Z towards +X, degrees above the \
+                 horizon, W/m², linear colour)";
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| anyhow!("--sun '{text}': {usage}"))?;
+    if !(v.len() == 3 || v.len() == 6) || v.iter().any(|x| !x.is_finite()) {
+        bail!("--sun '{text}': {usage}, all finite");
+    }
+    if !(-90.0..=90.0).contains(&v[1]) {
+        bail!("--sun '{text}': the elevation {} must be between -90 and 90 degrees", v[1]);
+    }
+    let color = if v.len() == 6 { Vec3::new(v[3], v[4], v[5]) } else { Vec3::ONE };
+    let sun = DirectionalLight { direction: sun_direction(v[0], v[1]), color, illuminance: v[2] };
+    if !sun.is_valid() {
+        bail!("--sun '{text}': the illuminance and colour must be >= 0");
+    }
+    Ok(sun)
+}
+
+/// Load the scene and its lights as the arguments say (`--sun` replaces the scene's own suns).
 pub fn load_scene(args: &SceneArgs) -> Result<(Scene, Vec<PointLight>)> {
-    let scene = Scene::load_any(&args.scene, args.scale)?;
+    let mut scene = Scene::load_any(&args.scene, args.scale)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
+    }
+    if !args.suns.is_empty() {
+        if args.suns.len() > MAX_DIRECTIONAL_LIGHTS {
+            bail!("{} --sun options: at most {MAX_DIRECTIONAL_LIGHTS} suns are shaded", args.suns.len());
+        }
+        scene.directional = args.suns.iter().map(|s| parse_sun(s)).collect::<Result<_>>()?;
     }
     let mut layout: LightLayout = layout::parse(&args.lights)?;
     if layout == LightLayout::Scene && scene.lights.is_empty() {

@@ -194,6 +194,20 @@ impl DirectionalLight {
     }
 }
 
+/// The direction of travel of a sun's light from the sun's azimuth (degrees from -Z towards +X) and elevation
+/// (degrees above the horizon, +Y up): the convention of the app's Lights panel and the CLI's `--sun`.
+pub fn sun_direction(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
+    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+    -Vec3::new(el.cos() * az.sin(), el.sin(), -el.cos() * az.cos())
+}
+
+/// The azimuth and elevation (degrees) of the sun a light travelling along `direction` comes from (the inverse
+/// of [`sun_direction`]).
+pub fn sun_angles(direction: Vec3) -> (f32, f32) {
+    let s = -direction.normalize_or(Vec3::NEG_Y);
+    (s.x.atan2(-s.z).to_degrees(), s.y.clamp(-1.0, 1.0).asin().to_degrees())
+}
+
 /// A point light, omnidirectional or a spot. Radiance falls off smoothly to zero at `range` (the papers' `L_att`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PointLight {

@@ -100,18 +100,8 @@ pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) 
     suns_ui(session, ui);
 }
 
-/// The sun's direction of travel from the sun's azimuth (degrees from -Z towards +X) and elevation (degrees
-/// above the horizon).
-pub fn sun_direction(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
-    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-    -Vec3::new(el.cos() * az.sin(), el.sin(), -el.cos() * az.cos())
-}
-
-/// The azimuth and elevation (degrees) of the sun a light travelling along `direction` comes from.
-pub fn sun_angles(direction: Vec3) -> (f32, f32) {
-    let s = -direction.normalize_or(Vec3::NEG_Y);
-    (s.x.atan2(-s.z).to_degrees(), s.y.clamp(-1.0, 1.0).asin().to_degrees())
-}
+/// The sun's angles (the core's convention, shared with the CLI's `--sun`).
+pub use shadowlab_core::scene::{sun_angles, sun_direction};
 
 /// The directional lights: add, aim, colour and remove (undoable, saved in scene files).
 fn suns_ui(session: &mut Session, ui: &mut egui::Ui) {
