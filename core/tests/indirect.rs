@@ -94,6 +94,13 @@ fn intercepted_flux(intensity: f32, range: f32, h: f32, side: f32) -> f64 {
     sum
 }
 
+/// The scene's BVH (the renderer's service), on a GPU of its own.
+fn scene_bvh(scene: &Scene) -> std::sync::Arc<shadowlab_core::accel::scene_bvh::SceneBvh> {
+    let gpu = gpu();
+    let layout = shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
+    shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, scene, &layout).bvh(&gpu).0
+}
+
 fn plane_scene(side: f32, albedo: f32) -> Scene {
     let camera = Camera::look_at(Vec3::new(0.0, 6.0, 5.0), Vec3::ZERO, 60f32.to_radians(), 0.1, 50.0);
     scene_of("plane", vec![quad("ground", Vec3::ZERO, side, 0)], albedo, camera)
@@ -103,13 +110,7 @@ fn plane_scene(side: f32, albedo: f32) -> Scene {
 fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
     let (side, h, albedo) = (8.0, 2.0, 0.6);
     let scene = plane_scene(side, albedo);
-    let gpu = gpu();
-    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
-        &gpu,
-        &scene,
-        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
-    );
-    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let bvh = scene_bvh(&scene);
     let light = PointLight::new(Vec3::new(0.0, h, 0.0), Vec3::new(1.0, 0.5, 0.25), 10.0, 50.0);
     let expected = albedo as f64 * intercepted_flux(10.0, 50.0, h, side);
     let mut totals = Vec::new();
@@ -134,13 +135,7 @@ fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {
 #[test]
 fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little() {
     let scene = plane_scene(8.0, 0.5);
-    let gpu = gpu();
-    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
-        &gpu,
-        &scene,
-        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
-    );
-    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let bvh = scene_bvh(&scene);
     let light = PointLight::new(Vec3::new(0.3, 2.0, -0.2), Vec3::ONE, 5.0, 50.0);
     for source in [VplSource::Rsm, VplSource::Traced] {
         let s = VplSettings { count: 256, source, bounces: 3, ..Default::default() };
@@ -162,11 +157,7 @@ fn the_same_seed_gives_the_same_vpls_and_a_small_light_move_moves_them_a_little(
 
 #[test]
 fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error() {
-    let gpu = gpu();
-    let layout = shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
-    let scene = plane_scene(8.0, 0.5);
-    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &scene, &layout);
-    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let bvh = scene_bvh(&plane_scene(8.0, 0.5));
     // Below the plane and facing nowhere it is single-sided? No: planes are hit from both sides; a light far
     // outside the scene with a short range reaches nothing.
     let away = PointLight::new(Vec3::new(0.0, 100.0, 0.0), Vec3::ONE, 5.0, 1.0);
@@ -176,9 +167,7 @@ fn lights_that_hit_nothing_black_albedo_and_zero_vpls_make_no_vpls_and_no_error(
     assert!(none.vpls.is_empty());
     let zero = vpl::generate(&bvh, &[away], &[], &VplSettings { count: 0, ..Default::default() });
     assert!(zero.vpls.is_empty() && zero.samples == 0);
-    let black = plane_scene(8.0, 0.0);
-    let black_gpu = shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, &black, &layout);
-    let (black_bvh, _) = black_gpu.bvh(&gpu);
+    let black_bvh = scene_bvh(&plane_scene(8.0, 0.0));
     let light = PointLight::new(Vec3::new(0.0, 2.0, 0.0), Vec3::ONE, 5.0, 50.0);
     assert!(vpl::generate(&black_bvh, &[light], &[], &VplSettings::default()).vpls.is_empty());
     // A million VPLs is refused with a message naming the limit.
@@ -422,13 +411,7 @@ fn spot_lights_light_their_cone_only_in_every_direct_technique() {
 #[test]
 fn spot_vpls_lie_in_the_cone_and_carry_its_flux_and_a_zero_cone_is_dark() {
     let scene = plane_scene(8.0, 0.5);
-    let gpu = gpu();
-    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
-        &gpu,
-        &scene,
-        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
-    );
-    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let bvh = scene_bvh(&scene);
     let spot = spot_over_plane(25.0);
     let cone = spot.spot.unwrap();
     // The flux the plane reflects, by quadrature over the plane, the cone's falloff included.
@@ -540,13 +523,7 @@ fn sun(direction: Vec3, color: Vec3, illuminance: f32) -> DirectionalLight {
 fn sun_vpls_carry_the_flux_the_plane_reflects_alone_and_beside_a_point_light() {
     let (side, albedo) = (8.0, 0.6);
     let scene = plane_scene(side, albedo);
-    let gpu = gpu();
-    let gpu_scene = shadowlab_core::accel::gpu_scene::GpuScene::new(
-        &gpu,
-        &scene,
-        &shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device),
-    );
-    let (bvh, _) = gpu_scene.bvh(&gpu);
+    let bvh = scene_bvh(&scene);
     let d = Vec3::new(0.3, -1.0, 0.2).normalize();
     let suns = [sun(d, Vec3::new(1.0, 0.5, 0.25), 2.0)];
     // The plane intercepts E times its area projected along the sun's direction, and reflects rho of it.

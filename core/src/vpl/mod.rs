@@ -274,6 +274,8 @@ struct SunAperture {
     /// Unit axes of its plane.
     u: Vec3,
     v: Vec3,
+    /// The direction the sun's light travels (unit).
+    dir: Vec3,
     /// The bounding sphere's radius.
     radius: f32,
     /// Its area: `4 R^2` (square) or `pi R^2` (disc).
@@ -296,6 +298,7 @@ impl SunAperture {
             origin: centre - dir * (radius * 1.01),
             u,
             v,
+            dir,
             radius,
             area,
         })
@@ -321,14 +324,15 @@ impl SunAperture {
 /// What the samples are shared among: the point lights, then the suns.
 enum Emitter<'a> {
     Point(&'a PointLight),
-    Sun(&'a DirectionalLight, SunAperture),
+    /// No aperture for an empty scene or a zero direction: the sun keeps its index, with no power.
+    Sun(&'a DirectionalLight, Option<SunAperture>),
 }
 
 impl Emitter<'_> {
     fn power(&self) -> f32 {
         match self {
             Emitter::Point(l) => light_power(l),
-            Emitter::Sun(sun, aperture) if sun.is_valid() => {
+            Emitter::Sun(sun, Some(aperture)) if sun.is_valid() => {
                 let p = sun.illuminance * aperture.area * (sun.color.x + sun.color.y + sun.color.z) / 3.0;
                 if p.is_finite() {
                     p
@@ -346,17 +350,7 @@ impl Emitter<'_> {
 pub fn generate(bvh: &SceneBvh, lights: &[PointLight], suns: &[DirectionalLight], settings: &VplSettings) -> VplSet {
     let mut set = VplSet { settings: Some(*settings), point_lights: lights.len() as u32, ..Default::default() };
     let mut emitters: Vec<Emitter> = lights.iter().map(Emitter::Point).collect();
-    for sun in suns {
-        // A sun whose aperture cannot be made (an empty scene) still takes its index, with no power.
-        let aperture = SunAperture::new(bvh, sun, settings.source).unwrap_or(SunAperture {
-            origin: Vec3::ZERO,
-            u: Vec3::X,
-            v: Vec3::Y,
-            radius: 0.0,
-            area: 0.0,
-        });
-        emitters.push(Emitter::Sun(sun, aperture));
-    }
+    emitters.extend(suns.iter().map(|sun| Emitter::Sun(sun, SunAperture::new(bvh, sun, settings.source))));
     let powers: Vec<f32> = emitters.iter().map(Emitter::power).collect();
     let total: f32 = powers.iter().sum();
     if settings.count == 0 || !(total > 0.0 && total.is_finite()) || bvh.cpu.triangles.is_empty() {
@@ -395,11 +389,12 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], suns: &[DirectionalLight]
                 };
                 (hit, light.position, flux)
             }
-            Emitter::Sun(sun, aperture) => {
+            // A sun without an aperture has no power, so p_light above is 0 for it.
+            Emitter::Sun(_, None) => continue,
+            Emitter::Sun(sun, Some(aperture)) => {
                 set.samples += 1;
                 let origin = aperture.point(settings.source, u[2], u[3]);
-                let dir = sun.direction.normalize();
-                let Some(hit) = bvh.closest_hit(origin, dir, f32::INFINITY) else {
+                let Some(hit) = bvh.closest_hit(origin, aperture.dir, f32::INFINITY) else {
                     set.misses += 1;
                     continue;
                 };
