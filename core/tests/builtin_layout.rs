@@ -371,6 +371,8 @@ fn builtins_are_deterministic_and_paper_lights_match() {
 fn specs_parse_to_the_expected_layouts() {
     assert_eq!(parse_ok("random:1024:1.5"), LightLayout::Random { count: 1024, range: 1.5, seed: 1 });
     assert_eq!(parse_ok("random:1024:1.5:7"), LightLayout::Random { count: 1024, range: 1.5, seed: 7 });
+    assert_eq!(parse_ok("above:256:4"), LightLayout::Above { count: 256, range: 4.0, seed: 1 });
+    assert_eq!(parse_ok("Above:256:4:9"), LightLayout::Above { count: 256, range: 4.0, seed: 9 });
     assert_eq!(parse_ok("circles:10:8:7"), LightLayout::Circles { circles: 10, per_circle: 8, range: 7.0 });
     assert_eq!(parse_ok("grid:8x4:2"), LightLayout::Grid { nx: 8, ny: 4, range: 2.0 });
     assert_eq!(parse_ok("grid:8X4:2"), LightLayout::Grid { nx: 8, ny: 4, range: 2.0 });
@@ -394,6 +396,7 @@ fn specs_round_trip_through_display() {
         "paper",
         "scene",
         "random:0:1",
+        "above:256:4:3",
     ] {
         let layout = parse_ok(spec);
         let text = layout.to_string();
@@ -529,6 +532,32 @@ fn random_lights_fill_the_shrunk_bounds() {
         assert!(spread.cmpge(shrunk.size() * 0.9).all(), "{name}: {spread} vs {}", shrunk.size());
         // Warm colours: red is the largest channel.
         assert!(lights.iter().all(|l| l.color.x == 1.0 && l.color.max_element() == 1.0 && l.color.z < 1.0));
+    }
+}
+
+#[test]
+fn above_lights_lie_over_the_footprint_from_the_top_to_half_the_height_higher() {
+    for &name in builtin::NAMES {
+        let scene = build(name);
+        let lights = layout::generate(&parse_ok("above:500:4:2"), &scene).unwrap();
+        assert_eq!(lights.len(), 500);
+        let (b, size) = (scene.bounds, scene.bounds.size());
+        let depth = (0.5 * size.y).max(0.1 * size.x.max(size.z));
+        for l in &lights {
+            assert!(l.is_valid() && l.range == 4.0);
+            let p = l.position;
+            assert!(p.y >= b.max.y - 1e-4 && p.y <= b.max.y + depth, "{name}: {p} not above the top {}", b.max.y);
+            let inset = size * 0.05;
+            assert!(p.x >= b.min.x + inset.x - 1e-4 && p.x <= b.max.x - inset.x + 1e-4, "{name}: {p}");
+            assert!(p.z >= b.min.z + inset.z - 1e-4 && p.z <= b.max.z - inset.z + 1e-4, "{name}: {p}");
+        }
+        // Spread over the slab: the lowest light near the top, the highest near the slab's top.
+        let (lo, hi) =
+            lights.iter().fold((f32::MAX, f32::MIN), |(lo, hi), l| (lo.min(l.position.y), hi.max(l.position.y)));
+        assert!(lo < b.max.y + 0.05 * depth && hi > b.max.y + 0.85 * depth, "{name}: heights {lo}..{hi}");
+        // Seeded: the same spec gives the same lights, another seed others.
+        assert_eq!(layout::generate(&parse_ok("above:500:4:2"), &scene).unwrap(), lights);
+        assert_ne!(layout::generate(&parse_ok("above:500:4:3"), &scene).unwrap(), lights);
     }
 }
 

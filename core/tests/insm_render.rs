@@ -89,6 +89,30 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
         assert_eq!(c.batches, 6 + 1 + 1, "a step per intermediate map, the triangulation, one light batch");
         mesh_sizes.push(gpu_triangles.len());
     }
+    // Dilation (off by default, as above): the GPU's vertices are the CPU twin's dilation of the undilated samples,
+    // and some samples (the plate's rim, the ground around it) did move.
+    insm.set_param("dilate", &ParamValue::Bool(false)).unwrap();
+    frame(&mut r, &mut insm, &scene.camera, &lights);
+    let (plain, _) = insm.read_meshes(r.gpu()).unwrap();
+    insm.set_param("dilate", &ParamValue::Bool(true)).unwrap();
+    frame(&mut r, &mut insm, &scene.camera, &lights);
+    let (dilated, _) = insm.read_meshes(r.gpu()).unwrap();
+    let eps = insm.mesh_settings().epsilon;
+    let (mut moved, mut differ) = (0, 0);
+    for (j, (p, d)) in plain.chunks(64 * 64).zip(dilated.chunks(64 * 64)).enumerate() {
+        let cpu = SampledImage { resolution: 64, samples: p }.dilated(eps);
+        for (i, (c, g)) in cpu.iter().zip(d).enumerate() {
+            assert_eq!(c.w, g.w, "map {j} sample {i}: the inverse depth is kept");
+            if (c.truncate() - g.truncate()).length() > 1e-4 * (1.0 + c.truncate().length()) {
+                differ += 1;
+            }
+            if (p[i].truncate() - g.truncate()).length() > 1e-3 {
+                moved += 1;
+            }
+        }
+    }
+    assert!(differ * 1000 <= plain.len(), "{differ} dilated vertices differ from the CPU twin's");
+    assert!(moved > 100, "only {moved} samples moved across the plate's and the ground's edges");
     // The ground and the plate are planes, but at 64² from the box placement many 8x8 tiles hold an edge of
     // the ground or the plate (or the image's last row and column, never merged): measured 7,566 of 10,178.
     assert!(mesh_sizes[1] * 10 < mesh_sizes[0] * 8, "adaptive mesh {} vs {} triangles", mesh_sizes[1], mesh_sizes[0]);

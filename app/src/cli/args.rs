@@ -18,6 +18,7 @@ pub struct SceneArgs {
     #[arg(long, default_value_t = 1.0)]
     pub scale: f32,
     /// Lights: `scene` (from the scene), `paper` (the scene's paper layout), `random:COUNT:L_ATT[:SEED]`,
+    /// `above:COUNT:L_ATT[:SEED]` (over the scene, from its top to half its height higher),
     /// `circles:CIRCLES:PER_CIRCLE:L_ATT`, `grid:NXxNY:L_ATT`.
     #[arg(long, default_value = "scene")]
     pub lights: String,

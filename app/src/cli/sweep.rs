@@ -116,7 +116,13 @@ pub fn run(args: SweepArgs) -> Result<()> {
             LightLayout::Random { range, seed, .. } => {
                 Ok(Some(layout::generate(&LightLayout::Random { count, range, seed }, &scene)?))
             }
-            _ => bail!("--param lights needs a random layout (--lights random:COUNT:L_ATT:SEED)"),
+            LightLayout::Above { range, seed, .. } => {
+                Ok(Some(layout::generate(&LightLayout::Above { count, range, seed }, &scene)?))
+            }
+            _ => bail!(
+                "--param lights needs a random or above layout (--lights random:COUNT:L_ATT:SEED or \
+                 above:COUNT:L_ATT:SEED)"
+            ),
         }
     };
     for setting in &settings {

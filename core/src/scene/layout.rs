@@ -47,6 +47,10 @@ pub const SPONZA_PAPER_RANGE: f32 = 7.0;
 pub enum LightLayout {
     /// `count` lights at seeded uniform random positions inside the scene bounds (shrunk by 5% per side).
     Random { count: usize, range: f32, seed: u64 },
+    /// `count` lights at seeded uniform random positions above the scene: over its footprint (shrunk by 5% per
+    /// side), from its top up to half its height higher (a model on a floor lit from above, the INSM paper's
+    /// outside-in scenes).
+    Above { count: usize, range: f32, seed: u64 },
     /// `circles` horizontal circles of `per_circle` lights each, in two rows along the longest horizontal axis.
     Circles { circles: usize, per_circle: usize, range: f32 },
     /// A horizontal `nx` (along X) by `ny` (along Z) grid at one third of the bounds' height.
@@ -65,7 +69,7 @@ impl LightLayout {
     /// overflows (such a layout is rejected anyway) or for `paper` and `scene`.
     pub fn light_count(&self) -> Option<usize> {
         match *self {
-            LightLayout::Random { count, .. } => Some(count),
+            LightLayout::Random { count, .. } | LightLayout::Above { count, .. } => Some(count),
             LightLayout::Circles { circles, per_circle, .. } => circles.checked_mul(per_circle),
             LightLayout::Grid { nx, ny, .. } => nx.checked_mul(ny),
             LightLayout::Spot { .. } => Some(1),
@@ -77,6 +81,7 @@ impl LightLayout {
     pub fn range(&self) -> Option<f32> {
         match *self {
             LightLayout::Random { range, .. }
+            | LightLayout::Above { range, .. }
             | LightLayout::Circles { range, .. }
             | LightLayout::Grid { range, .. }
             | LightLayout::Spot { range, .. } => Some(range),
@@ -121,6 +126,7 @@ impl fmt::Display for LightLayout {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             LightLayout::Random { count, range, seed } => write!(f, "random:{count}:{range}:{seed}"),
+            LightLayout::Above { count, range, seed } => write!(f, "above:{count}:{range}:{seed}"),
             LightLayout::Circles { circles, per_circle, range } => write!(f, "circles:{circles}:{per_circle}:{range}"),
             LightLayout::Grid { nx, ny, range } => write!(f, "grid:{nx}x{ny}:{range}"),
             LightLayout::Paper => f.write_str("paper"),
@@ -139,7 +145,8 @@ impl FromStr for LightLayout {
     }
 }
 
-const USAGE: &str = "expected random:COUNT:L_ATT[:SEED], circles:N:PER_CIRCLE:L_ATT, grid:NXxNY:L_ATT, \
+const USAGE: &str =
+    "expected random:COUNT:L_ATT[:SEED], above:COUNT:L_ATT[:SEED], circles:N:PER_CIRCLE:L_ATT, grid:NXxNY:L_ATT, \
                      spot:PX,PY,PZ:TX,TY,TZ:CONE_DEG:L_ATT, paper or scene";
 
 /// Parse a layout spec such as `random:1024:1.5`, `random:1024:1.5:7`, `circles:10:8:7`, `grid:8x8:2`, `paper`
@@ -151,8 +158,9 @@ pub fn parse(spec: &str) -> Result<LightLayout, LayoutError> {
     let args: Vec<&str> = parts.map(str::trim).collect();
 
     let layout = match kind.as_str() {
-        "random" => {
-            expect_fields(&args, 2, 3, "random:COUNT:L_ATT[:SEED]").map_err(invalid)?;
+        "random" | "above" => {
+            let usage = if kind == "random" { "random:COUNT:L_ATT[:SEED]" } else { "above:COUNT:L_ATT[:SEED]" };
+            expect_fields(&args, 2, 3, usage).map_err(invalid)?;
             let count = parse_count(args[0], "COUNT").map_err(invalid)?;
             let range = parse_range(args[1]).map_err(invalid)?;
             let seed = match args.get(2) {
@@ -161,7 +169,11 @@ pub fn parse(spec: &str) -> Result<LightLayout, LayoutError> {
                 })?,
                 None => 1,
             };
-            LightLayout::Random { count, range, seed }
+            if kind == "random" {
+                LightLayout::Random { count, range, seed }
+            } else {
+                LightLayout::Above { count, range, seed }
+            }
         }
         "circles" => {
             expect_fields(&args, 3, 3, "circles:N:PER_CIRCLE:L_ATT").map_err(invalid)?;
@@ -269,6 +281,7 @@ pub fn generate(layout: &LightLayout, scene: &Scene) -> Result<Vec<PointLight>, 
     let bounds = usable_bounds(&scene.bounds);
     let lights = match *layout {
         LightLayout::Random { count, range, seed } => random_lights(&bounds, count, range, seed),
+        LightLayout::Above { count, range, seed } => random_lights(&above(&bounds), count, range, seed),
         LightLayout::Circles { circles, per_circle, range } => circle_lights(&bounds, circles, per_circle, range),
         LightLayout::Grid { nx, ny, range } => grid_lights(&bounds, nx, ny, range),
         LightLayout::Paper => paper_lights(scene)?,
@@ -320,6 +333,17 @@ fn random_lights(bounds: &Aabb, count: usize, range: f32, seed: u64) -> Vec<Poin
             PointLight::new(lo + (hi - lo) * t, warm_color(&mut rng), intensity, range)
         })
         .collect()
+}
+
+/// The box `above` fills (before `random_lights`' 5% inset): the scene's footprint, from its top to half its
+/// height higher (at least a tenth of its widest side, so that a flat scene gets a slab, not a plane).
+fn above(bounds: &Aabb) -> Aabb {
+    let size = bounds.size();
+    let depth = (0.5 * size.y).max(0.1 * size.x.max(size.z)).max(1e-3);
+    // The inset takes 5% of the slab's height off its bottom: start that much lower (h = depth / 0.95, 0.05 h =
+    // depth / 19), so that the lowest light is at the top.
+    let min = Vec3::new(bounds.min.x, bounds.max.y - depth / 19.0, bounds.min.z);
+    Aabb { min, max: Vec3::new(bounds.max.x, bounds.max.y + depth, bounds.max.z) }
 }
 
 /// Circles like LightCluster's Sponza layout: two rows of circles along the longest horizontal axis, at 30% of

@@ -117,6 +117,9 @@ pub struct InsmParams {
     pub merge_epsilon: f32,
     /// Drop the triangles of a map whose corners another map reconstructs more finely (beyond the paper).
     pub drop_covered: bool,
+    /// Move every sample at a cut edge half a sample across it along its surface, undoing the half-sample
+    /// erosion of the reconstruction (beyond the paper).
+    pub dilate: bool,
     pub placement: Placement,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
     pub cube: CubeMapParams,
@@ -131,6 +134,7 @@ impl Default for InsmParams {
             adaptive: true,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
+            dilate: false,
             placement: Placement::Box,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
@@ -148,7 +152,7 @@ struct TriangulateUniform {
     adaptive: u32,
     merge_epsilon: f32,
     drop_covered: u32,
-    _pad: u32,
+    dilate: u32,
 }
 const _: () = assert!(std::mem::size_of::<TriangulateUniform>() == 32);
 
@@ -284,7 +288,7 @@ impl Insm {
                 adaptive: 0,
                 merge_epsilon: 0.0,
                 drop_covered: 0,
-                _pad: 0,
+                dilate: 0,
             }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
@@ -429,6 +433,15 @@ impl Technique for Insm {
                 value: ParamValue::Bool(self.params.drop_covered),
             },
             Param {
+                key: "dilate",
+                label: "Undo the erosion",
+                help: "Move every sample at a depth discontinuity half a sample across it, along its surface: the \
+                       reconstruction joins sample centres, so each surface ends half a sample short of its true \
+                       edge and light leaks past it (beyond the paper; off: the paper's half-sample erosion)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(self.params.dilate),
+            },
+            Param {
                 key: "placement",
                 label: "Viewpoints",
                 help: "box: the paper's bounding-box placement; inside: a ring inside the scene (rooms); custom: \
@@ -461,6 +474,7 @@ impl Technique for Insm {
             ("adaptive", ParamValue::Bool(v)) => self.params.adaptive = *v,
             ("merge_epsilon", ParamValue::Float(v)) => self.params.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.params.drop_covered = *v,
+            ("dilate", ParamValue::Bool(v)) => self.params.dilate = *v,
             ("placement", ParamValue::Choice(v)) => {
                 self.params.placement = Placement::from_name(v).expect("check_param checked the choice")
             }
@@ -558,7 +572,7 @@ impl Technique for Insm {
             adaptive: u32::from(self.params.adaptive),
             merge_epsilon: self.params.merge_epsilon,
             drop_covered: u32::from(self.params.drop_covered),
-            _pad: 0,
+            dilate: u32::from(self.params.dilate),
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
 

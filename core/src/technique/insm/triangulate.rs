@@ -60,6 +60,11 @@ pub struct MapView {
     pub far: f32,
 }
 
+/// tan 60°: the steepest surface (against the image plane) whose samples [`SampledImage::dilated`] moves; a
+/// steeper one is at a curved silhouette, where the tangent would leave the surface by up to half a sample and
+/// shadow it.
+const GRAZING_SLOPE: f32 = 1.732_050_8;
+
 /// Slack of the finer-sampling comparison of [`covered_samples`]: a map whose neighbourhood is within 5 % of
 /// the other's area is neither finer nor coarser, and the lower-numbered map keeps the surface.
 const FINER_SLACK: f32 = 0.95;
@@ -200,6 +205,52 @@ impl SampledImage<'_> {
         }
         // Outside the image (-1) gives no information and does not object, as in the paper's test.
         !known_a && !known_b && (z_before < 0.0 || z_after < 0.0 || (za - zb).abs() < epsilon * za.max(zb))
+    }
+
+    /// Half the step from the sample behind `s` (at `s - d`) to `s`, when the edge from `s` to `s + d` is cut
+    /// and the one from `s - d` to `s` is kept (both neighbours in the image): how far `s` moves across the cut.
+    fn half_step_across(&self, s: (i64, i64), d: (i64, i64), epsilon: f32) -> Vec3 {
+        let r = self.resolution as i64;
+        let (n, behind) = ((s.0 + d.0, s.1 + d.1), (s.0 - d.0, s.1 - d.1));
+        let inside = |p: (i64, i64)| p.0 >= 0 && p.1 >= 0 && p.0 < r && p.1 < r;
+        if !inside(n)
+            || !inside(behind)
+            || self.edge_connected(s, n, epsilon)
+            || !self.edge_connected(behind, s, epsilon)
+        {
+            return Vec3::ZERO;
+        }
+        let step = self.position(s.0 as u32, s.1 as u32) - self.position(behind.0 as u32, behind.1 as u32);
+        let depth_change = (1.0 / self.z(s.0, s.1) - 1.0 / self.z(behind.0, behind.1)).abs();
+        let lateral_sq = (step.length_squared() - depth_change * depth_change).max(0.0);
+        if depth_change * depth_change > GRAZING_SLOPE * GRAZING_SLOPE * lateral_sq {
+            return Vec3::ZERO;
+        }
+        0.5 * step
+    }
+
+    /// The samples with every sample at a cut edge moved half a sample across it, along its own surface (beyond
+    /// the paper, INSM's `dilate`): the reconstruction joins sample centres, so a surface ends at its last sample
+    /// although its true edge lies anywhere up to the next one, the half-sample erosion of the paper's section
+    /// 4.1. In each axis direction `d` where the edge to `s + d` is cut (a step, a crease or the background)
+    /// and the edge from `s - d` is kept, `s` moves by half the step from `s - d` (the expected position of
+    /// the edge, extrapolated along the surface); a sample with no kept edge behind it has no triangle along
+    /// that axis and does not move. Inverse depths are unchanged, so the connectivity tests see the samples as
+    /// rendered. The twin of `dilated_position` in the shader (which writes these as the vertices).
+    pub fn dilated(&self, epsilon: f32) -> Vec<Vec4> {
+        let r = self.resolution as i64;
+        (0..r * r)
+            .map(|i| {
+                let s = self.samples[i as usize];
+                if s.w <= 0.0 {
+                    return s;
+                }
+                let p = (i % r, i / r);
+                let offset: Vec3 =
+                    [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().map(|&d| self.half_step_across(p, d, epsilon)).sum();
+                (s.truncate() + offset).extend(s.w)
+            })
+            .collect()
     }
 
     /// The kept triangles of neighbourhood `(u, v)` (Algorithm 2, lines 2-5), as sample indices.
@@ -432,6 +483,61 @@ mod tests {
         let spike = image(8, |x, _| if x == 3 { 1.0 } else { 0.25 });
         let img = SampledImage { resolution: 8, samples: &spike };
         assert!(img.triangles(0.01).iter().all(|t| t.iter().all(|&i| i % 8 != 3)));
+    }
+
+    #[test]
+    fn dilation_moves_the_samples_at_a_cut_edge_half_a_sample_across_it_and_no_other() {
+        // A step between x = 3 (near, z = 1) and x = 4 (far, z = 0.25) on a grid of unit spacing: both sides
+        // end at their last sample, so the union of the meshes misses the strip 3..4 (the half-sample erosion
+        // on each side). Dilated, the near side reaches 3.5 and the far side starts there.
+        let s = image(8, |x, _| if x < 4 { 1.0 } else { 0.25 });
+        let img = SampledImage { resolution: 8, samples: &s };
+        let d = img.dilated(0.05);
+        for (i, (before, after)) in s.iter().zip(&d).enumerate() {
+            let (x, y) = (i % 8, i / 8);
+            assert_eq!(after.w, before.w, "inverse depth is kept");
+            let expected_x = match x {
+                3 | 4 => 3.5,
+                _ => x as f32,
+            };
+            // (In the first and last rows the diagonal next to the step is ambiguous, but dilation only looks
+            // along the axes.)
+            assert_eq!((after.x, after.y), (expected_x, y as f32), "sample ({x}, {y})");
+        }
+        // A bar three samples wide in front of the ground grows to three samples' width (2.5 to 5.5); a bar one
+        // sample wide has no triangle and does not move; the ground's samples next to a bar move under it.
+        let bar = image(14, |x, _| if (3..=5).contains(&x) || x == 9 { 1.0 } else { 0.25 });
+        let img = SampledImage { resolution: 14, samples: &bar };
+        let d = img.dilated(0.05);
+        let x_at = |x: usize| d[5 * 14 + x].x;
+        assert_eq!([x_at(3), x_at(4), x_at(5)], [2.5, 4.0, 5.5]);
+        assert_eq!(x_at(9), 9.0, "a one-sample bar has no kept edge behind it");
+        assert_eq!([x_at(2), x_at(6), x_at(8), x_at(10)], [2.5, 5.5, 8.5, 9.5]);
+        // Nothing moves on a plane, nor at the image's border (the surface goes on outside it).
+        let plane = image(9, |x, y| 0.5 + 0.01 * x as f32 + 0.02 * y as f32);
+        let img = SampledImage { resolution: 9, samples: &plane };
+        assert_eq!(img.dilated(1e-3), plane);
+    }
+
+    #[test]
+    fn dilation_extrapolates_along_a_slanted_surface() {
+        // World positions along a slope (z rises by 0.3 per sample) ending at a step: the last sample moves
+        // half a step along the slope, in depth too, not in the image plane alone.
+        let r = 8;
+        let s: Vec<Vec4> = (0..r * r)
+            .map(|i| {
+                let (x, y) = (i % r, i / r);
+                if x < 5 {
+                    Vec4::new(x as f32, y as f32, 0.3 * x as f32, 1.0 / (2.0 + 0.1 * x as f32))
+                } else {
+                    Vec4::new(x as f32, y as f32, 5.0, 0.1)
+                }
+            })
+            .collect();
+        let img = SampledImage { resolution: r, samples: &s };
+        let d = img.dilated(0.01);
+        let last = d[(3 * r + 4) as usize];
+        assert!((last.x - 4.5).abs() < 1e-6 && (last.z - 1.35).abs() < 1e-6, "{last}");
     }
 
     /// Checks a mesh of an image whose neighbourhoods all keep their triangles: it covers the image's square

@@ -47,7 +47,8 @@ struct Params {
     merge_epsilon: f32,
     // 1: drop what another map reconstructs more finely
     drop_covered: u32,
-    _pad2: u32,
+    // 1: move every sample at a cut edge half a sample across it, along its surface (`dilated_position`)
+    dilate: u32,
 }
 
 struct View {
@@ -80,11 +81,13 @@ const MAX_TRIS: u32 = 128u; // 2 * TILE * TILE
 @group(0) @binding(4) var<storage, read_write> indices: array<u32>;
 @group(0) @binding(5) var<storage, read_write> tiles: array<Tile>;
 
-// The tile's samples with a halo (one before, two after: the second differences of the last neighbourhood's
-// edges reach two samples past it), loaded once into workgroup memory: inverse depth and world position.
-const HALO: u32 = 11u; // TILE + 3
-var<workgroup> halo_z: array<f32, 121>; // HALO * HALO
-var<workgroup> halo_p: array<vec3<f32>, 121>;
+// The tile's samples with a halo (two before, two after: the second differences of the last neighbourhood's
+// edges reach two samples past it, and `dilated_position` tests the edges on both sides of every sample),
+// loaded once into workgroup memory: inverse depth and world position.
+const HALO: u32 = 12u; // TILE + 4
+const HALO_BEFORE: i32 = 2;
+var<workgroup> halo_z: array<f32, 144>; // HALO * HALO
+var<workgroup> halo_p: array<vec3<f32>, 144>;
 var<private> tile_origin: vec2<i32>;
 
 var<workgroup> tri_count: atomic<u32>;
@@ -124,14 +127,17 @@ fn world_position(p: vec2<i32>, image: u32) -> vec3<f32> {
     return w.xyz / w.w;
 }
 
-// Inverse depth of sample p from the tile's halo (p within one before and two after the tile).
+// Inverse depth of sample p from the tile's halo (p within two before and two after the tile).
 fn z_at(p: vec2<i32>) -> f32 {
-    let l = vec2<u32>(p - tile_origin + vec2<i32>(1));
+    let l = vec2<u32>(p - tile_origin + vec2<i32>(HALO_BEFORE));
     return halo_z[l.y * HALO + l.x];
 }
 
+// World position of sample p from the tile's halo: in `classify` where the sample is, in `triangulate` its
+// vertex as `classify` wrote it (dilated when `dilate` is on), so that bounds and covered tests use the mesh's
+// own vertices, as the CPU twin does.
 fn p_at(p: vec2<i32>) -> vec3<f32> {
-    let l = vec2<u32>(p - tile_origin + vec2<i32>(1));
+    let l = vec2<u32>(p - tile_origin + vec2<i32>(HALO_BEFORE));
     return halo_p[l.y * HALO + l.x];
 }
 
@@ -195,14 +201,23 @@ fn grow_bounds(p: vec3<f32>) {
     atomicMax(&hi[2], ordered(p.z));
 }
 
-fn load_halo(wg: vec3<u32>, li: u32) {
+// `from_vertices`: positions from the vertex buffer `classify` wrote, else from the depth atlas.
+fn load_halo(wg: vec3<u32>, li: u32, from_vertices: bool) {
     let image = wg.z;
     tile_origin = vec2<i32>(wg.xy * TILE);
     for (var i = li; i < HALO * HALO; i += TILE * TILE) {
-        let p = tile_origin + vec2<i32>(i32(i % HALO), i32(i / HALO)) - vec2<i32>(1);
+        let p = tile_origin + vec2<i32>(i32(i % HALO), i32(i / HALO)) - vec2<i32>(HALO_BEFORE);
         let z = inv_depth(p, image);
         halo_z[i] = z;
-        halo_p[i] = select(vec3<f32>(0.0), world_position(p, image), z > 0.0);
+        var w = vec3<f32>(0.0);
+        if z > 0.0 {
+            if from_vertices {
+                w = vertices[(image * params.resolution + u32(p.y)) * params.resolution + u32(p.x)].xyz;
+            } else {
+                w = world_position(p, image);
+            }
+        }
+        halo_p[i] = w;
     }
     if li == 0u {
         atomicStore(&tri_count, 0u);
@@ -228,6 +243,52 @@ fn neighbourhood_triangles(p00: vec2<i32>) -> vec2<bool> {
     return vec2<bool>(t1, t2);
 }
 
+// Half the step from sample `behind` to sample s, when the edge from s to s + d is cut (a step, a crease, or
+// the background) and the edge from s - d to s is kept: how far s moves along its surface across the cut.
+fn half_step_across(s: vec2<i32>, d: vec2<i32>) -> vec3<f32> {
+    let r = i32(params.resolution);
+    let n = s + d;
+    let behind = s - d;
+    if any(n < vec2<i32>(0)) || any(n >= vec2<i32>(r)) || any(behind < vec2<i32>(0)) || any(behind >= vec2<i32>(r)) {
+        return vec3<f32>(0.0);
+    }
+    if edge_connected(s, n) || !edge_connected(behind, s) {
+        return vec3<f32>(0.0);
+    }
+    let step = p_at(s) - p_at(behind);
+    // A surface seen at a grazing angle (its view depth changing faster than GRAZING_SLOPE times its lateral
+    // spacing) is at a curved silhouette: the tangent would leave it by up to half a sample and shadow the
+    // surface itself. It stays.
+    let depth_change = abs(1.0 / z_at(s) - 1.0 / z_at(behind));
+    let lateral_sq = max(dot(step, step) - depth_change * depth_change, 0.0);
+    if depth_change * depth_change > GRAZING_SLOPE * GRAZING_SLOPE * lateral_sq {
+        return vec3<f32>(0.0);
+    }
+    return 0.5 * step;
+}
+
+// tan 60 degrees: the steepest surface (against the image plane) whose samples move across a cut edge.
+const GRAZING_SLOPE: f32 = 1.7320508;
+
+// The vertex of sample s (beyond the paper, `dilate`): the reconstruction joins sample centres, so a surface
+// ends at its last sample although its true edge lies anywhere up to the next one: the half-sample erosion the
+// paper reports (section 4.1), which lets light leak past every silhouette and crease (a tube three samples wide
+// keeps two samples' width). With `dilate` a sample at a cut edge moves half a sample across it, extrapolated
+// along its own surface from the sample behind it (the expected position of the edge), in each of the four
+// axis directions; a sample with no kept edge behind it (one sample wide along that axis) has no triangle there
+// and does not move. The CPU twin is `SampledImage::dilated` in core/src/technique/insm/triangulate.rs.
+fn dilated_position(s: vec2<i32>) -> vec3<f32> {
+    var p = p_at(s);
+    if params.dilate == 0u {
+        return p;
+    }
+    p += half_step_across(s, vec2<i32>(1, 0));
+    p += half_step_across(s, vec2<i32>(-1, 0));
+    p += half_step_across(s, vec2<i32>(0, 1));
+    p += half_step_across(s, vec2<i32>(0, -1));
+    return p;
+}
+
 // Sample p's inverse depth within eps of the affine function through the tile's corners.
 fn on_tile_plane(p: vec2<i32>) -> bool {
     let z00 = z_at(tile_origin);
@@ -250,7 +311,7 @@ fn classify(
     @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) li: u32,
 ) {
-    load_halo(wg, li);
+    load_halo(wg, li, false);
     workgroupBarrier();
     let r = params.resolution;
     let whole = wg.x * TILE + TILE < r && wg.y * TILE + TILE < r;
@@ -259,7 +320,8 @@ fn classify(
     // `triangulate` reads every map's samples from the buffer.
     if uv.x < r && uv.y < r {
         let z = z_at(vec2<i32>(uv));
-        vertices[wg.z * r * r + uv.y * r + uv.x] = select(vec4<f32>(0.0), vec4<f32>(p_at(vec2<i32>(uv)), z), z > 0.0);
+        vertices[wg.z * r * r + uv.y * r + uv.x] =
+            select(vec4<f32>(0.0), vec4<f32>(dilated_position(vec2<i32>(uv)), z), z > 0.0);
     }
     if uv.x + 1u < r && uv.y + 1u < r {
         let p00 = vec2<i32>(uv);
@@ -412,7 +474,7 @@ fn triangulate(
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     let image = wg.z;
-    load_halo(wg, li);
+    load_halo(wg, li, true);
     workgroupBarrier();
 
     let r = params.resolution;
