@@ -488,6 +488,9 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     let dir = data_dir("insm");
     let mut h = start("insm", "arcade");
     h.state_mut().session.technique = "insm".into();
+    // The paper's cameras on the bounding box, inside the default view (the default distance puts them outside).
+    let params = h.state_mut().session.params.entry("insm".into()).or_default();
+    params.insert("box_distance".into(), ParamValue::Float(1.0));
     h.run_steps(4);
     assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "INSM viewpoints" && *on));
     assert!(h.state_mut().overlay_layers().iter().any(|(name, _)| name == "INSM dropped edges"));
@@ -1086,6 +1089,9 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
 fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     let mut h = start("viewpoint-tooltip", "arcade");
     h.state_mut().session.technique = "insm".into();
+    // The paper's cameras on the bounding box, inside the default view (the default distance puts them outside).
+    let params = h.state_mut().session.params.entry("insm".into()).or_default();
+    params.insert("box_distance".into(), shadowlab_core::technique::ParamValue::Float(1.0));
     h.run_steps(4);
     let p = projection(&h);
     let rect = h.state().views.last_viewport_rect.unwrap().shrink(70.0);

@@ -121,6 +121,8 @@ pub struct InsmParams {
     /// erosion of the reconstruction (beyond the paper).
     pub dilate: bool,
     pub placement: Placement,
+    /// How far the `box` placement's cameras stand from the box centre, in multiples of the paper's (on the box).
+    pub box_distance: f32,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
     pub cube: CubeMapParams,
 }
@@ -136,6 +138,7 @@ impl Default for InsmParams {
             drop_covered: true,
             dilate: false,
             placement: Placement::Box,
+            box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
     }
@@ -450,6 +453,16 @@ impl Technique for Insm {
                 value: ParamValue::Choice(self.params.placement.name().to_string()),
             },
             Param {
+                key: "box_distance",
+                label: "Box cameras' distance",
+                help: "How far the box placement's cameras stand from the scene's centre, in multiples of the \
+                       paper's (1: on the bounding box, with a ~120° view that spends its samples on the image's \
+                       borders; 4, the default: the same directions from four times as far, the box sampled \
+                       almost uniformly)",
+                kind: ParamKind::Float { min: 1.0, max: 16.0 },
+                value: ParamValue::Float(self.params.box_distance),
+            },
+            Param {
                 key: "viewpoints",
                 label: "Custom viewpoints",
                 help: "The viewpoints of placement = custom: add them from the camera, move them with the gizmo",
@@ -475,6 +488,7 @@ impl Technique for Insm {
             ("merge_epsilon", ParamValue::Float(v)) => self.params.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.params.drop_covered = *v,
             ("dilate", ParamValue::Bool(v)) => self.params.dilate = *v,
+            ("box_distance", ParamValue::Float(v)) => self.params.box_distance = *v,
             ("placement", ParamValue::Choice(v)) => {
                 self.params.placement = Placement::from_name(v).expect("check_param checked the choice")
             }
@@ -514,6 +528,7 @@ impl Technique for Insm {
             &bounds,
             &self.custom_viewpoints,
             self.params.viewpoints as usize,
+            self.params.box_distance,
         );
         if self.views.is_empty() {
             return Err(GpuError::InvalidSettings(
