@@ -123,6 +123,9 @@ pub struct InsmParams {
     pub placement: Placement,
     /// How far the `box` placement's cameras stand from the box centre, in multiples of the paper's (on the box).
     pub box_distance: f32,
+    /// The lookup's depth bias in intermediate samples (at least `bias`): the mesh stands for the surface only to
+    /// within about a sample (beyond the paper).
+    pub bias_samples: f32,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
     pub cube: CubeMapParams,
 }
@@ -139,6 +142,7 @@ impl Default for InsmParams {
             dilate: false,
             placement: Placement::Box,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
+            bias_samples: 1.0,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
     }
@@ -230,6 +234,8 @@ pub struct Insm {
     view_matrices: Vec<Mat4>,
     /// The scene's bounds in the last frame.
     bounds: Aabb,
+    /// The per-light maps' parameters of the last frame, with the lookup's bias ([`Insm::lookup_params`]).
+    lookup: CubeMapParams,
     /// Non-empty tiles of the reconstructed meshes, read back before the first light batch.
     tiles: Vec<Chunk>,
     mesh_triangles: u64,
@@ -315,6 +321,7 @@ impl Insm {
             views: Vec::new(),
             view_matrices: Vec::new(),
             bounds: Aabb::from_points(std::iter::empty()),
+            lookup: CubeMapParams::default(),
             tiles: Vec::new(),
             mesh_triangles: 0,
             tiles_ready: false,
@@ -337,6 +344,18 @@ impl Insm {
             merge_epsilon: self.params.merge_epsilon,
             drop_covered: self.params.drop_covered,
         }
+    }
+
+    /// The per-light maps' parameters with the lookup's depth bias: the larger of `bias` and `bias_samples`
+    /// intermediate samples ([`viewpoints::mean_sample_width`] of `views` at `resolution`).
+    pub fn lookup_params(&self, views: &[Viewpoint], bounds: &Aabb, resolution: u32) -> CubeMapParams {
+        let mesh_bias = self.params.bias_samples * viewpoints::mean_sample_width(views, bounds, resolution);
+        let bias_world = if mesh_bias.is_finite() {
+            self.params.cube.bias_world.max(mesh_bias)
+        } else {
+            self.params.cube.bias_world
+        };
+        CubeMapParams { bias_world, ..self.params.cube.clone() }
     }
 
     /// The cameras of the last frame's intermediate maps, for the CPU twin.
@@ -463,6 +482,16 @@ impl Technique for Insm {
                 value: ParamValue::Float(self.params.box_distance),
             },
             Param {
+                key: "bias_samples",
+                label: "Mesh bias (samples)",
+                help: "Depth bias of the shadow lookup in intermediate samples (the width of one at the viewpoints' \
+                       mean distance to the scene's centre), when larger than the depth bias in metres: the mesh \
+                       stands for the surface only to within about a sample (chords across curves and folds) and \
+                       would shadow the surface it stands for (beyond the paper; 0: the depth bias alone)",
+                kind: ParamKind::Float { min: 0.0, max: 8.0 },
+                value: ParamValue::Float(self.params.bias_samples),
+            },
+            Param {
                 key: "viewpoints",
                 label: "Custom viewpoints",
                 help: "The viewpoints of placement = custom: add them from the camera, move them with the gizmo",
@@ -489,6 +518,7 @@ impl Technique for Insm {
             ("drop_covered", ParamValue::Bool(v)) => self.params.drop_covered = *v,
             ("dilate", ParamValue::Bool(v)) => self.params.dilate = *v,
             ("box_distance", ParamValue::Float(v)) => self.params.box_distance = *v,
+            ("bias_samples", ParamValue::Float(v)) => self.params.bias_samples = *v,
             ("placement", ParamValue::Choice(v)) => {
                 self.params.placement = Placement::from_name(v).expect("check_param checked the choice")
             }
@@ -516,20 +546,23 @@ impl Technique for Insm {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.cpu_times.clear();
         self.tiles_ready = false;
-        let batches = self.shadows.prepare(ctx, &self.params.cube);
-        self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), ..Default::default() };
-        if batches == 0 {
-            return Ok(0);
-        }
+        let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let bounds = scene_bounds(&ctx.scene.chunks);
-        self.bounds = bounds;
-        self.views = viewpoints::select(
+        let views = viewpoints::select(
             self.params.placement,
             &bounds,
             &self.custom_viewpoints,
             self.params.viewpoints as usize,
             self.params.box_distance,
         );
+        self.lookup = self.lookup_params(&views, &bounds, res);
+        let batches = self.shadows.prepare(ctx, &self.lookup);
+        self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), ..Default::default() };
+        if batches == 0 {
+            return Ok(0);
+        }
+        self.bounds = bounds;
+        self.views = views;
         if self.views.is_empty() {
             return Err(GpuError::InvalidSettings(
                 "INSM has no viewpoint: place at least one (or choose the box or inside placement)".into(),
@@ -553,7 +586,6 @@ impl Technique for Insm {
             .collect();
         ctx.gpu.queue.write_buffer(&self.views_buffer, 0, bytemuck::cast_slice(&gpu_views));
 
-        let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let k = self.views.len() as u32;
         // The largest buffer is the tiles' index slots; refuse settings the device cannot hold, instead of
         // letting wgpu fail on creation.
@@ -629,7 +661,7 @@ impl Technique for Insm {
             // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).
             receivers: None,
         };
-        let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.params.cube);
+        let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.lookup);
         self.counts.add_cube_stats(&stats);
         Ok(())
     }

@@ -165,6 +165,20 @@ pub fn inside_viewpoints(bounds: &Aabb) -> Vec<Viewpoint> {
     out
 }
 
+/// The mean width (world units) of one sample of a `resolution`² map of `views` at each viewpoint's distance to
+/// the centre of `bounds`: the scale to which the reconstructed meshes stand for the surfaces. 0 without views.
+pub fn mean_sample_width(views: &[Viewpoint], bounds: &Aabb, resolution: u32) -> f32 {
+    if views.is_empty() || resolution == 0 {
+        return 0.0;
+    }
+    let c = bounds.center();
+    let sum: f32 = views
+        .iter()
+        .map(|v| 2.0 * v.position.distance(c) * (0.5 * v.fov_y_deg.to_radians()).tan() / resolution as f32)
+        .sum();
+    sum / views.len() as f32
+}
+
 /// How viewpoints are placed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Placement {
@@ -297,6 +311,18 @@ mod tests {
         // Below 1 (inside the box) or not finite: the paper's distance.
         assert_eq!(box_viewpoints(&b, 0.2), near);
         assert_eq!(box_viewpoints(&b, f32::NAN), near);
+    }
+
+    #[test]
+    fn the_mean_sample_width_is_the_width_of_a_sample_at_the_centre() {
+        let b = unit_box();
+        let c = b.center();
+        // 90 degrees at 2 m: the image is 4 m wide at the centre, so 100 samples are 4 cm each.
+        let v = Viewpoint { position: c + Vec3::new(0.0, 0.0, 2.0), target: c, fov_y_deg: 90.0 };
+        assert!((mean_sample_width(&[v], &b, 100) - 0.04).abs() < 1e-5);
+        let far = Viewpoint { position: c + Vec3::new(0.0, 0.0, 6.0), ..v };
+        assert!((mean_sample_width(&[v, far], &b, 100) - 0.08).abs() < 1e-5, "the mean of 4 and 12 cm");
+        assert_eq!(mean_sample_width(&[], &b, 100), 0.0);
     }
 
     #[test]
