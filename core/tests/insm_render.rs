@@ -309,3 +309,28 @@ fn dropping_covered_triangles_shrinks_the_mesh_and_keeps_the_image() {
     assert!(dropped * 10 < all * 8, "mesh {dropped} vs {all} triangles");
     assert!(share_dropped < 0.05 && share_dropped <= share_all + 0.005, "pixels over 5 %: {results:?}");
 }
+
+#[test]
+fn the_lookup_bias_is_at_least_bias_samples_intermediate_samples_wide() {
+    use shadowlab_core::technique::insm::viewpoints::{self, Placement};
+    let scene = plane_and_occluder();
+    let r = renderer(&scene, linear_settings(W, H));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    let views = viewpoints::select(Placement::Box, &scene.bounds, &[], 10, 4.0);
+    let width = viewpoints::mean_sample_width(&views, &scene.bounds, 128);
+    assert!(width > 0.01 && width.is_finite(), "a sample is {width} m wide");
+    // One sample (the default) and two: the bias follows the width; 0: the depth bias alone.
+    let bias = |insm: &Insm| insm.lookup_params(&views, &scene.bounds, 128).bias_world;
+    assert!((bias(&insm) - width).abs() < 1e-6 * width.max(1.0), "{} vs {width}", bias(&insm));
+    insm.set_param("bias_samples", &ParamValue::Float(2.0)).unwrap();
+    assert!((bias(&insm) - 2.0 * width).abs() < 1e-6 * width.max(1.0));
+    insm.set_param("bias_samples", &ParamValue::Float(0.0)).unwrap();
+    assert_eq!(bias(&insm), 0.01);
+    // A depth bias larger than the samples' is kept; a bad value is refused.
+    insm.set_param("bias_samples", &ParamValue::Float(1.0)).unwrap();
+    assert!(width < 0.5);
+    insm.set_param("bias", &ParamValue::Float(0.9)).unwrap();
+    assert_eq!(bias(&insm), 0.9);
+    assert!(insm.set_param("bias_samples", &ParamValue::Float(f32::NAN)).is_err());
+    assert!(insm.set_param("bias_samples", &ParamValue::Float(-1.0)).is_err());
+}
