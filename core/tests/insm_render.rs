@@ -89,7 +89,7 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
         assert_eq!(c.batches, 6 + 1 + 1, "a step per intermediate map, the triangulation, one light batch");
         mesh_sizes.push(gpu_triangles.len());
     }
-    // Dilation (off by default, as above): the GPU's vertices are the CPU twin's dilation of the undilated samples,
+    // Dilation (on by default, as above): the GPU's vertices are the CPU twin's dilation of the undilated samples,
     // and some samples (the plate's rim, the ground around it) did move.
     insm.set_param("dilate", &ParamValue::Bool(false)).unwrap();
     frame(&mut r, &mut insm, &scene.camera, &lights);

@@ -65,10 +65,10 @@
 //!   very surface it stands for (the paper's "superfluous blockers"). Conference room 11.1 % to 7.9 %, the
 //!   Dragon 1.05 % to 0.96 %, the restaurant 1.9 % to 1.6 %; Sponza, the arcade and the tori 0.1-0.2 points
 //!   worse (more light past contacts).
-//! - Beyond the paper, `dilate` (off by default): each sample at a cut edge moves half a sample across it along
+//! - Beyond the paper, `dilate` (on by default): each sample at a cut edge moves half a sample across it along
 //!   its surface, undoing the half-sample erosion (the shader's `dilated_position`, the CPU twin's
-//!   `SampledImage::dilated`). It helps surfaces wide in the maps and hurts tubes a few samples wide, whose
-//!   extended silhouettes shadow themselves; measured in docs/techniques/insm.md.
+//!   `SampledImage::dilated`). Alone it hurt tubes a few samples wide (their extended silhouettes shadowed
+//!   themselves); with `bias_samples` it lowers the error on every scene measured (docs/techniques/insm.md).
 //!
 //! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
 //! `k+1..` are the light batches (the first reads the tile list back).

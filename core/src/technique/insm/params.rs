@@ -25,7 +25,7 @@ pub struct InsmParams {
     /// Drop the triangles of a map whose corners another map reconstructs more finely (beyond the paper).
     pub drop_covered: bool,
     /// Move every sample at a cut edge half a sample across it along its surface, undoing the half-sample
-    /// erosion of the reconstruction (beyond the paper).
+    /// erosion of the reconstruction (beyond the paper; on by default).
     pub dilate: bool,
     pub placement: Placement,
     /// How far the `box` placement's cameras stand from the box centre, in multiples of the paper's (on the box).
@@ -46,7 +46,7 @@ impl Default for InsmParams {
             adaptive: true,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
-            dilate: false,
+            dilate: true,
             placement: Placement::Box,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
             bias_samples: 1.0,
