@@ -14,7 +14,9 @@ pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) 
     ui.horizontal(|ui| {
         let hint = if session.layout_spec.is_empty() { "the scene file's lights" } else { "random:64:2:1" };
         ui.add(egui::TextEdit::singleline(&mut session.layout_spec).desired_width(140.0).hint_text(hint))
-            .on_hover_text("random:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene");
+            .on_hover_text(
+            "random:COUNT:L_ATT[:SEED], above:COUNT:L_ATT[:SEED], circles:N:PER:L_ATT, grid:NXxNY:L_ATT, paper, scene",
+        );
         if ui.button("Apply layout").clicked() {
             let spec = session.layout_spec.clone();
             match session.apply_layout(&spec) {
