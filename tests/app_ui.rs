@@ -495,7 +495,10 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     assert!(h.state_mut().overlay_layers().iter().any(|(name, on)| name == "INSM viewpoints" && *on));
     assert!(h.state_mut().overlay_layers().iter().any(|(name, _)| name == "INSM dropped edges"));
 
-    // Start from the placed viewpoints: they become the custom list, and the placement switches to custom.
+    // Start from the placed viewpoints: they become the custom list, and the placement switches to custom (the
+    // button is scrolled into the panel first: INSM's parameters fill more than the panel's height).
+    h.get_by_label("Edit the placed ones").scroll_to_me();
+    h.run_steps(3);
     h.get_by_label("Edit the placed ones").click();
     h.run_steps(3);
     let cameras = |h: &Harness<'static, ShadowLabApp>| match h.state().session.params["insm"].get("viewpoints") {
@@ -533,6 +536,8 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
     h.run_steps(3);
 
     // Remove the first one from the list.
+    h.get_all_by_label("Remove").next().expect("a remove button per viewpoint").scroll_to_me();
+    h.run_steps(2);
     h.get_all_by_label("Remove").next().expect("a remove button per viewpoint").click();
     h.run_steps(2);
     let edited = cameras(&h);

@@ -466,7 +466,7 @@ fn sweep_over_the_light_count_renders_insm_and_the_target_per_count() {
     let mut bad = common.to_vec();
     bad[5] = "grid:4x4:1.5";
     bad.extend(["--param", "lights=8", "--out", csv_arg]);
-    assert_fails_with(&bad, "random layout");
+    assert_fails_with(&bad, "a random or above layout");
     let mut bad = common.to_vec();
     bad.extend(["--param", "lights=many", "--out", csv_arg]);
     assert_fails_with(&bad, "not a light count");
