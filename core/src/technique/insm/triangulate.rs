@@ -65,6 +65,19 @@ pub struct MapView {
 /// shadow it.
 const GRAZING_SLOPE: f32 = 1.732_050_8;
 
+impl MapView {
+    /// The world point that sample `(x, y)` of a `resolution`² map saw at inverse view depth `inv_depth`: the
+    /// depth-buffer value `d = (far - inv_depth near far) / (far - near)` unprojected through the sample's centre,
+    /// as the shader's `world_position` does from the depth atlas.
+    /// `world_from_clip` is the inverse of `clip_from_world`, computed once by the caller.
+    pub fn sample_position(&self, world_from_clip: &Mat4, x: u32, y: u32, resolution: u32, inv_depth: f32) -> Vec3 {
+        let r = resolution as f32;
+        let ndc = Vec2::new((x as f32 + 0.5) / r * 2.0 - 1.0, 1.0 - (y as f32 + 0.5) / r * 2.0);
+        let d = (self.far - inv_depth * self.near * self.far) / (self.far - self.near);
+        world_from_clip.project_point3(ndc.extend(d))
+    }
+}
+
 /// Slack of the finer-sampling comparison of [`covered_samples`]: a map whose neighbourhood is within 5 % of
 /// the other's area is neither finer nor coarser, and the lower-numbered map keeps the surface.
 const FINER_SLACK: f32 = 0.95;
@@ -125,6 +138,7 @@ fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f3
 pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, epsilon: f32) -> Vec<bool> {
     let img = &images[j];
     let r = img.resolution;
+    let world_from_clip = views[j].clip_from_world.inverse();
     (0..r * r)
         .map(|s| {
             let (x, y) = (s % r, s / r);
@@ -132,6 +146,8 @@ pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, eps
             if w.w <= 0.0 || r < 2 {
                 return false;
             }
+            // The surface point the sample saw, not its (possibly dilated) vertex, as the shader asks.
+            let seen = views[j].sample_position(&world_from_clip, x, y, r, w.w);
             let (qx, qy) = (x.min(r - 2), y.min(r - 2));
             let q = |dx: u32, dy: u32| img.samples[((qy + dy) * r + qx + dx) as usize];
             let corners = [q(0, 0), q(1, 0), q(0, 1), q(1, 1)];
@@ -141,7 +157,7 @@ pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, eps
                 f32::MAX
             };
             (0..images.len())
-                .any(|i| i != j && reconstructs_better(&images[i], &views[i], w.truncate(), area_j, i < j, epsilon))
+                .any(|i| i != j && reconstructs_better(&images[i], &views[i], seen, area_j, i < j, epsilon))
         })
         .collect()
 }

@@ -426,7 +426,9 @@ fn sample_covered(p: vec2<i32>, j: u32, k: u32) -> bool {
     if all(z4 > vec4<f32>(0.0)) {
         area_j = quad_area(p_at(q), p_at(q + vec2<i32>(1, 0)), p_at(q + vec2<i32>(0, 1)), p_at(q + vec2<i32>(1, 1)));
     }
-    let w = p_at(p);
+    // The surface point the sample saw, not its vertex: a vertex dilation moved lies off the other maps'
+    // triangles and would never be found covered (the footprints compared are the mesh's own quads).
+    let w = world_position(p, j);
     for (var i = 0u; i < k; i++) {
         if i != j && reconstructs_better(i, j, w, area_j) {
             return true;
