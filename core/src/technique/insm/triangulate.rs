@@ -251,8 +251,10 @@ impl SampledImage<'_> {
     /// 4.1. In each axis direction `d` where the edge to `s + d` is cut (a step, a crease or the background)
     /// and the edge from `s - d` is kept, `s` moves by half the step from `s - d` (the expected position of
     /// the edge, extrapolated along the surface); a sample with no kept edge behind it has no triangle along
-    /// that axis and does not move. Inverse depths are unchanged, so the connectivity tests see the samples as
-    /// rendered. The twin of `dilated_position` in the shader (which writes these as the vertices).
+    /// that axis and does not move, nor does one whose surface is seen at more than 60° from face-on (its view
+    /// depth changing faster than tan 60° times its lateral spacing: at a curved silhouette the tangent leaves
+    /// the surface and would shadow it). Inverse depths are unchanged, so the connectivity tests see the samples
+    /// as rendered. The twin of `dilated_position` in the shader (which writes these as the vertices).
     pub fn dilated(&self, epsilon: f32) -> Vec<Vec4> {
         let r = self.resolution as i64;
         (0..r * r)
@@ -554,6 +556,26 @@ mod tests {
         let d = img.dilated(0.01);
         let last = d[(3 * r + 4) as usize];
         assert!((last.x - 4.5).abs() < 1e-6 && (last.z - 1.35).abs() < 1e-6, "{last}");
+    }
+
+    #[test]
+    fn dilation_leaves_a_surface_seen_at_a_grazing_angle() {
+        // A plane (inverse depth affine in the image) ending at a step to a far surface; its view depth grows by
+        // 0.2-0.4 per sample. Spaced 1 apart sideways it is seen nearly face-on and its last sample moves; spaced
+        // 0.05 apart it is seen almost edge-on (depth changing six times faster than the spacing) and stays.
+        let r = 10;
+        for (spacing, moves) in [(1.0f32, true), (0.05, false)] {
+            let s: Vec<Vec4> = (0..r * r)
+                .map(|i| {
+                    let (x, y) = (i % r, i / r);
+                    let w = if x < 5 { 0.5 - 0.04 * x as f32 } else { 0.05 };
+                    Vec4::new(spacing * x as f32, spacing * y as f32, 1.0 / w, w)
+                })
+                .collect();
+            let img = SampledImage { resolution: r, samples: &s };
+            let last = img.dilated(0.01)[(4 * r + 4) as usize];
+            assert_eq!(last.x != s[(4 * r + 4) as usize].x, moves, "spacing {spacing}: {last}");
+        }
     }
 
     /// Checks a mesh of an image whose neighbourhoods all keep their triangles: it covers the image's square

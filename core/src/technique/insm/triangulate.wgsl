@@ -134,8 +134,8 @@ fn z_at(p: vec2<i32>) -> f32 {
 }
 
 // World position of sample p from the tile's halo: in `classify` where the sample is, in `triangulate` its
-// vertex as `classify` wrote it (dilated when `dilate` is on), so that bounds and covered tests use the mesh's
-// own vertices, as the CPU twin does.
+// vertex as `classify` wrote it (dilated when `dilate` is on), so that the bounds and the covered test's
+// footprints use the mesh's own vertices, as the CPU twin does.
 fn p_at(p: vec2<i32>) -> vec3<f32> {
     let l = vec2<u32>(p - tile_origin + vec2<i32>(HALO_BEFORE));
     return halo_p[l.y * HALO + l.x];
