@@ -55,7 +55,7 @@
 //!   surface is never covered) and GPU = CPU.
 //!
 //! - Beyond the paper, `box_distance` (4 by default; 1 is the paper's): the `box` placement's cameras stand
-//!   along the paper's lines to the box centre at four times the distance, so the box fits in ~30 degrees instead
+//!   along the paper's lines to the box centre at four times the distance, so the box fits in 35-45 degrees instead
 //!   of ~120 and is sampled almost uniformly (a wide perspective image spends its samples on its borders). On
 //!   the paper's Dragon the error against the ray tracer fell from 3.75 % to 1.05 % ([`viewpoints`]).
 //! - Beyond the paper, `bias_samples` (1 by default; 0 is the paper's plain depth bias): the lookup's depth bias
