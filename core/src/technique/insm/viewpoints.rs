@@ -108,10 +108,10 @@ pub const DEFAULT_BOX_DISTANCE: f32 = 4.0;
 /// paper's. Deviation (the default [`DEFAULT_BOX_DISTANCE`]): a camera on the box needs a field of view of
 /// ~120 degrees to see the box, and a perspective image that wide spends its samples on its borders: the
 /// centre of the image, where the model stands, gets a quarter of the samples per degree that the borders get
-/// (the density goes as 1 / cos³ of the angle off axis). From four times as far the same box fits in
-/// 35-45 degrees (the Dragon's), sampled almost uniformly, and the model gets about four times the samples. Measured on the
-/// paper's Dragon (the Stanford dragon on a floor, `scripts/measure-insm`): shadow error against the ray tracer
-/// 3.75 % at distance 1, 3.18 % at 2, 1.56 % at 3, 1.05 % at 4, 1.21 % at 6, without `bias_samples` and
+/// (the density goes as 1 / cos³ of the angle off axis). From four times as far the same box fits in 35-45
+/// degrees (the Dragon's), sampled almost uniformly, and the model gets about four times the samples. Measured
+/// on the paper's Dragon (the Stanford dragon on a floor, `scripts/measure-insm`): shadow error against the ray
+/// tracer 3.75 % at distance 1, 3.18 % at 2, 1.56 % at 3, 1.05 % at 4, 1.21 % at 6, without `bias_samples` and
 /// `dilate` (the paper: 0.12 %).
 pub fn box_viewpoints(scene_bounds: &Aabb, distance: f32) -> Vec<Viewpoint> {
     let bounds = &placement_box(scene_bounds);
