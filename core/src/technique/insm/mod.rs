@@ -316,7 +316,8 @@ impl Insm {
         }
     }
 
-    /// The per-light maps' parameters with the lookup's bias for `views` at `resolution` ([`InsmParams::lookup_params`]).
+    /// The per-light maps' parameters with the lookup's bias for `views` at `resolution`
+    /// ([`InsmParams::lookup_params`]).
     pub fn lookup_params(&self, views: &[Viewpoint], bounds: &Aabb, resolution: u32) -> CubeMapParams {
         self.params.lookup_params(views, bounds, resolution)
     }
