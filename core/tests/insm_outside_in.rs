@@ -11,7 +11,7 @@ mod common;
 use common::*;
 use glam::Vec3;
 use shadowlab_core::compare::{visibility_image, Image};
-use shadowlab_core::scene::{Camera, PointLight};
+use shadowlab_core::scene::{Camera, PointLight, Scene};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::Renderer;
 
@@ -50,8 +50,17 @@ fn errors(a: &[f32], b: &[f32]) -> (f32, f32, f32) {
     (err, shadow(a), shadow(b))
 }
 
-#[test]
-fn the_default_box_placement_casts_the_plates_shadow() {
+/// The plate-and-ground scene lit by the ring of lights: its renderer, the unshadowed frame and the reference's
+/// visibility factors (256 texels per face).
+struct Plate {
+    scene: Scene,
+    lights: Vec<PointLight>,
+    r: Renderer,
+    open: Image,
+    reference: Vec<f32>,
+}
+
+fn plate() -> Plate {
     let scene = plane_and_occluder();
     let lights = lights_above();
     let mut r = renderer(&scene, linear_settings(W, H));
@@ -59,6 +68,12 @@ fn the_default_box_placement_casts_the_plates_shadow() {
     let open = Image::new(W, H, open).unwrap();
     let res = [("shadow_res", ParamValue::Int(256))];
     let reference = visibility(&mut r, "reference", &res, &scene.camera, &lights, &open);
+    Plate { scene, lights, r, open, reference }
+}
+
+#[test]
+fn the_default_box_placement_casts_the_plates_shadow() {
+    let Plate { scene, lights, mut r, open, reference } = plate();
     // INSM as a user gets it (the paper's box placement), the per-light resolution aside, at 256²: the plate is
     // then 6-8 samples wide in the maps (at 128² it is 3-4 and the half-sample erosion left nothing of it).
     let params = [("shadow_res", ParamValue::Int(256)), ("insm_res", ParamValue::Int(256))];
@@ -76,13 +91,7 @@ fn the_default_box_placement_casts_the_plates_shadow() {
 
 #[test]
 fn undoing_the_erosion_casts_more_of_the_plates_shadow() {
-    let scene = plane_and_occluder();
-    let lights = lights_above();
-    let mut r = renderer(&scene, linear_settings(W, H));
-    let (open, _) = frame_of(&mut r, "unshadowed", &[], &scene.camera, &lights);
-    let open = Image::new(W, H, open).unwrap();
-    let res = [("shadow_res", ParamValue::Int(256))];
-    let reference = visibility(&mut r, "reference", &res, &scene.camera, &lights, &open);
+    let Plate { scene, lights, mut r, open, reference } = plate();
     // The plate is 6-8 samples wide in the 256² maps: its mesh ends at its last samples, half a sample short of
     // its edges on every side (the paper's half-sample erosion), unless `dilate` moves them across.
     let run = |r: &mut Renderer, dilate: bool| {
