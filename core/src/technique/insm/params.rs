@@ -8,14 +8,15 @@ use crate::renderer::cube_params::CubeMapParams;
 use crate::scene::Aabb;
 use crate::technique::{Param, ParamKind, ParamValue};
 
-/// The connectivity test's default ε (relative second difference of inverse depth). 0.01 until the lookup's
-/// sample bias and dilation: with them, 0.02 lowered the error against the ray tracer on all seven scenes
-/// measured (160x90, 1,024 lights, `--param epsilon=0.01,0.02,0.04`): the Dragon 0.57 / 0.57 %, the tori 3.50 /
+/// The connectivity test's default ε (relative second difference of inverse depth). 0.02 was tried with the
+/// lookup's sample bias and dilation (160x90, 1,024 lights, `--param epsilon=0.01,0.02`): at 128² it lowered
+/// the error against the ray tracer on all seven scenes measured (the Dragon 0.57 / 0.57 %, the tori 3.50 /
 /// 2.62 %, the conference room 7.49 / 6.78 %, the restaurant 1.37 / 1.27 %, the Cornell box 4.36 / 4.22 %,
-/// Sponza 7.05 / 6.59 %, the arcade 9.25 / 8.34 %, for 0-17 % more triangles in the cube maps; 0.04 was worse on
-/// the tori (8.47 %) and the Dragon (0.92 %). Bridging a little more now costs less than it did: a bridged step
-/// stands at most a sample from the surfaces it joins, which the sample bias absorbs.
-pub const DEFAULT_EPSILON: f32 = 0.02;
+/// Sponza 7.05 / 6.59 %, the arcade 9.25 / 8.34 %), but at 512² it was worse (the tori 0.77 / 2.55 %, the
+/// Dragon 0.21 / 0.42 %), so that the error no longer fell with the resolution: a bridged step stands up to ε
+/// of the depth from the surfaces it joins, which the one-sample bias absorbs at 128² and not once the samples
+/// are four times finer. Not kept; an ε scaled to the sample's angular width would be the next thing to try.
+pub const DEFAULT_EPSILON: f32 = 0.01;
 
 /// INSM's parameters.
 #[derive(Clone, Debug, PartialEq)]
