@@ -462,7 +462,16 @@ fn sweep_over_the_light_count_renders_insm_and_the_target_per_count() {
     assert_eq!(col(lines[4], 0), 24);
     assert!(col(lines[4], 4) > col(lines[1], 4), "{text}");
     assert!(image::open(&png).is_ok());
-    // A light count needs a random layout; a bad count is refused before rendering.
+    // The above layout's count is swept the same way.
+    let mut above = common.to_vec();
+    above[5] = "above:64:3:2";
+    above.extend(["--param", "lights=4,12", "--out", csv_arg]);
+    let out = shadowlab(&above);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let counts: Vec<usize> = text.lines().skip(1).map(|l| col(l, 0)).collect();
+    assert_eq!(counts, [4, 12], "{text}");
+    // A light count needs a random or above layout; a bad count is refused before rendering.
     let mut bad = common.to_vec();
     bad[5] = "grid:4x4:1.5";
     bad.extend(["--param", "lights=8", "--out", csv_arg]);

@@ -373,6 +373,11 @@ fn specs_parse_to_the_expected_layouts() {
     assert_eq!(parse_ok("random:1024:1.5:7"), LightLayout::Random { count: 1024, range: 1.5, seed: 7 });
     assert_eq!(parse_ok("above:256:4"), LightLayout::Above { count: 256, range: 4.0, seed: 1 });
     assert_eq!(parse_ok("Above:256:4:9"), LightLayout::Above { count: 256, range: 4.0, seed: 9 });
+    // What `sweep --param lights=N` varies: the count of the layouts that have a free one.
+    assert_eq!(parse_ok("above:256:4:9").with_count(8), Some(LightLayout::Above { count: 8, range: 4.0, seed: 9 }));
+    assert_eq!(parse_ok("random:64:2:3").with_count(5), Some(LightLayout::Random { count: 5, range: 2.0, seed: 3 }));
+    assert_eq!(parse_ok("grid:4x4:2").with_count(8), None);
+    assert_eq!(parse_ok("paper").with_count(8), None);
     assert_eq!(parse_ok("circles:10:8:7"), LightLayout::Circles { circles: 10, per_circle: 8, range: 7.0 });
     assert_eq!(parse_ok("grid:8x4:2"), LightLayout::Grid { nx: 8, ny: 4, range: 2.0 });
     assert_eq!(parse_ok("grid:8X4:2"), LightLayout::Grid { nx: 8, ny: 4, range: 2.0 });

@@ -112,18 +112,13 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let lights_for = |setting: &[(String, String)]| -> Result<Option<Vec<PointLight>>> {
         let Some((_, n)) = setting.iter().find(|(k, _)| k == LIGHTS_KEY) else { return Ok(None) };
         let count: usize = n.parse().map_err(|_| anyhow!("--param lights: '{n}' is not a light count"))?;
-        match layout {
-            LightLayout::Random { range, seed, .. } => {
-                Ok(Some(layout::generate(&LightLayout::Random { count, range, seed }, &scene)?))
-            }
-            LightLayout::Above { range, seed, .. } => {
-                Ok(Some(layout::generate(&LightLayout::Above { count, range, seed }, &scene)?))
-            }
-            _ => bail!(
+        let Some(counted) = layout.with_count(count) else {
+            bail!(
                 "--param lights needs a random or above layout (--lights random:COUNT:L_ATT:SEED or \
                  above:COUNT:L_ATT:SEED)"
-            ),
-        }
+            )
+        };
+        Ok(Some(layout::generate(&counted, &scene)?))
     };
     for setting in &settings {
         lights_for(setting)?;

@@ -77,6 +77,16 @@ impl LightLayout {
         }
     }
 
+    /// The same layout with `count` lights, for the layouts whose count is a free number (`random`, `above`):
+    /// what `sweep --param lights=...` varies. `None` for the others.
+    pub fn with_count(&self, count: usize) -> Option<LightLayout> {
+        match *self {
+            LightLayout::Random { range, seed, .. } => Some(LightLayout::Random { count, range, seed }),
+            LightLayout::Above { range, seed, .. } => Some(LightLayout::Above { count, range, seed }),
+            _ => None,
+        }
+    }
+
     /// The attenuation range of the generated lights, for the layouts that have one.
     pub fn range(&self) -> Option<f32> {
         match *self {

@@ -62,7 +62,7 @@ pub struct MapView {
 
 /// tan 60°: the steepest surface (against the image plane) whose samples [`SampledImage::dilated`] moves; a
 /// steeper one is at a curved silhouette, where the tangent would leave the surface by up to half a sample and
-/// shadow it.
+/// shadow it. Keep in sync with `GRAZING_SLOPE` in `insm/triangulate.wgsl`.
 const GRAZING_SLOPE: f32 = 1.732_050_8;
 
 impl MapView {
@@ -737,6 +737,33 @@ mod tests {
             let all = self::meshes(&images, &views, &MeshSettings { drop_covered: false, ..settings });
             assert_eq!(all[f].len(), images[f].triangles(settings.epsilon).len());
         }
+    }
+
+    #[test]
+    fn the_covered_test_asks_of_the_point_a_sample_saw_not_of_its_moved_vertex() {
+        let r = 33;
+        let (near, far) = (looking_down(Vec3::new(0.0, 2.0, 0.0)), looking_down(Vec3::new(0.3, 6.0, 0.0)));
+        let (near_s, far_s) = (samples_of_plane(&near, r, 0.0), samples_of_plane(&far, r, 0.0));
+        // The point a sample saw, from its inverse depth and its map's camera, is where the sample is.
+        let world_from_clip = far.clip_from_world.inverse();
+        for (i, s) in far_s.iter().enumerate() {
+            let seen = far.sample_position(&world_from_clip, i as u32 % r, i as u32 / r, r, s.w);
+            assert!(seen.distance(s.truncate()) < 1e-3 * (1.0 + s.truncate().length()), "{seen} vs {s}");
+        }
+        let views = [near, far];
+        let covered = |far_samples: &[Vec4]| {
+            let images = [
+                SampledImage { resolution: r, samples: &near_s },
+                SampledImage { resolution: r, samples: far_samples },
+            ];
+            covered_samples(&images, &views, 1, 0.01)
+        };
+        let plain = covered(&far_s);
+        assert!(plain.iter().filter(|&&c| c).count() > 100, "the near map covers part of the far one");
+        // The far map's vertices moved 30 cm off the plane (as dilation moves the ones at a cut edge), their
+        // inverse depths kept: the same samples are covered, since the test asks of the points they saw.
+        let moved: Vec<Vec4> = far_s.iter().map(|s| (s.truncate() + Vec3::Y * 0.3).extend(s.w)).collect();
+        assert_eq!(covered(&moved), plain);
     }
 
     #[test]

@@ -267,7 +267,8 @@ fn half_step_across(s: vec2<i32>, d: vec2<i32>) -> vec3<f32> {
     return 0.5 * step;
 }
 
-// tan 60 degrees: the steepest surface (against the image plane) whose samples move across a cut edge.
+// tan 60 degrees: the steepest surface (against the image plane) whose samples move across a cut edge. Keep in
+// sync with GRAZING_SLOPE in core/src/technique/insm/triangulate.rs.
 const GRAZING_SLOPE: f32 = 1.7320508;
 
 // The vertex of sample s (beyond the paper, `dilate`): the reconstruction joins sample centres, so a surface
