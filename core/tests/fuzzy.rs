@@ -199,45 +199,62 @@ fn gpu_kmeans_matches_its_cpu_twin() {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let mut km = GpuKMeans::new(&gpu, "test");
-        for (k, f, gamma, max_ring) in
-            [(1usize, 1usize, 1u32, 0u32), (20, 6, 2, 0), (150, 8, 1, 0), (600, 3, 4, 0), (150, 6, 2, 1)]
-        {
-            let p = KMeansParams {
-                clusters: k,
-                iterations: 6,
-                gamma,
-                fuzziness: f,
-                n_t: 3f32.sqrt() / 2.0,
-                min_distance: 1e-6,
-                max_ring,
-                width: w,
-                height: h,
-                bounds_min: Vec3::new(-2.0, 0.0, -2.0),
-                bounds_extent: Vec3::new(4.0, 3.0, 4.0),
-            };
-            let cpu = kmeans::cluster(&points, &p);
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None).unwrap();
-            gpu.queue.submit([encoder.finish()]);
-            let (assignment, inverse) = km.read_assignment(&gpu).unwrap();
-            let clusters = km.read_clusters(&gpu).unwrap();
-            assert_eq!(clusters.len(), cpu.centroids.len());
-            let f = cpu.fuzziness;
-            // Nearest clusters agree for all but near-ties moved by rounding.
-            let same = (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]).count();
-            assert!(same as f32 >= 0.98 * points.len() as f32, "K = {k}: {same} of {} agree", points.len());
-            let all_same =
-                (0..points.len()).filter(|&m| assignment[m * f..m * f + f] == cpu.assignment[m * f..m * f + f]).count();
-            // Measured: every F-list agrees, tilted normals or not.
-            assert!(all_same as f32 >= 0.995 * points.len() as f32, "tilt {tilt} K = {k}: {all_same} F-lists agree");
-            for m in (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]) {
-                let (a, b) = (inverse[m * f], cpu.inverse_distance[m * f]);
-                assert!((a - b).abs() <= 1e-3 * b.max(1.0), "K = {k} point {m}: W {a} vs {b}");
+        // The last three: Algorithm 2 from the neighbouring samples' lists (km_final over the samples, km_fill);
+        // every case with the exact searches walking the grid, scanning the normal buckets, or either by count.
+        for scan_limit in [0, u32::MAX, shadowlab_core::technique::fuzzy::gpu::BUCKET_SCAN_LIMIT] {
+            km.set_bucket_scan_limit(scan_limit);
+            for (k, f, gamma, max_ring, neighbour_lists) in [
+                (1usize, 1usize, 1u32, 0u32, false),
+                (20, 6, 2, 0, false),
+                (150, 8, 1, 0, false),
+                (600, 3, 4, 0, false),
+                (150, 6, 2, 1, false),
+                (20, 6, 2, 0, true),
+                (600, 3, 4, 0, true),
+                (150, 6, 3, 1, true),
+            ] {
+                let p = KMeansParams {
+                    clusters: k,
+                    iterations: 6,
+                    gamma,
+                    fuzziness: f,
+                    n_t: 3f32.sqrt() / 2.0,
+                    min_distance: 1e-6,
+                    max_ring,
+                    neighbour_lists,
+                    width: w,
+                    height: h,
+                    bounds_min: Vec3::new(-2.0, 0.0, -2.0),
+                    bounds_extent: Vec3::new(4.0, 3.0, 4.0),
+                };
+                let cpu = kmeans::cluster(&points, &p);
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None).unwrap();
+                gpu.queue.submit([encoder.finish()]);
+                let (assignment, inverse) = km.read_assignment(&gpu).unwrap();
+                let clusters = km.read_clusters(&gpu).unwrap();
+                assert_eq!(clusters.len(), cpu.centroids.len());
+                let f = cpu.fuzziness;
+                // Nearest clusters agree for all but near-ties moved by rounding.
+                let same = (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]).count();
+                assert!(same as f32 >= 0.98 * points.len() as f32, "K = {k}: {same} of {} agree", points.len());
+                let all_same = (0..points.len())
+                    .filter(|&m| assignment[m * f..m * f + f] == cpu.assignment[m * f..m * f + f])
+                    .count();
+                // Measured: every F-list agrees, tilted normals or not.
+                assert!(
+                    all_same as f32 >= 0.995 * points.len() as f32,
+                    "tilt {tilt} K = {k} scan limit {scan_limit}: {all_same} F-lists agree"
+                );
+                for m in (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]) {
+                    let (a, b) = (inverse[m * f], cpu.inverse_distance[m * f]);
+                    assert!((a - b).abs() <= 1e-3 * b.max(1.0), "K = {k} point {m}: W {a} vs {b}");
+                }
+                // Members add up to the valid points.
+                let members: u32 = clusters.iter().map(|c| c.members()).sum();
+                assert_eq!(members as usize, points.iter().filter(|p| p.valid).count(), "K = {k}");
+                assert_eq!(clusters.iter().filter(|c| c.exists()).count(), cpu.non_empty(), "K = {k}");
             }
-            // Members add up to the valid points.
-            let members: u32 = clusters.iter().map(|c| c.members()).sum();
-            assert_eq!(members as usize, points.iter().filter(|p| p.valid).count(), "K = {k}");
-            assert_eq!(clusters.iter().filter(|c| c.exists()).count(), cpu.non_empty(), "K = {k}");
         }
     }
 }

@@ -5,6 +5,13 @@
 //! representative's position, normal and the members' flux) and `assignment` (per point, `F` clusters with
 //! inverse distances). [`GpuKMeans::read_clusters`] and [`GpuKMeans::read_assignment`] read them back for the
 //! counts and overlays.
+//!
+//! Two things only the GPU does, for speed, without changing what is found (the tests compare both ways with
+//! the twin): with neighbour lists, a point whose four samples' lists hold fewer than `F` compatible clusters
+//! goes to a queue that a dispatch of its own searches (`km_fill`, `km_search`), so that the points beside it
+//! do not wait for its long search; and an exact search whose compatible centroids are few scans them whole from
+//! an octahedral map of the centroids' normals (`find` in the shader) instead of walking the grid shell by shell
+//! until `F` are found, which for a point on a crease or a narrow face can visit every cell.
 
 use glam::Vec3;
 
@@ -35,8 +42,9 @@ struct KmParamsUniform {
     bounds_min: [f32; 4],
     bounds_extent: [f32; 4],
     flux_scale: [f32; 4],
+    options: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 112);
+const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 128);
 
 /// A point, cluster or light as the shaders store it (`KmPoint`, `Vpl`, `Endpoint`: the `GpuVpl` layout).
 #[repr(C)]
@@ -67,6 +75,8 @@ impl GpuPoint {
 
 /// Words of the accumulators per cluster (`ACC` in the shader).
 const ACC: u64 = 24;
+/// Normal buckets (kmeans.wgsl `NB`).
+const NB: u64 = 64;
 /// Most clusters (the initial-centroid arithmetic of the shader stays within u32).
 pub const MAX_CLUSTERS: usize = 65_536;
 
@@ -101,7 +111,13 @@ pub struct GpuKMeans {
     /// Per point `F` entries of (cluster, inverse-distance bits).
     pub assignment: Option<wgpu::Buffer>,
     pub shape: RunShape,
+    /// The most centroids a search scans whole from the normal buckets instead of walking the grid (0: always
+    /// the grid). Speed only: both find the same clusters.
+    bucket_scan_limit: u32,
 }
+
+/// [`GpuKMeans`]'s default bucket scan limit: about what the grid walk of a point on an open wall visits.
+pub const BUCKET_SCAN_LIMIT: u32 = 128;
 
 /// Grow `slot` to a storage buffer (copyable both ways) of at least `size` bytes, rounded up to a power of two
 /// so a frame that grows a little does not reallocate; true when it was (re)created.
@@ -138,6 +154,8 @@ const ENTRIES: &[&str] = &[
     "km_assign",
     "km_update",
     "km_final",
+    "km_fill",
+    "km_search",
     "rep_pick",
     "rep_finish",
 ];
@@ -154,7 +172,21 @@ impl GpuKMeans {
             uniform_bytes,
             &[true, false, false, false],
         );
-        GpuKMeans { label, kernels, clusters: None, work: None, assignment: None, shape: RunShape::default() }
+        GpuKMeans {
+            label,
+            kernels,
+            clusters: None,
+            work: None,
+            assignment: None,
+            shape: RunShape::default(),
+            bucket_scan_limit: BUCKET_SCAN_LIMIT,
+        }
+    }
+
+    /// Sets the bucket scan limit (0: every search walks the grid; `u32::MAX`: every exact search scans the
+    /// buckets). The clusters found do not change; the tests check both paths against the CPU twin.
+    pub fn set_bucket_scan_limit(&mut self, limit: u32) {
+        self.bucket_scan_limit = limit;
     }
 
     fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
@@ -190,7 +222,12 @@ impl GpuKMeans {
             )));
         }
         ensure_storage(&mut self.clusters, gpu, "fuzzy clusters", (2 * k.max(1) * 48) as u64);
-        ensure_storage(&mut self.work, gpu, "fuzzy kmeans work", (k as u64 * ACC + 2 * cells + 1 + k as u64) * 4);
+        ensure_storage(
+            &mut self.work,
+            gpu,
+            "fuzzy kmeans work",
+            (k as u64 * ACC + 2 * cells + 1 + k as u64 + 3 * NB + 1 + k as u64 + 1 + m as u64) * 4,
+        );
         ensure_storage(&mut self.assignment, gpu, "fuzzy assignment", assignment_bytes);
         self.shape = RunShape { points: m, clusters: k, fuzziness: f };
         let (clusters, work, assignment) = (
@@ -205,6 +242,7 @@ impl GpuKMeans {
             return Ok(self.shape);
         }
         let max_flux = max_flux.filter(|v| v.is_finite() && *v > 0.0);
+        let neighbours = params.neighbour_lists && g > 1;
         let uniform = KmParamsUniform {
             point_count: m as u32,
             width: params.width,
@@ -222,11 +260,12 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
+            options: [neighbours as u32, self.bucket_scan_limit, 0, 0],
         };
         self.kernels.write_uniform(gpu, &uniform);
         let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment]);
         let over_k = groups(k);
-        let over_cells = groups(cells as usize);
+        let over_cells = groups((cells as usize).max(NB as usize));
         let over_samples = groups(samples);
         let over_points = groups(m);
         let name = format!("fuzzy clustering ({})", self.label);
@@ -251,7 +290,13 @@ impl GpuKMeans {
             }
             grid(&mut run);
             run("acc_clear", over_k);
-            run("km_final", over_points);
+            if neighbours {
+                run("km_final", over_samples);
+                run("km_fill", over_points);
+                run("km_search", over_points);
+            } else {
+                run("km_final", over_points);
+            }
             run("rep_pick", over_points);
             run("rep_finish", over_k);
         });

@@ -279,6 +279,7 @@ impl FuzzyClustering {
             n_t: self.params.n_t,
             min_distance: self.scene_size * 1e-6,
             max_ring: if self.params.search == "paper" { 1 } else { 0 },
+            neighbour_lists: self.params.assign == "neighbours",
             width,
             height,
             bounds_min: bounds.min,

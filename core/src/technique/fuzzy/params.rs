@@ -41,6 +41,9 @@ pub struct FuzzyParams {
     pub rays_per_step: u32,
     /// `exact` (the search grows until it holds the F nearest) or `paper` (the 27 cells around a point).
     pub search: String,
+    /// Algorithm 2 for the pixels between samples: `neighbours` (the F nearest among the four neighbouring
+    /// samples' clusters, a grid search where fewer than F match) or `search` (every pixel searches the grid).
+    pub assign: String,
     /// Lights one shading step sums.
     pub lights_per_step: u32,
 }
@@ -65,6 +68,7 @@ impl Default for FuzzyParams {
             probe_y: -1,
             rays_per_step: 1 << 22,
             search: "exact".into(),
+            assign: "neighbours".into(),
             lights_per_step: crate::technique::MAX_LIGHT_WORK_PER_PASS as u32,
         }
     }
@@ -100,6 +104,7 @@ impl FuzzyParams {
 const MODE_CHOICES: &[&str] = &["weighted", "fuzzy", "hard"];
 const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
 const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
+const ASSIGN_CHOICES: &[&str] = &["neighbours", "search"];
 
 impl FuzzyParams {
     /// The parameters as the UI and the CLI list them.
@@ -180,6 +185,15 @@ impl FuzzyParams {
                 value: ParamValue::Choice(p.search.clone()),
             },
             Param {
+                key: "assign",
+                label: "Pixels between samples",
+                help: "neighbours: a pixel off the gamma grid takes its F nearest among the clusters of the four \
+                       samples around it (a grid search where fewer than F match its normal; the samples search \
+                       the grid); search: every pixel searches the grid (slower)",
+                kind: ParamKind::Choice(ASSIGN_CHOICES),
+                value: ParamValue::Choice(p.assign.clone()),
+            },
+            Param {
                 key: "bias",
                 label: "Ray offset",
                 help: "Ray ends offset along their normals, world units per metre of camera distance",
@@ -240,6 +254,7 @@ impl FuzzyParams {
             ("n_t", ParamValue::Float(v)) => p.n_t = *v,
             ("bias", ParamValue::Float(v)) => p.ray_bias = *v,
             ("search", ParamValue::Choice(v)) => p.search = v.clone(),
+            ("assign", ParamValue::Choice(v)) => p.assign = v.clone(),
             ("inspect", ParamValue::Bool(v)) => p.inspect = *v,
             ("probe_x", ParamValue::Int(v)) => p.probe_x = *v as i32,
             ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
