@@ -195,6 +195,50 @@ fn the_gl_backend_renders_the_same_analytic_image() {
     assert_eq!(r.report.counts.technique.shadow_maps, 1);
 }
 
+/// A depth texture cleared to `value`, read back as the renderer reads its G-buffer depth.
+fn cleared_depth_reads_back(gpu: &shadowlab_core::GpuContext, value: f32) -> Vec<f32> {
+    let (w, h) = (37u32, 21u32);
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &view,
+            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(value), store: wgpu::StoreOp::Store }),
+            stencil_ops: None,
+        }),
+        ..Default::default()
+    });
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = shadowlab_core::gpu::readback::read_texture(gpu, &texture, w, h, 4).unwrap();
+    assert_eq!(bytes.len(), (w * h * 4) as usize);
+    bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect()
+}
+
+#[test]
+fn depth_reads_back_on_gl_which_cannot_copy_depth_to_a_buffer() {
+    // GL lacks DEPTH_TEXTURE_AND_BUFFER_COPIES: the readback draws the depth into a colour target instead (it
+    // panicked in wgpu's validation before, so every comparison on GL did).
+    let gl = shadowlab_core::GpuContext::headless_on(wgpu::Backends::GL)
+        .unwrap_or_else(|e| panic!("no GL adapter ({e}): install libegl1 libegl-mesa0 libgl1-mesa-dri"));
+    assert_eq!(gl.adapter_info.backend, wgpu::Backend::Gl);
+    for ctx in [&gl, &gpu()] {
+        let depths = cleared_depth_reads_back(ctx, 0.25);
+        assert!(depths.iter().all(|&d| d == 0.25), "{:?}: {:?}", ctx.adapter_info.backend, &depths[..4]);
+    }
+}
+
 #[test]
 fn a_gltf_emissive_texture_modulates_the_emission_instead_of_a_flat_glow() {
     // lit_quad.gltf's material emits (4, 2, 0); with its checker as the emissive texture the quad shows the

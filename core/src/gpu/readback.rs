@@ -12,6 +12,12 @@ pub fn read_texture(
     bytes_per_pixel: u32,
 ) -> Result<Vec<u8>, GpuError> {
     gpu.check_lost()?;
+    // wgpu's GL backend never offers `DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES`; every other one does.
+    let copies_depth = gpu.adapter_info.backend != wgpu::Backend::Gl;
+    if texture.format().is_depth_stencil_format() && !copies_depth {
+        let colour = depth_as_colour(gpu, texture, width, height)?;
+        return read_texture(gpu, &colour, width, height, bytes_per_pixel);
+    }
     let row = width * bytes_per_pixel;
     let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -47,6 +53,129 @@ pub fn read_texture(
     }
     Ok(out)
 }
+
+/// Layer 0 of a `Depth32Float` texture drawn, bit for bit, into an `R32Uint` one of the same size (GL cannot
+/// render to `R32Float`): the adapters without
+/// `DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES` (GL) cannot copy depth to a buffer, but can read it in a
+/// fragment shader.
+fn depth_as_colour(
+    gpu: &GpuContext,
+    texture: &wgpu::Texture,
+    width: u32,
+    height: u32,
+) -> Result<wgpu::Texture, GpuError> {
+    let unsupported = |why: &str| {
+        GpuError::Readback(format!(
+            "this adapter ({:?}) cannot copy depth to a buffer, and {why}; use the Vulkan, Metal or DX12 backend",
+            gpu.adapter_info.backend
+        ))
+    };
+    if texture.format() != wgpu::TextureFormat::Depth32Float {
+        return Err(unsupported("only Depth32Float is drawn instead"));
+    }
+    if !texture.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) || texture.depth_or_array_layers() != 1 {
+        return Err(unsupported("this depth texture is not a single sampled layer"));
+    }
+    let colour = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("depth readback"),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Uint,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("depth readback"),
+        source: wgpu::ShaderSource::Wgsl(DEPTH_AS_COLOUR.into()),
+    });
+    // The depth bound as an unfilterable float texture: naga's GLSL output cannot load from a depth texture.
+    let bind_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("depth readback"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        }],
+    });
+    let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("depth readback"),
+        bind_group_layouts: &[Some(&bind_layout)],
+        immediate_size: 0,
+    });
+    let pipeline = gpu.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("depth readback"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::TextureFormat::R32Uint.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let view = texture
+        .create_view(&wgpu::TextureViewDescriptor { aspect: wgpu::TextureAspect::DepthOnly, ..Default::default() });
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("depth readback"),
+        layout: &bind_layout,
+        entries: &[wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) }],
+    });
+    let target = colour.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("depth readback"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    Ok(colour)
+}
+
+/// One triangle over the target; each fragment writes its texel's depth bits.
+const DEPTH_AS_COLOUR: &str = r#"
+@group(0) @binding(0) var depth: texture_2d<f32>;
+
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<u32> {
+    return vec4<u32>(bitcast<u32>(textureLoad(depth, vec2<i32>(p.xy), 0).r), 0u, 0u, 1u);
+}
+"#;
 
 /// Map the first `bytes` of a `MAP_READ` buffer (after the submitted work that fills it), copy them out, unmap.
 pub fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
