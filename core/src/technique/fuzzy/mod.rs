@@ -10,7 +10,8 @@
 //!    its members' mean normal and summed flux (`I_c` of equation 6).
 //! 3. Shading points: the G-buffer's pixels (position, normal) of the current view (`fuzzy/points.wgsl`).
 //! 4. SP clustering: `K_sp` clusters by Algorithm 1 over every `gamma`-th column and row, then Algorithm 2
-//!    assigns every pixel to its `F` nearest clusters with inverse distances. Both clusterings: initial
+//!    assigns every pixel to its `F` nearest clusters with inverse distances (`assign=neighbours`, the default:
+//!    the pixels between samples from their four samples' lists, a deviation of [`kmeans`]). Both clusterings: initial
 //!    centroids from the data, a regular grid over the centroids rebuilt every iteration and a search from the
 //!    27 cells around a point, fixed-point atomic sums (64-bit, 2^-24 of the scene's bounds), `dist` of
 //!    equation 7 with `n_t`.
