@@ -80,7 +80,14 @@ const SHADE: WgslModule = crate::wgsl!(
     "fuzzy_shade",
     ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
 );
-const KMEANS: WgslModule = crate::wgsl!("fuzzy_kmeans", ["core/src/technique/fuzzy/kmeans.wgsl"]);
+const KMEANS: WgslModule = crate::wgsl!(
+    "fuzzy_kmeans",
+    [
+        "core/src/technique/fuzzy/kmeans.wgsl",
+        "core/src/technique/fuzzy/kmeans_search.wgsl",
+        "core/src/technique/fuzzy/kmeans_final.wgsl"
+    ]
+);
 
 /// Mirrors `VisParams` in `fuzzy/visibility.wgsl`.
 #[repr(C)]

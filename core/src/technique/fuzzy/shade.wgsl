@@ -19,7 +19,7 @@ struct FuzzyShade {
 }
 
 @group(1) @binding(0) var<uniform> shade: FuzzyShade;
-// Per pixel, F entries of (cluster, bitcast inverse distance), from fuzzy/kmeans.wgsl's km_final.
+// Per pixel, F entries of (cluster, bitcast inverse distance), from fuzzy/kmeans_final.wgsl.
 @group(1) @binding(1) var<storage, read> sp_assignment: array<u32>;
 @group(1) @binding(2) var<storage, read> vis_bits: array<u32>;
 

@@ -1,0 +1,149 @@
+// Algorithm 2 of fuzzy/kmeans.wgsl (concatenated after it): every point's F nearest clusters with inverse
+// distances and the members they make; with neighbour lists, the samples by the search (km_final), the points
+// between them from their four samples' lists (km_fill), the long searches in a dispatch of their own
+// (km_search).
+
+// Algorithm 2's output for point m: its F entries (the search state), and entry 0's cluster counts the point
+// as a member (count, the least member distance for the representative; with flux, normal and flux sums).
+fn record(m: u32, p: KmPoint, f_max: u32) {
+    let base = m * f_max * 2u;
+    var first = NONE;
+    var first_d = 0.0;
+    if best_n == 0u {
+        first = any_k;
+        first_d = any_d;
+        if first != NONE {
+            assignment[base] = first;
+        }
+    } else {
+        first = best_kl.x;
+        first_d = best_dl.x;
+        for (var f = 0u; f < best_n; f++) {
+            assignment[base + 2u * f] = best_k(f);
+            assignment[base + 2u * f + 1u] = bitcast<u32>(1.0 / max(best_d(f), km.min_distance));
+        }
+    }
+    if first == NONE {
+        return;
+    }
+    let acc = first * ACC;
+    atomicAdd(&work[acc + ACC_COUNT], 1u);
+    atomicMin(&work[acc + ACC_BEST], bitcast<u32>(first_d));
+    // The mean normal and the flux are only used for clusters of VPLs (rep_finish).
+    if km.has_flux == 1u {
+        accumulate_normal(first, p);
+        let flux = p.flux.rgb * km.flux_scale.x;
+        add64(acc + ACC_FLUX + 0u, quantize(flux.r));
+        add64(acc + ACC_FLUX + 2u, quantize(flux.g));
+        add64(acc + ACC_FLUX + 4u, quantize(flux.b));
+    }
+}
+
+fn clear_entries(m: u32, f_max: u32) {
+    let base = m * f_max * 2u;
+    for (var f = 0u; f < f_max; f++) {
+        assignment[base + 2u * f] = NONE;
+        assignment[base + 2u * f + 1u] = 0u;
+    }
+}
+
+fn neighbour_lists() -> bool {
+    return km.options.x == 1u && km.gamma > 1u;
+}
+
+// Algorithm 2: the F nearest clusters of every point and their inverse distances, by the grid search; with
+// neighbour lists, of the samples only (one invocation per sample).
+@compute @workgroup_size(64)
+fn km_final(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    var m = global_index(id, groups);
+    if neighbour_lists() {
+        if m >= km.sample_count {
+            return;
+        }
+        m = sample_point(m);
+    }
+    if m >= km.point_count {
+        return;
+    }
+    let f_max = clamp(km.fuzziness, 1u, MAX_F);
+    clear_entries(m, f_max);
+    let p = km_points[m];
+    if !point_valid(p) {
+        return;
+    }
+    find(p.position.xyz, p.normal.xyz, f_max);
+    record(m, p, f_max);
+}
+
+// A candidate from a neighbouring sample's list, once.
+fn consider_once(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    if !listed(k) {
+        consider(k, p, n, f_max);
+    }
+}
+
+// Algorithm 2 for the points off the sample grid (after km_final over the samples): the F nearest among the
+// clusters the four samples around the point list, by equation 7; the grid search where fewer than F of them
+// are compatible (kmeans.rs `sample_corners`, `neighbour_lists`).
+@compute @workgroup_size(64)
+fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let m = global_index(id, groups);
+    if m >= km.point_count {
+        return;
+    }
+    let g = km.gamma;
+    let w = max(km.width, 1u);
+    let h = max(km.height, 1u);
+    let x = m % w;
+    let y = m / w;
+    if x % g == 0u && y % g == 0u {
+        return;
+    }
+    let f_max = clamp(km.fuzziness, 1u, MAX_F);
+    clear_entries(m, f_max);
+    let p = km_points[m];
+    if !point_valid(p) {
+        return;
+    }
+    reset_best();
+    let x0 = x / g * g;
+    let y0 = y / g * g;
+    let x1 = min(x0 + g, (w - 1u) / g * g);
+    let y1 = min(y0 + g, (h - 1u) / g * g);
+    let corners = array<u32, 4>(y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1);
+    for (var c = 0u; c < 4u; c++) {
+        let s = corners[c];
+        if s >= km.point_count {
+            continue;
+        }
+        for (var f = 0u; f < f_max; f++) {
+            let k = assignment[s * f_max * 2u + 2u * f];
+            if k == NONE {
+                break;
+            }
+            consider_once(k, p.position.xyz, p.normal.xyz, f_max);
+        }
+    }
+    if best_n < f_max {
+        // The grid search is long where it is needed (few compatible clusters near a crease): it goes to a
+        // queue of its own (km_search) so that the invocations beside it do not wait for it.
+        let q = atomicAdd(&work[queue_base()], 1u);
+        atomicStore(&work[queue_base() + 1u + q], m);
+        return;
+    }
+    record(m, p, f_max);
+}
+
+// The points km_fill queued: the grid search.
+@compute @workgroup_size(64)
+fn km_search(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = global_index(id, groups);
+    if i >= atomicLoad(&work[queue_base()]) {
+        return;
+    }
+    let m = atomicLoad(&work[queue_base() + 1u + i]);
+    let f_max = clamp(km.fuzziness, 1u, MAX_F);
+    let p = km_points[m];
+    find(p.position.xyz, p.normal.xyz, f_max);
+    record(m, p, f_max);
+}

@@ -1,0 +1,249 @@
+// The search of fuzzy/kmeans.wgsl (concatenated after it): the F nearest compatible centroids of a point, by the
+// grid walked shell by shell (kmeans.rs `Grid::nearest`) or, where they are few, by the normal buckets.
+
+// The search state of one invocation: the F nearest compatible centroids (up to 8, sorted, in two vec4 halves:
+// entries 0-3 and 4-7, FAR / NONE where empty), how many there are, and the nearest by position. Vectors with
+// constant lanes instead of arrays with per-invocation indices: a CPU rasterizer (lavapipe) keeps them in
+// registers and inserts without branches; the array version made the final assignment several times slower.
+const FAR: f32 = 3.0e38;
+var<private> best_dl: vec4<f32>;
+var<private> best_dh: vec4<f32>;
+var<private> best_kl: vec4<u32>;
+var<private> best_kh: vec4<u32>;
+var<private> best_n: u32;
+var<private> any_d: f32;
+var<private> any_k: u32;
+// Every centroid counts as compatible (find's nearest by position).
+var<private> all_compatible: bool;
+
+fn best_d(i: u32) -> f32 {
+    if i < 4u {
+        return best_dl[i];
+    }
+    return best_dh[i - 4u];
+}
+
+fn best_k(i: u32) -> u32 {
+    if i < 4u {
+        return best_kl[i];
+    }
+    return best_kh[i - 4u];
+}
+
+fn reset_best() {
+    best_dl = vec4<f32>(FAR);
+    best_dh = vec4<f32>(FAR);
+    best_kl = vec4<u32>(NONE);
+    best_kh = vec4<u32>(NONE);
+    best_n = 0u;
+    any_k = NONE;
+    any_d = FAR;
+}
+
+fn less(d: f32, k: u32, d2: f32, k2: u32) -> bool {
+    return d < d2 || (d == d2 && k < k2);
+}
+
+fn listed(k: u32) -> bool {
+    return any(best_kl == vec4<u32>(k)) || any(best_kh == vec4<u32>(k));
+}
+
+// Insert (d, k) into the sorted list: the entries it precedes move one place down (the last one drops out).
+fn insert_best(d: f32, k: u32, f_max: u32) {
+    let dv = vec4<f32>(d);
+    let kv = vec4<u32>(k);
+    let lt_l = (dv < best_dl) | ((dv == best_dl) & (kv < best_kl));
+    let lt_h = (dv < best_dh) | ((dv == best_dh) & (kv < best_kh));
+    // Each entry's predecessor (the new item before entry 0).
+    let pd_l = vec4<f32>(d, best_dl.xyz);
+    let pk_l = vec4<u32>(k, best_kl.xyz);
+    let plt_l = vec4<bool>(false, lt_l.xyz);
+    let pd_h = vec4<f32>(best_dl.w, best_dh.xyz);
+    let pk_h = vec4<u32>(best_kl.w, best_kh.xyz);
+    let plt_h = vec4<bool>(lt_l.w, lt_h.xyz);
+    best_dl = select(best_dl, select(dv, pd_l, plt_l), lt_l);
+    best_kl = select(best_kl, select(kv, pk_l, plt_l), lt_l);
+    best_dh = select(best_dh, select(dv, pd_h, plt_h), lt_h);
+    best_kh = select(best_kh, select(kv, pk_h, plt_h), lt_h);
+    best_n = min(best_n + 1u, f_max);
+}
+
+// The nearest by position is only used when no compatible centroid is found, so it is kept only while none is.
+// A full list rejects a farther candidate with one comparison.
+fn consider(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    let c = centroid(k);
+    let d = length(p - c.position.xyz);
+    if best_n == 0u && (any_k == NONE || less(d, k, any_d, any_k)) {
+        any_d = d;
+        any_k = k;
+    }
+    if all_compatible || dot(n, c.normal.xyz) > km.n_t {
+        if best_n == f_max && !less(d, k, best_d(f_max - 1u), best_k(f_max - 1u)) {
+            return;
+        }
+        insert_best(d, k, f_max);
+    }
+}
+
+// The distance from p to the box of cell c; a border cell's box reaches to infinity outwards (centroids beyond
+// the bounds are binned into it).
+fn cell_distance(c: vec3<i32>, p: vec3<f32>) -> f32 {
+    let lo = km.bounds_min.xyz + vec3<f32>(c) * km.cell;
+    let hi = lo + vec3<f32>(km.cell);
+    let top = vec3<i32>(km.dims.xyz) - 1;
+    let below = select(lo - p, vec3<f32>(0.0), c == vec3<i32>(0));
+    let above = select(p - hi, vec3<f32>(0.0), c == top);
+    return length(max(max(below, above), vec3<f32>(0.0)));
+}
+
+// A cell farther than the F-th centroid found cannot change the list once it is full.
+fn visit_cell(c: vec3<i32>, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    if best_n == f_max && cell_distance(c, p) > best_d(f_max - 1u) {
+        return;
+    }
+    let i = cell_index(c);
+    let s = atomicLoad(&work[starts_base() + i]);
+    let e = atomicLoad(&work[starts_base() + i + 1u]);
+    for (var j = s; j < e; j++) {
+        consider(atomicLoad(&work[items_base() + j]), p, n, f_max);
+    }
+}
+
+// How far every centroid outside the block of radius r around cell c is from p at least: the distance to the
+// block's nearest face with cells beyond it (kmeans.rs `Grid::guarantee`).
+fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
+    var g = 3.0e38;
+    for (var a = 0; a < 3; a++) {
+        if c[a] - r > 0 {
+            g = min(g, p[a] - (km.bounds_min[a] + f32(c[a] - r) * km.cell));
+        }
+        if c[a] + r < i32(km.dims[a]) - 1 {
+            g = min(g, km.bounds_min[a] + f32(c[a] + r + 1) * km.cell - p[a]);
+        }
+    }
+    return g;
+}
+
+// Shell by shell (Chebyshev radius r) from the point's cell: at least the 27 cells of the paper, more until the
+// F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
+fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    reset_best();
+    let c = cell_of(p);
+    let dims = vec3<i32>(km.dims.xyz);
+    let far = max(c, dims - 1 - c);
+    let reach = max(far.x, max(far.y, far.z));
+    var r = 0;
+    loop {
+        let lo = max(c - vec3<i32>(r), vec3<i32>(0));
+        let hi = min(c + vec3<i32>(r), dims - 1);
+        for (var z = lo.z; z <= hi.z; z++) {
+            for (var y = lo.y; y <= hi.y; y++) {
+                if abs(z - c.z) == r || abs(y - c.y) == r {
+                    for (var x = lo.x; x <= hi.x; x++) {
+                        visit_cell(vec3<i32>(x, y, z), p, n, f_max);
+                    }
+                } else {
+                    if c.x - r >= 0 {
+                        visit_cell(vec3<i32>(c.x - r, y, z), p, n, f_max);
+                    }
+                    if c.x + r < dims.x {
+                        visit_cell(vec3<i32>(c.x + r, y, z), p, n, f_max);
+                    }
+                }
+            }
+        }
+        let complete = best_n == f_max && best_d(f_max - 1u) <= guarantee(p, c, r);
+        // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
+        let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
+        if (r >= 1 && (complete || ring_done)) || r >= reach {
+            break;
+        }
+        r++;
+    }
+}
+
+// The normal buckets: the octahedral cell of a normal, the direction of a cell's centre.
+fn normal_bucket(n: vec3<f32>) -> u32 {
+    let a = abs(n.x) + abs(n.y) + abs(n.z);
+    if !(a > 1e-20) || !(a < 3.0e38) {
+        return 0u;
+    }
+    var uv = n.xy / a;
+    if n.z < 0.0 {
+        uv = (1.0 - abs(uv.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), uv >= vec2<f32>(0.0));
+    }
+    let cell = vec2<u32>(clamp((uv * 0.5 + 0.5) * f32(NB_SIDE), vec2<f32>(0.0), vec2<f32>(f32(NB_SIDE) - 1.0)));
+    return cell.x + cell.y * NB_SIDE;
+}
+
+fn bucket_axis(b: u32) -> vec3<f32> {
+    let uv = (vec2<f32>(f32(b % NB_SIDE), f32(b / NB_SIDE)) + 0.5) / f32(NB_SIDE) * 2.0 - 1.0;
+    var n = vec3<f32>(uv, 1.0 - abs(uv.x) - abs(uv.y));
+    if n.z < 0.0 {
+        n = vec3<f32>((1.0 - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0)), n.z);
+    }
+    return normalize(n);
+}
+
+fn unit(n: vec3<f32>) -> bool {
+    return abs(dot(n, n) - 1.0) < 1e-3;
+}
+
+// The F nearest compatible centroids (the search state), exactly as `search` finds them. Where the buckets that
+// can hold a compatible centroid hold at most options.y centroids (a point on a crease or a narrow face, whose
+// compatible centroids are few and may be far), they are scanned whole instead of walking the grid shell by
+// shell until F are found, which can visit every cell. A compatible centroid lies within acos(n_t) of the point's
+// normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than both (plus
+// a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's (F = 1, every
+// centroid compatible), as the exhausted search would find it.
+fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    if km.options.y == 0u || km.dims.w > 0u || !unit(n) {
+        search(p, n, f_max);
+        return;
+    }
+    var mask_lo = 0u;
+    var mask_hi = 0u;
+    var total = 0u;
+    for (var b = 0u; b < NB; b++) {
+        let limit = bitcast<f32>(atomicLoad(&work[nb_limits_base() + b]));
+        if limit > -1.5 && dot(n, bucket_axis(b)) < limit {
+            continue;
+        }
+        let count = atomicLoad(&work[nb_starts_base() + b + 1u]) - atomicLoad(&work[nb_starts_base() + b]);
+        if count == 0u {
+            continue;
+        }
+        total += count;
+        if b < 32u {
+            mask_lo |= 1u << b;
+        } else {
+            mask_hi |= 1u << (b - 32u);
+        }
+    }
+    if total > km.options.y {
+        search(p, n, f_max);
+        return;
+    }
+    reset_best();
+    for (var b = 0u; b < NB; b++) {
+        let bit = select(mask_hi >> (b - 32u), mask_lo >> b, b < 32u) & 1u;
+        if bit == 0u {
+            continue;
+        }
+        let s = atomicLoad(&work[nb_starts_base() + b]);
+        let e = atomicLoad(&work[nb_starts_base() + b + 1u]);
+        for (var j = s; j < e; j++) {
+            consider(atomicLoad(&work[nb_items_base() + j]), p, n, f_max);
+        }
+    }
+    if best_n == 0u {
+        all_compatible = true;
+        search(p, n, 1u);
+        all_compatible = false;
+        let k = best_kl.x;
+        let d = best_dl.x;
+        reset_best();
+        any_k = k;
+        any_d = d;
+    }
+}
