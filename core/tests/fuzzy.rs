@@ -383,3 +383,36 @@ fn a_frame_with_the_last_frames_vpls_reuses_their_clusters_and_renders_the_same(
     let (_, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
     assert_eq!(reused(&report), 1.0);
 }
+
+#[test]
+fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_clustering_again_would() {
+    // The shading-point clusters depend on the G-buffer alone: while the view stays (a light dragged, the same
+    // frame again) they are reused; a moved camera or `reuse=false` clusters again.
+    let scene = room();
+    let Rendered { mut renderer, hdr: first, report } =
+        Shot::indirect(&scene, &lights(), settings(256), "fuzzy").params(&[int("k_vpl", 32)]).render_keeping();
+    let reused = |r: &shadowlab_core::FrameReport| r.indirect.as_ref().unwrap().counts.figures["sp clusters reused"];
+    assert_eq!(reused(&report), 0.0, "the first frame clusters");
+    let mut direct = create(&renderer, "unshadowed", &[]);
+    let (again, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &lights());
+    assert_eq!(reused(&report), 1.0, "the same view is clustered again");
+    assert!(again == first, "reused clusters render another image");
+    // A moved light: the view's clusters are kept, the light's shading is new.
+    let moved = vec![white_light(Vec3::new(-0.6, 2.2, -0.4), 8.0, 30.0)];
+    let (kept, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+    assert_eq!(reused(&report), 1.0, "a moved light re-clusters the unchanged view");
+    assert!(kept != first);
+    // Clustering every frame renders the same image.
+    renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Bool(false)).unwrap();
+    let (fresh, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+    assert_eq!(reused(&report), 0.0, "reuse=false reused");
+    assert!(fresh == kept, "the reused clusters shade differently from clustering again");
+    renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Bool(true)).unwrap();
+    // A moved camera clusters again.
+    let mut turned = scene.camera;
+    turned.position += Vec3::new(0.05, 0.0, 0.0);
+    let (_, report) = frame(&mut renderer, direct.as_mut(), &turned, &moved);
+    assert_eq!(reused(&report), 0.0, "a moved camera reused the old view's clusters");
+    let (_, report) = frame(&mut renderer, direct.as_mut(), &turned, &moved);
+    assert_eq!(reused(&report), 1.0);
+}

@@ -36,7 +36,9 @@
 //!   of surface points and may lie inside geometry or in the air, where shadow rays would start blocked or
 //!   unblocked wrongly. The paper speaks of "the representative VPL of cluster c" without saying how it is
 //!   chosen.
-//! - Both clusterings run every frame (the paper clusters VPLs once per static scene): lights move here.
+//! - Both clusterings run in every frame whose inputs changed (the paper clusters VPLs once per static scene):
+//!   lights and the camera move here. A frame reuses the VPL clusters of the same VPL set and the shading-point
+//!   clusters of the same view (`reuse`).
 //! - Ray ends are offset along their normals by `bias` times the camera distance, as `vpl-raytraced` does, so
 //!   the two are comparable (with one cluster per VPL and per pixel the two images agree: tested).
 
@@ -173,6 +175,12 @@ pub struct FuzzyClustering {
     clustered_vpls: Option<(Arc<VplSet>, KMeansParams)>,
     /// This frame reuses the last frame's VPL clusters.
     vpl_reused: bool,
+    /// The view and settings the shading-point clusters on the GPU were made from (the scene's BVH, the
+    /// camera, the image size, the k-means settings): a frame of the same view (only lights moved, or the same
+    /// frame again) reuses them, since they depend on the G-buffer alone.
+    clustered_view: Option<(Arc<SceneBvh>, crate::scene::Camera, (u32, u32), KMeansParams)>,
+    /// This frame reuses the last frame's shading-point clusters.
+    sp_reused: bool,
     /// Wall time of the last step's readback of the clusters (and the inspection's maps).
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
@@ -263,6 +271,8 @@ impl FuzzyClustering {
             pending: (None, None),
             clustered_vpls: None,
             vpl_reused: false,
+            clustered_view: None,
+            sp_reused: false,
             readback_ms: 0.0,
             last_step: "fuzzy shading",
         }
@@ -314,7 +324,8 @@ impl FuzzyClustering {
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, &ctx.vpls.buffer.buffer, kp, Some(max_flux))?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
-        if let Some(kp) = &sp_kp {
+        if let Some(kp) = sp_kp.as_ref().filter(|_| !self.sp_reused) {
+            self.clustered_view = None;
             let pixels = ctx.size.0 as u64 * ctx.size.1 as u64;
             gpu::ensure_storage(&mut self.sp_points, ctx.gpu, "fuzzy shading points", pixels * 48);
             let points = self.sp_points.as_ref().expect("ensured");
@@ -332,6 +343,7 @@ impl FuzzyClustering {
             });
             let points = self.sp_points.as_ref().expect("ensured");
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp, None)?;
+            self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
         Ok(())
     }
@@ -549,10 +561,22 @@ impl Technique for FuzzyClustering {
             let f = (self.params.fuzziness as usize).clamp(1, MAX_F);
             self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f)
         });
-        self.vpl_reused = vpl_kp.as_ref().is_some_and(|kp| {
-            self.clustered_vpls.as_ref().is_some_and(|(set, done)| Arc::ptr_eq(set, &self.vpls) && done == kp)
-        });
+        let reuse = self.params.reuse;
+        self.vpl_reused = reuse
+            && vpl_kp.as_ref().is_some_and(|kp| {
+                self.clustered_vpls.as_ref().is_some_and(|(set, done)| Arc::ptr_eq(set, &self.vpls) && done == kp)
+            });
+        self.sp_reused = reuse
+            && sp_kp.as_ref().is_some_and(|kp| {
+                self.clustered_view.as_ref().is_some_and(|(bvh, camera, size, done)| {
+                    self.bvh.as_ref().is_some_and(|b| Arc::ptr_eq(b, bvh))
+                        && camera == ctx.camera
+                        && *size == ctx.size
+                        && done == kp
+                })
+            });
         self.counts.figures.insert("vpl clusters reused".into(), if self.vpl_reused { 1.0 } else { 0.0 });
+        self.counts.figures.insert("sp clusters reused".into(), if self.sp_reused { 1.0 } else { 0.0 });
         if let Some(kp) = &vpl_kp {
             self.vpl_kmeans.shape = gpu::RunShape::of(kp);
         }

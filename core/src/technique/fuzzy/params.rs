@@ -34,6 +34,9 @@ pub struct FuzzyParams {
     pub ray_bias: f32,
     /// Read the clusters back every frame for the overlays (costs a readback of the per-pixel clusters).
     pub inspect: bool,
+    /// Reuse the last frame's clusters whose inputs did not change: the VPL clusters of the same VPL set, the
+    /// shading-point clusters of the same view (off: both clustered every frame, to time them).
+    pub reuse: bool,
     /// The pixel whose clusters and visibility rays the probe overlay shows (-1: none).
     pub probe_x: i32,
     pub probe_y: i32,
@@ -64,6 +67,7 @@ impl Default for FuzzyParams {
             cluster: "both".into(),
             ray_bias: 0.001,
             inspect: true,
+            reuse: true,
             probe_x: -1,
             probe_y: -1,
             rays_per_step: 1 << 22,
@@ -208,6 +212,14 @@ impl FuzzyParams {
                 value: ParamValue::Bool(p.inspect),
             },
             Param {
+                key: "reuse",
+                label: "Reuse unchanged clusters",
+                help: "Keep the last frame's VPL clusters while the VPLs stay, and its shading-point clusters while \
+                       the view stays (as when only a light moves); off clusters both every frame (for timing)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.reuse),
+            },
+            Param {
                 key: "probe_x",
                 label: "Probe pixel x",
                 help: "The pixel whose F clusters and visibility rays the probe overlay shows (-1: none; in the app, \
@@ -256,6 +268,7 @@ impl FuzzyParams {
             ("search", ParamValue::Choice(v)) => p.search = v.clone(),
             ("assign", ParamValue::Choice(v)) => p.assign = v.clone(),
             ("inspect", ParamValue::Bool(v)) => p.inspect = *v,
+            ("reuse", ParamValue::Bool(v)) => p.reuse = *v,
             ("probe_x", ParamValue::Int(v)) => p.probe_x = *v as i32,
             ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
             ("rays_per_step", ParamValue::Int(v)) => p.rays_per_step = *v as u32,
