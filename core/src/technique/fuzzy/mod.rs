@@ -178,7 +178,7 @@ pub struct FuzzyClustering {
     /// The view and settings the shading-point clusters on the GPU were made from (the scene's BVH, the
     /// camera, the image size, the k-means settings): a frame of the same view (only lights moved, or the same
     /// frame again) reuses them, since they depend on the G-buffer alone.
-    clustered_view: Option<(Arc<SceneBvh>, crate::scene::Camera, (u32, u32), KMeansParams)>,
+    clustered_view: Option<ClusteredView>,
     /// This frame reuses the last frame's shading-point clusters.
     sp_reused: bool,
     /// Wall time of the last step's readback of the clusters (and the inspection's maps).
@@ -188,6 +188,10 @@ pub struct FuzzyClustering {
     /// The camera of the last frame: the shading-point clusters are of its view.
     frame_camera: Option<crate::scene::Camera>,
 }
+
+/// What a run of the shading-point clustering was made from: the scene's BVH, the camera, the image size and
+/// the k-means settings.
+type ClusteredView = (Arc<SceneBvh>, crate::scene::Camera, (u32, u32), KMeansParams);
 
 impl FuzzyClustering {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> FuzzyClustering {
