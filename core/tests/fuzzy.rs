@@ -387,7 +387,7 @@ fn a_frame_with_the_last_frames_vpls_reuses_their_clusters_and_renders_the_same(
 #[test]
 fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_clustering_again_would() {
     // The shading-point clusters depend on the G-buffer alone: while the view stays (a light dragged, the same
-    // frame again) they are reused; a moved camera or `reuse=false` clusters again.
+    // frame again) they are reused; a moved camera or `reuse=vpls` / `none` clusters again.
     let scene = room();
     let Rendered { mut renderer, hdr: first, report } =
         Shot::indirect(&scene, &lights(), settings(256), "fuzzy").params(&[int("k_vpl", 32)]).render_keeping();
@@ -403,11 +403,15 @@ fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_c
     assert_eq!(reused(&report), 1.0, "a moved light re-clusters the unchanged view");
     assert!(kept != first);
     // Clustering every frame renders the same image.
-    renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Bool(false)).unwrap();
-    let (fresh, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
-    assert_eq!(reused(&report), 0.0, "reuse=false reused");
-    assert!(fresh == kept, "the reused clusters shade differently from clustering again");
-    renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Bool(true)).unwrap();
+    for (reuse, vpls_reused) in [("vpls", 1.0), ("none", 0.0)] {
+        renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Choice(reuse.into())).unwrap();
+        let (fresh, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &moved);
+        let figures = &report.indirect.as_ref().unwrap().counts.figures;
+        assert_eq!(figures["sp clusters reused"], 0.0, "reuse={reuse} reused the view's clusters");
+        assert_eq!(figures["vpl clusters reused"], vpls_reused, "reuse={reuse}: VPL clusters");
+        assert!(fresh == kept, "the reused clusters shade differently from clustering again (reuse={reuse})");
+    }
+    renderer.indirect_mut().unwrap().set_param("reuse", &ParamValue::Choice("all".into())).unwrap();
     // A moved camera clusters again.
     let mut turned = scene.camera;
     turned.position += Vec3::new(0.05, 0.0, 0.0);

@@ -38,7 +38,7 @@
 //!   chosen.
 //! - Both clusterings run in every frame whose inputs changed (the paper clusters VPLs once per static scene):
 //!   lights and the camera move here. A frame reuses the VPL clusters of the same VPL set and the shading-point
-//!   clusters of the same view (`reuse`).
+//!   clusters of the same view (`reuse=all`; `vpls` and `none` cluster more, for timing).
 //! - Ray ends are offset along their normals by `bias` times the camera distance, as `vpl-raytraced` does, so
 //!   the two are comparable (with one cluster per VPL and per pixel the two images agree: tested).
 
@@ -565,12 +565,12 @@ impl Technique for FuzzyClustering {
             let f = (self.params.fuzziness as usize).clamp(1, MAX_F);
             self.kmeans_params(ctx.scene.bounds, self.params.sp_clusters(pixels), w, h, self.params.gamma, f)
         });
-        let reuse = self.params.reuse;
-        self.vpl_reused = reuse
+        let (reuse_vpls, reuse_view) = (self.params.reuse != "none", self.params.reuse == "all");
+        self.vpl_reused = reuse_vpls
             && vpl_kp.as_ref().is_some_and(|kp| {
                 self.clustered_vpls.as_ref().is_some_and(|(set, done)| Arc::ptr_eq(set, &self.vpls) && done == kp)
             });
-        self.sp_reused = reuse
+        self.sp_reused = reuse_view
             && sp_kp.as_ref().is_some_and(|kp| {
                 self.clustered_view.as_ref().is_some_and(|(bvh, camera, size, done)| {
                     self.bvh.as_ref().is_some_and(|b| Arc::ptr_eq(b, bvh))

@@ -34,9 +34,10 @@ pub struct FuzzyParams {
     pub ray_bias: f32,
     /// Read the clusters back every frame for the overlays (costs a readback of the per-pixel clusters).
     pub inspect: bool,
-    /// Reuse the last frame's clusters whose inputs did not change: the VPL clusters of the same VPL set, the
-    /// shading-point clusters of the same view (off: both clustered every frame, to time them).
-    pub reuse: bool,
+    /// Which of the last frame's clusters a frame reuses when their inputs did not change: `all` (the VPL
+    /// clusters of the same VPL set and the shading-point clusters of the same view), `vpls` (the VPL clusters
+    /// only: the view is clustered every frame, as when the camera moves) or `none` (both every frame).
+    pub reuse: String,
     /// The pixel whose clusters and visibility rays the probe overlay shows (-1: none).
     pub probe_x: i32,
     pub probe_y: i32,
@@ -67,7 +68,7 @@ impl Default for FuzzyParams {
             cluster: "both".into(),
             ray_bias: 0.001,
             inspect: true,
-            reuse: true,
+            reuse: "all".into(),
             probe_x: -1,
             probe_y: -1,
             rays_per_step: 1 << 22,
@@ -109,6 +110,7 @@ const MODE_CHOICES: &[&str] = &["weighted", "fuzzy", "hard"];
 const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
 const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
 const ASSIGN_CHOICES: &[&str] = &["neighbours", "search"];
+const REUSE_CHOICES: &[&str] = &["all", "vpls", "none"];
 
 impl FuzzyParams {
     /// The parameters as the UI and the CLI list them.
@@ -214,10 +216,11 @@ impl FuzzyParams {
             Param {
                 key: "reuse",
                 label: "Reuse unchanged clusters",
-                help: "Keep the last frame's VPL clusters while the VPLs stay, and its shading-point clusters while \
-                       the view stays (as when only a light moves); off clusters both every frame (for timing)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.reuse),
+                help: "all: keep the last frame's VPL clusters while the VPLs stay and its shading-point clusters \
+                       while the view stays (as when only a light moves); vpls: the VPL clusters only (the view is \
+                       clustered every frame, as when the camera moves); none: both every frame (for timing)",
+                kind: ParamKind::Choice(REUSE_CHOICES),
+                value: ParamValue::Choice(p.reuse.clone()),
             },
             Param {
                 key: "probe_x",
@@ -268,7 +271,7 @@ impl FuzzyParams {
             ("search", ParamValue::Choice(v)) => p.search = v.clone(),
             ("assign", ParamValue::Choice(v)) => p.assign = v.clone(),
             ("inspect", ParamValue::Bool(v)) => p.inspect = *v,
-            ("reuse", ParamValue::Bool(v)) => p.reuse = *v,
+            ("reuse", ParamValue::Choice(v)) => p.reuse = v.clone(),
             ("probe_x", ParamValue::Int(v)) => p.probe_x = *v as i32,
             ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
             ("rays_per_step", ParamValue::Int(v)) => p.rays_per_step = *v as u32,
