@@ -39,6 +39,7 @@ pub const LIGHT_TILES_BUILD: WgslModule =
 pub const RAYTRACE_TEST: WgslModule =
     crate::wgsl!("raytrace_test", ["shaders/raytrace_bvh.wgsl", "shaders/raytrace_test.wgsl"]);
 pub const OVERLAY: WgslModule = crate::wgsl!("overlay", ["shaders/overlay.wgsl"]);
+pub const DEPTH_READBACK: WgslModule = crate::wgsl!("depth_readback", ["shaders/depth_readback.wgsl"]);
 pub const PARABOLOID_DEPTH: WgslModule = crate::wgsl!(
     "paraboloid_depth",
     ["shaders/vpl_basis.wgsl", "shaders/material.wgsl", "shaders/paraboloid_depth.wgsl"]
@@ -98,6 +99,7 @@ pub const MODULES: &[WgslModule] = &[
     LIGHT_TILES_BUILD,
     RAYTRACE_TEST,
     OVERLAY,
+    DEPTH_READBACK,
     PARABOLOID_DEPTH,
     VPL_GATHER_UNSHADOWED,
     VPL_GATHER_RAYTRACED,

@@ -86,10 +86,7 @@ fn depth_as_colour(
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("depth readback"),
-        source: wgpu::ShaderSource::Wgsl(DEPTH_AS_COLOUR.into()),
-    });
+    let module = super::pipeline::create_module(&gpu.device, "depth readback", crate::shaders::DEPTH_READBACK.source);
     // The depth bound as an unfilterable float texture: naga's GLSL output cannot load from a depth texture.
     let bind_layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("depth readback"),
@@ -160,22 +157,6 @@ fn depth_as_colour(
     gpu.queue.submit([encoder.finish()]);
     Ok(colour)
 }
-
-/// One triangle over the target; each fragment writes its texel's depth bits.
-const DEPTH_AS_COLOUR: &str = r#"
-@group(0) @binding(0) var depth: texture_2d<f32>;
-
-@vertex
-fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
-@fragment
-fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<u32> {
-    return vec4<u32>(bitcast<u32>(textureLoad(depth, vec2<i32>(p.xy), 0).r), 0u, 0u, 1u);
-}
-"#;
 
 /// Map the first `bytes` of a `MAP_READ` buffer (after the submitted work that fills it), copy them out, unmap.
 pub fn map_read(gpu: &GpuContext, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u8>, GpuError> {
