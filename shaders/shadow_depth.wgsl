@@ -2,6 +2,8 @@
 
 struct Face {
     clip_from_world: mat4x4<f32>,
+    // the face's centre (xyz) and the push per unit of view depth (w) of `vs_pushed`
+    eye_push: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> face: Face;
@@ -9,6 +11,21 @@ struct Face {
 @vertex
 fn vs_main(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
     return face.clip_from_world * vec4<f32>(position, 1.0);
+}
+
+// Geometry whose vertices carry their own uncertainty (INSM's meshes: the fourth float is the sample's inverse
+// view depth 1 / z from its intermediate viewpoint): each vertex moves away from the face's centre by
+// push * z, a depth bias that grows with the width of the sample it came from. A radial move keeps a vertex in
+// the faces and outside the culling hulls it was in (both are cones or convex sets around the centre).
+@vertex
+fn vs_pushed(@location(0) position: vec3<f32>, @location(1) inverse_depth: f32) -> @builtin(position) vec4<f32> {
+    let away = position - face.eye_push.xyz;
+    let d = length(away);
+    var p = position;
+    if d > 0.0 && inverse_depth > 0.0 {
+        p += away * (face.eye_push.w / (inverse_depth * d));
+    }
+    return face.clip_from_world * vec4<f32>(p, 1.0);
 }
 
 // Alpha-tested casters (cut-out materials: leaves, fences): material.wgsl's cutoff test, so they cast the shape

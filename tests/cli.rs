@@ -834,7 +834,16 @@ fn fuzzy_clustering_traces_particles_by_default_and_sweeps_its_time_split() {
         "--against-indirect",
         "vpl-raytraced",
     ]);
-    let out = shadowlab(&args);
+    // The columns below are the wall-clock steps' names; `auto` may keep the timestamps (named per pass) when
+    // the machine is loaded, so the clock is named.
+    let runtime = std::env::temp_dir().join("shadowlab-xdg");
+    std::fs::create_dir_all(&runtime).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .args(&args)
+        .env("XDG_RUNTIME_DIR", &runtime)
+        .env("SHADOWLAB_TIMING", "cpu")
+        .output()
+        .expect("run shadowlab");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = std::fs::read_to_string(&csv).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();

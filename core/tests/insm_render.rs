@@ -319,9 +319,9 @@ fn the_lookup_bias_is_at_least_bias_samples_intermediate_samples_wide() {
     let views = viewpoints::select(Placement::Box, &scene.bounds, &[], 10, 4.0);
     let width = viewpoints::mean_sample_width(&views, &scene.bounds, 128);
     assert!(width > 0.01 && width.is_finite(), "a sample is {width} m wide");
-    // One sample (the default) and two: the bias follows the width; 0: the depth bias alone.
+    // Half a sample (the default) and two: the bias follows the width; 0: the depth bias alone.
     let bias = |insm: &Insm| insm.lookup_params(&views, &scene.bounds, 128).bias_world;
-    assert!((bias(&insm) - width).abs() < 1e-6 * width.max(1.0), "{} vs {width}", bias(&insm));
+    assert!((bias(&insm) - 0.5 * width).abs() < 1e-6 * width.max(1.0), "{} vs {width}", bias(&insm));
     insm.set_param("bias_samples", &ParamValue::Float(2.0)).unwrap();
     assert!((bias(&insm) - 2.0 * width).abs() < 1e-6 * width.max(1.0));
     insm.set_param("bias_samples", &ParamValue::Float(0.0)).unwrap();
@@ -333,4 +333,32 @@ fn the_lookup_bias_is_at_least_bias_samples_intermediate_samples_wide() {
     assert_eq!(bias(&insm), 0.9);
     assert!(insm.set_param("bias_samples", &ParamValue::Float(f32::NAN)).is_err());
     assert!(insm.set_param("bias_samples", &ParamValue::Float(-1.0)).is_err());
+}
+
+#[test]
+fn pushed_mesh_vertices_move_away_from_the_light_by_their_own_sample_widths() {
+    let scene = plane_and_occluder();
+    let lights = [white_light(Vec3::new(0.0, 3.0, 0.0), 3.0, 8.0)];
+    let mut r = renderer(&scene, linear_settings(W, H));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.custom_viewpoints = viewpoints_over_the_plate();
+    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
+    insm.set_param("bias_samples", &ParamValue::Float(0.0)).unwrap();
+    // The plate stands 1 m above the ground, 4.1 m from the viewpoints (60° views, its view depth about 4.1 m):
+    // a sample of 32² is 4.1 * 2 tan 30° / 32 = 0.148 m wide there. Lit from straight above, pushed 6 widths
+    // (0.89 m) it still shadows the ground, with the same outline (a push along the light's rays is a depth
+    // bias); pushed 8 (1.18 m) it lies below the ground and shadows nothing.
+    let mut images = Vec::new();
+    for push in [0.0, 6.0, 8.0] {
+        insm.set_param("push_samples", &ParamValue::Float(push)).unwrap();
+        images.push(frame(&mut r, &mut insm, &scene.camera, &lights).0);
+    }
+    insm.set_param("epsilon", &ParamValue::Float(0.0)).unwrap();
+    let (unshadowed, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    assert_eq!(report.counts.technique.insm_mesh_triangles, Some(0));
+    let shadowed: Vec<f32> = images.iter().map(|i| share_over(i, &unshadowed, 0.05)).collect();
+    assert!(shadowed[0] > 0.005, "the plate shadows the ground: {shadowed:?}");
+    assert_eq!(share_over(&images[0], &images[1], 0.05), 0.0, "the push keeps the outline: {shadowed:?}");
+    assert!(shadowed[2] < 0.002, "pushed below the ground it shadows nothing: {shadowed:?}");
 }

@@ -71,6 +71,9 @@ pub struct CubeGeometry<'a> {
     /// caster with no receiver in its range draws nothing. None: every chunk in range (maps looked up from
     /// anywhere).
     pub receivers: Option<Aabb>,
+    /// With a renderer made by [`CubeShadowRenderer::with_pushed_vertices`]: how far each vertex moves away
+    /// from the cube's centre per unit of the view depth its fourth float holds the inverse of (0: not at all).
+    pub push_per_depth: f32,
 }
 
 /// The box of the surfaces a frame of `camera` (at `aspect`) can shade: its view frustum's corners' box within
@@ -198,6 +201,7 @@ impl GpuScene {
             cull: true,
             cutouts: Some(Cutouts { bind_groups: &self.material_bind_groups, masked: &self.material_cutout }),
             receivers: None,
+            push_per_depth: 0.0,
         }
     }
 }
@@ -247,6 +251,17 @@ impl CubeShadowRenderer {
 
     /// A renderer for geometry whose vertices are `vertex_stride` bytes with the position first.
     pub fn with_vertex_stride(gpu: &GpuContext, vertex_stride: u64) -> CubeShadowRenderer {
+        Self::with_layout(gpu, vertex_stride, false)
+    }
+
+    /// A renderer for geometry whose 16-byte vertices are a position and an inverse view depth, each vertex
+    /// pushed away from the cube's centre by [`CubeGeometry::push_per_depth`] times its view depth
+    /// (`vs_pushed` in `shadow_depth.wgsl`; INSM's meshes). Cube maps only.
+    pub fn with_pushed_vertices(gpu: &GpuContext) -> CubeShadowRenderer {
+        Self::with_layout(gpu, 16, true)
+    }
+
+    fn with_layout(gpu: &GpuContext, vertex_stride: u64, pushed: bool) -> CubeShadowRenderer {
         let device = &gpu.device;
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cube face"),
@@ -256,7 +271,7 @@ impl CubeShadowRenderer {
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
                     has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(64),
+                    min_binding_size: wgpu::BufferSize::new(80),
                 },
                 count: None,
             }],
@@ -275,12 +290,25 @@ impl CubeShadowRenderer {
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &faces,
                     offset: 0,
-                    size: wgpu::BufferSize::new(64),
+                    size: wgpu::BufferSize::new(80),
                 }),
             }],
         });
         let module = crate::gpu::pipeline::create_module(device, "shadow_depth", shaders::SHADOW_DEPTH.source);
-        let pipeline = Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth", false);
+        let pipeline = if pushed {
+            Self::depth_pipeline_with(
+                device,
+                &layout,
+                None,
+                &module,
+                vertex_stride,
+                "shadow depth (pushed)",
+                false,
+                true,
+            )
+        } else {
+            Self::depth_pipeline(device, &layout, &module, vertex_stride, "shadow depth", false)
+        };
         CubeShadowRenderer {
             pipeline,
             paraboloid_pipeline: None,
@@ -304,11 +332,11 @@ impl CubeShadowRenderer {
         label: &str,
         with_fragment: bool,
     ) -> wgpu::RenderPipeline {
-        Self::depth_pipeline_with(device, layout, None, module, vertex_stride, label, with_fragment)
+        Self::depth_pipeline_with(device, layout, None, module, vertex_stride, label, with_fragment, false)
     }
 
     /// The depth pipeline; with `material` the alpha-tested variant (`vs_masked`/`fs_masked`, group 1 the
-    /// material, the UVs at location 2).
+    /// material, the UVs at location 2); `pushed`: `vs_pushed` (the inverse depth at location 1, offset 12).
     #[allow(clippy::too_many_arguments)]
     fn depth_pipeline_with(
         device: &wgpu::Device,
@@ -318,6 +346,7 @@ impl CubeShadowRenderer {
         vertex_stride: u64,
         label: &str,
         with_fragment: bool,
+        pushed: bool,
     ) -> wgpu::RenderPipeline {
         let mut groups = vec![Some(layout)];
         groups.extend(material.map(Some));
@@ -329,19 +358,31 @@ impl CubeShadowRenderer {
         let masked = material.is_some();
         let attributes: &[wgpu::VertexAttribute] = if masked {
             &wgpu::vertex_attr_array![0 => Float32x3, 2 => Float32x2]
+        } else if pushed {
+            &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32]
         } else {
             &wgpu::vertex_attr_array![0 => Float32x3]
         };
-        let attributes: Vec<wgpu::VertexAttribute> = attributes
-            .iter()
-            .map(|a| wgpu::VertexAttribute { offset: if a.shader_location == 2 { 24 } else { 0 }, ..*a })
-            .collect();
+        let offset = |location| match location {
+            1 => 12,
+            2 => 24,
+            _ => 0,
+        };
+        let attributes: Vec<wgpu::VertexAttribute> =
+            attributes.iter().map(|a| wgpu::VertexAttribute { offset: offset(a.shader_location), ..*a }).collect();
+        let entry = if masked {
+            "vs_masked"
+        } else if pushed {
+            "vs_pushed"
+        } else {
+            "vs_main"
+        };
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(&pipeline_layout),
             vertex: wgpu::VertexState {
                 module,
-                entry_point: Some(if masked { "vs_masked" } else { "vs_main" }),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: vertex_stride,
@@ -396,6 +437,7 @@ impl CubeShadowRenderer {
             self.vertex_stride,
             label,
             true,
+            false,
         );
         if paraboloid {
             self.paraboloid_masked_pipeline = Some(pipeline);
@@ -576,7 +618,12 @@ impl CubeShadowRenderer {
             .iter()
             .flat_map(|c| CUBE_FACES.iter().map(|f| f.clip_from_world(c.position, c.near, c.far)))
             .collect();
-        let matrices: Vec<MatrixUniform> = clip_from_world.iter().map(|m| MatrixUniform::new(*m)).collect();
+        let eyes = casters.iter().flat_map(|c| [c.position.extend(geometry.push_per_depth).to_array(); 6]);
+        let matrices: Vec<MatrixUniform> = clip_from_world
+            .iter()
+            .zip(eyes)
+            .map(|(m, eye_push)| MatrixUniform { eye_push, ..MatrixUniform::new(*m) })
+            .collect();
         gpu.queue.write_buffer(&self.faces, 0, bytemuck::cast_slice(&matrices));
         let projections =
             clip_from_world.iter().map(|&clip_from_world| TileProjection::Perspective { clip_from_world });

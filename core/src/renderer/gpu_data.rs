@@ -28,13 +28,16 @@ const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct MatrixUniform {
     pub clip_from_world: [[f32; 4]; 4],
-    pub _pad: [[f32; 4]; 12],
+    /// A cube face's centre (xyz) and how far a pushed vertex moves away from it per unit of its view depth (w;
+    /// `Face` in `shadow_depth.wgsl`, [`crate::renderer::cube_shadows::CubeGeometry::push_per_depth`]).
+    pub eye_push: [f32; 4],
+    pub _pad: [[f32; 4]; 11],
 }
 const _: () = assert!(std::mem::size_of::<MatrixUniform>() == 256);
 
 impl MatrixUniform {
     pub fn new(m: Mat4) -> Self {
-        MatrixUniform { clip_from_world: m.to_cols_array_2d(), _pad: [[0.0; 4]; 12] }
+        MatrixUniform { clip_from_world: m.to_cols_array_2d(), eye_push: [0.0; 4], _pad: [[0.0; 4]; 11] }
     }
 }
 

@@ -58,8 +58,9 @@
 //!   along the paper's lines to the box centre at four times the distance, so the box fits in 35-45 degrees instead
 //!   of ~120 and is sampled almost uniformly (a wide perspective image spends its samples on its borders). On
 //!   the paper's Dragon the error against the ray tracer fell from 3.75 % to 1.05 % ([`viewpoints`]).
-//! - Beyond the paper, `bias_samples` (1 by default; 0 is the paper's plain depth bias): the lookup's depth bias
-//!   is at least the width of one intermediate sample at the viewpoints' mean distance to the scene's centre
+//! - Beyond the paper, `bias_samples` (0.5 by default since issue 23's push; 0 is the paper's plain depth bias):
+//!   the lookup's depth bias is at least that many widths of an intermediate sample at the viewpoints' mean
+//!   distance to the scene's centre
 //!   ([`viewpoints::mean_sample_width`]). The mesh stands for the surface only to within about a sample (chords
 //!   across curves, bridged folds of a curtain), and a bias in metres or per-light texels lets it shadow the
 //!   very surface it stands for (the paper's "superfluous blockers"). Conference room 11.1 % to 7.9 %, the
@@ -69,6 +70,13 @@
 //!   its surface, undoing the half-sample erosion (the shader's `dilated_position`, the CPU twin's
 //!   `SampledImage::dilated`). Alone it hurt tubes a few samples wide (their extended silhouettes shadowed
 //!   themselves); with `bias_samples` it lowers the error on every scene measured (docs/techniques/insm.md).
+//! - Beyond the paper, `push_samples` (1.5 by default): every mesh vertex is drawn into the per-light maps that
+//!   many widths of *its own* sample further from the light (`vs_pushed` in `shaders/shadow_depth.wgsl`; the
+//!   width is its view depth times 2 tan(fov / 2) / w): a depth bias that follows how coarsely each surface was
+//!   sampled, where `bias_samples` uses one mean width for all. `normal_samples` (0 by default) moves the
+//!   lookup along the receiver's normal instead; measured, it helped less than either.
+//! - Beyond the paper, ε is given at 128² (0.02) and scales as 128 / w down to half of it
+//!   ([`InsmParams::epsilon_at`]): a bridged step must stay under the push, which shrinks with the samples.
 //!
 //! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
 //! `k+1..` are the light batches (the first reads the tile list back).
@@ -206,6 +214,8 @@ pub struct Insm {
     bounds: Aabb,
     /// The per-light maps' parameters of the last frame, with the lookup's bias ([`Insm::lookup_params`]).
     lookup: CubeMapParams,
+    /// How far the meshes' vertices move away from a light per unit of their view depth ([`InsmParams::push_per_depth`]).
+    push_per_depth: f32,
     /// Non-empty tiles of the reconstructed meshes, read back before the first light batch.
     tiles: Vec<Chunk>,
     mesh_triangles: u64,
@@ -281,7 +291,7 @@ impl Insm {
             params: InsmParams::default(),
             custom_viewpoints: Vec::new(),
             images: CubeShadowRenderer::new(gpu),
-            shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_vertex_stride(gpu, MESH_VERTEX_BYTES)),
+            shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_pushed_vertices(gpu)),
             triangulate_pipeline,
             classify_pipeline,
             triangulate_layout,
@@ -292,6 +302,7 @@ impl Insm {
             view_matrices: Vec::new(),
             bounds: Aabb::from_points(std::iter::empty()),
             lookup: CubeMapParams::default(),
+            push_per_depth: 0.0,
             tiles: Vec::new(),
             mesh_triangles: 0,
             tiles_ready: false,
@@ -308,8 +319,9 @@ impl Insm {
 
     /// How the meshes are built, for the CPU twin.
     pub fn mesh_settings(&self) -> MeshSettings {
+        let res = self.mesh.as_ref().map_or(self.params.insm_resolution, |m| m.resolution);
         MeshSettings {
-            epsilon: self.params.epsilon,
+            epsilon: self.params.epsilon_at(res),
             adaptive: self.params.adaptive,
             merge_epsilon: self.params.merge_epsilon,
             drop_covered: self.params.drop_covered,
@@ -406,6 +418,7 @@ impl Technique for Insm {
             self.params.box_distance,
         );
         self.lookup = self.params.lookup_params(&views, &bounds, res);
+        self.push_per_depth = self.params.push_per_depth(&views, res);
         let batches = self.shadows.prepare(ctx, &self.lookup);
         self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), ..Default::default() };
         if batches == 0 {
@@ -464,7 +477,7 @@ impl Technique for Insm {
         let uniform = TriangulateUniform {
             resolution: res,
             tiles_per_side: triangulate::tiles_per_side(res),
-            epsilon: self.params.epsilon,
+            epsilon: self.params.epsilon_at(res),
             atlas_tiles_per_row,
             adaptive: u32::from(self.params.adaptive),
             merge_epsilon: self.params.merge_epsilon,
@@ -510,6 +523,7 @@ impl Technique for Insm {
             cutouts: None,
             // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).
             receivers: None,
+            push_per_depth: self.push_per_depth,
         };
         let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.lookup);
         self.counts.add_cube_stats(&stats);

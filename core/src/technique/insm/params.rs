@@ -8,15 +8,26 @@ use crate::renderer::cube_params::CubeMapParams;
 use crate::scene::Aabb;
 use crate::technique::{Param, ParamKind, ParamValue};
 
-/// The connectivity test's default ε (relative second difference of inverse depth). 0.02 was tried with the
-/// lookup's sample bias and dilation (160x90, 1,024 lights, `--param epsilon=0.01,0.02`): at 128² it lowered
-/// the error against the ray tracer on all seven scenes measured (the Dragon 0.57 / 0.57 %, the tori 3.50 /
-/// 2.62 %, the conference room 7.49 / 6.78 %, the restaurant 1.37 / 1.27 %, the Cornell box 4.36 / 4.22 %,
-/// Sponza 7.05 / 6.59 %, the arcade 9.25 / 8.34 %), but at 512² it was worse (the tori 0.77 / 2.55 %, the
-/// Dragon 0.21 / 0.42 %), so that the error no longer fell with the resolution: a bridged step stands up to ε
-/// of the depth from the surfaces it joins, which the one-sample bias absorbs at 128² and not once the samples
-/// are four times finer. Not kept; an ε scaled to the sample's angular width would be the next thing to try.
-pub const DEFAULT_EPSILON: f32 = 0.01;
+/// The connectivity test's default ε (relative second difference of inverse depth) at [`EPSILON_RESOLUTION`]²
+/// samples ([`InsmParams::epsilon_at`] for other resolutions). A step under about ε of the depth is bridged,
+/// and the lookup's bias and push absorb about a sample's footprint, which shrinks as 1 / resolution: so ε
+/// does too, down to half its value at 128² (at 512², ε / 4 cut real surfaces: the conference room 2.85 ->
+/// 3.40 %). 0.02 at every resolution lowered the error at 128² on all seven scenes measured but raised it at
+/// 512² (the tori 0.77 -> 2.55 %, the Dragon 0.21 -> 0.42 %); scaled as √(128 / resolution) it put the Dragon
+/// at 1.23 % at 256² against 0.60 % with this rule (issue 23, measured in docs/techniques/insm.md).
+pub const DEFAULT_EPSILON: f32 = 0.02;
+
+/// The lookup's depth bias in intermediate samples of the viewpoints' mean width, and the push of every mesh
+/// vertex in widths of its own sample (a depth bias that follows how coarsely each surface was sampled: a wall
+/// seen from across a room needs more than a chair seen from nearby). Half a mean sample plus 1.5 of its own
+/// replaced one mean sample (issue 23): with ε 0.02 at 128², 160x90, 1,024 lights, against the ray tracer, the
+/// conference room 6.78 % with one mean sample, 6.46 % with a push of 2 alone, 6.40 % with these
+/// (docs/techniques/insm.md).
+pub const DEFAULT_BIAS_SAMPLES: f32 = 0.5;
+pub const DEFAULT_PUSH_SAMPLES: f32 = 1.5;
+
+/// The resolution at which `epsilon` is given ([`InsmParams::epsilon_at`]).
+pub const EPSILON_RESOLUTION: u32 = 128;
 
 /// INSM's parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,6 +54,10 @@ pub struct InsmParams {
     /// The lookup's depth bias in intermediate samples (at least `bias`): the mesh stands for the surface only to
     /// within about a sample (beyond the paper).
     pub bias_samples: f32,
+    /// The lookup's normal offset in intermediate samples (beyond the paper).
+    pub normal_samples: f32,
+    /// Each mesh vertex drawn this many of its own samples' widths further from the light (beyond the paper).
+    pub push_samples: f32,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
     pub cube: CubeMapParams,
 }
@@ -59,7 +74,9 @@ impl Default for InsmParams {
             dilate: true,
             placement: Placement::Box,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
-            bias_samples: 1.0,
+            bias_samples: DEFAULT_BIAS_SAMPLES,
+            normal_samples: 0.0,
+            push_samples: DEFAULT_PUSH_SAMPLES,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
     }
@@ -86,7 +103,8 @@ impl InsmParams {
             Param {
                 key: "epsilon",
                 label: "Discontinuity ε",
-                help: "Relative second-order depth difference above which an edge is not triangulated",
+                help: "Relative second-order depth difference above which an edge is not triangulated, at 128² \
+                       samples (scaled as 128 / resolution for other resolutions, down to half of it)",
                 kind: ParamKind::Float { min: 0.0, max: 10.0 },
                 value: ParamValue::Float(self.epsilon),
             },
@@ -152,6 +170,25 @@ impl InsmParams {
                 value: ParamValue::Float(self.bias_samples),
             },
             Param {
+                key: "normal_samples",
+                label: "Mesh normal offset (samples)",
+                help: "The shadow lookup's receiver moved along its normal by this many intermediate samples (the \
+                       width of one at the viewpoints' mean distance to the scene's centre), on top of the normal \
+                       offset in texels: unlike a depth bias it clears the mesh's stand-off from its surface at \
+                       every angle to the light (beyond the paper; 0: the texel offset alone)",
+                kind: ParamKind::Float { min: 0.0, max: 8.0 },
+                value: ParamValue::Float(self.normal_samples),
+            },
+            Param {
+                key: "push_samples",
+                label: "Mesh push (own samples)",
+                help: "Each vertex of the meshes drawn into the per-light maps this many widths of its own sample \
+                       further from the light: a depth bias that follows how coarsely each surface was sampled \
+                       (beyond the paper; 0: off)",
+                kind: ParamKind::Float { min: 0.0, max: 8.0 },
+                value: ParamValue::Float(self.push_samples),
+            },
+            Param {
                 key: "viewpoints",
                 label: "Custom viewpoints",
                 help: "The viewpoints of placement = custom: add them from the camera, move them with the gizmo",
@@ -179,6 +216,8 @@ impl InsmParams {
             ("dilate", ParamValue::Bool(v)) => self.dilate = *v,
             ("box_distance", ParamValue::Float(v)) => self.box_distance = *v,
             ("bias_samples", ParamValue::Float(v)) => self.bias_samples = *v,
+            ("normal_samples", ParamValue::Float(v)) => self.normal_samples = *v,
+            ("push_samples", ParamValue::Float(v)) => self.push_samples = *v,
             ("placement", ParamValue::Choice(v)) => {
                 self.placement = Placement::from_name(v).expect("check_param checked the choice")
             }
@@ -193,8 +232,71 @@ impl InsmParams {
     /// The per-light maps' parameters with the lookup's depth bias: the larger of `bias` and `bias_samples`
     /// intermediate samples ([`viewpoints::mean_sample_width`] of `views` at `resolution`).
     pub fn lookup_params(&self, views: &[Viewpoint], bounds: &Aabb, resolution: u32) -> CubeMapParams {
-        let mesh_bias = self.bias_samples * viewpoints::mean_sample_width(views, bounds, resolution);
+        let width = viewpoints::mean_sample_width(views, bounds, resolution);
+        let mesh_bias = self.bias_samples * width;
         let bias_world = if mesh_bias.is_finite() { self.cube.bias_world.max(mesh_bias) } else { self.cube.bias_world };
-        CubeMapParams { bias_world, ..self.cube.clone() }
+        let offset = self.normal_samples * width;
+        let normal_offset_world = if offset.is_finite() { offset.max(0.0) } else { 0.0 };
+        CubeMapParams { bias_world, normal_offset_world, ..self.cube.clone() }
+    }
+
+    /// How far a mesh vertex moves away from a light per unit of its view depth: `push_samples` widths of a
+    /// sample of `resolution`² over the viewpoints' mean field of view.
+    pub fn push_per_depth(&self, views: &[Viewpoint], resolution: u32) -> f32 {
+        if views.is_empty() || resolution == 0 {
+            return 0.0;
+        }
+        let span: f32 =
+            views.iter().map(|v| 2.0 * (0.5 * v.fov_y_deg.to_radians()).tan()).sum::<f32>() / views.len() as f32;
+        let push = self.push_samples * span / resolution as f32;
+        if push.is_finite() {
+            push.max(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// The connectivity test's ε for `resolution`² maps: `epsilon` is given at 128² ([`EPSILON_RESOLUTION`])
+    /// and scales as 128 / resolution, down to half of it (0.02 at 128², 0.04 at 64², 0.01 from 256² up).
+    pub fn epsilon_at(&self, resolution: u32) -> f32 {
+        let scale = (EPSILON_RESOLUTION as f32 / resolution.max(1) as f32).max(0.5);
+        self.epsilon * scale
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn epsilon_is_given_at_128_and_scales_with_the_sample_width_down_to_half() {
+        let p = InsmParams { epsilon: 0.02, ..InsmParams::default() };
+        assert_eq!(p.epsilon_at(EPSILON_RESOLUTION), 0.02);
+        assert!((p.epsilon_at(64) - 0.04).abs() < 1e-7);
+        assert!((p.epsilon_at(32) - 0.08).abs() < 1e-7);
+        assert!((p.epsilon_at(256) - 0.01).abs() < 1e-7);
+        assert!((p.epsilon_at(512) - 0.01).abs() < 1e-7);
+        assert!((p.epsilon_at(192) - 0.02 * 128.0 / 192.0).abs() < 1e-7);
+        // Zero stays zero (the reconstruction off), and a zero resolution does not divide by zero.
+        assert_eq!(InsmParams { epsilon: 0.0, ..p.clone() }.epsilon_at(256), 0.0);
+        assert!(p.epsilon_at(0).is_finite());
+    }
+
+    #[test]
+    fn the_lookup_offsets_and_the_push_follow_the_sample_width() {
+        let bounds = Aabb { min: glam::Vec3::splat(-5.0), max: glam::Vec3::splat(5.0) };
+        let views = viewpoints::select(Placement::Inside, &bounds, &[], 10, 4.0);
+        let width = viewpoints::mean_sample_width(&views, &bounds, 128);
+        assert!(width > 0.0 && width.is_finite());
+        let p = InsmParams { bias_samples: 0.0, normal_samples: 2.0, push_samples: 3.0, ..InsmParams::default() };
+        let lookup = p.lookup_params(&views, &bounds, 128);
+        assert!((lookup.normal_offset_world - 2.0 * width).abs() < 1e-6);
+        assert_eq!(lookup.bias_world, p.cube.bias_world);
+        // The inside placement's views are 100°: a sample at depth z is z * 2 tan 50° / 128 wide.
+        let push = p.push_per_depth(&views, 128);
+        let expected = 3.0 * 2.0 * 50f32.to_radians().tan() / 128.0;
+        assert!((push - expected).abs() < 1e-6 * expected, "{push} vs {expected}");
+        assert_eq!(p.push_per_depth(&[], 128), 0.0);
+        assert_eq!(InsmParams { push_samples: 0.0, ..p }.push_per_depth(&views, 128), 0.0);
     }
 }
