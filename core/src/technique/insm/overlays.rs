@@ -36,7 +36,10 @@ impl Insm {
             ExplainStep {
                 title: "4. Cube maps from the meshes",
                 text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
-                       light and face in tiles (the Shadow maps panel shows the last batch's).",
+                       light and face in tiles (the Shadow maps panel shows the last batch's). The mesh stands for \
+                       its surface only to about a sample, so beyond the paper each vertex is drawn push_samples \
+                       widths of its own sample further from the light, and the lookup's bias is bias_samples \
+                       mean widths: a mesh does not shadow the surface it stands for.",
                 layers: &["lights"],
                 shows_shadow_maps: true,
                 ..Default::default()
