@@ -316,7 +316,7 @@ fn the_lookup_bias_is_at_least_bias_samples_intermediate_samples_wide() {
     let scene = plane_and_occluder();
     let r = renderer(&scene, linear_settings(W, H));
     let mut insm = Insm::new(r.gpu(), r.layouts());
-    let views = viewpoints::select(Placement::Box, &scene.bounds, &[], 10, 4.0);
+    let views = viewpoints::select(Placement::Box, &scene.bounds, &[], 10, 4.0, None);
     let width = viewpoints::mean_sample_width(&views, &scene.bounds, 128);
     assert!(width > 0.01 && width.is_finite(), "a sample is {width} m wide");
     // Half a sample (the default) and two: the bias follows the width; 0: the depth bias alone.

@@ -410,12 +410,18 @@ impl Technique for Insm {
         self.tiles_ready = false;
         let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let bounds = scene_bounds(&ctx.scene.chunks);
+        // `walls` finds the walls through the scene's BVH (built once per scene, shared with the tracers).
+        let bvh = (self.params.placement == viewpoints::Placement::Walls).then(|| ctx.scene.bvh(ctx.gpu).0);
+        let hit = |o: Vec3, d: Vec3, t: f32| {
+            bvh.as_ref().and_then(|b| crate::accel::bvh::closest_hit_cpu(&b.cpu, o, d, t)).map(|h| h.t)
+        };
         let views = viewpoints::select(
             self.params.placement,
             &bounds,
             &self.custom_viewpoints,
             self.params.viewpoints as usize,
             self.params.box_distance,
+            bvh.as_ref().map(|_| &hit as &dyn Fn(Vec3, Vec3, f32) -> Option<f32>),
         );
         self.lookup = self.params.lookup_params(&views, &bounds, res);
         self.push_per_depth = self.params.push_per_depth(&views, res);

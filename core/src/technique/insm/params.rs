@@ -144,8 +144,9 @@ impl InsmParams {
             Param {
                 key: "placement",
                 label: "Viewpoints",
-                help: "box: the paper's bounding-box placement; inside: a ring inside the scene (rooms); custom: \
-                       the viewpoints you placed",
+                help: "box: the paper's bounding-box placement; inside: a ring inside the scene (rooms); walls: \
+                       inside, with the cameras that stand behind a wall moved in front of it (rooms that do not \
+                       fill their box: aisles, galleries); custom: the viewpoints you placed",
                 kind: ParamKind::Choice(Placement::NAMES),
                 value: ParamValue::Choice(self.placement.name().to_string()),
             },
@@ -285,7 +286,7 @@ mod tests {
     #[test]
     fn the_lookup_offsets_and_the_push_follow_the_sample_width() {
         let bounds = Aabb { min: glam::Vec3::splat(-5.0), max: glam::Vec3::splat(5.0) };
-        let views = viewpoints::select(Placement::Inside, &bounds, &[], 10, 4.0);
+        let views = viewpoints::select(Placement::Inside, &bounds, &[], 10, 4.0, None);
         let width = viewpoints::mean_sample_width(&views, &bounds, 128);
         assert!(width > 0.0 && width.is_finite());
         let p = InsmParams { bias_samples: 0.0, normal_samples: 2.0, push_samples: 3.0, ..InsmParams::default() };

@@ -153,7 +153,7 @@ pub fn inside_viewpoints(bounds: &Aabb) -> Vec<Viewpoint> {
     // Ring order alternating across the centre so prefixes spread: 0, 4, 2, 6, 1, 5, 3, 7 (eighths of a turn).
     for i in [0u32, 4, 2, 6, 1, 5, 3, 7] {
         let a = i as f32 * std::f32::consts::FRAC_PI_4;
-        let p = Vec3::new(c.x + a.cos() * half.x * 0.85, c.y, c.z + a.sin() * half.z * 0.85);
+        let p = Vec3::new(c.x + a.cos() * half.x * INSIDE_WALL_SHARE, c.y, c.z + a.sin() * half.z * INSIDE_WALL_SHARE);
         let target = Vec3::new(c.x, c.y, c.z);
         out.push(Viewpoint { position: p, target, fov_y_deg: INSIDE_FOV_DEG });
     }
@@ -185,21 +185,67 @@ pub fn mean_sample_width(views: &[Viewpoint], bounds: &Aabb, resolution: u32) ->
 /// 10.49 % and the restaurant 1.37 to 1.42 % (Sponza equal): not a change for every scene, so 100 stays.
 pub const INSIDE_FOV_DEG: f32 = 100.0;
 
+/// The inside placement fitted to the walls (`walls`): a camera of `views` (made by [`inside_viewpoints`] for
+/// `bounds`) that stands behind a wall moves in, along its line from the vertical axis through the centre, to
+/// [`INSIDE_WALL_SHARE`] of the way to that wall. A wall is a surface that `hit(origin, direction, t_max)` finds
+/// nearer than the camera's box position at the camera's height and at a quarter of the box's height above and
+/// below it (the farthest of the three is taken): an object of part of the room's height (a block, a table) does
+/// not move a camera, a wall does, which the box alone cannot tell (an arcade's aisles lie inside its box, with
+/// two of the ring's cameras behind their outer walls). A surface within a fifth of the camera's distance from
+/// the axis (a column at the centre) moves nothing.
+pub fn fit_inside(
+    views: Vec<Viewpoint>,
+    bounds: &Aabb,
+    hit: impl Fn(Vec3, Vec3, f32) -> Option<f32>,
+) -> Vec<Viewpoint> {
+    let c = bounds.center();
+    let rise = Vec3::Y * (0.25 * bounds.size().y);
+    views
+        .into_iter()
+        .map(|v| {
+            let origin = Vec3::new(c.x, v.position.y, c.z);
+            let out = v.position - origin;
+            let r = out.length();
+            if !(r > 0.0 && r.is_finite()) {
+                return v;
+            }
+            let dir = out / r;
+            let wall = r / INSIDE_WALL_SHARE;
+            let farthest = [origin - rise, origin, origin + rise]
+                .into_iter()
+                .map(|o| hit(o, dir, wall))
+                .try_fold(0.0f32, |acc, t| t.map(|t| acc.max(t)));
+            match farthest {
+                Some(t) if t < wall && t > 0.2 * r => {
+                    Viewpoint { position: origin + dir * (INSIDE_WALL_SHARE * t), ..v }
+                }
+                _ => v,
+            }
+        })
+        .collect()
+}
+
+/// How far the inside ring stands from the centre towards the walls.
+pub const INSIDE_WALL_SHARE: f32 = 0.85;
+
 /// How viewpoints are placed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Placement {
     Box,
     Inside,
     Custom,
+    /// `Inside` with the cameras behind walls moved in front of them ([`fit_inside`], beyond the paper).
+    Walls,
 }
 
 impl Placement {
-    pub const NAMES: &'static [&'static str] = &["box", "inside", "custom"];
+    pub const NAMES: &'static [&'static str] = &["box", "inside", "walls", "custom"];
 
     pub fn name(self) -> &'static str {
         match self {
             Placement::Box => "box",
             Placement::Inside => "inside",
+            Placement::Walls => "walls",
             Placement::Custom => "custom",
         }
     }
@@ -208,6 +254,7 @@ impl Placement {
         match name {
             "box" => Some(Placement::Box),
             "inside" => Some(Placement::Inside),
+            "walls" => Some(Placement::Walls),
             "custom" => Some(Placement::Custom),
             _ => None,
         }
@@ -215,18 +262,21 @@ impl Placement {
 }
 
 /// The first `k` viewpoints of `placement` for `bounds` (custom: the first `k` of `custom`), invalid ones dropped;
-/// `box_distance` is [`box_viewpoints`]' `distance`.
+/// `box_distance` is [`box_viewpoints`]' `distance`; `hit` finds the walls of `walls` ([`fit_inside`]; without
+/// it `walls` is `inside`).
 pub fn select(
     placement: Placement,
     bounds: &Aabb,
     custom: &[Viewpoint],
     k: usize,
     box_distance: f32,
+    hit: Option<&dyn Fn(Vec3, Vec3, f32) -> Option<f32>>,
 ) -> Vec<Viewpoint> {
-    let all = match placement {
-        Placement::Box => box_viewpoints(bounds, box_distance),
-        Placement::Inside => inside_viewpoints(bounds),
-        Placement::Custom => custom.to_vec(),
+    let all = match (placement, hit) {
+        (Placement::Box, _) => box_viewpoints(bounds, box_distance),
+        (Placement::Inside, _) | (Placement::Walls, None) => inside_viewpoints(bounds),
+        (Placement::Walls, Some(hit)) => fit_inside(inside_viewpoints(bounds), bounds, hit),
+        (Placement::Custom, _) => custom.to_vec(),
     };
     all.into_iter().filter(Viewpoint::is_valid).take(k).collect()
 }
@@ -347,13 +397,13 @@ mod tests {
     #[test]
     fn select_takes_k_and_drops_invalid_custom_viewpoints() {
         let b = unit_box();
-        assert_eq!(select(Placement::Box, &b, &[], 6, 1.0).len(), 6);
-        assert_eq!(select(Placement::Box, &b, &[], 100, 1.0).len(), 14);
+        assert_eq!(select(Placement::Box, &b, &[], 6, 1.0, None).len(), 6);
+        assert_eq!(select(Placement::Box, &b, &[], 100, 1.0, None).len(), 14);
         let good = Viewpoint { position: Vec3::ZERO, target: Vec3::X, fov_y_deg: 90.0 };
         let nan = Viewpoint { position: Vec3::NAN, ..good };
         let degenerate = Viewpoint { target: Vec3::ZERO, ..good };
         let custom = [good, nan, degenerate, good];
-        assert_eq!(select(Placement::Custom, &b, &custom, 10, 1.0), vec![good, good]);
+        assert_eq!(select(Placement::Custom, &b, &custom, 10, 1.0, None), vec![good, good]);
         assert_eq!(Placement::from_name("inside"), Some(Placement::Inside));
         assert_eq!(Placement::from_name("nope"), None);
     }
@@ -379,5 +429,43 @@ mod tests {
             let e = kind.parse("viewpoints", bad);
             assert!(e.is_err(), "{bad} was accepted");
         }
+    }
+
+    #[test]
+    fn walls_move_the_cameras_behind_a_wall_and_nothing_else() {
+        let b = unit_box();
+        let c = b.center();
+        let inside = inside_viewpoints(&b);
+        // A wall across the box at z = 0.6 (full height): the rays towards +z from the axis meet it at
+        // t = 0.6 / dir.z. The ring's camera at +z (a quarter turn) stands at z = 0.85 behind it, the low ring's
+        // at z = 0.5 in front of it.
+        let wall = |o: Vec3, d: Vec3, t_max: f32| {
+            let t = (0.6 - o.z) / d.z;
+            (d.z > 1e-6 && t > 0.0 && t < t_max).then_some(t)
+        };
+        let fitted = select(Placement::Walls, &b, &[], 14, 1.0, Some(&wall));
+        assert_eq!(fitted.len(), 14);
+        for (f, i) in fitted.iter().zip(&inside) {
+            let crosses = i.position.z > 0.6;
+            if crosses {
+                // Moved along its line from the axis to 0.85 of the way to the wall, looking where it looked.
+                assert!((f.position.z - 0.85 * 0.6).abs() < 1e-4, "{f:?}");
+                let (a, b2) = ((f.position - c).with_y(0.0), (i.position - c).with_y(0.0));
+                assert!(a.normalize().dot(b2.normalize()) > 0.9999, "{f:?} {i:?}");
+                assert_eq!((f.position.y, f.target, f.fov_y_deg), (i.position.y, i.target, i.fov_y_deg));
+            } else {
+                assert_eq!(f, i, "a camera in front of the wall stays");
+            }
+        }
+        assert!(inside.iter().any(|i| i.position.z > 0.6), "the test needs a camera behind the wall");
+        // A block of part of the height (only the lowest ray meets it) and a column at the centre move nothing;
+        // without a way to find walls, `walls` is `inside`.
+        let low_y = c.y - 0.25 * b.size().y;
+        let block = |o: Vec3, d: Vec3, t_max: f32| if o.y <= low_y + 1e-4 { wall(o, d, t_max) } else { None };
+        assert_eq!(select(Placement::Walls, &b, &[], 14, 1.0, Some(&block)), inside);
+        let column = |_: Vec3, _: Vec3, _: f32| Some(0.01);
+        assert_eq!(select(Placement::Walls, &b, &[], 14, 1.0, Some(&column)), inside);
+        assert_eq!(select(Placement::Walls, &b, &[], 14, 1.0, None), inside);
+        assert_eq!(Placement::from_name("walls"), Some(Placement::Walls));
     }
 }
