@@ -75,8 +75,9 @@
 //!   width is its view depth times 2 tan(fov / 2) / w): a depth bias that follows how coarsely each surface was
 //!   sampled, where `bias_samples` uses one mean width for all. `normal_samples` (0 by default) moves the
 //!   lookup along the receiver's normal instead; measured, it helped less than either.
-//! - Beyond the paper, ε is given at 128² (0.02) and scales as 128 / w down to half of it
-//!   ([`InsmParams::epsilon_at`]): a bridged step must stay under the push, which shrinks with the samples.
+//! - Beyond the paper, ε is given at 128² (0.02 for the box placement, 0.04 for the inside ones, as the paper
+//!   says ε "depends on the scene") and scales as 128 / w down to 0.01 ([`InsmParams::epsilon_at`]): a bridged
+//!   step must stay under the push, which shrinks with the samples.
 //!
 //! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
 //! `k+1..` are the light batches (the first reads the tile list back).

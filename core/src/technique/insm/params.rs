@@ -9,13 +9,24 @@ use crate::scene::Aabb;
 use crate::technique::{Param, ParamKind, ParamValue};
 
 /// The connectivity test's default ε (relative second difference of inverse depth) at [`EPSILON_RESOLUTION`]²
-/// samples ([`InsmParams::epsilon_at`] for other resolutions). A step under about ε of the depth is bridged,
-/// and the lookup's bias and push absorb about a sample's footprint, which shrinks as 1 / resolution: so ε
-/// does too, down to half its value at 128² (at 512², ε / 4 cut real surfaces: the conference room 2.85 ->
-/// 3.40 %). 0.02 at every resolution lowered the error at 128² on all seven scenes measured but raised it at
-/// 512² (the tori 0.77 -> 2.55 %, the Dragon 0.21 -> 0.42 %); scaled as √(128 / resolution) it put the Dragon
-/// at 1.23 % at 256² against 0.60 % with this rule (issue 23, measured in docs/techniques/insm.md).
+/// samples for the `box` and `custom` placements ([`InsmParams::epsilon_at`] for other resolutions). A step
+/// under about ε of the depth is bridged, and the lookup's bias and push absorb about a sample's footprint,
+/// which shrinks as 1 / resolution: so ε does too, down to [`EPSILON_FLOOR`] (at 512², 0.005 cut real
+/// surfaces: the conference room 2.85 -> 3.40 %). 0.02 at every resolution lowered the error at 128² on all
+/// seven scenes measured but raised it at 512² (the tori 0.77 -> 2.55 %, the Dragon 0.21 -> 0.42 %); scaled as
+/// √(128 / resolution) it put the Dragon at 1.23 % at 256² against 0.60 % with this rule (issue 23, measured in
+/// docs/techniques/insm.md).
 pub const DEFAULT_EPSILON: f32 = 0.02;
+
+/// The same for the `inside` and `walls` placements, whose 100° views see surfaces from a metre to across the
+/// room: 0.04 at 128² lowered the error on four of the five interiors against 0.02 (the conference room 6.40 ->
+/// 5.74 %, Sponza 6.50 -> 6.23 %, the Cornell box 4.16 -> 4.00 %, the arcade 8.45 -> 8.41 %; the restaurant
+/// 1.24 -> 1.28 %), and 0.03 / 0.05 less in all (docs/techniques/insm.md). The box placement's scenes went the
+/// other way (the tori 2.81 -> 3.12 %, the Dragon 0.59 -> 0.71 % at 0.03).
+pub const DEFAULT_EPSILON_INSIDE: f32 = 0.04;
+
+/// The smallest ε the resolution scaling gives (a smaller `epsilon` is used as it is).
+pub const EPSILON_FLOOR: f32 = 0.01;
 
 /// The lookup's depth bias in intermediate samples of the viewpoints' mean width, and the push of every mesh
 /// vertex in widths of its own sample (a depth bias that follows how coarsely each surface was sampled: a wall
@@ -38,6 +49,8 @@ pub struct InsmParams {
     pub insm_resolution: u32,
     /// Relative second-order difference above which an edge is a depth discontinuity.
     pub epsilon: f32,
+    /// The same for the `inside` and `walls` placements.
+    pub epsilon_inside: f32,
     /// Merge planar 8x8 tiles into a few triangles (the adaptive mesh, beyond the paper).
     pub adaptive: bool,
     /// Relative tolerance of the merge test (planes pass it to rounding; it bounds how far a merged tile
@@ -68,6 +81,7 @@ impl Default for InsmParams {
             viewpoints: 10,
             insm_resolution: 128,
             epsilon: DEFAULT_EPSILON,
+            epsilon_inside: DEFAULT_EPSILON_INSIDE,
             adaptive: true,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
@@ -104,9 +118,18 @@ impl InsmParams {
                 key: "epsilon",
                 label: "Discontinuity ε",
                 help: "Relative second-order depth difference above which an edge is not triangulated, at 128² \
-                       samples (scaled as 128 / resolution for other resolutions, down to half of it)",
+                       samples, for the box and custom placements (scaled as 128 / resolution for other \
+                       resolutions, down to 0.01)",
                 kind: ParamKind::Float { min: 0.0, max: 10.0 },
                 value: ParamValue::Float(self.epsilon),
+            },
+            Param {
+                key: "epsilon_inside",
+                label: "Discontinuity ε (inside)",
+                help: "The same for the inside and walls placements, whose wide views see surfaces from a metre to \
+                       across the room",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(self.epsilon_inside),
             },
             Param {
                 key: "adaptive",
@@ -211,6 +234,7 @@ impl InsmParams {
             ("k", ParamValue::Int(v)) => self.viewpoints = *v as u32,
             ("insm_res", ParamValue::Int(v)) => self.insm_resolution = *v as u32,
             ("epsilon", ParamValue::Float(v)) => self.epsilon = *v,
+            ("epsilon_inside", ParamValue::Float(v)) => self.epsilon_inside = *v,
             ("adaptive", ParamValue::Bool(v)) => self.adaptive = *v,
             ("merge_epsilon", ParamValue::Float(v)) => self.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.drop_covered = *v,
@@ -257,11 +281,17 @@ impl InsmParams {
         }
     }
 
-    /// The connectivity test's ε for `resolution`² maps: `epsilon` is given at 128² ([`EPSILON_RESOLUTION`])
-    /// and scales as 128 / resolution, down to half of it (0.02 at 128², 0.04 at 64², 0.01 from 256² up).
+    /// The connectivity test's ε for `resolution`² maps: `epsilon` (`epsilon_inside` for the inside and walls
+    /// placements) is given at 128² ([`EPSILON_RESOLUTION`]) and scales as 128 / resolution, down to
+    /// [`EPSILON_FLOOR`] (0.02 at 128², 0.04 at 64², 0.01 from 256² up; inside 0.04, 0.08, 0.02 at 256², 0.01
+    /// at 512²).
     pub fn epsilon_at(&self, resolution: u32) -> f32 {
-        let scale = (EPSILON_RESOLUTION as f32 / resolution.max(1) as f32).max(0.5);
-        self.epsilon * scale
+        let e = match self.placement {
+            Placement::Inside | Placement::Walls => self.epsilon_inside,
+            Placement::Box | Placement::Custom => self.epsilon,
+        };
+        let scaled = e * EPSILON_RESOLUTION as f32 / resolution.max(1) as f32;
+        scaled.max(e.min(EPSILON_FLOOR))
     }
 }
 
@@ -270,15 +300,26 @@ mod tests {
     use super::*;
 
     #[test]
-    fn epsilon_is_given_at_128_and_scales_with_the_sample_width_down_to_half() {
-        let p = InsmParams { epsilon: 0.02, ..InsmParams::default() };
+    fn epsilon_is_given_at_128_per_placement_and_scales_with_the_sample_width_down_to_a_floor() {
+        let p = InsmParams { epsilon: 0.02, epsilon_inside: 0.04, ..InsmParams::default() };
+        assert_eq!(p.placement, Placement::Box);
         assert_eq!(p.epsilon_at(EPSILON_RESOLUTION), 0.02);
         assert!((p.epsilon_at(64) - 0.04).abs() < 1e-7);
         assert!((p.epsilon_at(32) - 0.08).abs() < 1e-7);
         assert!((p.epsilon_at(256) - 0.01).abs() < 1e-7);
         assert!((p.epsilon_at(512) - 0.01).abs() < 1e-7);
         assert!((p.epsilon_at(192) - 0.02 * 128.0 / 192.0).abs() < 1e-7);
-        // Zero stays zero (the reconstruction off), and a zero resolution does not divide by zero.
+        for placement in [Placement::Inside, Placement::Walls] {
+            let q = InsmParams { placement, ..p.clone() };
+            assert_eq!(q.epsilon_at(128), 0.04);
+            assert!((q.epsilon_at(256) - 0.02).abs() < 1e-7);
+            assert!((q.epsilon_at(512) - 0.01).abs() < 1e-7);
+            assert!((q.epsilon_at(1024) - 0.01).abs() < 1e-7);
+        }
+        assert_eq!(InsmParams { placement: Placement::Custom, ..p.clone() }.epsilon_at(128), 0.02);
+        // A value under the floor is used as it is; zero stays zero (the reconstruction off); a zero
+        // resolution does not divide by zero.
+        assert!((InsmParams { epsilon: 0.004, ..p.clone() }.epsilon_at(512) - 0.004).abs() < 1e-9);
         assert_eq!(InsmParams { epsilon: 0.0, ..p.clone() }.epsilon_at(256), 0.0);
         assert!(p.epsilon_at(0).is_finite());
     }
