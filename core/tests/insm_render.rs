@@ -362,3 +362,32 @@ fn pushed_mesh_vertices_move_away_from_the_light_by_their_own_sample_widths() {
     assert_eq!(share_over(&images[0], &images[1], 0.05), 0.0, "the push keeps the outline: {shadowed:?}");
     assert!(shadowed[2] < 0.002, "pushed below the ground it shadows nothing: {shadowed:?}");
 }
+
+#[test]
+fn the_walls_placement_moves_the_arcades_cameras_from_behind_its_outer_walls() {
+    use shadowlab_core::technique::insm::viewpoints::{self, Placement};
+    // Through the frame: `walls` finds the walls with the scene's BVH. Some of the arcade's inside ring stand
+    // behind its aisles' outer walls (the box holds more than the hall); `walls` moves them in, the rest stay.
+    let scene = Scene::builtin("arcade").unwrap();
+    let lights: Vec<PointLight> = scene.lights.iter().take(4).cloned().collect();
+    let mut r = renderer(&scene, linear_settings(64, 36));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
+    insm.set_param("shadow_res", &ParamValue::Int(64)).unwrap();
+    let mut placed = Vec::new();
+    for placement in ["inside", "walls"] {
+        insm.set_param("placement", &ParamValue::Choice(placement.into())).unwrap();
+        frame(&mut r, &mut insm, &scene.camera, &lights);
+        placed.push(insm.cameras_in_use("viewpoints"));
+    }
+    let (inside, walls) = (&placed[0], &placed[1]);
+    assert_eq!(inside, &viewpoints::select(Placement::Inside, &scene.bounds, &[], 10, 4.0, None));
+    let c = scene.bounds.center();
+    let radius = |v: &Viewpoint| (v.position - c).with_y(0.0).length();
+    let moved: Vec<usize> = (0..inside.len()).filter(|&i| inside[i] != walls[i]).collect();
+    assert!(!moved.is_empty() && moved.len() < inside.len(), "moved {moved:?}");
+    for &i in &moved {
+        assert!(radius(&walls[i]) < radius(&inside[i]) - 0.1, "camera {i} moved in: {:?} -> {:?}", inside[i], walls[i]);
+        assert_eq!(walls[i].target, inside[i].target);
+    }
+}
