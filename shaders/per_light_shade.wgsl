@@ -12,9 +12,8 @@ struct Batch {
     // normal offset in shadow-map texels
     normal_offset_texels: f32,
     tiles_per_row: u32,
-    // a further normal offset in world units (INSM's mesh offset; 0 for the reference)
-    normal_offset_world: f32,
-    _pad: f32,
+    _pad1: f32,
+    _pad2: f32,
 }
 
 @group(1) @binding(0) var<storage, read> lights: array<Light>;
@@ -25,7 +24,7 @@ fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
     let d = distance(s.position, light.position);
     // Normal offset grows with the texel footprint (2 d / resolution) so acne stays away at every distance.
     let texel_world = 2.0 * d / batch.resolution;
-    let p = s.position + s.normal * (texel_world * batch.normal_offset_texels + batch.normal_offset_world);
+    let p = s.position + s.normal * (texel_world * batch.normal_offset_texels);
     let look = cube_lookup(p - light.position, cube_index, batch.resolution, batch.tiles_per_row);
     let depth = textureLoad(shadow_atlas, look.texel, 0).r;
     if depth >= 1.0 {

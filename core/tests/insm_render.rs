@@ -219,6 +219,10 @@ fn many_lights_run_in_bounded_batches_and_bad_settings_are_errors() {
     assert!(err.contains("outside"), "{err}");
     assert!(insm.set_param("insm_res", &ParamValue::Int(100_000)).is_err());
     assert!(insm.set_param("epsilon", &ParamValue::Float(f32::NAN)).is_err());
+    assert!(insm.set_param("epsilon_inside", &ParamValue::Float(f32::INFINITY)).is_err());
+    assert!(insm.set_param("push_samples", &ParamValue::Float(f32::NAN)).is_err());
+    assert!(insm.set_param("push_samples", &ParamValue::Float(-1.0)).is_err());
+    assert!(insm.set_param("push_samples", &ParamValue::Float(1e9)).is_err());
     assert!(insm.set_param("placement", &ParamValue::Choice("sideways".into())).is_err());
 
     // Custom placement without valid viewpoints is a clear error, not a panic.

@@ -15,9 +15,6 @@ pub struct CubeMapParams {
     pub bias_world: f32,
     /// Normal offset in shadow-map texels.
     pub normal_offset_texels: f32,
-    /// A further normal offset in world units (not a user parameter of the shared block: INSM sets it from the
-    /// width of its intermediate samples, 0 elsewhere).
-    pub normal_offset_world: f32,
     /// Memory for one batch's atlas, in MiB.
     pub atlas_budget_mib: u32,
     /// Cull chunks per light and per cube face. Off draws every chunk into every face, which is the
@@ -31,7 +28,6 @@ impl Default for CubeMapParams {
             shadow_resolution: 1024,
             bias_world: 0.01,
             normal_offset_texels: 1.5,
-            normal_offset_world: 0.0,
             atlas_budget_mib: (DEFAULT_ATLAS_BUDGET_BYTES >> 20) as u32,
             cull: true,
         }

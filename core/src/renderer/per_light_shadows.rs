@@ -24,8 +24,7 @@ struct PerLightBatchUniform {
     bias_world: f32,
     normal_offset_texels: f32,
     tiles_per_row: u32,
-    normal_offset_world: f32,
-    _pad: f32,
+    _pad: [f32; 2],
 }
 const _: () = assert!(std::mem::size_of::<PerLightBatchUniform>() == 32);
 
@@ -120,7 +119,7 @@ impl PerLightShadows {
                     res,
                     params.normal_offset_texels,
                     params.bias_world,
-                ) + params.normal_offset_world.max(0.0),
+                ),
             })
             .collect();
         let geometry = CubeGeometry { cull: params.cull, receivers: ctx.receivers, ..geometry };
@@ -134,8 +133,7 @@ impl PerLightShadows {
             bias_world: params.bias_world,
             normal_offset_texels: params.normal_offset_texels,
             tiles_per_row: atlas.tiles_per_row,
-            normal_offset_world: params.normal_offset_world,
-            _pad: 0.0,
+            _pad: [0.0; 2],
         };
         self.shade.write_batch(ctx.gpu, &uniform);
         let group = self.bind_group.as_ref().expect("prepare created the bind group");

@@ -73,8 +73,8 @@
 //! - Beyond the paper, `push_samples` (1.5 by default): every mesh vertex is drawn into the per-light maps that
 //!   many widths of *its own* sample further from the light (`vs_pushed` in `shaders/shadow_depth.wgsl`; the
 //!   width is its view depth times 2 tan(fov / 2) / w): a depth bias that follows how coarsely each surface was
-//!   sampled, where `bias_samples` uses one mean width for all. `normal_samples` (0 by default) moves the
-//!   lookup along the receiver's normal instead; measured, it helped less than either.
+//!   sampled, where `bias_samples` uses one mean width for all. A normal offset in mean sample widths instead
+//!   was measured and helped less than either (not kept).
 //! - Beyond the paper, ε is given at 128² (0.02 for the box placement, 0.04 for the inside ones, as the paper
 //!   says ε "depends on the scene") and scales as 128 / w down to 0.01 ([`InsmParams::epsilon_at`]): a bridged
 //!   step must stay under the push, which shrinks with the samples.

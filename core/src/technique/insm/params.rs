@@ -67,8 +67,6 @@ pub struct InsmParams {
     /// The lookup's depth bias in intermediate samples (at least `bias`): the mesh stands for the surface only to
     /// within about a sample (beyond the paper).
     pub bias_samples: f32,
-    /// The lookup's normal offset in intermediate samples (beyond the paper).
-    pub normal_samples: f32,
     /// Each mesh vertex drawn this many of its own samples' widths further from the light (beyond the paper).
     pub push_samples: f32,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
@@ -89,7 +87,6 @@ impl Default for InsmParams {
             placement: Placement::Box,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
             bias_samples: DEFAULT_BIAS_SAMPLES,
-            normal_samples: 0.0,
             push_samples: DEFAULT_PUSH_SAMPLES,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
@@ -194,16 +191,6 @@ impl InsmParams {
                 value: ParamValue::Float(self.bias_samples),
             },
             Param {
-                key: "normal_samples",
-                label: "Mesh normal offset (samples)",
-                help: "The shadow lookup's receiver moved along its normal by this many intermediate samples (the \
-                       width of one at the viewpoints' mean distance to the scene's centre), on top of the normal \
-                       offset in texels: unlike a depth bias it clears the mesh's stand-off from its surface at \
-                       every angle to the light (beyond the paper; 0: the texel offset alone)",
-                kind: ParamKind::Float { min: 0.0, max: 8.0 },
-                value: ParamValue::Float(self.normal_samples),
-            },
-            Param {
                 key: "push_samples",
                 label: "Mesh push (own samples)",
                 help: "Each vertex of the meshes drawn into the per-light maps this many widths of its own sample \
@@ -241,7 +228,6 @@ impl InsmParams {
             ("dilate", ParamValue::Bool(v)) => self.dilate = *v,
             ("box_distance", ParamValue::Float(v)) => self.box_distance = *v,
             ("bias_samples", ParamValue::Float(v)) => self.bias_samples = *v,
-            ("normal_samples", ParamValue::Float(v)) => self.normal_samples = *v,
             ("push_samples", ParamValue::Float(v)) => self.push_samples = *v,
             ("placement", ParamValue::Choice(v)) => {
                 self.placement = Placement::from_name(v).expect("check_param checked the choice")
@@ -260,9 +246,7 @@ impl InsmParams {
         let width = viewpoints::mean_sample_width(views, bounds, resolution);
         let mesh_bias = self.bias_samples * width;
         let bias_world = if mesh_bias.is_finite() { self.cube.bias_world.max(mesh_bias) } else { self.cube.bias_world };
-        let offset = self.normal_samples * width;
-        let normal_offset_world = if offset.is_finite() { offset.max(0.0) } else { 0.0 };
-        CubeMapParams { bias_world, normal_offset_world, ..self.cube.clone() }
+        CubeMapParams { bias_world, ..self.cube.clone() }
     }
 
     /// How far a mesh vertex moves away from a light per unit of its view depth: `push_samples` widths of a
@@ -330,10 +314,8 @@ mod tests {
         let views = viewpoints::select(Placement::Inside, &bounds, &[], 10, 4.0, None);
         let width = viewpoints::mean_sample_width(&views, &bounds, 128);
         assert!(width > 0.0 && width.is_finite());
-        let p = InsmParams { bias_samples: 0.0, normal_samples: 2.0, push_samples: 3.0, ..InsmParams::default() };
-        let lookup = p.lookup_params(&views, &bounds, 128);
-        assert!((lookup.normal_offset_world - 2.0 * width).abs() < 1e-6);
-        assert_eq!(lookup.bias_world, p.cube.bias_world);
+        let p = InsmParams { bias_samples: 0.0, push_samples: 3.0, ..InsmParams::default() };
+        assert_eq!(p.lookup_params(&views, &bounds, 128).bias_world, p.cube.bias_world);
         // The inside placement's views are 100°: a sample at depth z is z * 2 tan 50° / 128 wide.
         let push = p.push_per_depth(&views, 128);
         let expected = 3.0 * 2.0 * 50f32.to_radians().tan() / 128.0;
