@@ -32,8 +32,9 @@
 //!   contact shadows leak: measured on the plane-and-wall test scene, relative RMSE against exact visibility
 //!   0.047 for CSSM against 0.053 for none at all, which is why `pcss` (explicit depth tests, `2 grid^2`
 //!   texel reads per pixel and VAL) stays the default.
-//! - Step 2 is refined ([`split`], issue 23): VALs are bisected, those whose VPLs spread along their normal by
-//!   more than `max_depth` L first, until there are M, starting from one VAL by default (`kmeans_share = 0`;
+//! - Step 2 is refined ([`split`], issue 23): VALs are bisected, the one of largest flux-weighted error next
+//!   (by normal when its normal cone exceeds `max_cone`, by depth when its VPLs spread along its normal by
+//!   more than `max_depth` L), until there are M, starting from one VAL by default (`kmeans_share = 0`;
 //!   the VALs for M + 1 are then those for M with one bisected, which is what makes the error fall with M
 //!   on the real scenes, measured in docs/techniques/val.md). VALs across corners and layers were the leaks of
 //!   the paper's Fig. 7. `split = off` is the paper's k-means alone.
@@ -154,7 +155,9 @@ pub struct ValParams {
     pub split: bool,
     /// [`split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
     pub kmeans_share: f32,
-    /// [`split`]: the largest normal cone of a VAL, degrees.
+    /// [`split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule breakers first).
+    pub rank: String,
+    /// [`split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
     pub max_depth: f32,
@@ -186,7 +189,12 @@ impl Default for ValParams {
             cssm_offset: 0.12,
             split: true,
             kmeans_share: 0.0,
-            max_cone_degrees: 180.0,
+            // Measured with `rank = flux` (docs/techniques/val.md): 45 degrees splits a room corner into its
+            // walls and keeps FLIP falling with M on the three scenes; 30 also splits the curved chairs' VALs
+            // by normal (a step up at M = 30 on the conference room), 180 (off) leaves the Cornell box's corner
+            // VALs cut across by depth (not monotone at M = 4-16).
+            rank: "flux".into(),
+            max_cone_degrees: 45.0,
             max_depth: 0.1,
         }
     }
@@ -194,6 +202,7 @@ impl Default for ValParams {
 
 const VISIBILITY_CHOICES: &[&str] = &["pcss", "cssm", "hard"];
 const CLUSTERING_CHOICES: &[&str] = &["gpu", "cpu"];
+const RANK_CHOICES: &[&str] = &["flux", "rule"];
 
 pub struct VirtualAreaLights {
     pub params: ValParams,
@@ -298,6 +307,7 @@ impl VirtualAreaLights {
         let m = (self.params.vals as usize).min(MAX_VALS);
         let sp = split::SplitParams {
             vals: m,
+            rank: if self.params.rank == "rule" { split::Rank::Rule } else { split::Rank::Flux },
             max_cone: self.params.max_cone_degrees.to_radians(),
             max_depth: self.params.max_depth * self.scene_size * self.params.length_fraction,
             iterations: 8,
@@ -377,9 +387,17 @@ impl Technique for VirtualAreaLights {
                 value: ParamValue::Float(p.kmeans_share),
             },
             Param {
+                key: "rank",
+                label: "Bisect first",
+                help: "split: flux: the VAL of largest flux-weighted error is bisected next; rule: every VAL breaking \
+                       the cone or depth rule first (the first version)",
+                kind: ParamKind::Choice(RANK_CHOICES),
+                value: ParamValue::Choice(p.rank.clone()),
+            },
+            Param {
                 key: "max_cone",
                 label: "Max normal cone (deg)",
-                help: "split: a VAL whose VPL normals are farther than this from its normal is bisected first",
+                help: "split: a VAL whose VPL normals are farther than this from its normal is bisected by normal",
                 kind: ParamKind::Float { min: 0.0, max: 180.0 },
                 value: ParamValue::Float(p.max_cone_degrees),
             },
@@ -388,7 +406,7 @@ impl Technique for VirtualAreaLights {
                 label: "Max depth spread",
                 help:
                     "split: a VAL whose VPLs spread along its normal by more than this share of its size is bisected \
-                       next",
+                       by depth",
                 kind: ParamKind::Float { min: 0.0, max: 100.0 },
                 value: ParamValue::Float(p.max_depth),
             },
@@ -499,6 +517,7 @@ impl Technique for VirtualAreaLights {
             ("cssm_offset", ParamValue::Float(v)) => p.cssm_offset = *v,
             ("split", ParamValue::Bool(v)) => p.split = *v,
             ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
+            ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             _ => unreachable!("check_param accepted an unknown key"),
