@@ -18,7 +18,7 @@ struct GpuVal {
     centre: vec4<f32>,
     // xyz: unit normal, w: VPLs assigned (0: empty, visibility 1)
     normal: vec4<f32>,
-    // x: near, y: far of its map
+    // x: near, y: far of its map, z: the radius of its VPLs' bounding sphere about `centre`
     depth: vec4<f32>,
 }
 
@@ -185,6 +185,11 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     }
     let n = val.normal.xyz;
     let centre = val.centre.xyz;
+    // Every VPL of the VAL behind the receiver's tangent plane: none lights it (`vpl_term` is 0), so its
+    // visibility is never used; skipped (exact: the image does not change).
+    if dot(s.normal, centre - s.position) + val.depth.z <= 0.0 {
+        return 1.0;
+    }
     let rel0 = s.position - centre;
     if dot(rel0, n) <= 0.0 {
         return 1.0;

@@ -189,12 +189,12 @@ impl Default for ValParams {
             cssm_offset: 0.12,
             split: true,
             kmeans_share: 0.0,
-            // Measured with `rank = flux` (docs/techniques/val.md): 45 degrees splits a room corner into its
-            // walls and keeps FLIP falling with M on the three scenes; 30 also splits the curved chairs' VALs
-            // by normal (a step up at M = 30 on the conference room), 180 (off) leaves the Cornell box's corner
-            // VALs cut across by depth (not monotone at M = 4-16).
+            // Measured with `rank = flux` (docs/techniques/val.md): 40 degrees splits a room corner into its
+            // walls; 30-35 also split the curved chairs' VALs by normal (a step up at M = 16-30 on the
+            // conference room), 45 left Sponza 0.03 higher at M = 128-160, 180 (off) leaves the Cornell box's
+            // corner VALs cut across by depth (not monotone at M = 4-16).
             rank: "flux".into(),
-            max_cone_degrees: 45.0,
+            max_cone_degrees: 40.0,
             max_depth: 0.1,
         }
     }
@@ -587,18 +587,29 @@ impl Technique for VirtualAreaLights {
         let offset = self.scene_size * 2e-3;
         let far = self.scene_size * 1.01;
         self.casters.clear();
+        let centres: Vec<Vec3> = self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect();
+        // Each VAL's bounding sphere about its map's centre: a receiver whose tangent plane has the whole sphere
+        // behind it gets no light from any of the VAL's VPLs (`vpl_term` is 0 for cos_x <= 0), so its visibility
+        // is not computed (`val_visibility`). Widened by a millionth of the scene for rounding.
+        let mut radius = vec![0.0f32; centres.len()];
+        for (v, &k) in vpls.iter().zip(&self.clustering.assignment) {
+            if let (Some(r), Some(c)) = (radius.get_mut(k as usize), centres.get(k as usize)) {
+                *r = r.max(v.position.distance(*c));
+            }
+        }
         let gpu_vals: Vec<GpuVal> = self
             .clustering
             .vals
             .iter()
-            .map(|v| {
-                let centre = v.position + v.normal * offset;
+            .zip(&centres)
+            .zip(&radius)
+            .map(|((v, &centre), &r)| {
                 let near = (NEAR_FRACTION * v.size()).max(self.scene_size * 1e-5);
                 self.casters.push(ParaboloidCaster { centre, normal: v.normal, near, far });
                 GpuVal {
                     centre: centre.extend(v.size()).to_array(),
                     normal: v.normal.extend(v.count as f32).to_array(),
-                    depth: [near, far, 0.0, 0.0],
+                    depth: [near, far, r + self.scene_size * 1e-6, 0.0],
                 }
             })
             .collect();
