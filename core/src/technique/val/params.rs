@@ -1,0 +1,288 @@
+//! VAL's parameters: what they are, their defaults, and how the UI and the CLI see and set them.
+
+use super::MAX_VALS;
+use crate::technique::{Param, ParamKind, ParamValue};
+
+/// The technique's parameters; their keys, ranges and help are in [`ValParams::describe`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValParams {
+    /// `M`.
+    pub vals: u32,
+    pub iterations: u32,
+    pub w_x: f32,
+    pub w_a: f32,
+    /// `L`, the length position distances are divided by, as a fraction of the scene's diagonal.
+    pub length_fraction: f32,
+    /// `pcss`, `cssm` or `hard`.
+    pub visibility: String,
+    pub shadow_resolution: u32,
+    /// Side of the blocker-search and PCF grid.
+    pub grid: u32,
+    pub bias_world: f32,
+    pub normal_offset_texels: f32,
+    /// Bias of a filter sample per texel of its offset, in texel footprints at the receiver.
+    pub slope_bias: f32,
+    pub interleave: bool,
+    /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8).
+    pub warm_start: bool,
+    pub vpls_per_step: u32,
+    /// Show one VAL's contribution alone (its VPLs with its soft visibility; -1 = all VALs).
+    pub solo: i32,
+    /// `gpu` (the paper's GPU k-means, `val/kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
+    pub clustering: String,
+    /// CSSM: the receiver's normalised depth is moved toward the VAL by this share of the map's depth range.
+    pub cssm_offset: f32,
+    /// Refine the k-means result by bisecting VALs across surfaces ([`split`]); off: the paper's k-means alone.
+    pub split: bool,
+    /// [`split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
+    pub kmeans_share: f32,
+    /// [`split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule breakers first).
+    pub rank: String,
+    /// [`split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
+    pub max_cone_degrees: f32,
+    /// [`split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
+    pub max_depth: f32,
+}
+
+impl Default for ValParams {
+    fn default() -> Self {
+        ValParams {
+            vals: 30,
+            iterations: 10,
+            w_x: 0.7,
+            w_a: 0.3,
+            // The paper weighs raw distances in its scenes' units (metres); a tenth of the diagonal is a room's
+            // size in Sponza and a third of a metre in the Cornell box. Measured against per-VPL maps (FLIP,
+            // 30 VALs, 160x90): Cornell 0.0087 -> 0.0024, Sponza 0.28 -> 0.20, conference 0.19 -> 0.17 from
+            // L = the diagonal to L = a tenth of it.
+            length_fraction: 0.1,
+            visibility: "pcss".into(),
+            shadow_resolution: 256,
+            grid: 5,
+            bias_world: 0.01,
+            normal_offset_texels: 1.5,
+            slope_bias: 1.0,
+            interleave: false,
+            warm_start: false,
+            vpls_per_step: crate::vpl::MAX_VPLS,
+            clustering: "gpu".into(),
+            solo: -1,
+            cssm_offset: 0.12,
+            split: true,
+            kmeans_share: 0.0,
+            // Measured with `rank = flux` (docs/techniques/val.md): 40 degrees splits a room corner into its
+            // walls; 30-35 also split the curved chairs' VALs by normal (a step up at M = 16-30 on the
+            // conference room), 45 left Sponza 0.03 higher at M = 128-160, 180 (off) leaves the Cornell box's
+            // corner VALs cut across by depth (not monotone at M = 4-16).
+            rank: "flux".into(),
+            max_cone_degrees: 40.0,
+            max_depth: 0.1,
+        }
+    }
+}
+
+const VISIBILITY_CHOICES: &[&str] = &["pcss", "cssm", "hard"];
+const CLUSTERING_CHOICES: &[&str] = &["gpu", "cpu"];
+const RANK_CHOICES: &[&str] = &["flux", "rule"];
+
+impl ValParams {
+    /// The parameters as the UI and the CLI see them.
+    pub fn describe(&self) -> Vec<Param> {
+        let p = self;
+        vec![
+            Param {
+                key: "vals",
+                label: "VALs (M)",
+                help: "Clusters of VPLs, each a soft-shadowing area light (clamped to the VPL count)",
+                kind: ParamKind::Int { min: 1, max: MAX_VALS as i64 },
+                value: ParamValue::Int(p.vals as i64),
+            },
+            Param {
+                key: "clustering",
+                label: "k-means on",
+                help: "gpu: the paper's scatter passes (fixed-point atomic sums); cpu: the twin (also with warm start)",
+                kind: ParamKind::Choice(CLUSTERING_CHOICES),
+                value: ParamValue::Choice(p.clustering.clone()),
+            },
+            Param {
+                key: "iterations",
+                label: "k-means iterations",
+                help: "Assignment and update rounds, restarted every frame from VAL k = VPL k N / M",
+                kind: ParamKind::Int { min: 0, max: 100 },
+                value: ParamValue::Int(p.iterations as i64),
+            },
+            Param {
+                key: "w_x",
+                label: "w_x (position)",
+                help: "Weight of the position distance (divided by the scene's diagonal)",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(p.w_x),
+            },
+            Param {
+                key: "w_a",
+                label: "w_a (normal angle)",
+                help: "Weight of the angle between normals, radians",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(p.w_a),
+            },
+            Param {
+                key: "length",
+                label: "L (share of the diagonal)",
+                help: "The length position distances are divided by, as a share of the scene's diagonal: smaller \
+                       weighs position more against the normals' angle",
+                kind: ParamKind::Float { min: 1e-3, max: 10.0 },
+                value: ParamValue::Float(p.length_fraction),
+            },
+            Param {
+                key: "split",
+                label: "Split VALs across surfaces",
+                help: "Bisect VALs whose normals or depths spread too far (corners, columns) until there are M; off: \
+                       the paper's k-means alone",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.split),
+            },
+            Param {
+                key: "kmeans_share",
+                label: "k-means share of M",
+                help: "split: k-means clusters into this share of M VALs, bisection fills up to M",
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                value: ParamValue::Float(p.kmeans_share),
+            },
+            Param {
+                key: "rank",
+                label: "Bisect first",
+                help: "split: flux: the VAL of largest flux-weighted error is bisected next; rule: every VAL breaking \
+                       the cone or depth rule first (the first version)",
+                kind: ParamKind::Choice(RANK_CHOICES),
+                value: ParamValue::Choice(p.rank.clone()),
+            },
+            Param {
+                key: "max_cone",
+                label: "Max normal cone (deg)",
+                help: "split: a VAL whose VPL normals are farther than this from its normal is bisected by normal",
+                kind: ParamKind::Float { min: 0.0, max: 180.0 },
+                value: ParamValue::Float(p.max_cone_degrees),
+            },
+            Param {
+                key: "max_depth",
+                label: "Max depth spread",
+                help:
+                    "split: a VAL whose VPLs spread along its normal by more than this share of its size is bisected \
+                       by depth",
+                kind: ParamKind::Float { min: 0.0, max: 100.0 },
+                value: ParamValue::Float(p.max_depth),
+            },
+            Param {
+                key: "visibility",
+                label: "Visibility",
+                help: "pcss: soft shadow from the VAL's area (blocker search, penumbra, PCF); cssm: the paper's \
+                       convolution soft shadow maps (4 Fourier terms, mip-mapped); hard: one test",
+                kind: ParamKind::Choice(VISIBILITY_CHOICES),
+                value: ParamValue::Choice(p.visibility.clone()),
+            },
+            Param {
+                key: "shadow_res",
+                label: "Map resolution",
+                help: "Texels per side of each VAL's paraboloid map",
+                kind: ParamKind::Int { min: 16, max: 2048 },
+                value: ParamValue::Int(p.shadow_resolution as i64),
+            },
+            Param {
+                key: "grid",
+                label: "PCF grid",
+                help: "Side of the blocker-search and filter grid (grid^2 texels each)",
+                kind: ParamKind::Int { min: 2, max: 16 },
+                value: ParamValue::Int(p.grid as i64),
+            },
+            Param {
+                key: "bias",
+                label: "Depth bias",
+                help: "Constant depth bias in world units",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(p.bias_world),
+            },
+            Param {
+                key: "normal_offset",
+                label: "Normal offset",
+                help: "Receiver offset along its normal, in map texels at the receiver",
+                kind: ParamKind::Float { min: 0.0, max: 16.0 },
+                value: ParamValue::Float(p.normal_offset_texels),
+            },
+            Param {
+                key: "slope_bias",
+                label: "Slope bias",
+                help: "Bias of a filter sample below the receiver's plane per texel of offset, in texel \
+                       footprints (curved receivers otherwise shadow themselves in a wide kernel)",
+                kind: ParamKind::Float { min: 0.0, max: 16.0 },
+                value: ParamValue::Float(p.slope_bias),
+            },
+            Param {
+                key: "cssm_offset",
+                label: "CSSM offset",
+                help: "cssm: the receiver moved toward the VAL by this share of the map's depth range (4 Fourier \
+                       terms at half phase rise over about 1/4 of it: smaller darkens lit surfaces, larger leaks \
+                       light)",
+                kind: ParamKind::Float { min: 0.0, max: 0.5 },
+                value: ParamValue::Float(p.cssm_offset),
+            },
+            Param {
+                key: "interleave",
+                label: "Interleaved sampling",
+                help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (section 6)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.interleave),
+            },
+            Param {
+                key: "warm_start",
+                label: "Warm start",
+                help: "Start k-means from last frame's VALs (the variant the paper rejects: VALs get lost)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.warm_start),
+            },
+            Param {
+                key: "solo",
+                label: "Show one VAL",
+                help: "The contribution of one VAL alone: its VPLs with its soft shadow (-1: all VALs)",
+                kind: ParamKind::Int { min: -1, max: MAX_VALS as i64 - 1 },
+                value: ParamValue::Int(p.solo as i64),
+            },
+            Param {
+                key: "vpls_per_step",
+                label: "VPLs per step",
+                help: "VPLs gathered in one pass (the image does not change)",
+                kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
+                value: ParamValue::Int(p.vpls_per_step as i64),
+            },
+        ]
+    }
+
+    /// Set one parameter; `key` and `value` were checked against [`ValParams::describe`].
+    pub fn set(&mut self, key: &str, value: &ParamValue) {
+        let p = self;
+        match (key, value) {
+            ("vals", ParamValue::Int(v)) => p.vals = *v as u32,
+            ("iterations", ParamValue::Int(v)) => p.iterations = *v as u32,
+            ("w_x", ParamValue::Float(v)) => p.w_x = *v,
+            ("w_a", ParamValue::Float(v)) => p.w_a = *v,
+            ("length", ParamValue::Float(v)) => p.length_fraction = *v,
+            ("visibility", ParamValue::Choice(v)) => p.visibility = v.clone(),
+            ("shadow_res", ParamValue::Int(v)) => p.shadow_resolution = *v as u32,
+            ("grid", ParamValue::Int(v)) => p.grid = *v as u32,
+            ("bias", ParamValue::Float(v)) => p.bias_world = *v,
+            ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
+            ("slope_bias", ParamValue::Float(v)) => p.slope_bias = *v,
+            ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
+            ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
+            ("vpls_per_step", ParamValue::Int(v)) => p.vpls_per_step = *v as u32,
+            ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
+            ("solo", ParamValue::Int(v)) => p.solo = *v as i32,
+            ("cssm_offset", ParamValue::Float(v)) => p.cssm_offset = *v,
+            ("split", ParamValue::Bool(v)) => p.split = *v,
+            ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
+            ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
+            ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
+            ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
+            _ => unreachable!("check_param accepted an unknown key"),
+        }
+    }
+}
