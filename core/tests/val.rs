@@ -28,23 +28,38 @@ fn rel_rmse(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
     (num / den.max(1e-30)).sqrt()
 }
 
+/// Also with interleaving, where a pixel tests only the VALs of its 1/64 share of the VPLs, each at the first
+/// of its VPLs that lights it: a VAL's visibility reused for another VAL's VPL, or a needed VAL left untested,
+/// breaks the match.
 #[test]
 fn one_val_per_vpl_with_hard_visibility_is_per_vpl_shadow_mapping() {
     let scene = room();
-    let (sm, _) = Shot::indirect(&scene, &lights(), settings(200), "vpl-shadowmaps")
-        .params(&[("shadow_res", ParamValue::Int(128))])
-        .render();
-    let n = 200;
-    let params = [
-        ("vals", ParamValue::Int(n)),
-        ("visibility", ParamValue::Choice("hard".into())),
-        ("shadow_res", ParamValue::Int(128)),
-    ];
-    let (val, report) = Shot::indirect(&scene, &lights(), settings(200), "val").params(&params).render();
-    let ind = report.indirect.unwrap();
-    assert_eq!(ind.counts.figures["vals"] as usize, ind.vpls, "M = N: every VAL holds one VPL");
-    let err = rel_rmse(&val, &sm);
-    assert!(err < 0.01, "M = N hard VALs differ from per-VPL shadow maps by {err:.4} (relative RMSE)");
+    for interleave in [false, true] {
+        let (sm, _) = Shot::indirect(&scene, &lights(), settings(200), "vpl-shadowmaps")
+            .params(&[("shadow_res", ParamValue::Int(128)), ("interleave", ParamValue::Bool(interleave))])
+            .render();
+        let n = 200;
+        let params = [
+            ("vals", ParamValue::Int(n)),
+            ("visibility", ParamValue::Choice("hard".into())),
+            ("shadow_res", ParamValue::Int(128)),
+            ("interleave", ParamValue::Bool(interleave)),
+        ];
+        let (val, report) = Shot::indirect(&scene, &lights(), settings(200), "val").params(&params).render();
+        let ind = report.indirect.unwrap();
+        assert_eq!(ind.counts.figures["vals"] as usize, ind.vpls, "M = N: every VAL holds one VPL");
+        let err = rel_rmse(&val, &sm);
+        assert!(
+            err < 0.01,
+            "interleave {interleave}: M = N hard VALs differ from per-VPL shadow maps by {err:.4} (relative RMSE)"
+        );
+        if interleave {
+            // Fewer VAL tests than VALs per pixel: the pixel's share holds about N / 64 VPLs.
+            let lookups = ind.work.get("shadow_lookups").copied().unwrap_or(f64::NAN);
+            let pixels = report.work.get("shaded_pixels").copied().unwrap_or(f64::NAN);
+            assert!(lookups / pixels < 8.0, "{:.1} VAL tests per pixel with interleaving", lookups / pixels);
+        }
+    }
 }
 
 #[test]
