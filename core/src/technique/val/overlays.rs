@@ -16,8 +16,16 @@ impl VirtualAreaLights {
             },
             ExplainStep {
                 title: "2. Clustering into VALs",
-                text: "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
-                       VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle.",
+                text: if self.params.split {
+                    "From k-means over position and normal (d = w_x dx / L + w_a da; by default one VAL), the VAL \
+                     carrying the most light times its spread is cut in two until there are M: by normal across a \
+                     corner, by depth across a column and the wall behind it, else in the paper's metric (our \
+                     addition; 'split' off gives the paper's k-means alone). Each VAL gets its VPLs' mean position \
+                     and normal and their bounding rectangle."
+                } else {
+                    "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
+                     VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle."
+                },
                 layers: &["vpls by val", "val rectangles", "val normals", "val centres"],
                 shows_shadow_maps: false,
                 ..Default::default()
@@ -32,8 +40,9 @@ impl VirtualAreaLights {
             ExplainStep {
                 title: "4-5. Soft visibility and shading",
                 text:
-                    "Each pixel computes every VAL's soft visibility once (CSSM, PCSS or hard) and sums all VPLs, each \
-                       with its VAL's visibility; set 'Show one VAL' to see one VAL's contribution alone.",
+                    "Each pixel computes the soft visibility of every VAL that can light it once (CSSM, PCSS or hard) \
+                       and sums all VPLs (interleaved: its 1/64 share, and only their VALs), each with its VAL's \
+                       visibility; set 'Show one VAL' to see one VAL's contribution alone.",
                 layers: &[],
                 shows_shadow_maps: false,
                 ..Default::default()
