@@ -23,7 +23,8 @@ pub struct ValParams {
     /// Bias of a filter sample per texel of its offset, in texel footprints at the receiver.
     pub slope_bias: f32,
     pub interleave: bool,
-    /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8).
+    /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8). With `split` on,
+    /// k-means makes `ceil(kmeans_share * M)` VALs (one by default), so it changes little or nothing then.
     pub warm_start: bool,
     pub vpls_per_step: u32,
     /// Show one VAL's contribution alone (its VPLs with its soft visibility; -1 = all VALs).
@@ -235,7 +236,9 @@ impl ValParams {
             Param {
                 key: "warm_start",
                 label: "Warm start",
-                help: "Start k-means from last frame's VALs (the variant the paper rejects: VALs get lost)",
+                help:
+                    "Start k-means from last frame's VALs (the variant the paper rejects: VALs get lost); with split \
+                       on, k-means makes only kmeans_share of M VALs (one by default), so it changes little or nothing",
                 kind: ParamKind::Bool,
                 value: ParamValue::Bool(p.warm_start),
             },
