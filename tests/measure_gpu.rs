@@ -53,14 +53,18 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 6] = [
+const COMPARISONS: [&str; 7] = [
     "LightCluster d_init=0.5 vs reference",
     "LightCluster d_init=1.6 vs reference",
     "INSM vs reference",
     "VALs vs one shadow map per VPL",
+    "VALs, M = 64, vs one shadow map per VPL",
     "fuzzy clustering vs exact VPL visibility",
     "unshadowed vs reference",
 ];
+
+/// The rows that compute FLIP (the others skip it: it costs seconds on the CPU at the papers' sizes).
+const WITH_FLIP: [&str; 1] = ["VALs, M = 64, vs one shadow map per VPL"];
 
 #[test]
 fn smoke_run_gives_one_row_per_comparison_with_speedup_and_clock() {
@@ -89,6 +93,7 @@ fn smoke_run_gives_one_row_per_comparison_with_speedup_and_clock() {
         header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no '{name}' column in {header:?}"))
     };
     let (speedup, clock, wall, rmse) = (col("speedup"), col("clock"), col("wall-clock ratio"), col("RMSE"));
+    let flip = col("FLIP");
     let (tech_ms, against_ms) = (col("technique ms"), col("against ms"));
     let rows = &table[2..];
     assert_eq!(rows.len(), COMPARISONS.len(), "one row per comparison (both d_init values):\n{stdout}");
@@ -107,6 +112,12 @@ fn smoke_run_gives_one_row_per_comparison_with_speedup_and_clock() {
         assert!(number(row[tech_ms]) > 0.0 && number(row[against_ms]) > 0.0, "times in {row:?}");
         let e = number(row[rmse]);
         assert!(e.is_finite() && e >= 0.0, "RMSE in {row:?}");
+        if WITH_FLIP.contains(&name) {
+            let f = number(row[flip]);
+            assert!(f.is_finite() && (0.0..=1.0).contains(&f), "FLIP in {row:?}");
+        } else {
+            assert_eq!(row[flip], "-", "FLIP computed where it is skipped: {row:?}");
+        }
     }
 
     // The same table in the smoke folder (never over a real run's target/measure-gpu/table.md).
