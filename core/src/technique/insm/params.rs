@@ -266,8 +266,8 @@ impl InsmParams {
     }
 
     /// The connectivity test's ε for `resolution`² maps: `epsilon` (`epsilon_inside` for the inside and walls
-    /// placements) is given at 128² ([`EPSILON_RESOLUTION`]) and scales as 128 / resolution, down to
-    /// [`EPSILON_FLOOR`] (0.02 at 128², 0.04 at 64², 0.01 from 256² up; inside 0.04, 0.08, 0.02 at 256², 0.01
+    /// placements) is given at 128² (`EPSILON_RESOLUTION`) and scales as 128 / resolution, down to
+    /// `EPSILON_FLOOR` (0.02 at 128², 0.04 at 64², 0.01 from 256² up; inside 0.04, 0.08, 0.02 at 256², 0.01
     /// at 512²).
     pub fn epsilon_at(&self, resolution: u32) -> f32 {
         let e = match self.placement {

@@ -29,19 +29,21 @@ pub struct ValParams {
     pub vpls_per_step: u32,
     /// Show one VAL's contribution alone (its VPLs with its soft visibility; -1 = all VALs).
     pub solo: i32,
-    /// `gpu` (the paper's GPU k-means, `val/kmeans.wgsl`) or `cpu` (the twin, [`kmeans::cluster`]).
+    /// `gpu` (the paper's GPU k-means, `val/kmeans.wgsl`) or `cpu` (the twin, [`super::kmeans::cluster`]).
     pub clustering: String,
     /// CSSM: the receiver's normalised depth is moved toward the VAL by this share of the map's depth range.
     pub cssm_offset: f32,
-    /// Refine the k-means result by bisecting VALs across surfaces ([`split`]); off: the paper's k-means alone.
+    /// Refine the k-means result by bisecting VALs across surfaces ([`super::split`]); off: the paper's k-means
+    /// alone.
     pub split: bool,
-    /// [`split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
+    /// [`super::split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
     pub kmeans_share: f32,
-    /// [`split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule breakers first).
+    /// [`super::split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule
+    /// breakers first).
     pub rank: String,
-    /// [`split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
+    /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
-    /// [`split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
+    /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
     pub max_depth: f32,
 }
 
