@@ -102,7 +102,8 @@ fn luminance(c: Vec3) -> f32 {
     c.max(Vec3::ZERO).dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
-/// The bisection order of `g` under `rank`: a larger key goes first.
+/// The bisection order of `g` under `rank`: a larger key goes first (the rule is the class a VAL is in; ranked
+/// by flux, every VAL is in the same one).
 fn priority(g: &Group, sp: &SplitParams) -> (Rule, f32) {
     match sp.rank {
         Rank::Flux => (Rule::Error, g.flux_error),
