@@ -7,7 +7,8 @@
 // - cssm (the paper): convolution soft shadow maps, Fourier basis textures filtered by mip-mapping (below);
 // - pcss: blocker search over the VAL's angular size, z_avg, the paper's penumbra
 //   p cos(beta) = (d - z_avg) Delta / z_avg, filter angle alpha = arctan(p cos(beta) / d), kernel width
-//   alpha / pi of the map (section 4.2), then percentage-closer filtering over a grid of `grid^2` texels.
+//   alpha / pi of the map (section 4.2), then percentage-closer filtering over a grid of `grid^2` texels (not
+//   run again when the kernel is the search region: the search's own comparisons give it).
 // Receivers in a VAL's negative half-space take full visibility (section 5.1).
 // Composed after common.wgsl, vpl_common.wgsl and vpl_basis.wgsl. `GpuVal` and `ValParams` mirror
 // core/src/technique/val/mod.rs.
@@ -257,6 +258,11 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     // The kernel never exceeds the search region (as in PCSS): a penumbra wider than the VAL's own angular size
     // would average in texels that no part of the VAL is hidden by.
     let width = clamp(alpha / PI * res, 1.0, search);
+    if width >= search {
+        // The kernel is the search region (a blocker in the nearer two thirds of the way, roughly): the filter's
+        // texels and comparisons are the search's, each lit exactly where the search found no blocker.
+        return 1.0 - blockers / f32(grid * grid);
+    }
     var lit = 0.0;
     for (var j = 0u; j < grid; j++) {
         for (var i = 0u; i < grid; i++) {
