@@ -1,7 +1,11 @@
 //! Scene loading: small hand-written fixtures (`tests/fixtures/`) and the real scenes in `../shared/scenes`
 //! (or `$SHADOWLAB_SCENES`). The real-scene tests fail, not skip, when that folder is missing.
 
+mod common;
+
 use std::path::{Path, PathBuf};
+
+use common::scenes_dir;
 use std::time::Instant;
 
 use glam::{Vec3, Vec4};
@@ -16,28 +20,6 @@ fn fixtures() -> PathBuf {
 
 fn fixture(name: &str) -> PathBuf {
     fixtures().join(name)
-}
-
-/// The shared real scenes (`../shared/scenes`, or `SHADOWLAB_SCENES`). In CI (`CI` set, not `false`) a missing
-/// folder fails the test with instructions; elsewhere the test says clearly that it did not run and passes, so
-/// a fresh clone without the data passes the README's test command.
-fn scenes_dir(test: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("SHADOWLAB_SCENES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/scenes")).to_path_buf());
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    let message = format!(
-        "the shared scenes folder {} is missing: {test} needs the real scenes (dabrovic-sponza, conference, \
-         cornell-box, cornell-box-gltf) next to the project, or SHADOWLAB_SCENES pointing at them",
-        dir.display()
-    );
-    if std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false") {
-        panic!("{message}");
-    }
-    eprintln!("NOT RUN: {message}");
-    None
 }
 
 fn assert_close(a: Vec3, b: Vec3, eps: f32) {

@@ -10,7 +10,21 @@ use glam::Vec3;
 use super::scene_bvh::{cutout_alpha, CutoutAlpha, SceneBvh};
 use crate::gpu::GpuContext;
 use crate::scene::chunks::{Chunk, ChunkedGeometry};
+use crate::scene::proxy::ProxyParams;
 use crate::scene::{Material, Scene, TextureImage};
+
+/// Shadow proxies a scene keeps at once ([`GpuScene::proxy`]).
+pub const MAX_PROXIES: usize = 2;
+
+/// A simplified copy of a scene's geometry on the GPU, for shadow maps ([`crate::scene::proxy`]): positions at
+/// offset 0 of the scene's vertex layout, chunks for culling, the scene's materials.
+pub struct GpuProxy {
+    pub params: ProxyParams,
+    pub vertex_buffer: wgpu::Buffer,
+    pub index_buffer: wgpu::Buffer,
+    pub chunks: Vec<Chunk>,
+    pub triangle_count: u64,
+}
 
 pub struct GpuScene {
     pub vertex_buffer: wgpu::Buffer,
@@ -35,6 +49,8 @@ pub struct GpuScene {
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
     pub(crate) bvh_cell: std::sync::OnceLock<Arc<SceneBvh>>,
+    /// Simplified copies of the geometry for shadow maps, built on first use ([`GpuScene::proxy`]).
+    proxies: std::sync::Mutex<Vec<Arc<GpuProxy>>>,
     /// The scene's valid directional lights (the renderer's directional-light service shades them).
     pub directional: Vec<crate::scene::DirectionalLight>,
 }
@@ -160,6 +176,7 @@ impl GpuScene {
             bounds: geometry.chunks.iter().fold(crate::scene::Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             material_albedo,
             bvh_cell: std::sync::OnceLock::new(),
+            proxies: std::sync::Mutex::new(Vec::new()),
             directional: scene
                 .directional
                 .iter()
@@ -252,6 +269,44 @@ fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::Tex
 impl GpuScene {
     /// The scene's BVH, built the first time it is asked for; the second value is its build time when this
     /// call built it.
+    /// The shadow proxy of `params` ([`crate::scene::proxy`]), built and uploaded on first use and kept (the last
+    /// [`MAX_PROXIES`] asked for). Returns it and, when this call built it, the build's milliseconds.
+    pub fn proxy(&self, gpu: &GpuContext, params: ProxyParams) -> (Arc<GpuProxy>, Option<f64>) {
+        let mut proxies = self.proxies.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = proxies.iter().find(|p| p.params == params) {
+            return (p.clone(), None);
+        }
+        let started = std::time::Instant::now();
+        let geometry = crate::scene::proxy::build(&self.geometry, &self.material_cutout, params);
+        let build_ms = started.elapsed().as_secs_f64() * 1e3;
+        let device = &gpu.device;
+        // Never empty: a scene without triangles still binds valid buffers.
+        let vertices: &[u8] =
+            if geometry.vertices.is_empty() { &[0u8; 32] } else { bytemuck::cast_slice(&geometry.vertices) };
+        let indices: &[u8] =
+            if geometry.indices.is_empty() { &[0u8; 12] } else { bytemuck::cast_slice(&geometry.indices) };
+        let proxy = Arc::new(GpuProxy {
+            params,
+            vertex_buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow proxy vertices"),
+                contents: vertices,
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            index_buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow proxy indices"),
+                contents: indices,
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            triangle_count: geometry.triangle_count() as u64,
+            chunks: geometry.chunks,
+        });
+        if proxies.len() >= MAX_PROXIES {
+            proxies.remove(0);
+        }
+        proxies.push(proxy.clone());
+        (proxy, Some(build_ms))
+    }
+
     pub fn bvh(&self, gpu: &GpuContext) -> (Arc<SceneBvh>, Option<f64>) {
         let mut built = None;
         let bvh = self.bvh_cell.get_or_init(|| {

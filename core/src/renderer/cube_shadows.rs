@@ -204,6 +204,17 @@ impl GpuScene {
             push_per_depth: 0.0,
         }
     }
+
+    /// [`GpuScene::cube_geometry`] with the triangles of `proxy`, a simplified copy of this scene's.
+    pub fn proxy_geometry<'a>(&'a self, proxy: &'a crate::accel::gpu_scene::GpuProxy) -> CubeGeometry<'a> {
+        CubeGeometry {
+            vertex_buffer: &proxy.vertex_buffer,
+            index_buffer: &proxy.index_buffer,
+            chunks: &proxy.chunks,
+            triangle_count: proxy.triangle_count,
+            ..self.cube_geometry()
+        }
+    }
 }
 
 /// One paraboloid shadow map to render (a VPL's hemisphere): its centre, the direction it faces and its depth

@@ -70,41 +70,49 @@ impl ChunkedGeometry {
             }));
             out.uv1
                 .extend((0..mesh.positions.len()).map(|i| mesh.uvs1.get(i).copied().unwrap_or(Vec2::ZERO).to_array()));
-            let tris: Vec<[u32; 3]> = mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-            if tris.is_empty() {
-                continue;
-            }
-            let centroid = |t: &[u32; 3]| {
-                (mesh.positions[t[0] as usize] + mesh.positions[t[1] as usize] + mesh.positions[t[2] as usize]) / 3.0
-            };
-            let mesh_bounds = Aabb::from_points(tris.iter().map(centroid));
-            let extent = mesh_bounds.size().max(Vec3::splat(1e-12));
-            let mut keyed: Vec<(u64, [u32; 3])> = tris
-                .iter()
-                .map(|t| {
-                    let q = ((centroid(t) - mesh_bounds.min) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
-                    (morton3(q.x as u32, q.y as u32, q.z as u32), *t)
-                })
-                .collect();
-            keyed.sort_by_key(|k| k.0);
-            for group in keyed.chunks(CHUNK_TRIANGLES) {
-                let first_index = out.indices.len() as u32;
-                let mut bounds = Aabb::EMPTY;
-                for (_, t) in group {
-                    for &i in t {
-                        out.indices.push(base + i);
-                        bounds.extend(mesh.positions[i as usize]);
-                    }
-                }
-                out.chunks.push(Chunk {
-                    first_index,
-                    index_count: (group.len() * 3) as u32,
-                    material: mesh.material as u32,
-                    bounds,
-                });
-            }
+            let tris: Vec<[u32; 3]> =
+                mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]).collect();
+            let positions = &mesh.positions;
+            let position = |i: u32| positions[(i - base) as usize];
+            push_chunks(&mut out.indices, &mut out.chunks, position, tris, mesh.material as u32);
         }
         out
+    }
+}
+
+/// Cuts `tris` (indices into the vertices `position` reads) into chunks of at most [`CHUNK_TRIANGLES`] triangles of
+/// `material`, ordered along a Morton curve of their centroids, and appends them to `indices` and `chunks`.
+pub(crate) fn push_chunks(
+    indices: &mut Vec<u32>,
+    chunks: &mut Vec<Chunk>,
+    position: impl Fn(u32) -> Vec3,
+    tris: Vec<[u32; 3]>,
+    material: u32,
+) {
+    if tris.is_empty() {
+        return;
+    }
+    let centroid = |t: &[u32; 3]| (position(t[0]) + position(t[1]) + position(t[2])) / 3.0;
+    let bounds = Aabb::from_points(tris.iter().map(centroid));
+    let extent = bounds.size().max(Vec3::splat(1e-12));
+    let mut keyed: Vec<(u64, [u32; 3])> = tris
+        .into_iter()
+        .map(|t| {
+            let q = ((centroid(&t) - bounds.min) / extent * 1023.0).clamp(Vec3::ZERO, Vec3::splat(1023.0));
+            (morton3(q.x as u32, q.y as u32, q.z as u32), t)
+        })
+        .collect();
+    keyed.sort_by_key(|k| k.0);
+    for group in keyed.chunks(CHUNK_TRIANGLES) {
+        let first_index = indices.len() as u32;
+        let mut bounds = Aabb::EMPTY;
+        for (_, t) in group {
+            for &i in t {
+                indices.push(i);
+                bounds.extend(position(i));
+            }
+        }
+        chunks.push(Chunk { first_index, index_count: (group.len() * 3) as u32, material, bounds });
     }
 }
 

@@ -9,6 +9,7 @@ mod gltf_data;
 pub mod gltf_loader;
 pub mod layout;
 pub mod obj_loader;
+pub mod proxy;
 pub mod random;
 mod shapes;
 pub mod texture;

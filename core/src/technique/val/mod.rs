@@ -69,6 +69,7 @@ use super::{
     check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamValue, Technique,
     TechniqueCounts,
 };
+use crate::accel::gpu_scene::GpuProxy;
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
@@ -76,6 +77,7 @@ use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
+use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -148,6 +150,9 @@ pub struct VirtualAreaLights {
     scene_size: f32,
     counts: TechniqueCounts,
     clustering_ms: f64,
+    /// The simplified scene the VAL maps draw (`proxy` below 1), and its build time when this frame built it.
+    proxy: Option<Arc<GpuProxy>>,
+    proxy_ms: Option<f64>,
 }
 
 impl VirtualAreaLights {
@@ -200,6 +205,8 @@ impl VirtualAreaLights {
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             clustering_ms: 0.0,
+            proxy: None,
+            proxy_ms: None,
         }
     }
 }
@@ -345,6 +352,18 @@ impl Technique for VirtualAreaLights {
                 }
             })
             .collect();
+        (self.proxy, self.proxy_ms) = if self.params.proxy < 1.0 || self.params.max_edge > 0.0 {
+            let params = ProxyParams {
+                keep: self.params.proxy,
+                max_error: self.params.proxy_error * self.scene_size,
+                max_edge: self.params.max_edge.max(0.0) * self.scene_size,
+            };
+            let (proxy, built) = ctx.scene.proxy(ctx.gpu, params);
+            self.counts.figures.insert("map_geometry_triangles".into(), proxy.triangle_count as f64);
+            (Some(proxy), built)
+        } else {
+            (None, None)
+        };
         let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         self.shadows.ensure_tiles(ctx.gpu, res, m);
         self.vals_buffer.write(ctx.gpu, &gpu_vals);
@@ -371,9 +390,13 @@ impl Technique for VirtualAreaLights {
         }
         if step == 0 {
             // Step 3: every VAL's paraboloid map, one pass.
+            let geometry = match &self.proxy {
+                Some(proxy) => ctx.scene.proxy_geometry(proxy),
+                None => ctx.scene.cube_geometry(),
+            };
             let stats = self.shadows.render_paraboloids(
                 ctx.gpu,
-                ctx.scene.cube_geometry(),
+                geometry,
                 ctx.timer,
                 encoder,
                 "val shadow maps",
@@ -463,7 +486,11 @@ impl Technique for VirtualAreaLights {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        vec![PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 }]
+        let mut stages = vec![PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 }];
+        if let Some(ms) = self.proxy_ms {
+            stages.push(PassTime { name: "map geometry build".into(), ms, count: 1 });
+        }
+        stages
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {

@@ -45,6 +45,12 @@ pub struct ValParams {
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
     pub max_depth: f32,
+    /// The share of the scene's triangles the VAL maps draw ([`crate::scene::proxy`]; 1: the scene itself).
+    pub proxy: f32,
+    /// How far the proxy's surface may move from the scene's, as a share of the scene's diagonal.
+    pub proxy_error: f32,
+    /// The longest triangle edge the VAL maps draw, as a share of the scene's diagonal (0: as they are).
+    pub max_edge: f32,
 }
 
 impl Default for ValParams {
@@ -80,6 +86,9 @@ impl Default for ValParams {
             rank: "flux".into(),
             max_cone_degrees: 40.0,
             max_depth: 0.1,
+            proxy: 1.0,
+            proxy_error: 0.0005,
+            max_edge: crate::scene::proxy::DEFAULT_MAX_EDGE,
         }
     }
 }
@@ -191,6 +200,31 @@ impl ValParams {
                 value: ParamValue::Int(p.shadow_resolution as i64),
             },
             Param {
+                key: "proxy",
+                label: "Map geometry kept",
+                help: "The share of the scene's triangles the VAL maps draw: below 1 a simplified copy of the \
+                       scene (edge collapse, per material; cut-outs kept whole; the paper's future work). 1: the \
+                       scene itself",
+                kind: ParamKind::Float { min: 0.01, max: 1.0 },
+                value: ParamValue::Float(p.proxy),
+            },
+            Param {
+                key: "proxy_error",
+                label: "Proxy error",
+                help: "proxy: the farthest the simplified surface may move from the scene's, as a share of the \
+                       scene's diagonal (the simplification stops there, above the share asked for if need be)",
+                kind: ParamKind::Float { min: 0.0, max: 0.1 },
+                value: ParamValue::Float(p.proxy_error),
+            },
+            Param {
+                key: "max_edge",
+                label: "Longest edge",
+                help: "The longest triangle edge the VAL maps draw, as a share of the scene's diagonal: longer ones \
+                       are cut, since a paraboloid map draws a triangle's edges straight. 0: the triangles as they are",
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                value: ParamValue::Float(p.max_edge),
+            },
+            Param {
                 key: "grid",
                 label: "PCF grid",
                 help: "Side of the blocker-search and filter grid (grid^2 texels each)",
@@ -287,6 +321,9 @@ impl ValParams {
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
+            ("proxy", ParamValue::Float(v)) => p.proxy = *v,
+            ("proxy_error", ParamValue::Float(v)) => p.proxy_error = *v,
+            ("max_edge", ParamValue::Float(v)) => p.max_edge = *v,
             _ => unreachable!("check_param accepted an unknown key"),
         }
     }

@@ -24,6 +24,7 @@ use std::sync::Arc;
 use super::{
     check_param, FrameContext, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
+use crate::accel::gpu_scene::GpuProxy;
 use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::gpu::bind::depth_texture_entry;
@@ -31,6 +32,7 @@ use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster, MAX_CUBES_PER_BATCH};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
+use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::shaders;
 use crate::timing::PassTime;
@@ -64,6 +66,9 @@ pub struct GatherParams {
     pub atlas_budget_mib: u32,
     /// Shadow maps: draw only the chunks in a VPL's front half-space.
     pub cull: bool,
+    /// Shadow maps: the longest triangle edge the maps draw, as a share of the scene's diagonal (longer ones are
+    /// cut, [`crate::scene::proxy`]: a paraboloid draws edges straight); 0: the scene's triangles as they are.
+    pub max_edge: f32,
     /// Interleaved sampling (Dong section 6): each pixel of an 8x8 block gathers every 64th VPL, then a
     /// geometry-aware blur spreads them over the block. Off for the references.
     pub interleave: bool,
@@ -81,6 +86,7 @@ impl Default for GatherParams {
             normal_offset_texels: 1.5,
             atlas_budget_mib: 64,
             cull: true,
+            max_edge: crate::scene::proxy::DEFAULT_MAX_EDGE,
             interleave: false,
             path_light: 0,
         }
@@ -104,6 +110,10 @@ pub struct VplGather {
     scene_size: f32,
     counts: TechniqueCounts,
     build_ms: Option<f64>,
+    /// Shadow maps: the scene with its long edges cut (`max_edge` above 0), and its build time when this frame
+    /// built it.
+    map_geometry: Option<Arc<GpuProxy>>,
+    map_geometry_ms: Option<f64>,
 }
 
 impl VplGather {
@@ -139,6 +149,8 @@ impl VplGather {
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             build_ms: None,
+            map_geometry: None,
+            map_geometry_ms: None,
         }
     }
 
@@ -248,6 +260,15 @@ impl Technique for VplGather {
                     kind: ParamKind::Bool,
                     value: ParamValue::Bool(p.cull),
                 },
+                Param {
+                    key: "max_edge",
+                    label: "Longest edge",
+                    help: "The longest triangle edge the maps draw, as a share of the scene's diagonal: longer ones \
+                           are cut, since a paraboloid map draws a triangle's edges straight (a wall of two triangles \
+                           beside a VPL lands in the wrong place). 0: the scene's triangles as they are",
+                    kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                    value: ParamValue::Float(p.max_edge),
+                },
             ]),
             Visibility::None => {}
         }
@@ -265,6 +286,7 @@ impl Technique for VplGather {
             ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
+            ("max_edge", ParamValue::Float(v)) => p.max_edge = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
             ("path_light", ParamValue::Int(v)) => p.path_light = *v as u32,
             _ => unreachable!("check_param accepted an unknown key"),
@@ -278,6 +300,7 @@ impl Technique for VplGather {
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.build_ms = None;
+        self.map_geometry_ms = None;
         self.vpls = ctx.vpls.set.clone();
         self.scene_size = ctx.scene.bounds.size().length().max(1e-6);
         let n = self.vpls.vpls.len();
@@ -285,6 +308,14 @@ impl Technique for VplGather {
         if self.visibility == Visibility::ShadowMaps {
             let (res, per_batch) = self.maps_per_batch(ctx.gpu);
             self.batch_size = self.batch_size.min(per_batch);
+            (self.map_geometry, self.map_geometry_ms) = match self.params.max_edge {
+                e if e > 0.0 => {
+                    let max_edge = e * self.scene_size;
+                    let (g, ms) = ctx.scene.proxy(ctx.gpu, ProxyParams { keep: 1.0, max_error: 0.0, max_edge });
+                    (Some(g), ms)
+                }
+                _ => (None, None),
+            };
             let shadows = self.shadows.as_mut().expect("shadow maps own a shadow renderer");
             let grew = shadows.ensure_tiles(ctx.gpu, res, self.batch_size.min(n.max(1)));
             if grew || self.visibility_group.is_none() {
@@ -319,6 +350,9 @@ impl Technique for VplGather {
         let batches = n.div_ceil(self.batch_size);
         self.counts = TechniqueCounts { lights_visible: ctx.lights.len(), batches, ..Default::default() };
         self.counts.figures.insert("vpls".into(), n as f64);
+        if let Some(g) = &self.map_geometry {
+            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        }
         self.batches = batches;
         // With interleaving, one more step: the blur.
         Ok(if self.params.interleave && batches > 0 { batches + 1 } else { batches })
@@ -355,7 +389,10 @@ impl Technique for VplGather {
                         far,
                     })
                     .collect();
-                let mut geometry = ctx.scene.cube_geometry();
+                let mut geometry = match &self.map_geometry {
+                    Some(g) => ctx.scene.proxy_geometry(g),
+                    None => ctx.scene.cube_geometry(),
+                };
                 geometry.cull = self.params.cull;
                 let shadows = self.shadows.as_mut().expect("shadow maps own a shadow renderer");
                 let stats =
@@ -396,7 +433,9 @@ impl Technique for VplGather {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 }).into_iter().collect()
+        let bvh = self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 });
+        let maps = self.map_geometry_ms.map(|ms| PassTime { name: "map geometry build".into(), ms, count: 1 });
+        bvh.into_iter().chain(maps).collect()
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
