@@ -51,6 +51,10 @@
 //! - The blocker search covers the VAL's half-size seen from the receiver and the PCF kernel is capped to it,
 //!   as PCSS does (an uncapped `alpha / pi` kernel for large VALs averaged in texels that hide no part of the
 //!   VAL: Sponza, 30 VALs, FLIP 0.42 uncapped against 0.37 capped, same near plane).
+//! - The VAL maps draw the scene with every edge longer than `max_edge` cut (a paraboloid draws edges straight;
+//!   the per-VPL reference draws the same copy), and with `proxy` below 1 a simplified copy
+//!   ([`crate::scene::proxy`]): the paper's conclusion leaves "geometric simplifications ... on top of the
+//!   visibility approximations" to future work, so it is off by default.
 
 pub mod cssm;
 pub mod gpu_kmeans;
