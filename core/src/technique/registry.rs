@@ -221,9 +221,11 @@ pub const INDIRECT_REGISTRY: &[TechniqueEntry] = &[
         label: "VPLs, an imperfect shadow map each (Ritschel 2008)",
         role: Role::Approximation,
         target: INDIRECT_REFERENCE,
-        // Measured (harness, 256 VPLs): worst on ceiling, mean abs 0.0307 with 8.7 % of the pixels off (points of
-        // the ceiling behind the plate leak through its gaps); vpl-unshadowed is 0.052 / 14.3 % there.
-        tolerance: tolerance(0.036, 0.1),
+        // Measured (harness, 256 VPLs): worst on ceiling, mean abs 0.0361 with 10.2 % of the pixels off (points of
+        // the ceiling behind the plate leak through its gaps); vpl-unshadowed is 0.059 / 17.7 % there. It was
+        // 0.0307 / 8.7 % against per-VPL maps that drew the scene's long edges straight, which were 0.0176 off
+        // the ray tracer there against 0.0057 now: ISM had agreed with the reference's leaks.
+        tolerance: tolerance(0.042, 0.12),
         create: |gpu, layouts| Box::new(ism::VplIsm::new(gpu, layouts)),
         vpl_source: None,
         software_defaults: &[],
