@@ -32,7 +32,14 @@ impl VirtualAreaLights {
             },
             ExplainStep {
                 title: "3. A paraboloid map per VAL",
-                text: "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps).",
+                text: if self.params.proxy < 1.0 {
+                    "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps), drawn from a \
+                     simplified copy of the scene ('Map geometry kept': the paper's future work, not its method), \
+                     its long edges cut since a paraboloid draws edges straight."
+                } else {
+                    "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps); the scene's long \
+                     edges are cut first, since a paraboloid draws edges straight ('Longest edge')."
+                },
                 layers: &["val centres", "val normals"],
                 shows_shadow_maps: true,
                 ..Default::default()
