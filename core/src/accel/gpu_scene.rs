@@ -13,11 +13,11 @@ use crate::scene::chunks::{Chunk, ChunkedGeometry};
 use crate::scene::proxy::ProxyParams;
 use crate::scene::{Material, Scene, TextureImage};
 
-/// Shadow proxies a scene keeps at once ([`GpuScene::proxy`]).
+/// Geometry copies a scene keeps at once ([`GpuScene::proxy`]).
 pub const MAX_PROXIES: usize = 2;
 
-/// A simplified copy of a scene's geometry on the GPU, for shadow maps ([`crate::scene::proxy`]): positions at
-/// offset 0 of the scene's vertex layout, chunks for culling, the scene's materials.
+/// A copy of a scene's geometry on the GPU for paraboloid maps ([`crate::scene::proxy`]: long edges cut, and
+/// simplified when asked): the scene's vertex layout, chunks for culling, the scene's materials.
 pub struct GpuProxy {
     pub params: ProxyParams,
     pub vertex_buffer: wgpu::Buffer,
@@ -49,7 +49,7 @@ pub struct GpuScene {
     pub material_albedo: Vec<glam::Vec3>,
     /// The BVH, built on first use ([`GpuScene::bvh`]).
     pub(crate) bvh_cell: std::sync::OnceLock<Arc<SceneBvh>>,
-    /// Simplified copies of the geometry for shadow maps, built on first use ([`GpuScene::proxy`]).
+    /// Copies of the geometry for paraboloid maps, built on first use ([`GpuScene::proxy`]).
     proxies: std::sync::Mutex<Vec<Arc<GpuProxy>>>,
     /// The scene's valid directional lights (the renderer's directional-light service shades them).
     pub directional: Vec<crate::scene::DirectionalLight>,
@@ -267,11 +267,11 @@ fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::Tex
 }
 
 impl GpuScene {
-    /// The scene's BVH, built the first time it is asked for; the second value is its build time when this
-    /// call built it.
-    /// The shadow proxy of `params` ([`crate::scene::proxy`]), built and uploaded on first use and kept (the last
-    /// [`MAX_PROXIES`] asked for). Returns it and, when this call built it, the build's milliseconds.
+    /// The geometry copy of `params` ([`crate::scene::proxy`]), built and uploaded on first use and kept (the
+    /// last [`MAX_PROXIES`] asked for). Returns it and, when this call built it, the build's milliseconds.
     pub fn proxy(&self, gpu: &GpuContext, params: ProxyParams) -> (Arc<GpuProxy>, Option<f64>) {
+        // Not simplified, the error bound means nothing: one copy serves every technique that only cuts edges.
+        let params = if params.keep < 1.0 { params } else { ProxyParams { keep: 1.0, max_error: 0.0, ..params } };
         let mut proxies = self.proxies.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = proxies.iter().find(|p| p.params == params) {
             return (p.clone(), None);
@@ -288,12 +288,12 @@ impl GpuScene {
         let proxy = Arc::new(GpuProxy {
             params,
             vertex_buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow proxy vertices"),
+                label: Some("map geometry vertices"),
                 contents: vertices,
                 usage: wgpu::BufferUsages::VERTEX,
             }),
             index_buffer: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow proxy indices"),
+                label: Some("map geometry indices"),
                 contents: indices,
                 usage: wgpu::BufferUsages::INDEX,
             }),
@@ -307,6 +307,8 @@ impl GpuScene {
         (proxy, Some(build_ms))
     }
 
+    /// The scene's BVH, built the first time it is asked for; the second value is its build time when this
+    /// call built it.
     pub fn bvh(&self, gpu: &GpuContext) -> (Arc<SceneBvh>, Option<f64>) {
         let mut built = None;
         let bvh = self.bvh_cell.get_or_init(|| {

@@ -205,7 +205,7 @@ impl GpuScene {
         }
     }
 
-    /// [`GpuScene::cube_geometry`] with the triangles of `proxy`, a simplified copy of this scene's.
+    /// [`GpuScene::cube_geometry`] with the triangles of `proxy`, a copy of this scene's ([`GpuScene::proxy`]).
     pub fn proxy_geometry<'a>(&'a self, proxy: &'a crate::accel::gpu_scene::GpuProxy) -> CubeGeometry<'a> {
         CubeGeometry {
             vertex_buffer: &proxy.vertex_buffer,
