@@ -86,13 +86,32 @@ fn degenerate_parameters_give_defined_images() {
         vec![("vals", ParamValue::Int(256))], // more VALs than VPLs: clamped
         vec![("iterations", ParamValue::Int(0))],
         vec![("vals", ParamValue::Int(1)), ("interleave", ParamValue::Bool(true))],
+        // The VAL maps' geometry at its extremes: nothing cut, cut very fine (bounded), simplified to a hundredth
+        // with a large error.
+        vec![("max_edge", ParamValue::Float(0.0))],
+        vec![("max_edge", ParamValue::Float(1e-5))],
+        vec![("proxy", ParamValue::Float(0.01)), ("proxy_error", ParamValue::Float(0.1))],
     ] {
         let (img, report) = Shot::indirect(&scene, &lights(), settings(64), "val").params(&params).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{params:?}: NaN");
         assert!(img.iter().any(|p| p[1] > 0.0), "{params:?}: no indirect light");
         let ind = report.indirect.unwrap();
         assert!(ind.counts.figures["vals"] <= ind.vpls as f64);
+        if let Some(&t) = ind.counts.figures.get("map_geometry_triangles") {
+            let scene_triangles = scene.meshes.iter().map(|m| m.indices.len() / 3).sum::<usize>() as f64;
+            assert!(t > 0.0 && t <= 16.0 * scene_triangles + 3.0 * 4096.0, "{params:?}: {t} map triangles");
+        }
     }
+    // Simplified (the room's quads collapse no further, so this checks the path, not the reduction: the unit tests
+    // of scene::proxy do), the image stays close and the maps' triangles are reported.
+    let cut = Shot::indirect(&scene, &lights(), settings(64), "val").render();
+    let simplified =
+        Shot::indirect(&scene, &lights(), settings(64), "val").params(&[("proxy", ParamValue::Float(0.25))]).render();
+    for (_, r) in [&cut, &simplified] {
+        assert!(r.indirect.as_ref().unwrap().counts.figures.contains_key("map_geometry_triangles"));
+    }
+    let e = rel_rmse(&simplified.0, &cut.0);
+    assert!(e < 0.05, "the simplified maps change the image by {e}");
     // No VPLs at all.
     let (img, _) = Shot::indirect(&scene, &lights(), settings(0), "val").render();
     assert!(img.iter().all(|p| p[1] == 0.0));
