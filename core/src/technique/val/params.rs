@@ -203,8 +203,9 @@ impl ValParams {
                 key: "proxy",
                 label: "Map geometry kept",
                 help: "The share of the scene's triangles the VAL maps draw: below 1 a simplified copy of the \
-                       scene (edge collapse, per material; cut-outs kept whole; the paper's future work). 1: the \
-                       scene itself",
+                       scene (edge collapse, per material; cut-outs kept whole; the paper's future work, not its \
+                       method). The collapse also stops at 'Proxy error', and stopped there it is most reliable: \
+                       set this low and the error bound decides. 1: the scene itself",
                 kind: ParamKind::Float { min: 0.01, max: 1.0 },
                 value: ParamValue::Float(p.proxy),
             },
