@@ -277,7 +277,21 @@ impl GpuScene {
             return (p.clone(), None);
         }
         let started = std::time::Instant::now();
-        let geometry = crate::scene::proxy::build(&self.geometry, &self.material_cutout, params);
+        let mut geometry = crate::scene::proxy::build(&self.geometry, &self.material_cutout, params);
+        // A very short `max_edge` on a large scene can outgrow the device's largest buffer: the maps then draw the
+        // scene's own triangles (which fit, being uploaded already), and say so.
+        let limit = gpu.device.limits().max_buffer_size;
+        let bytes = (geometry.vertices.len() * std::mem::size_of::<crate::scene::chunks::Vertex>()) as u64;
+        if bytes > limit || geometry.indices.len() as u64 * 4 > limit {
+            log::warn!(
+                "the maps' geometry for {params:?} needs {} MiB, more than the device's {} MiB buffers: drawing the \
+                 scene's own triangles",
+                bytes >> 20,
+                limit >> 20
+            );
+            let own = ProxyParams { keep: 1.0, max_error: 0.0, max_edge: 0.0 };
+            geometry = crate::scene::proxy::build(&self.geometry, &self.material_cutout, own);
+        }
         let build_ms = started.elapsed().as_secs_f64() * 1e3;
         let device = &gpu.device;
         // Never empty: a scene without triangles still binds valid buffers.
