@@ -268,13 +268,16 @@ fn upload_texture(gpu: &GpuContext, t: &TextureImage, max_dim: u32) -> wgpu::Tex
 
 impl GpuScene {
     /// The geometry copy of `params` ([`crate::scene::proxy`]), built and uploaded on first use and kept (the
-    /// last [`MAX_PROXIES`] asked for). Returns it and, when this call built it, the build's milliseconds.
-    pub fn proxy(&self, gpu: &GpuContext, params: ProxyParams) -> (Arc<GpuProxy>, Option<f64>) {
-        // Not simplified, the error bound means nothing: one copy serves every technique that only cuts edges.
-        let params = if params.keep < 1.0 { params } else { ProxyParams { keep: 1.0, max_error: 0.0, ..params } };
+    /// last [`MAX_PROXIES`] asked for): it and, when this call built it, the build's milliseconds. None when
+    /// `params` ask for nothing ([`ProxyParams::is_identity`]): the maps draw [`GpuScene::cube_geometry`].
+    pub fn proxy(&self, gpu: &GpuContext, params: ProxyParams) -> Option<(Arc<GpuProxy>, Option<f64>)> {
+        if params.is_identity() {
+            return None;
+        }
+        let params = params.normalized();
         let mut proxies = self.proxies.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(p) = proxies.iter().find(|p| p.params == params) {
-            return (p.clone(), None);
+            return Some((p.clone(), None));
         }
         let started = std::time::Instant::now();
         let mut geometry = crate::scene::proxy::build(&self.geometry, &self.material_cutout, params);
@@ -318,7 +321,7 @@ impl GpuScene {
             proxies.remove(0);
         }
         proxies.push(proxy.clone());
-        (proxy, Some(build_ms))
+        Some((proxy, Some(build_ms)))
     }
 
     /// The scene's BVH, built the first time it is asked for; the second value is its build time when this

@@ -44,6 +44,30 @@ pub struct ProxyParams {
     pub max_edge: f32,
 }
 
+impl ProxyParams {
+    /// Whether it simplifies (`keep` below 1; not a number: no).
+    fn simplifies(&self) -> bool {
+        self.keep < 1.0
+    }
+
+    /// The copy would be the scene's own triangles: nothing simplified, no edge cut (a `max_edge` that is not a
+    /// positive number cuts nothing).
+    pub fn is_identity(&self) -> bool {
+        let cuts = self.max_edge > 0.0 && self.max_edge.is_finite();
+        !self.simplifies() && !cuts
+    }
+
+    /// The same copy, named one way: not simplified, the error bound means nothing and is dropped, so every
+    /// technique that only cuts edges asks for (and shares) one copy.
+    pub fn normalized(self) -> ProxyParams {
+        if self.simplifies() {
+            self
+        } else {
+            ProxyParams { keep: 1.0, max_error: 0.0, ..self }
+        }
+    }
+}
+
 /// The copy of `geometry` that `params` asks for (see the module). `masked[m]`: material `m` is cut out.
 pub fn build(geometry: &ChunkedGeometry, masked: &[bool], params: ProxyParams) -> ChunkedGeometry {
     let keep = if params.keep.is_finite() { params.keep.clamp(1e-4, 1.0) } else { 1.0 };
@@ -305,6 +329,16 @@ mod tests {
         // The cut-out's UVs survive; the welded ground's are not kept.
         let first = s.chunks.iter().find(|c| c.material == 1).unwrap().first_index as usize;
         assert_eq!(s.vertices[s.indices[first] as usize].uv, [0.5, 0.5]);
+    }
+
+    #[test]
+    fn a_copy_of_nothing_is_asked_for_as_nothing_and_cut_only_copies_are_one() {
+        let p = |keep, max_error, max_edge| ProxyParams { keep, max_error, max_edge };
+        assert!(p(1.0, 0.3, 0.0).is_identity() && p(f32::NAN, 0.0, f32::NAN).is_identity());
+        assert!(!p(1.0, 0.0, 0.1).is_identity() && !p(0.5, 0.0, 0.0).is_identity());
+        // Cut only: the error bound is dropped, so two techniques asking with different bounds share one copy.
+        assert_eq!(p(1.0, 0.3, 0.1).normalized(), p(1.0, 0.0, 0.1).normalized());
+        assert_eq!(p(0.5, 0.3, 0.1).normalized(), p(0.5, 0.3, 0.1));
     }
 
     #[test]

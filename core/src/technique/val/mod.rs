@@ -154,7 +154,8 @@ pub struct VirtualAreaLights {
     scene_size: f32,
     counts: TechniqueCounts,
     clustering_ms: f64,
-    /// The simplified scene the VAL maps draw (`proxy` below 1), and its build time when this frame built it.
+    /// The scene's copy the VAL maps draw (long edges cut, simplified with `proxy` below 1; None: the scene as it
+    /// is), and its build time when this frame built it.
     proxy: Option<Arc<GpuProxy>>,
     proxy_ms: Option<f64>,
 }
@@ -356,18 +357,16 @@ impl Technique for VirtualAreaLights {
                 }
             })
             .collect();
-        (self.proxy, self.proxy_ms) = if self.params.proxy < 1.0 || self.params.max_edge > 0.0 {
-            let params = ProxyParams {
-                keep: self.params.proxy,
-                max_error: self.params.proxy_error * self.scene_size,
-                max_edge: self.params.max_edge.max(0.0) * self.scene_size,
-            };
-            let (proxy, built) = ctx.scene.proxy(ctx.gpu, params);
-            self.counts.figures.insert("map_geometry_triangles".into(), proxy.triangle_count as f64);
-            (Some(proxy), built)
-        } else {
-            (None, None)
+        let geometry = ProxyParams {
+            keep: self.params.proxy,
+            max_error: self.params.proxy_error * self.scene_size,
+            max_edge: self.params.max_edge * self.scene_size,
         };
+        let (proxy, built) = ctx.scene.proxy(ctx.gpu, geometry).unzip();
+        (self.proxy, self.proxy_ms) = (proxy, built.flatten());
+        if let Some(g) = &self.proxy {
+            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        }
         let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         self.shadows.ensure_tiles(ctx.gpu, res, m);
         self.vals_buffer.write(ctx.gpu, &gpu_vals);

@@ -110,8 +110,8 @@ pub struct VplGather {
     scene_size: f32,
     counts: TechniqueCounts,
     build_ms: Option<f64>,
-    /// Shadow maps: the scene with its long edges cut (`max_edge` above 0), and its build time when this frame
-    /// built it.
+    /// Shadow maps: the scene with its long edges cut (None: `max_edge` 0, the scene as it is), and its build time
+    /// when this frame built it.
     map_geometry: Option<Arc<GpuProxy>>,
     map_geometry_ms: Option<f64>,
 }
@@ -308,14 +308,9 @@ impl Technique for VplGather {
         if self.visibility == Visibility::ShadowMaps {
             let (res, per_batch) = self.maps_per_batch(ctx.gpu);
             self.batch_size = self.batch_size.min(per_batch);
-            (self.map_geometry, self.map_geometry_ms) = match self.params.max_edge {
-                e if e > 0.0 => {
-                    let max_edge = e * self.scene_size;
-                    let (g, ms) = ctx.scene.proxy(ctx.gpu, ProxyParams { keep: 1.0, max_error: 0.0, max_edge });
-                    (Some(g), ms)
-                }
-                _ => (None, None),
-            };
+            let cut = ProxyParams { keep: 1.0, max_error: 0.0, max_edge: self.params.max_edge * self.scene_size };
+            let (geometry, built) = ctx.scene.proxy(ctx.gpu, cut).unzip();
+            (self.map_geometry, self.map_geometry_ms) = (geometry, built.flatten());
             let shadows = self.shadows.as_mut().expect("shadow maps own a shadow renderer");
             let grew = shadows.ensure_tiles(ctx.gpu, res, self.batch_size.min(n.max(1)));
             if grew || self.visibility_group.is_none() {
