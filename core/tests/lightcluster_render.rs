@@ -184,3 +184,65 @@ fn zero_and_out_of_view_lights_give_no_clusters() {
     assert_eq!(report.counts.technique.lights_visible, 0);
     assert_eq!(report.counts.technique.shadow_maps, 0);
 }
+
+/// A horizontal `n` x `n` grid of side `size` centred at `center`, normal +Y: flat, so an edge collapse within
+/// any error bound takes it down to its border.
+fn grid(name: &str, center: Vec3, size: f32, n: u32) -> shadowlab_core::scene::Mesh {
+    let mut mesh = quad(name, center, size, 0);
+    mesh.positions.clear();
+    mesh.uvs.clear();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+            mesh.positions.push(center + Vec3::new((u - 0.5) * size, 0.0, (v - 0.5) * size));
+            mesh.uvs.push(glam::Vec2::new(u, v));
+        }
+    }
+    mesh.normals = vec![Vec3::Y; mesh.positions.len()];
+    mesh.indices.clear();
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            let (b, c, d) = (a + 1, a + n + 2, a + n + 1);
+            mesh.indices.extend([a, c, b, a, d, c]);
+        }
+    }
+    mesh
+}
+
+#[test]
+fn a_simplified_copy_for_the_cluster_maps_draws_fewer_triangles_and_keeps_the_shadows() {
+    // The plane-and-occluder scene with both surfaces finely tessellated (2 x 48² and 2 x 16² triangles).
+    let mut scene = plane_and_occluder();
+    scene.meshes = vec![grid("ground", Vec3::ZERO, GROUND_SIZE, 48), grid("plate", PLATE_CENTER, PLATE_SIZE, 16)];
+    scene.finalize(std::path::Path::new("test")).unwrap();
+    let lights = lights_around_occluder();
+    let shot = |params: Params| {
+        Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+            .params(MAPS)
+            .params(&[("d_init", ParamValue::Float(0.5))])
+            .params(params)
+            .render()
+    };
+    let (full, full_report) = shot(&[]);
+    let (simplified, report) = shot(&[("proxy", ParamValue::Float(0.05))]);
+    let drawn = |r: &shadowlab_core::FrameReport| r.counts.technique.shadow_triangles_submitted;
+    assert!(
+        drawn(&report) * 4 < drawn(&full_report),
+        "the simplified copy drew {} triangles, the scene {}",
+        drawn(&report),
+        drawn(&full_report)
+    );
+    let kept = report.counts.technique.figures["map_geometry_triangles"];
+    assert!(kept > 0.0 && kept < 0.2 * (2.0 * 48.0 * 48.0 + 2.0 * 16.0 * 16.0), "{kept} triangles kept");
+    assert!(!full_report.counts.technique.figures.contains_key("map_geometry_triangles"));
+    assert!(report.cpu_stages.iter().any(|s| s.name == "map geometry build"));
+    // Flat surfaces simplified within the error bound cast the same shadows.
+    let (_, share) = compare(&simplified, &full, 0.01);
+    assert!(share < 0.002, "{:.3}% of pixels differ by more than 1% with the simplified maps", share * 100.0);
+    // Absurd values are refused with an error, not rendered.
+    let mut lc = renderer(&scene, linear_settings(W, H)).create_technique("lightcluster").unwrap();
+    for (key, value) in [("proxy", f32::NAN), ("proxy", -1.0), ("proxy_error", f32::INFINITY)] {
+        assert!(lc.set_param(key, &ParamValue::Float(value)).is_err(), "{key} = {value} was accepted");
+    }
+}

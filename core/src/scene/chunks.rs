@@ -74,20 +74,23 @@ impl ChunkedGeometry {
                 mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]).collect();
             let positions = &mesh.positions;
             let position = |i: u32| positions[(i - base) as usize];
-            push_chunks(&mut out.indices, &mut out.chunks, position, tris, mesh.material as u32);
+            push_chunks(&mut out.indices, &mut out.chunks, position, tris, mesh.material as u32, CHUNK_TRIANGLES);
         }
         out
     }
 }
 
-/// Cuts `tris` (indices into the vertices `position` reads) into chunks of at most [`CHUNK_TRIANGLES`] triangles of
-/// `material`, ordered along a Morton curve of their centroids, and appends them to `indices` and `chunks`.
+/// Cuts `tris` (indices into the vertices `position` reads) into chunks of at most `per_chunk` triangles (at
+/// least one) of `material`, ordered along a Morton curve of their centroids, and appends them to `indices` and
+/// `chunks`. The scene's own chunks hold [`CHUNK_TRIANGLES`]; a simplified copy's hold fewer, so that a chunk
+/// covers about as much surface as the scene's and culls as well.
 pub(crate) fn push_chunks(
     indices: &mut Vec<u32>,
     chunks: &mut Vec<Chunk>,
     position: impl Fn(u32) -> Vec3,
     tris: Vec<[u32; 3]>,
     material: u32,
+    per_chunk: usize,
 ) {
     if tris.is_empty() {
         return;
@@ -103,7 +106,7 @@ pub(crate) fn push_chunks(
         })
         .collect();
     keyed.sort_by_key(|k| k.0);
-    for group in keyed.chunks(CHUNK_TRIANGLES) {
+    for group in keyed.chunks(per_chunk.max(1)) {
         let first_index = indices.len() as u32;
         let mut bounds = Aabb::EMPTY;
         for (_, t) in group {

@@ -26,7 +26,10 @@
 
 use glam::{Vec2, Vec3};
 
-use super::chunks::{push_chunks, ChunkedGeometry, Vertex};
+use super::chunks::{push_chunks, ChunkedGeometry, Vertex, CHUNK_TRIANGLES};
+
+/// The fewest triangles a simplified copy's chunk holds (smaller chunks would make draw calls the cost).
+const MIN_CHUNK_TRIANGLES: usize = 32;
 
 /// The default longest edge of the paraboloid maps' triangles, as a share of the scene's diagonal (measured in
 /// docs/techniques/vpl-gather.md: the Cornell box's per-VPL maps against ray-traced visibility FLIP 0.139 with its
@@ -99,6 +102,7 @@ pub fn build(geometry: &ChunkedGeometry, masked: &[bool], params: ProxyParams) -
     while start < geometry.chunks.len() {
         let material = geometry.chunks[start].material;
         let end = start + geometry.chunks[start..].iter().take_while(|c| c.material == material).count();
+        let source_count: usize = geometry.chunks[start..end].iter().map(|c| c.triangle_count() as usize).sum();
         let source = geometry.chunks[start..end].iter().flat_map(|c| {
             let first = c.first_index as usize;
             geometry.indices[first..first + c.index_count as usize].chunks_exact(3)
@@ -137,7 +141,15 @@ pub fn build(geometry: &ChunkedGeometry, masked: &[bool], params: ProxyParams) -
             }
         }
         let tris = split_long_edges(&mut out.vertices, tris, params.max_edge, &mut midpoints);
-        push_chunks(&mut out.indices, &mut out.chunks, |i| out_position(&out.vertices, i), tris, material);
+        // Chunks that cover about as much surface as the scene's: a simplified material's triangles are larger,
+        // and 256 of them would span so much that the per-face culling kept most of them (Sponza's cluster maps
+        // drew 2.3 times the copy's triangles per map, the scene's own 1.2 times).
+        let per_chunk = if simplify {
+            (CHUNK_TRIANGLES * tris.len()).div_ceil(source_count.max(1)).clamp(MIN_CHUNK_TRIANGLES, CHUNK_TRIANGLES)
+        } else {
+            CHUNK_TRIANGLES
+        };
+        push_chunks(&mut out.indices, &mut out.chunks, |i| out_position(&out.vertices, i), tris, material, per_chunk);
         start = end;
     }
     out.uv1 = vec![Vec2::ZERO.to_array(); out.vertices.len()];
@@ -232,7 +244,7 @@ mod tests {
             }));
             let tris = vec![[first, first + 1, first + 2], [first, first + 2, first + 3]];
             let vertices = g.vertices.clone();
-            push_chunks(&mut g.indices, &mut g.chunks, |i| out_position(&vertices, i), tris, material);
+            push_chunks(&mut g.indices, &mut g.chunks, |i| out_position(&vertices, i), tris, material, CHUNK_TRIANGLES);
         };
         for i in 0..n {
             for j in 0..n {
@@ -329,6 +341,24 @@ mod tests {
         // The cut-out's UVs survive; the welded ground's are not kept.
         let first = s.chunks.iter().find(|c| c.material == 1).unwrap().first_index as usize;
         assert_eq!(s.vertices[s.indices[first] as usize].uv, [0.5, 0.5]);
+    }
+
+    #[test]
+    fn a_simplified_copy_cuts_smaller_chunks_so_they_cull_as_well_as_the_scenes() {
+        let g = grid_and_box(32);
+        let s = build(&g, &[false, false], ProxyParams { keep: 0.05, max_error: 0.01, max_edge: 0.0 });
+        chunks_cover_the_indices(&s);
+        let ground: Vec<&Chunk> = s.chunks.iter().filter(|c| c.material == 0).collect();
+        let kept: u32 = ground.iter().map(|c| c.triangle_count()).sum();
+        // 2,048 triangles kept as `kept`: a chunk holds 256 * kept / 2,048 of them (at least 32), not 256.
+        let per_chunk = (256 * kept).div_ceil(2048).clamp(MIN_CHUNK_TRIANGLES as u32, 256);
+        assert!(kept < 2048 / 4, "the flat grid kept {kept} triangles");
+        assert!(ground.iter().all(|c| c.triangle_count() <= per_chunk), "a chunk holds more than {per_chunk}");
+        assert!(ground.len() as u32 >= kept.div_ceil(per_chunk), "{} chunks for {kept} triangles", ground.len());
+        assert!(ground.len() > 1);
+        // Copies that are only cut keep the scene's chunk size.
+        let cut = build(&g, &[false, false], ProxyParams { keep: 1.0, max_error: 0.0, max_edge: 0.5 });
+        assert!(cut.chunks.iter().any(|c| c.triangle_count() as usize == CHUNK_TRIANGLES));
     }
 
     #[test]

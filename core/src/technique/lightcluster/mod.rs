@@ -44,8 +44,11 @@ use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
 use crate::renderer::per_light_shadows::PerLightShadows;
 use crate::renderer::shade_pass::ShadePass;
+use crate::accel::gpu_scene::GpuProxy;
+use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::timing::PassTime;
+use std::sync::Arc;
 use clustering::{ClusterParams, Clusterer, Clustering};
 
 use crate::shaders::WgslModule;
@@ -121,6 +124,10 @@ pub struct LightClusterParams {
     pub fallback: bool,
     /// Draw only this cluster's soft visibility, as grey (the Explain panel's step 5); None: shade them all.
     pub visibility_of: Option<u32>,
+    /// The share of the scene's triangles the cluster maps draw ([`crate::scene::proxy`]; 1: the scene itself).
+    pub proxy: f32,
+    /// How far the simplified surface may move from the scene's, as a share of the scene's diagonal.
+    pub proxy_error: f32,
 }
 
 impl Default for LightClusterParams {
@@ -135,6 +142,8 @@ impl Default for LightClusterParams {
             cube: CubeMapParams::default(),
             fallback: true,
             visibility_of: None,
+            proxy: 1.0,
+            proxy_error: 0.0005,
         }
     }
 }
@@ -160,6 +169,10 @@ pub struct LightCluster {
     /// The per-light path of the worst case (every cluster holds one light): the reference's own service.
     fallback: PerLightShadows,
     using_reference: bool,
+    /// The simplified copy the cluster maps draw (`proxy` below 1; None: the scene as it is) and, in the frame
+    /// that built it, the build's milliseconds.
+    proxy: Option<Arc<GpuProxy>>,
+    proxy_ms: Option<f64>,
 }
 
 impl LightCluster {
@@ -185,6 +198,8 @@ impl LightCluster {
             cluster_spheres: Vec::new(),
             fallback: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::new(gpu)),
             using_reference: false,
+            proxy: None,
+            proxy_ms: None,
         }
     }
 
@@ -268,6 +283,24 @@ impl Technique for LightCluster {
                 kind: ParamKind::Int { min: -1, max: 1 << 20 },
                 value: ParamValue::Int(p.visibility_of.map_or(-1, i64::from)),
             },
+            Param {
+                key: "proxy",
+                label: "Map geometry kept",
+                help: "The share of the scene's triangles the cluster maps draw: below 1 a simplified copy of the \
+                       scene (edge collapse, per material; cut-outs kept whole; beyond the paper). The collapse \
+                       also stops at 'Proxy error', and stopped there it is most reliable: set this low and the \
+                       error bound decides. 1: the scene itself. The reference never simplifies",
+                kind: ParamKind::Float { min: 0.01, max: 1.0 },
+                value: ParamValue::Float(p.proxy),
+            },
+            Param {
+                key: "proxy_error",
+                label: "Proxy error",
+                help: "proxy: the farthest the simplified surface may move from the scene's, as a share of the \
+                       scene's diagonal (the simplification stops there, above the share asked for if need be)",
+                kind: ParamKind::Float { min: 0.0, max: 0.1 },
+                value: ParamValue::Float(p.proxy_error),
+            },
         ];
         params.extend(p.cube.params());
         params
@@ -285,6 +318,8 @@ impl Technique for LightCluster {
             ("early_out", ParamValue::Bool(v)) => p.early_out = *v,
             ("fallback", ParamValue::Bool(v)) => p.fallback = *v,
             ("visibility_of", ParamValue::Int(v)) => p.visibility_of = u32::try_from(*v).ok(),
+            ("proxy", ParamValue::Float(v)) => p.proxy = *v,
+            ("proxy_error", ParamValue::Float(v)) => p.proxy_error = *v,
             _ => {
                 let known = p.cube.set(key, value);
                 debug_assert!(known, "check_param accepted an unknown key");
@@ -294,6 +329,7 @@ impl Technique for LightCluster {
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
+        self.proxy_ms = None;
         // Step 1: clustering on the CPU.
         let start = std::time::Instant::now();
         let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
@@ -344,6 +380,18 @@ impl Technique for LightCluster {
         let batches = cluster_count.div_ceil(self.batch_size);
         self.counts =
             TechniqueCounts { lights_visible: visible, batches, clusters: Some(cluster_count), ..Default::default() };
+        // The cluster maps' geometry: a cube map draws edges straight as they are, so nothing is cut (max_edge 0).
+        let scene_size = ctx.scene.bounds.size().length();
+        let geometry = ProxyParams {
+            keep: self.params.proxy,
+            max_error: self.params.proxy_error * if scene_size.is_finite() { scene_size } else { 0.0 },
+            max_edge: 0.0,
+        };
+        let (proxy, built) = ctx.scene.proxy(ctx.gpu, geometry).unzip();
+        (self.proxy, self.proxy_ms) = (proxy, built.flatten());
+        if let Some(g) = &self.proxy {
+            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        }
         if cluster_count == 0 {
             return Ok(0);
         }
@@ -414,8 +462,11 @@ impl Technique for LightCluster {
                 }
             })
             .collect();
-        let geometry =
-            CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..ctx.scene.cube_geometry() };
+        let scene = match &self.proxy {
+            Some(proxy) => ctx.scene.proxy_geometry(proxy),
+            None => ctx.scene.cube_geometry(),
+        };
+        let geometry = CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..scene };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
         self.counts.add_cube_stats(&stats);
 
@@ -453,7 +504,11 @@ impl Technique for LightCluster {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        vec![PassTime { name: "clustering".into(), ms: self.clustering_ms, count: 1 }]
+        let mut stages = vec![PassTime { name: "clustering".into(), ms: self.clustering_ms, count: 1 }];
+        if let Some(ms) = self.proxy_ms {
+            stages.push(PassTime { name: "map geometry build".into(), ms, count: 1 });
+        }
+        stages
     }
 
     /// Per pixel, the cluster whose center is nearest among those whose `C_att` reaches the pixel: the cluster
