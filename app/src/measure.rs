@@ -198,6 +198,32 @@ impl IndirectChoice {
     pub fn none() -> IndirectChoice {
         IndirectChoice { key: "none".into(), params: Vec::new() }
     }
+
+    /// A side's name in captions and titles: `direct`, or `direct + indirect` with an indirect technique.
+    pub fn name_with(&self, direct: &str) -> String {
+        if self.key == "none" {
+            direct.to_string()
+        } else {
+            format!("{direct} + {}", self.key)
+        }
+    }
+
+    /// A side's parameters for a caption: the direct technique's, then the indirect technique's after its key
+    /// (`shadow_res=256 · val: vals=12`), "default parameters" when neither has any set.
+    pub fn params_caption(&self, direct: &[String]) -> String {
+        let mut parts = Vec::new();
+        if !direct.is_empty() {
+            parts.push(direct.join(" "));
+        }
+        if self.key != "none" && !self.params.is_empty() {
+            parts.push(format!("{}: {}", self.key, self.params.join(" ")));
+        }
+        if parts.is_empty() {
+            "default parameters".to_string()
+        } else {
+            parts.join(" · ")
+        }
+    }
 }
 
 /// Apply `--shadow-res` and `--param key=value` to a technique.
@@ -485,6 +511,19 @@ pub fn combinations(params: &[(String, Vec<String>)]) -> Vec<Vec<(String, String
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_side_with_an_indirect_technique_is_named_and_captioned_with_both_parts() {
+        let val = IndirectChoice { key: "val".into(), params: vec!["vals=12".into()] };
+        assert_eq!(val.name_with("unshadowed"), "unshadowed + val");
+        assert_eq!(val.params_caption(&[]), "val: vals=12");
+        assert_eq!(val.params_caption(&["shadow_res=256".into()]), "shadow_res=256 · val: vals=12");
+        let none = IndirectChoice::none();
+        assert_eq!(none.name_with("reference"), "reference");
+        assert_eq!(none.params_caption(&[]), "default parameters");
+        let bare = IndirectChoice { key: "val".into(), params: Vec::new() };
+        assert_eq!(bare.params_caption(&[]), "default parameters");
+    }
 
     #[test]
     fn ranges_lists_and_single_values() {

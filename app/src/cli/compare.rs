@@ -143,9 +143,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
         use crate::figure::{compose, metrics_caption, FigurePane};
         let metrics_lines = metrics_caption(&metrics);
-        let params = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
+        let component = if f.component == "total" { String::new() } else { format!(" · {} light", f.component) };
         let title = format!(
-            "{} · {} lights · {}x{} · {}",
+            "{} · {} lights · {}x{}{component} · {}",
             scene.name,
             lights.len(),
             f.width,
@@ -158,8 +158,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 FigurePane {
                     image: tech_image,
                     caption: vec![
-                        args.target.technique.clone(),
-                        params(&args.params),
+                        indirect.name_with(&args.target.technique),
+                        indirect.params_caption(&args.params),
                         format!(
                             "{:.1} ms (median of {}, {}), ×{:.2}",
                             tech.timing.median_in(clock),
@@ -172,8 +172,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
                 FigurePane {
                     image: target_image,
                     caption: vec![
-                        args.target.against.clone(),
-                        params(&args.target.against_params),
+                        against_indirect.name_with(&args.target.against),
+                        against_indirect.params_caption(&args.target.against_params),
                         format!("{:.1} ms (median of {})", target.timing.median_in(clock), target.timing.frames),
                     ],
                 },
@@ -192,12 +192,14 @@ pub fn run(args: CompareArgs) -> Result<()> {
     write_atomic(&args.out, &encode_png(&diff)?)?;
     if !quiet {
         eprintln!(
-            "{} vs {} on {} ({}x{}): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over {:.0}%",
-            args.target.technique,
-            args.target.against,
+            "{} vs {} on {} ({}x{}, {} light): RMSE {:.5}, PSNR {}, FLIP {}, shadow error {}, {:.2}% of pixels over \
+             {:.0}%",
+            indirect.name_with(&args.target.technique),
+            against_indirect.name_with(&args.target.against),
             scene.name,
             f.width,
             f.height,
+            f.component,
             metrics.rmse,
             metrics.psnr_db.map(|p| format!("{p:.2} dB")).unwrap_or_else(|| "inf".into()),
             metrics.flip_mean.map(|v| format!("{v:.4}")).unwrap_or_else(|| "-".into()),
@@ -212,9 +214,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
             "time (median of {}, {}): {} {:.2} ms, {} {:.2} ms, speedup {}",
             tech.timing.frames,
             clock.name(),
-            args.target.technique,
+            indirect.name_with(&args.target.technique),
             tech.timing.median_in(clock),
-            args.target.against,
+            against_indirect.name_with(&args.target.against),
             target.timing.median_in(clock),
             speedup.text()
         );

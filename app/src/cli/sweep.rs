@@ -339,15 +339,8 @@ pub fn run(args: SweepArgs) -> Result<()> {
         let tmp = path.with_extension("png.tmp.png");
         let lights_swept = swept[0].0 == LIGHTS_KEY;
         // With indirect techniques the names say both parts (`unshadowed + val`).
-        let with = |direct: &str, indirect: &str| {
-            if indirect == "none" {
-                direct.to_string()
-            } else {
-                format!("{direct} + {indirect}")
-            }
-        };
-        let technique_name = with(&args.target.technique, &f.indirect);
-        let against_name = with(&args.target.against, &target_indirect.key);
+        let technique_name = f.indirect_choice().name_with(&args.target.technique);
+        let against_name = target_indirect.name_with(&args.target.against);
         let component = if f.component == "total" { String::new() } else { format!(", {} light", f.component) };
         let title = if lights_swept {
             format!("{technique_name} and {against_name} on {} ({}x{}{component})", scene.name, f.width, f.height)

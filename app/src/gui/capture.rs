@@ -96,14 +96,13 @@ impl ShadowLabApp {
             renderer.gpu().adapter_description()
         );
         let metrics_lines = figure::metrics_caption(&metrics);
-        let shown = |p: &[String]| if p.is_empty() { "default parameters".to_string() } else { p.join(" ") };
         let speedup = measure::Speedup::of(&tech.timing, &target.timing);
         let panes = [
             FigurePane {
                 image: tech_image,
                 caption: vec![
                     technique_pair(&self.session.technique, indirect_key),
-                    shown(&params),
+                    indirect.params_caption(&params),
                     format!("{:.1} ms, {}", tech.timing.median_in(speedup.clock), speedup.text()),
                 ],
             },
@@ -111,7 +110,7 @@ impl ShadowLabApp {
                 image: target_image,
                 caption: vec![
                     technique_pair(&against, self.session.against_indirect_key()),
-                    shown(&against_params),
+                    against_indirect.params_caption(&against_params),
                     format!("{:.1} ms ({})", target.timing.median_in(speedup.clock), speedup.clock.name()),
                 ],
             },

@@ -33,6 +33,7 @@ use super::{
     check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
     TechniqueCounts,
 };
+use crate::accel::gpu_scene::GpuProxy;
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
@@ -44,12 +45,11 @@ use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
 use crate::renderer::per_light_shadows::PerLightShadows;
 use crate::renderer::shade_pass::ShadePass;
-use crate::accel::gpu_scene::GpuProxy;
 use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::timing::PassTime;
-use std::sync::Arc;
 use clustering::{ClusterParams, Clusterer, Clustering};
+use std::sync::Arc;
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
