@@ -82,6 +82,14 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
         let c = &report.counts.technique;
         assert_eq!(c.insm_mesh_triangles, Some(gpu_triangles.len() as u64));
         assert!(gpu_triangles.len() as u64 <= 2 * 6 * 64 * 64);
+        // What the adaptive mesh merged: none without it; with it, some tiles of the flat scene, their
+        // triangles a part of the mesh's.
+        let figure = |k: &str| c.figures.get(k).copied().unwrap_or(f64::NAN);
+        let (tiles, merged) = (figure("mesh_tiles"), figure("mesh_merged_tiles"));
+        let merged_triangles = figure("mesh_merged_triangles");
+        assert!(merged <= tiles && tiles <= (6 * 8 * 8) as f64, "{merged} merged of {tiles} tiles");
+        assert!(merged_triangles <= gpu_triangles.len() as f64 && merged_triangles <= 4.0 * 8.0 * merged);
+        assert_eq!(merged > 0.0, adaptive, "merged tiles {merged}, adaptive {adaptive}");
         let budget = c.insm_triangle_budget.unwrap();
         assert_eq!(budget, 6 * scene.triangle_count() as u64 + 2 * lights.len() as u64 * 6 * 64 * 64);
         assert!(c.shadow_triangles_submitted <= budget, "{} > {budget}", c.shadow_triangles_submitted);
