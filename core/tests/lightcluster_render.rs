@@ -245,4 +245,9 @@ fn a_simplified_copy_for_the_cluster_maps_draws_fewer_triangles_and_keeps_the_sh
     for (key, value) in [("proxy", f32::NAN), ("proxy", -1.0), ("proxy_error", f32::INFINITY)] {
         assert!(lc.set_param(key, &ParamValue::Float(value)).is_err(), "{key} = {value} was accepted");
     }
+    // The Explain step of the maps says what they draw.
+    let maps_step = |lc: &dyn shadowlab_core::technique::Technique| lc.explain()[3].text;
+    assert!(!maps_step(lc.as_ref()).contains("simplified"));
+    lc.set_param("proxy", &ParamValue::Float(0.05)).unwrap();
+    assert!(maps_step(lc.as_ref()).contains("simplified copy"));
 }

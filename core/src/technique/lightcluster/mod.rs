@@ -631,8 +631,14 @@ impl Technique for LightCluster {
             },
             ExplainStep {
                 title: "4. One cube map per cluster",
-                text: "One cube shadow map per cluster, rendered from its center with far plane C_att (the \
-                       Shadow maps panel shows the last batch's).",
+                text: if self.params.proxy < 1.0 {
+                    "One cube shadow map per cluster, rendered from its center with far plane C_att (the Shadow \
+                     maps panel shows the last batch's), drawn from a simplified copy of the scene ('Map geometry \
+                     kept', beyond the paper; the depth bias grows by its 'Proxy error')."
+                } else {
+                    "One cube shadow map per cluster, rendered from its center with far plane C_att (the Shadow \
+                     maps panel shows the last batch's)."
+                },
                 layers: &["cluster centers"],
                 shows_shadow_maps: true,
                 ..Default::default()
