@@ -53,9 +53,11 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 7] = [
+const COMPARISONS: [&str; 9] = [
     "LightCluster d_init=0.5 vs reference",
+    "LightCluster d_init=0.5, maps from a simplified copy",
     "LightCluster d_init=1.6 vs reference",
+    "LightCluster d_init=1.6, maps from a simplified copy",
     "INSM vs reference",
     "VALs vs one shadow map per VPL",
     "VALs, M = ",
