@@ -403,3 +403,41 @@ fn the_walls_placement_moves_the_arcades_cameras_from_behind_its_outer_walls() {
         assert_eq!(walls[i].target, inside[i].target);
     }
 }
+
+#[test]
+fn simplified_meshes_draw_fewer_triangles_and_cast_the_same_shadows() {
+    // The flat plane and plate: Algorithm 2 makes hundreds of triangles of each map's view of them, and the
+    // edge collapse takes each surface down to its locked borders, where it stays on its plane.
+    let scene = plane_and_occluder();
+    let lights = lights_above();
+    let mut r = renderer(&scene, linear_settings(W, H));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
+    insm.set_param("adaptive", &ParamValue::Bool(false)).unwrap();
+    let (full, a) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    insm.set_param("simplify", &ParamValue::Float(0.05)).unwrap();
+    let (simplified, b) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    let (a, b_counts) = (&a.counts.technique, &b.counts.technique);
+    assert_eq!(a.insm_mesh_triangles, b_counts.insm_mesh_triangles, "the triangulation itself is the same");
+    assert!(!a.figures.contains_key("mesh_simplified_triangles"));
+    let kept = b_counts.figures["mesh_simplified_triangles"];
+    let triangulated = b_counts.insm_mesh_triangles.unwrap() as f64;
+    assert!(kept > 0.0 && kept * 4.0 < triangulated, "{kept} of {triangulated} triangles kept");
+    assert!(
+        b_counts.shadow_triangles_submitted * 2 < a.shadow_triangles_submitted,
+        "{} triangles drawn simplified, {} as triangulated",
+        b_counts.shadow_triangles_submitted,
+        a.shadow_triangles_submitted
+    );
+    assert!(b.cpu_stages.iter().any(|s| s.name == "mesh simplification"));
+    let share = share_over(&simplified, &full, 0.02);
+    assert!(share < 0.005, "{:.2} % of pixels changed by more than 2 % with the simplified meshes", share * 100.0);
+    // Back to the triangulation as it is; absurd values are refused.
+    insm.set_param("simplify", &ParamValue::Float(1.0)).unwrap();
+    let (again, c) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    assert!(!c.counts.technique.figures.contains_key("mesh_simplified_triangles"));
+    assert_eq!(share_over(&again, &full, 1e-5), 0.0);
+    for (key, value) in [("simplify", f32::NAN), ("simplify", 0.0), ("simplify_error", f32::INFINITY)] {
+        assert!(insm.set_param(key, &ParamValue::Float(value)).is_err(), "{key} = {value} was accepted");
+    }
+}

@@ -85,6 +85,7 @@
 mod overlays;
 mod params;
 mod passes;
+pub mod simplify;
 pub mod triangulate;
 pub mod viewpoints;
 
@@ -217,9 +218,12 @@ pub struct Insm {
     lookup: CubeMapParams,
     /// How far the meshes' vertices move away from a light per unit of their view depth ([`InsmParams::push_per_depth`]).
     push_per_depth: f32,
-    /// Non-empty tiles of the reconstructed meshes, read back before the first light batch.
+    /// Non-empty tiles of the reconstructed meshes, read back before the first light batch (with `simplify`
+    /// below 1: the simplified mesh's chunks, whose indices are in `simplified`).
     tiles: Vec<Chunk>,
     mesh_triangles: u64,
+    /// The simplified meshes' index buffer (`simplify` below 1), into the same vertex buffer.
+    simplified: Option<wgpu::Buffer>,
     tiles_ready: bool,
     snapshot: MeshSnapshot,
     counts: TechniqueCounts,
@@ -307,6 +311,7 @@ impl Insm {
             tiles: Vec::new(),
             mesh_triangles: 0,
             tiles_ready: false,
+            simplified: None,
             snapshot: MeshSnapshot::default(),
             counts: TechniqueCounts::default(),
             cpu_times: Vec::new(),
@@ -523,9 +528,13 @@ impl Technique for Insm {
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
         let geometry = CubeGeometry {
             vertex_buffer: &mesh.vertices,
-            index_buffer: &mesh.indices,
+            index_buffer: self.simplified.as_ref().unwrap_or(&mesh.indices),
             chunks: &self.tiles,
-            triangle_count: self.mesh_triangles,
+            triangle_count: if self.simplified.is_some() {
+                self.tiles.iter().map(|c| c.triangle_count() as u64).sum()
+            } else {
+                self.mesh_triangles
+            },
             cull: true,
             cutouts: None,
             // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).

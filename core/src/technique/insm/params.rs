@@ -58,6 +58,11 @@ pub struct InsmParams {
     pub merge_epsilon: f32,
     /// Drop the triangles of a map whose corners another map reconstructs more finely (beyond the paper).
     pub drop_covered: bool,
+    /// The share of the reconstructed meshes' triangles the per-light maps draw (1: as triangulated; below 1
+    /// simplified by edge collapse, beyond the paper).
+    pub simplify: f32,
+    /// How far the simplified surface may move from the triangulated one, as a share of the scene's diagonal.
+    pub simplify_error: f32,
     /// Move every sample at a cut edge half a sample across it along its surface, undoing the half-sample
     /// erosion of the reconstruction (beyond the paper; on by default).
     pub dilate: bool,
@@ -83,6 +88,8 @@ impl Default for InsmParams {
             adaptive: true,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
+            simplify: 1.0,
+            simplify_error: 0.0005,
             dilate: true,
             placement: Placement::Box,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
@@ -151,6 +158,24 @@ impl InsmParams {
                        paper; off: every map keeps all its triangles)",
                 kind: ParamKind::Bool,
                 value: ParamValue::Bool(self.drop_covered),
+            },
+            Param {
+                key: "simplify",
+                label: "Mesh kept",
+                help: "The share of the reconstructed meshes' triangles the per-light maps draw: below 1 the meshes \
+                       are simplified by edge collapse (borders locked; beyond the paper), the collapse stopping \
+                       at 'Simplify error' too: set this low and let the error bound decide. 1: as triangulated \
+                       (the wireframe overlay always shows the triangulation)",
+                kind: ParamKind::Float { min: 0.01, max: 1.0 },
+                value: ParamValue::Float(self.simplify),
+            },
+            Param {
+                key: "simplify_error",
+                label: "Simplify error",
+                help: "simplify: the farthest the simplified surface may move from the triangulated one, as a \
+                       share of the scene's diagonal",
+                kind: ParamKind::Float { min: 0.0, max: 0.1 },
+                value: ParamValue::Float(self.simplify_error),
             },
             Param {
                 key: "dilate",
@@ -225,6 +250,8 @@ impl InsmParams {
             ("adaptive", ParamValue::Bool(v)) => self.adaptive = *v,
             ("merge_epsilon", ParamValue::Float(v)) => self.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.drop_covered = *v,
+            ("simplify", ParamValue::Float(v)) => self.simplify = *v,
+            ("simplify_error", ParamValue::Float(v)) => self.simplify_error = *v,
             ("dilate", ParamValue::Bool(v)) => self.dilate = *v,
             ("box_distance", ParamValue::Float(v)) => self.box_distance = *v,
             ("bias_samples", ParamValue::Float(v)) => self.bias_samples = *v,

@@ -168,6 +168,35 @@ impl Insm {
             ms: start.elapsed().as_secs_f64() * 1e3,
             count: 1,
         });
+        self.simplified = None;
+        if self.params.simplify < 1.0 && self.mesh_triangles > 0 {
+            self.simplify_meshes(gpu)?;
+        }
+        Ok(())
+    }
+
+    /// `simplify` below 1: the meshes read back whole, simplified on the CPU ([`simplify`]), and their indices
+    /// uploaded; the per-light maps then draw those chunks instead of the tiles. The triangulation's count stays
+    /// in `insm_mesh_triangles`; the figure `mesh_simplified_triangles` is what the maps draw from.
+    fn simplify_meshes(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
+        let start = std::time::Instant::now();
+        let (samples, triangles) = self.read_meshes(gpu)?;
+        let diagonal = self.bounds.size().length();
+        let max_error = self.params.simplify_error * if diagonal.is_finite() { diagonal } else { 0.0 };
+        let mesh = simplify::simplify(&samples, &triangles, self.params.simplify, max_error);
+        let indices: &[u8] = if mesh.indices.is_empty() { &[0u8; 12] } else { bytemuck::cast_slice(&mesh.indices) };
+        self.simplified = Some(gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("insm simplified indices"),
+            contents: indices,
+            usage: wgpu::BufferUsages::INDEX,
+        }));
+        self.counts.figures.insert("mesh_simplified_triangles".into(), mesh.triangle_count() as f64);
+        self.tiles = mesh.chunks;
+        self.cpu_times.push(PassTime {
+            name: "mesh simplification".into(),
+            ms: start.elapsed().as_secs_f64() * 1e3,
+            count: 1,
+        });
         Ok(())
     }
 }
