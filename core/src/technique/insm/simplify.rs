@@ -66,7 +66,7 @@ pub fn simplify(samples: &[Vec4], triangles: &[[u32; 3]], keep: f32, max_error: 
     let before = (source.len() / 3) as u32;
     let per_chunk = (MAX_TRIANGLES_PER_TILE * tris.len() as u32).div_ceil(before.max(1));
     let per_chunk = per_chunk.clamp(MIN_CHUNK_TRIANGLES, MAX_TRIANGLES_PER_TILE) as usize;
-    let position = |i: u32| Vec3::from(samples[i as usize].truncate());
+    let position = |i: u32| samples[i as usize].truncate();
     push_chunks(&mut out.indices, &mut out.chunks, position, tris, 0, per_chunk);
     out
 }
