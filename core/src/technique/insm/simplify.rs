@@ -13,7 +13,7 @@
 //! result is cut into chunks like the scene's ([`crate::scene::chunks::push_chunks`]), each covering about as
 //! much surface as a tile did, for the same per-light and per-face culling.
 
-use glam::{Vec3, Vec4};
+use glam::Vec4;
 
 use crate::scene::chunks::{push_chunks, Chunk};
 
@@ -74,6 +74,7 @@ pub fn simplify(samples: &[Vec4], triangles: &[[u32; 3]], keep: f32, max_error: 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     /// An `n` x `n` grid of samples on the plane y = 0 (inverse depth 1), as Algorithm 2 triangulates it, and
     /// a second, separate grid 0.5 above it shifted by half its size (a step: two meshes with borders).
