@@ -163,7 +163,7 @@ impl InsmParams {
                 key: "simplify",
                 label: "Mesh kept",
                 help: "The share of the reconstructed meshes' triangles the per-light maps draw: below 1 the meshes \
-                       are simplified by edge collapse (borders locked; beyond the paper), the collapse stopping \
+                       are simplified by edge collapse (a border only along itself; beyond the paper), the collapse stopping \
                        at 'Simplify error' too: set this low and let the error bound decide. 1: as triangulated \
                        (the wireframe overlay always shows the triangulation)",
                 kind: ParamKind::Float { min: 0.01, max: 1.0 },
