@@ -135,7 +135,14 @@ pub fn build(geometry: &ChunkedGeometry, masked: &[bool], params: ProxyParams) -
             }
         }
         let tris = split_long_edges(&mut out.vertices, tris, params.max_edge, &mut midpoints);
-        push_chunks(&mut out.indices, &mut out.chunks, |i| out_position(&out.vertices, i), tris, material, CHUNK_TRIANGLES);
+        push_chunks(
+            &mut out.indices,
+            &mut out.chunks,
+            |i| out_position(&out.vertices, i),
+            tris,
+            material,
+            CHUNK_TRIANGLES,
+        );
         start = end;
     }
     // 2. The opaque materials together (a depth map does not see materials, and simplified apart they would keep
