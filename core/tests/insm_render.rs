@@ -430,12 +430,31 @@ fn simplified_meshes_draw_fewer_triangles_and_cast_the_same_shadows() {
         a.shadow_triangles_submitted
     );
     assert!(b.cpu_stages.iter().any(|s| s.name == "mesh simplification"));
+    // Its wireframe is an overlay layer, listed always and drawn when shown, a line per edge of what was kept.
+    let layer = |insm: &Insm, show: bool| {
+        insm.overlays_shown(&lights, &|name: &str, default: bool| {
+            if name.contains("simplified") {
+                show
+            } else {
+                default
+            }
+        })
+        .into_iter()
+        .find(|l| l.name == "INSM simplified mesh (wireframe)")
+    };
+    assert!(layer(&insm, false).is_some_and(|l| l.primitives.is_empty()));
+    let shown = layer(&insm, true).expect("the simplified mesh's layer");
+    assert_eq!(shown.primitives.len() as f64, 3.0 * kept, "three lines per kept triangle");
+    let maps_step = |insm: &Insm| insm.explain().into_iter().find(|s| s.title.starts_with("4.")).expect("step 4");
+    assert!(maps_step(&insm).layers.contains(&"INSM simplified mesh (wireframe)"));
     let share = share_over(&simplified, &full, 0.02);
     assert!(share < 0.005, "{:.2} % of pixels changed by more than 2 % with the simplified meshes", share * 100.0);
     // Back to the triangulation as it is; absurd values are refused.
     insm.set_param("simplify", &ParamValue::Float(1.0)).unwrap();
     let (again, c) = frame(&mut r, &mut insm, &scene.camera, &lights);
     assert!(!c.counts.technique.figures.contains_key("mesh_simplified_triangles"));
+    assert!(layer(&insm, true).is_none(), "no simplified layer without simplification");
+    assert!(!maps_step(&insm).layers.contains(&"INSM simplified mesh (wireframe)"));
     assert_eq!(share_over(&again, &full, 1e-5), 0.0);
     for (key, value) in [("simplify", f32::NAN), ("simplify", 0.0), ("simplify_error", f32::INFINITY)] {
         assert!(insm.set_param(key, &ParamValue::Float(value)).is_err(), "{key} = {value} was accepted");

@@ -183,6 +183,8 @@ struct MeshSnapshot {
     samples: std::sync::OnceLock<Arc<Vec<Vec4>>>,
     /// The mesh overlay layers, built on first use (the app asks for overlays every UI frame).
     layers: std::sync::OnceLock<Vec<OverlayLayer>>,
+    /// The simplified meshes' wireframe (`simplify` below 1): what the per-light maps draw.
+    simplified: Option<OverlayLayer>,
 }
 
 /// The GPU samples of a frame's meshes and the buffer they are copied to for reading.
@@ -195,6 +197,8 @@ struct SampleSource {
 
 /// The mesh overlay layers: built only when one of them is shown.
 const MESH_LAYERS: [&str; 3] = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
+/// The simplified meshes' wireframe (`simplify` below 1), built when they are.
+const SIMPLIFIED_LAYER: &str = "INSM simplified mesh (wireframe)";
 
 pub struct Insm {
     pub params: InsmParams,

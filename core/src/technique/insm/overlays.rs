@@ -35,12 +35,25 @@ impl Insm {
             },
             ExplainStep {
                 title: "4. Cube maps from the meshes",
-                text: "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
-                       light and face in tiles (the Shadow maps panel shows the last batch's). The mesh stands for \
-                       its surface only to about a sample, so beyond the paper each vertex is drawn push_samples \
-                       widths of its own sample further from the light, and the lookup's bias is bias_samples \
-                       mean widths: a mesh does not shadow the surface it stands for.",
-                layers: &["lights"],
+                text: if self.params.simplify < 1.0 {
+                    "Every light's cube shadow map is rendered from the meshes instead of the scene, here simplified \
+                     first ('Mesh kept', beyond the paper: the green wireframe), culled per light and face in \
+                     chunks (the Shadow maps panel shows the last batch's). The mesh stands for its surface only to \
+                     about a sample, so beyond the paper each vertex is drawn push_samples widths of its own sample \
+                     further from the light, and the lookup's bias is bias_samples mean widths: a mesh does not \
+                     shadow the surface it stands for."
+                } else {
+                    "Every light's cube shadow map is rendered from the meshes instead of the scene, culled per \
+                     light and face in tiles (the Shadow maps panel shows the last batch's). The mesh stands for \
+                     its surface only to about a sample, so beyond the paper each vertex is drawn push_samples \
+                     widths of its own sample further from the light, and the lookup's bias is bias_samples \
+                     mean widths: a mesh does not shadow the surface it stands for."
+                },
+                layers: if self.params.simplify < 1.0 {
+                    &["lights", "INSM simplified mesh (wireframe)"]
+                } else {
+                    &["lights"]
+                },
                 shows_shadow_maps: true,
                 ..Default::default()
             },
@@ -70,6 +83,11 @@ impl Insm {
                 Glyph::Palette,
                 palette,
                 "kept edges of the mesh triangulated from the samples (Algorithm 2)",
+            )],
+            "INSM simplified mesh (wireframe)" => vec![LegendEntry::new(
+                Glyph::Line,
+                [0.2, 1.0, 0.6, 0.9],
+                "edges of the simplified meshes the per-light maps draw ('Mesh kept', beyond the paper)",
             )],
             "INSM dropped edges" => vec![LegendEntry::new(
                 Glyph::Line,
@@ -114,6 +132,14 @@ impl Insm {
                 }))
                 .collect(),
         });
+        if let Some(layer) = &self.snapshot.simplified {
+            // Named always, its lines copied only when shown (the app asks every UI frame).
+            layers.push(if shown(layer.name, false) {
+                layer.clone()
+            } else {
+                OverlayLayer { name: layer.name, visible_by_default: false, primitives: Vec::new() }
+            });
+        }
         if MESH_LAYERS.iter().any(|name| shown(name, false)) {
             layers.extend(self.snapshot.layers.get_or_init(|| self.snapshot.build_layers()).iter().cloned());
         } else if self.snapshot.source.is_some() {

@@ -157,6 +157,7 @@ impl Insm {
             }),
             samples: Default::default(),
             layers: Default::default(),
+            simplified: None,
         };
         self.tiles_ready = true;
         self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
@@ -191,6 +192,19 @@ impl Insm {
             usage: wgpu::BufferUsages::INDEX,
         }));
         self.counts.figures.insert("mesh_simplified_triangles".into(), mesh.triangle_count() as f64);
+        // Its wireframe, one colour: every `stride`-th triangle when large (the triangulation's layer caps alike).
+        let stride = (mesh.triangle_count() as usize).div_ceil(MAX_WIREFRAME_TRIANGLES).max(1);
+        let color = [0.2, 1.0, 0.6, 0.9];
+        let primitives = mesh
+            .indices
+            .chunks_exact(3)
+            .step_by(stride)
+            .flat_map(|t| {
+                let p = [t[0], t[1], t[2]].map(|i| samples[i as usize].truncate());
+                [(p[0], p[1]), (p[1], p[2]), (p[2], p[0])].map(|(from, to)| Overlay::Line { from, to, color })
+            })
+            .collect();
+        self.snapshot.simplified = Some(OverlayLayer { name: SIMPLIFIED_LAYER, visible_by_default: false, primitives });
         self.tiles = mesh.chunks;
         self.cpu_times.push(PassTime {
             name: "mesh simplification".into(),
