@@ -541,21 +541,19 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     // Comparing two indirect techniques over the same direct light on the indirect component.
     let dir = out_dir("indirect-compare");
     let (diff, json) = (dir.join("diff.png"), dir.join("report.json"));
-    let mut args: Vec<&str> = vec![
-        "compare",
-        "--quiet",
-        "--warmup",
-        "0",
-        "--out",
-        diff.to_str().unwrap(),
-        "--report",
-        json.to_str().unwrap(),
-    ];
+    let mut args: Vec<&str> =
+        vec!["compare", "--warmup", "0", "--out", diff.to_str().unwrap(), "--report", json.to_str().unwrap()];
     args.extend(small);
     args.extend(["--technique", "reference", "--against", "reference", "--indirect", "vpl-unshadowed"]);
     args.extend(["--against-indirect", "vpl-raytraced", "--component", "indirect"]);
     let out = shadowlab(&args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // Both sides are named with both their parts, and the component is said.
+    assert!(
+        stderr.contains("reference + vpl-unshadowed vs reference + vpl-raytraced on cornell (64x48, indirect light)"),
+        "{stderr}"
+    );
     let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(r["component"], "indirect");
     assert_eq!(r["against_indirect"]["key"], "vpl-raytraced");
