@@ -89,6 +89,33 @@ impl Param {
         }
     }
 
+    /// The share of the scene's triangles a technique's shadow maps draw from a simplified copy of the scene
+    /// ([`crate::scene::proxy`]; VALs and LightCluster, beyond their papers).
+    pub fn map_proxy(keep: f32) -> Param {
+        Param {
+            key: "proxy",
+            label: "Map geometry kept",
+            help: "The share of the scene's triangles the shadow maps draw: below 1 a simplified copy of the scene \
+                   (edge collapse of the opaque surfaces, cut-outs kept whole; beyond the technique's paper). The \
+                   collapse also stops at 'Proxy error', and stopped there it is most reliable: set this low and \
+                   the error bound decides. 1: the scene itself (the references never simplify)",
+            kind: ParamKind::Float { min: 0.01, max: 1.0 },
+            value: ParamValue::Float(keep),
+        }
+    }
+
+    /// How far that copy's surface may move, as a share of the scene's diagonal; `help` says so, and what else
+    /// follows from it in the technique.
+    pub fn map_proxy_error(help: &'static str, value: f32) -> Param {
+        Param {
+            key: "proxy_error",
+            label: "Proxy error",
+            help,
+            kind: ParamKind::Float { min: 0.0, max: 0.1 },
+            value: ParamValue::Float(value),
+        }
+    }
+
     /// A random seed; `help` says what it seeds.
     pub fn seed(help: &'static str, value: u32) -> Param {
         Param {

@@ -296,25 +296,13 @@ impl Technique for LightCluster {
                 kind: ParamKind::Int { min: -1, max: 1 << 20 },
                 value: ParamValue::Int(p.visibility_of.map_or(-1, i64::from)),
             },
-            Param {
-                key: "proxy",
-                label: "Map geometry kept",
-                help: "The share of the scene's triangles the cluster maps draw: below 1 a simplified copy of the \
-                       scene (edge collapse, per material; cut-outs kept whole; beyond the paper). The collapse \
-                       also stops at 'Proxy error', and stopped there it is most reliable: set this low and the \
-                       error bound decides. 1: the scene itself. The reference never simplifies",
-                kind: ParamKind::Float { min: 0.01, max: 1.0 },
-                value: ParamValue::Float(p.proxy),
-            },
-            Param {
-                key: "proxy_error",
-                label: "Proxy error",
-                help: "proxy: the farthest the simplified surface may move from the scene's, as a share of the \
-                       scene's diagonal (the simplification stops there, above the share asked for if need be); \
-                       the lookups' depth bias grows by as much",
-                kind: ParamKind::Float { min: 0.0, max: 0.1 },
-                value: ParamValue::Float(p.proxy_error),
-            },
+            Param::map_proxy(p.proxy),
+            Param::map_proxy_error(
+                "proxy: the farthest the simplified surface may move from the scene's, as a share of the scene's \
+                 diagonal (the simplification stops there, above the share asked for if need be); the lookups' \
+                 depth bias grows by as much",
+                p.proxy_error,
+            ),
         ];
         params.extend(p.cube.params());
         params

@@ -199,24 +199,12 @@ impl ValParams {
                 kind: ParamKind::Int { min: 16, max: 2048 },
                 value: ParamValue::Int(p.shadow_resolution as i64),
             },
-            Param {
-                key: "proxy",
-                label: "Map geometry kept",
-                help: "The share of the scene's triangles the VAL maps draw: below 1 a simplified copy of the \
-                       scene (edge collapse, per material; cut-outs kept whole; the paper's future work, not its \
-                       method). The collapse also stops at 'Proxy error', and stopped there it is most reliable: \
-                       set this low and the error bound decides. 1: the scene itself",
-                kind: ParamKind::Float { min: 0.01, max: 1.0 },
-                value: ParamValue::Float(p.proxy),
-            },
-            Param {
-                key: "proxy_error",
-                label: "Proxy error",
-                help: "proxy: the farthest the simplified surface may move from the scene's, as a share of the \
-                       scene's diagonal (the simplification stops there, above the share asked for if need be)",
-                kind: ParamKind::Float { min: 0.0, max: 0.1 },
-                value: ParamValue::Float(p.proxy_error),
-            },
+            Param::map_proxy(p.proxy),
+            Param::map_proxy_error(
+                "proxy: the farthest the simplified surface may move from the scene's, as a share of the scene's \
+                 diagonal (the simplification stops there, above the share asked for if need be)",
+                p.proxy_error,
+            ),
             Param {
                 key: "max_edge",
                 label: "Longest edge",
