@@ -201,11 +201,7 @@ impl IndirectChoice {
 
     /// A side's name in captions and titles: `direct`, or `direct + indirect` with an indirect technique.
     pub fn name_with(&self, direct: &str) -> String {
-        if self.key == "none" {
-            direct.to_string()
-        } else {
-            format!("{direct} + {}", self.key)
-        }
+        technique_pair(direct, (self.key != "none").then_some(self.key.as_str()))
     }
 
     /// A side's parameters for a caption: the direct technique's, then the indirect technique's after its key
@@ -223,6 +219,14 @@ impl IndirectChoice {
         } else {
             parts.join(" · ")
         }
+    }
+}
+
+/// `direct`, or `direct + indirect`: how a frame's techniques are named everywhere (views, tables, figures).
+pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
+    match indirect {
+        Some(i) => format!("{direct} + {i}"),
+        None => direct.to_string(),
     }
 }
 

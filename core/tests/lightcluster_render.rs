@@ -237,6 +237,13 @@ fn a_simplified_copy_for_the_cluster_maps_draws_fewer_triangles_and_keeps_the_sh
     assert!(kept > 0.0 && kept < 0.2 * (2.0 * 48.0 * 48.0 + 2.0 * 16.0 * 16.0), "{kept} triangles kept");
     assert!(!full_report.counts.technique.figures.contains_key("map_geometry_triangles"));
     assert!(report.cpu_stages.iter().any(|s| s.name == "map geometry build"));
+    // The worst case's fallback is the reference path: the scene itself, no copy reported.
+    let (fallback, report) = shot(&[("proxy", ParamValue::Float(0.05)), ("d_init", ParamValue::Float(0.01))]);
+    assert!(report.counts.technique.fell_back_to_reference);
+    assert!(!report.counts.technique.figures.contains_key("map_geometry_triangles"));
+    assert!(!report.cpu_stages.iter().any(|s| s.name == "map geometry build"));
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
+    assert_eq!(fallback, reference, "the fallback drew something else than the reference");
     // Flat surfaces simplified within the error bound cast the same shadows.
     let (_, share) = compare(&simplified, &full, 0.01);
     assert!(share < 0.002, "{:.3}% of pixels differ by more than 1% with the simplified maps", share * 100.0);

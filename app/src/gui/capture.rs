@@ -12,7 +12,6 @@ use shadowlab_core::technique::Overlay;
 use shadowlab_core::Renderer;
 
 use super::camera::CameraMode;
-use super::views::technique_pair;
 use super::ShadowLabApp;
 use crate::figure::{self, FigurePane};
 use crate::measure::{self, DiffKind, IndirectChoice};
@@ -87,10 +86,13 @@ impl ShadowLabApp {
             true,
             self.session.view.exposure,
         )?;
-        let indirect_key = self.session.indirect.technique.as_deref();
         let (w, h) = (renderer.settings().width, renderer.settings().height);
+        let component = match renderer.settings().component {
+            shadowlab_core::renderer::Component::Total => String::new(),
+            other => format!(" · {} light", other.name()),
+        };
         let title = format!(
-            "{} · {} lights · {w}x{h} · {}",
+            "{} · {} lights · {w}x{h}{component} · {}",
             self.session.scene.name,
             lights.len(),
             renderer.gpu().adapter_description()
@@ -101,7 +103,7 @@ impl ShadowLabApp {
             FigurePane {
                 image: tech_image,
                 caption: vec![
-                    technique_pair(&self.session.technique, indirect_key),
+                    indirect.name_with(&self.session.technique),
                     indirect.params_caption(&params),
                     format!("{:.1} ms, {}", tech.timing.median_in(speedup.clock), speedup.text()),
                 ],
@@ -109,7 +111,7 @@ impl ShadowLabApp {
             FigurePane {
                 image: target_image,
                 caption: vec![
-                    technique_pair(&against, self.session.against_indirect_key()),
+                    against_indirect.name_with(&against),
                     against_indirect.params_caption(&against_params),
                     format!("{:.1} ms ({})", target.timing.median_in(speedup.clock), speedup.clock.name()),
                 ],

@@ -17,12 +17,13 @@ use glam::Vec3;
 
 pub use super::cube_atlas::{CubeAtlas, CubeStats, DistanceReader, TileProjection};
 use super::gpu_data::MatrixUniform;
-use crate::accel::gpu_scene::GpuScene;
+use crate::accel::gpu_scene::{GpuProxy, GpuScene};
 use crate::gpu::GpuContext;
 use crate::math::{Aabb, CUBE_FACES};
 use crate::scene::chunks::{merge_draw_ranges, Chunk};
+use crate::scene::proxy::ProxyParams;
 use crate::shaders;
-use crate::timing::PassTimer;
+use crate::timing::{PassTime, PassTimer};
 
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -204,16 +205,55 @@ impl GpuScene {
             push_per_depth: 0.0,
         }
     }
+}
 
-    /// [`GpuScene::cube_geometry`] with the triangles of `proxy`, a copy of this scene's ([`GpuScene::proxy`]).
-    pub fn proxy_geometry<'a>(&'a self, proxy: &'a crate::accel::gpu_scene::GpuProxy) -> CubeGeometry<'a> {
-        CubeGeometry {
-            vertex_buffer: &proxy.vertex_buffer,
-            index_buffer: &proxy.index_buffer,
-            chunks: &proxy.chunks,
-            triangle_count: proxy.triangle_count,
-            ..self.cube_geometry()
+/// The geometry a technique's shadow maps draw: the scene itself, or a copy of it ([`GpuScene::proxy`]: long
+/// edges cut for paraboloid maps, simplified when asked). One per technique; `update` once per frame in
+/// `prepare`, then `geometry` for every map pass.
+#[derive(Default)]
+pub struct MapGeometry {
+    copy: Option<std::sync::Arc<GpuProxy>>,
+    /// The copy's build time, in the frame that built it.
+    built_ms: Option<f64>,
+}
+
+impl MapGeometry {
+    /// The copy `params` ask for (none when they ask for nothing, [`ProxyParams::is_identity`]), built on first
+    /// use and then shared through the scene.
+    pub fn update(&mut self, gpu: &GpuContext, scene: &GpuScene, params: ProxyParams) {
+        (self.copy, self.built_ms) = match scene.proxy(gpu, params) {
+            Some((copy, built)) => (Some(copy), built),
+            None => (None, None),
+        };
+    }
+
+    /// What the maps draw: [`GpuScene::cube_geometry`], with the copy's triangles when there is one.
+    pub fn geometry<'a>(&'a self, scene: &'a GpuScene) -> CubeGeometry<'a> {
+        match &self.copy {
+            Some(copy) => CubeGeometry {
+                vertex_buffer: &copy.vertex_buffer,
+                index_buffer: &copy.index_buffer,
+                chunks: &copy.chunks,
+                triangle_count: copy.triangle_count,
+                ..scene.cube_geometry()
+            },
+            None => scene.cube_geometry(),
         }
+    }
+
+    /// Whether the maps draw a copy.
+    pub fn is_copy(&self) -> bool {
+        self.copy.is_some()
+    }
+
+    /// The copy's triangles, for the figure `map_geometry_triangles` (None: the scene's own).
+    pub fn copy_triangles(&self) -> Option<u64> {
+        self.copy.as_ref().map(|c| c.triangle_count)
+    }
+
+    /// The CPU stage `map geometry build`, in the frame that built the copy.
+    pub fn build_time(&self) -> Option<PassTime> {
+        self.built_ms.map(|ms| PassTime { name: "map geometry build".into(), ms, count: 1 })
     }
 }
 

@@ -520,13 +520,7 @@ pub fn session_name(report: &shadowlab_core::FrameReport) -> String {
     technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
 }
 
-/// `direct`, or `direct + indirect`.
-pub fn technique_pair(direct: &str, indirect: Option<&str>) -> String {
-    match indirect {
-        Some(i) => format!("{direct} + {i}"),
-        None => direct.to_string(),
-    }
-}
+pub use crate::measure::technique_pair;
 
 /// False when `SHADOWLAB_STEP_WAIT=blocking`: every progressive step is waited for, as before steps were
 /// polled (for A/B measurements of the UI's frame rate while a frame renders).

@@ -360,15 +360,23 @@ impl Insm {
     /// tools): `(samples, triangles as sample indices)`. Call after a frame.
     pub fn read_meshes(&self, gpu: &GpuContext) -> Result<(Vec<Vec4>, Vec<[u32; 3]>), GpuError> {
         let mesh = self.mesh.as_ref().ok_or_else(|| GpuError::Readback("INSM has not rendered a frame".into()))?;
-        let samples: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.vertices)?).to_vec();
         let tiles: Vec<GpuTile> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.tiles)?).to_vec();
+        self.read_mesh_triangles(gpu, &tiles)
+    }
+
+    /// The samples and the triangles of `tiles` (this frame's, already read back), from the GPU's buffers.
+    fn read_mesh_triangles(&self, gpu: &GpuContext, tiles: &[GpuTile]) -> Result<(Vec<Vec4>, Vec<[u32; 3]>), GpuError> {
+        let mesh = self.mesh.as_ref().ok_or_else(|| GpuError::Readback("INSM has not rendered a frame".into()))?;
+        let samples: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.vertices)?).to_vec();
         let indices: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.indices)?).to_vec();
         let mut triangles = Vec::new();
         for (t, tile) in tiles.iter().enumerate() {
             let base = t * MAX_TRIANGLES_PER_TILE as usize * 3;
             for i in 0..tile.count.min(MAX_TRIANGLES_PER_TILE) as usize {
                 let o = base + i * 3;
-                triangles.push([indices[o], indices[o + 1], indices[o + 2]]);
+                if let Some(tri) = indices.get(o..o + 3) {
+                    triangles.push([tri[0], tri[1], tri[2]]);
+                }
             }
         }
         Ok((samples, triangles))

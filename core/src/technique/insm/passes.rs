@@ -171,17 +171,17 @@ impl Insm {
         });
         self.simplified = None;
         if self.params.simplify < 1.0 && self.mesh_triangles > 0 {
-            self.simplify_meshes(gpu)?;
+            self.simplify_meshes(gpu, &tiles)?;
         }
         Ok(())
     }
 
-    /// `simplify` below 1: the meshes read back whole, simplified on the CPU ([`simplify`]), and their indices
+    /// `simplify` below 1: the meshes read back whole (the tiles `read_tiles` just read), simplified on the CPU ([`simplify`]), and their indices
     /// uploaded; the per-light maps then draw those chunks instead of the tiles. The triangulation's count stays
     /// in `insm_mesh_triangles`; the figure `mesh_simplified_triangles` is what the maps draw from.
-    fn simplify_meshes(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
+    fn simplify_meshes(&mut self, gpu: &GpuContext, tiles: &[GpuTile]) -> Result<(), GpuError> {
         let start = std::time::Instant::now();
-        let (samples, triangles) = self.read_meshes(gpu)?;
+        let (samples, triangles) = self.read_mesh_triangles(gpu, tiles)?;
         let diagonal = self.bounds.size().length();
         let max_error = self.params.simplify_error * if diagonal.is_finite() { diagonal } else { 0.0 };
         let mesh = simplify::simplify(&samples, &triangles, self.params.simplify, max_error);

@@ -42,13 +42,12 @@ use super::{
     check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
     TechniqueCounts,
 };
-use crate::accel::gpu_scene::GpuProxy;
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
 use crate::renderer::cube_params::CubeMapParams;
-use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer};
+use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, MapGeometry};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
@@ -58,7 +57,6 @@ use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::timing::PassTime;
 use clustering::{ClusterParams, Clusterer, Clustering};
-use std::sync::Arc;
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
@@ -178,10 +176,8 @@ pub struct LightCluster {
     /// The per-light path of the worst case (every cluster holds one light): the reference's own service.
     fallback: PerLightShadows,
     using_reference: bool,
-    /// The simplified copy the cluster maps draw (`proxy` below 1; None: the scene as it is) and, in the frame
-    /// that built it, the build's milliseconds.
-    proxy: Option<Arc<GpuProxy>>,
-    proxy_ms: Option<f64>,
+    /// What the cluster maps draw: the scene, or its simplified copy (`proxy` below 1).
+    maps: MapGeometry,
     /// How far the copy's surface may lie from the scene's (world units; 0 without a copy): added to the
     /// lookups' bias, so a receiver behind a surface the collapse moved toward the light does not shadow itself.
     proxy_bias: f32,
@@ -210,8 +206,7 @@ impl LightCluster {
             cluster_spheres: Vec::new(),
             fallback: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::new(gpu)),
             using_reference: false,
-            proxy: None,
-            proxy_ms: None,
+            maps: MapGeometry::default(),
             proxy_bias: 0.0,
         }
     }
@@ -331,7 +326,6 @@ impl Technique for LightCluster {
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
-        self.proxy_ms = None;
         // Step 1: clustering on the CPU.
         let start = std::time::Instant::now();
         let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
@@ -351,6 +345,9 @@ impl Technique for LightCluster {
         // Step 2: the worst case goes down the reference path.
         self.using_reference = self.params.fallback && cluster_count > 0 && cluster_count == visible;
         if self.using_reference {
+            // The reference path draws the scene itself (and reports no copy or build of one).
+            self.maps = MapGeometry::default();
+            self.proxy_bias = 0.0;
             let steps = self.fallback.prepare(ctx, &self.params.cube);
             self.counts = TechniqueCounts {
                 lights_visible: self.fallback.visible_lights(),
@@ -389,11 +386,10 @@ impl Technique for LightCluster {
             max_error: self.params.proxy_error * if scene_size.is_finite() { scene_size } else { 0.0 },
             max_edge: 0.0,
         };
-        let (proxy, built) = ctx.scene.proxy(ctx.gpu, geometry).unzip();
-        (self.proxy, self.proxy_ms) = (proxy, built.flatten());
-        self.proxy_bias = if self.proxy.is_some() && geometry.max_error.is_finite() { geometry.max_error } else { 0.0 };
-        if let Some(g) = &self.proxy {
-            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        self.maps.update(ctx.gpu, ctx.scene, geometry);
+        self.proxy_bias = if self.maps.is_copy() { geometry.max_error } else { 0.0 };
+        if let Some(t) = self.maps.copy_triangles() {
+            self.counts.figures.insert("map_geometry_triangles".into(), t as f64);
         }
         if cluster_count == 0 {
             return Ok(0);
@@ -466,11 +462,8 @@ impl Technique for LightCluster {
                 }
             })
             .collect();
-        let scene = match &self.proxy {
-            Some(proxy) => ctx.scene.proxy_geometry(proxy),
-            None => ctx.scene.cube_geometry(),
-        };
-        let geometry = CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..scene };
+        let geometry =
+            CubeGeometry { cull: self.params.cube.cull, receivers: ctx.receivers, ..self.maps.geometry(ctx.scene) };
         let stats = self.cubes.render(ctx.gpu, geometry, ctx.timer, encoder, "shadow maps", &casters);
         self.counts.add_cube_stats(&stats);
 
@@ -508,11 +501,8 @@ impl Technique for LightCluster {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        let mut stages = vec![PassTime { name: "clustering".into(), ms: self.clustering_ms, count: 1 }];
-        if let Some(ms) = self.proxy_ms {
-            stages.push(PassTime { name: "map geometry build".into(), ms, count: 1 });
-        }
-        stages
+        let clustering = PassTime { name: "clustering".into(), ms: self.clustering_ms, count: 1 };
+        std::iter::once(clustering).chain(self.maps.build_time()).collect()
     }
 
     /// Per pixel, the cluster whose center is nearest among those whose `C_att` reaches the pixel: the cluster

@@ -73,12 +73,11 @@ use super::{
     check_param, index_color, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamValue, Technique,
     TechniqueCounts,
 };
-use crate::accel::gpu_scene::GpuProxy;
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster};
+use crate::renderer::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::scene::proxy::ProxyParams;
@@ -154,10 +153,8 @@ pub struct VirtualAreaLights {
     scene_size: f32,
     counts: TechniqueCounts,
     clustering_ms: f64,
-    /// The scene's copy the VAL maps draw (long edges cut, simplified with `proxy` below 1; None: the scene as it
-    /// is), and its build time when this frame built it.
-    proxy: Option<Arc<GpuProxy>>,
-    proxy_ms: Option<f64>,
+    /// What the VAL maps draw: the scene with its long edges cut, simplified with `proxy` below 1.
+    maps: MapGeometry,
 }
 
 impl VirtualAreaLights {
@@ -210,8 +207,7 @@ impl VirtualAreaLights {
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             clustering_ms: 0.0,
-            proxy: None,
-            proxy_ms: None,
+            maps: MapGeometry::default(),
         }
     }
 }
@@ -362,10 +358,9 @@ impl Technique for VirtualAreaLights {
             max_error: self.params.proxy_error * self.scene_size,
             max_edge: self.params.max_edge * self.scene_size,
         };
-        let (proxy, built) = ctx.scene.proxy(ctx.gpu, geometry).unzip();
-        (self.proxy, self.proxy_ms) = (proxy, built.flatten());
-        if let Some(g) = &self.proxy {
-            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        self.maps.update(ctx.gpu, ctx.scene, geometry);
+        if let Some(t) = self.maps.copy_triangles() {
+            self.counts.figures.insert("map_geometry_triangles".into(), t as f64);
         }
         let res = self.params.shadow_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         self.shadows.ensure_tiles(ctx.gpu, res, m);
@@ -393,13 +388,9 @@ impl Technique for VirtualAreaLights {
         }
         if step == 0 {
             // Step 3: every VAL's paraboloid map, one pass.
-            let geometry = match &self.proxy {
-                Some(proxy) => ctx.scene.proxy_geometry(proxy),
-                None => ctx.scene.cube_geometry(),
-            };
             let stats = self.shadows.render_paraboloids(
                 ctx.gpu,
-                geometry,
+                self.maps.geometry(ctx.scene),
                 ctx.timer,
                 encoder,
                 "val shadow maps",
@@ -489,11 +480,8 @@ impl Technique for VirtualAreaLights {
     }
 
     fn cpu_times(&self) -> Vec<PassTime> {
-        let mut stages = vec![PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 }];
-        if let Some(ms) = self.proxy_ms {
-            stages.push(PassTime { name: "map geometry build".into(), ms, count: 1 });
-        }
-        stages
+        let clustering = PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 };
+        std::iter::once(clustering).chain(self.maps.build_time()).collect()
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {

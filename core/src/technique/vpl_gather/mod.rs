@@ -24,12 +24,11 @@ use std::sync::Arc;
 use super::{
     check_param, FrameContext, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique, TechniqueCounts,
 };
-use crate::accel::gpu_scene::GpuProxy;
 use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::gpu::bind::depth_texture_entry;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeShadowRenderer, ParaboloidCaster, MAX_CUBES_PER_BATCH};
+use crate::renderer::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster, MAX_CUBES_PER_BATCH};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::scene::proxy::ProxyParams;
@@ -110,10 +109,8 @@ pub struct VplGather {
     scene_size: f32,
     counts: TechniqueCounts,
     build_ms: Option<f64>,
-    /// Shadow maps: the scene with its long edges cut (None: `max_edge` 0, the scene as it is), and its build time
-    /// when this frame built it.
-    map_geometry: Option<Arc<GpuProxy>>,
-    map_geometry_ms: Option<f64>,
+    /// Shadow maps: what they draw, the scene with its long edges cut (`max_edge` 0: the scene as it is).
+    maps: MapGeometry,
 }
 
 impl VplGather {
@@ -149,8 +146,7 @@ impl VplGather {
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             build_ms: None,
-            map_geometry: None,
-            map_geometry_ms: None,
+            maps: MapGeometry::default(),
         }
     }
 
@@ -300,7 +296,6 @@ impl Technique for VplGather {
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.build_ms = None;
-        self.map_geometry_ms = None;
         self.vpls = ctx.vpls.set.clone();
         self.scene_size = ctx.scene.bounds.size().length().max(1e-6);
         let n = self.vpls.vpls.len();
@@ -309,8 +304,7 @@ impl Technique for VplGather {
             let (res, per_batch) = self.maps_per_batch(ctx.gpu);
             self.batch_size = self.batch_size.min(per_batch);
             let cut = ProxyParams { keep: 1.0, max_error: 0.0, max_edge: self.params.max_edge * self.scene_size };
-            let (geometry, built) = ctx.scene.proxy(ctx.gpu, cut).unzip();
-            (self.map_geometry, self.map_geometry_ms) = (geometry, built.flatten());
+            self.maps.update(ctx.gpu, ctx.scene, cut);
             let shadows = self.shadows.as_mut().expect("shadow maps own a shadow renderer");
             let grew = shadows.ensure_tiles(ctx.gpu, res, self.batch_size.min(n.max(1)));
             if grew || self.visibility_group.is_none() {
@@ -345,8 +339,8 @@ impl Technique for VplGather {
         let batches = n.div_ceil(self.batch_size);
         self.counts = TechniqueCounts { lights_visible: ctx.lights.len(), batches, ..Default::default() };
         self.counts.figures.insert("vpls".into(), n as f64);
-        if let Some(g) = &self.map_geometry {
-            self.counts.figures.insert("map_geometry_triangles".into(), g.triangle_count as f64);
+        if let Some(t) = self.maps.copy_triangles() {
+            self.counts.figures.insert("map_geometry_triangles".into(), t as f64);
         }
         self.batches = batches;
         // With interleaving, one more step: the blur.
@@ -384,10 +378,7 @@ impl Technique for VplGather {
                         far,
                     })
                     .collect();
-                let mut geometry = match &self.map_geometry {
-                    Some(g) => ctx.scene.proxy_geometry(g),
-                    None => ctx.scene.cube_geometry(),
-                };
+                let mut geometry = self.maps.geometry(ctx.scene);
                 geometry.cull = self.params.cull;
                 let shadows = self.shadows.as_mut().expect("shadow maps own a shadow renderer");
                 let stats =
@@ -429,8 +420,7 @@ impl Technique for VplGather {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         let bvh = self.build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 });
-        let maps = self.map_geometry_ms.map(|ms| PassTime { name: "map geometry build".into(), ms, count: 1 });
-        bvh.into_iter().chain(maps).collect()
+        bvh.into_iter().chain(self.maps.build_time()).collect()
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
