@@ -17,7 +17,9 @@
 //! Deviation from the paper: visibility is not stored in a screen-sized texture per cluster but computed and
 //! consumed cluster by cluster in the same pass (the issue allows either). That keeps memory bounded for
 //! hundreds of clusters and still samples each cube map once per pixel and cluster, as the paper intends.
-//! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise. As production PCSS,
+//! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise. The blocker distance
+//! `d_b` is measured along the tap's ray, as the receiver's `d_r` is (the cube map stores distances along a
+//! face's axis, up to sqrt(3) shorter toward its corners, which widened penumbrae there several times). As production PCSS,
 //! it skips the filter where the blocker search's samples all agree: none blocked (lit), or all blocked with
 //! a filter no wider than the searched disc (umbra). With `early_out` (the default) PCSS also stops its blocker
 //! search and its filter after the first half of their samples when those agree (none blocked in the search;
