@@ -8,6 +8,8 @@
 //! so an interactive app stays responsive while a slow technique accumulates.
 
 pub mod cube_atlas;
+mod cube_draws;
+pub mod cube_geometry;
 pub mod cube_params;
 pub mod cube_shadows;
 pub mod directional;

@@ -226,6 +226,8 @@ pub struct Insm {
     /// below 1: the simplified mesh's chunks, whose indices are in `simplified`).
     tiles: Vec<Chunk>,
     mesh_triangles: u64,
+    /// Triangles of `tiles`, what the per-light maps draw from (`mesh_triangles`, or the simplified meshes').
+    tiles_triangles: u64,
     /// The simplified meshes' index buffer (`simplify` below 1), into the same vertex buffer.
     simplified: Option<wgpu::Buffer>,
     tiles_ready: bool,
@@ -314,6 +316,7 @@ impl Insm {
             push_per_depth: 0.0,
             tiles: Vec::new(),
             mesh_triangles: 0,
+            tiles_triangles: 0,
             tiles_ready: false,
             simplified: None,
             snapshot: MeshSnapshot::default(),
@@ -542,11 +545,7 @@ impl Technique for Insm {
             vertex_buffer: &mesh.vertices,
             index_buffer: self.simplified.as_ref().unwrap_or(&mesh.indices),
             chunks: &self.tiles,
-            triangle_count: if self.simplified.is_some() {
-                self.tiles.iter().map(|c| c.triangle_count() as u64).sum()
-            } else {
-                self.mesh_triangles
-            },
+            triangle_count: self.tiles_triangles,
             cull: true,
             cutouts: None,
             // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).

@@ -161,6 +161,7 @@ impl Insm {
         };
         self.tiles_ready = true;
         self.counts.insm_mesh_triangles = Some(self.mesh_triangles);
+        self.tiles_triangles = self.mesh_triangles;
         self.counts.figures.insert("mesh_tiles".into(), self.tiles.len() as f64);
         self.counts.figures.insert("mesh_merged_tiles".into(), merged_tiles as f64);
         self.counts.figures.insert("mesh_merged_triangles".into(), merged_triangles as f64);
@@ -205,6 +206,7 @@ impl Insm {
             })
             .collect();
         self.snapshot.simplified = Some(OverlayLayer { name: SIMPLIFIED_LAYER, visible_by_default: false, primitives });
+        self.tiles_triangles = mesh.triangle_count();
         self.tiles = mesh.chunks;
         self.cpu_times.push(PassTime {
             name: "mesh simplification".into(),

@@ -19,16 +19,16 @@
 //! hundreds of clusters and still samples each cube map once per pixel and cluster, as the paper intends.
 //! PCSS limits the filter to 4 cluster radii: wider filters with 8 samples only add noise. The blocker distance
 //! `d_b` is measured along the tap's ray, as the receiver's `d_r` is (the cube map stores distances along a
-//! face's axis, up to sqrt(3) shorter toward its corners, which widened penumbrae there several times). As production PCSS,
-//! it skips the filter where the blocker search's samples all agree: none blocked (lit), or all blocked with
-//! a filter no wider than the searched disc (umbra). With `early_out` (the default) PCSS also stops its blocker
+//! face's axis, up to sqrt(3) shorter toward its corners, which widened penumbrae there several times). As
+//! production PCSS, it skips the filter where the blocker search's samples all agree: none blocked (lit), or all
+//! blocked with a filter no wider than the searched disc (umbra). With `early_out` (the default) PCSS also stops its blocker
 //! search and its filter after the first half of their samples when those agree (none blocked in the search;
 //! all lit or all shadowed in the filter): the other half only changes penumbrae. PCF keeps the paper's fixed
 //! samples.
 //!
 //! Beyond the paper, off by default (`proxy` below 1): the cluster maps may draw a simplified copy of the scene
-//! ([`crate::scene::proxy`]: meshoptimizer's edge collapse per material, the surface moved by at most
-//! `proxy_error` of the scene's diagonal, cut-outs kept whole). A cluster map is filtered over a disc of the
+//! ([`crate::scene::proxy`]: meshoptimizer's edge collapse of the opaque surfaces together, the surface moved by
+//! at most `proxy_error` of the scene's diagonal, cut-outs kept whole). A cluster map is filtered over a disc of the
 //! cluster's radius anyway, so a surface moved by a few centimetres changes its penumbrae by less than the
 //! filter's width, while the maps, which lavapipe draws at the cost of their triangles, get cheaper. The
 //! lookups' bias grows by the error bound: without that, receivers behind a surface the collapse moved toward
