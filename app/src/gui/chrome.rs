@@ -1,16 +1,15 @@
 //! The chrome around the views: the tiled layout of the panels, their inputs and state (the shadow-map
 //! inspector, the Explain panel's step, the sweep panel's inputs, the File menu's recent files and sequence
-//! settings), the status line, UI frame times, and the toasts over the view.
+//! settings), the status line, UI frame times, and the toasts over the view (`toasts.rs`).
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
 
-use eframe::egui;
 use shadowlab_core::technique::ParamValue;
 
 use super::inspector::Inspector;
 use super::layout::Layout;
+use super::toasts::Toasts;
 
 /// The panels' and the window's own state (nothing a scene file saves).
 pub struct Chrome {
@@ -68,58 +67,4 @@ pub struct Explain {
     /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
     /// that does not set them is chosen.
     pub saved: BTreeMap<(String, String), ParamValue>,
-}
-
-/// A short message shown over the view.
-struct Toast {
-    text: String,
-    error: bool,
-    until: Instant,
-}
-
-/// The messages shown over the view, each for a few seconds.
-#[derive(Default)]
-pub struct Toasts(Vec<Toast>);
-
-impl Toasts {
-    /// A message for 4 s (and the log).
-    pub fn say(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        log::info!("{text}");
-        self.0.push(Toast { text, error: false, until: Instant::now() + Duration::from_secs(4) });
-    }
-
-    /// An error for 8 s (and the log).
-    pub fn error(&mut self, text: impl Into<String>) {
-        let text = text.into();
-        log::warn!("{text}");
-        self.0.push(Toast { text, error: true, until: Instant::now() + Duration::from_secs(8) });
-    }
-
-    /// A note for `secs` seconds, not logged (a scene's warnings, say).
-    pub fn note(&mut self, text: String, secs: u64) {
-        self.0.push(Toast { text, error: false, until: Instant::now() + Duration::from_secs(secs) });
-    }
-
-    /// The messages not yet expired, in the window's bottom right corner.
-    pub fn ui(&mut self, ctx: &egui::Context) {
-        let now = Instant::now();
-        self.0.retain(|t| t.until > now);
-        if self.0.is_empty() {
-            return;
-        }
-        egui::Area::new(egui::Id::unique("toasts")).anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-12.0, -40.0)).show(
-            ctx,
-            |ui| {
-                for t in &self.0 {
-                    let color =
-                        if t.error { egui::Color32::from_rgb(255, 120, 120) } else { egui::Color32::LIGHT_GREEN };
-                    egui::Frame::popup(ui.style()).show(ui, |ui| {
-                        ui.colored_label(color, &t.text);
-                    });
-                }
-            },
-        );
-        ctx.request_repaint_after(Duration::from_millis(500));
-    }
 }

@@ -31,6 +31,7 @@ pub mod soak;
 pub mod start;
 pub mod sweep;
 pub mod tiles;
+pub mod toasts;
 pub mod tradeoff_run;
 pub mod views;
 pub mod worker;

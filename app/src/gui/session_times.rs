@@ -12,6 +12,11 @@ use std::collections::BTreeMap;
 use shadowlab_core::timing::{common_clock, TimingSource};
 use shadowlab_core::FrameReport;
 
+/// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
+fn session_name(report: &FrameReport) -> String {
+    crate::measure::technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
+}
+
 /// One configuration's last complete frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SessionTime {
@@ -80,7 +85,7 @@ impl SessionTimes {
         }
         let indirect = report.indirect.as_ref().map(|i| (i.technique.clone(), i.parameters.clone()));
         let view = view_of(scene, report);
-        let technique = crate::gui::views::session_name(report);
+        let technique = session_name(report);
         let mut parameters = describe(&report.parameters);
         if let Some((_, p)) = &indirect {
             if !p.is_empty() {

@@ -39,7 +39,7 @@ use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::shade_pass::ShadePass;
 use crate::scene::{Aabb, Camera, DirectionalLight, MAX_DIRECTIONAL_LIGHTS};
 use crate::shaders::{DIRECTIONAL_SHADOWMAP as MAPPED, DIRECTIONAL_TRACED as TRACED};
-use crate::technique::FrameContext;
+use crate::technique::{DirectionalVisibility, FrameContext};
 use crate::timing::PassTimer;
 
 /// Texels per side of a directional light's shadow map.
@@ -47,18 +47,6 @@ pub const RESOLUTION: u32 = 2048;
 /// Shadow rays' origin offset along the normal, world units per metre of camera distance (the ray tracer's
 /// default `bias`).
 const RAY_BIAS: f32 = 0.001;
-
-/// How a technique's frame sees the directional lights.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DirectionalVisibility {
-    /// The orthographic shadow map (the default: the reference and the shadow-map techniques).
-    #[default]
-    ShadowMap,
-    /// One shadow ray per pixel and light (the ground truths and the ray-traced techniques).
-    Traced,
-    /// No visibility (the unshadowed preview).
-    None,
-}
 
 /// Mirrors `DirectionalOne` in `shaders/directional_light.wgsl`.
 #[repr(C)]

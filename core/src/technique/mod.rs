@@ -50,13 +50,24 @@ use crate::error::GpuError;
 use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::renderer::cube_shadows::{CubeAtlas, CubeStats};
-pub use crate::renderer::directional::DirectionalVisibility;
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::light_tiles::TileLists;
 use crate::renderer::lights::VisibleLights;
 use crate::scene::{Camera, PointLight};
 use crate::timing::{PassTime, PassTimer};
 use crate::vpl::{VplFrame, VplSettings};
+
+/// How a technique's frame sees the directional lights (drawn by the renderer's `directional.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DirectionalVisibility {
+    /// The orthographic shadow map (the default: the reference and the shadow-map techniques).
+    #[default]
+    ShadowMap,
+    /// One shadow ray per pixel and light (the ground truths and the ray-traced techniques).
+    Traced,
+    /// No visibility (the unshadowed preview).
+    None,
+}
 
 /// Everything a technique may read during a frame.
 pub struct FrameContext<'a> {

@@ -3,8 +3,8 @@
 use eframe::egui;
 use glam::Vec3;
 
-use crate::gui::chrome::Toasts;
 use crate::gui::session::Session;
+use crate::gui::toasts::Toasts;
 
 pub fn lights_ui(session: &mut Session, toasts: &mut Toasts, ui: &mut egui::Ui) {
     ui.heading(format!("Lights ({})", session.lights.len()));

@@ -7,8 +7,8 @@ use eframe::egui;
 use egui_plot::{Legend, Line, Plot, PlotPoints};
 use shadowlab_core::technique::{ParamKind, ParamValue};
 
-use crate::gui::chrome::Toasts;
 use crate::gui::session::Session;
+use crate::gui::toasts::Toasts;
 use crate::gui::views::Views;
 use shadowlab_core::timing::TimingSource;
 

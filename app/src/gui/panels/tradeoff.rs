@@ -9,8 +9,8 @@ use eframe::egui;
 use egui_plot::{Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine};
 use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
 
-use crate::gui::chrome::Toasts;
 use crate::gui::session::Session;
+use crate::gui::toasts::Toasts;
 use crate::gui::views::Views;
 use crate::tradeoff::{self, Goal, Metric, TrySpec};
 

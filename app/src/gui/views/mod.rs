@@ -515,11 +515,6 @@ impl Views {
 /// The legend line of a layer whose technique's overlays do not follow a moving light or camera.
 pub const STALE_NOTE: &str = "while moving: as of the last complete frame (follows on release)";
 
-/// The name of a frame's techniques in the session table: the direct one, and `+ indirect` when it had one.
-pub fn session_name(report: &shadowlab_core::FrameReport) -> String {
-    technique_pair(&report.technique, report.indirect.as_ref().map(|i| i.technique.as_str()))
-}
-
 pub use crate::measure::technique_pair;
 
 /// False when `SHADOWLAB_STEP_WAIT=blocking`: every progressive step is waited for, as before steps were
