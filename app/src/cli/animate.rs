@@ -1,15 +1,19 @@
-//! `shadowlab animate`: the lights moved a step a frame, and the flicker measured; CSV rows.
+//! `shadowlab animate`: the lights moved a step a frame (and the camera turned a step about its target), the
+//! flicker measured, each frame's time (in the clock its report names) and, with `--against-indirect`, its
+//! error against a target rendered from the same camera and lights; CSV rows.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args;
+use shadowlab_core::compare::{self, CompareOptions, Image};
 use shadowlab_core::scene::PointLight;
 
 use super::args::{check_technique, parse_step, FrameArgs, SceneArgs, TechniqueChoice};
 use super::progress::Progress;
-use super::setup::setup;
+use super::setup::{parse_vec3s, setup};
 use crate::files::{check_output_path, write_atomic};
+use crate::measure::IndirectChoice;
 
 #[derive(Args, Debug)]
 pub struct AnimateArgs {
@@ -25,6 +29,18 @@ pub struct AnimateArgs {
     /// The move of every light per frame, `DX,DY,DZ` in world units.
     #[arg(long, value_name = "DX,DY,DZ", default_value = "0.02,0,0")]
     pub step: String,
+    /// The camera's turn about its target per frame, in degrees (the target: `--camera`'s, else the point
+    /// `sequence` orbits); 0 keeps the camera still.
+    #[arg(long, default_value_t = 0.0)]
+    pub orbit: f32,
+    /// Render every frame also with this indirect technique (the same direct technique, camera and lights, in
+    /// a renderer of its own so the animated technique keeps its state) and report the frame's error against
+    /// it (`rmse`, `psnr_db`, `share_over_5pct` of the chosen component).
+    #[arg(long = "against-indirect", value_name = "KEY")]
+    pub against_indirect: Option<String>,
+    /// A parameter of the target's indirect technique, `key=value`; repeatable.
+    #[arg(long = "against-indirect-param", value_name = "KEY=VALUE")]
+    pub against_indirect_params: Vec<String>,
     /// One row per frame (CSV).
     #[arg(long)]
     pub out: PathBuf,
@@ -37,20 +53,53 @@ pub fn run(args: AnimateArgs) -> Result<()> {
         bail!("--frames {}: between 2 and 1000", args.frames);
     }
     let step = parse_step(&args.step)?;
+    if !args.orbit.is_finite() || args.orbit.abs() > 360.0 {
+        bail!("--orbit {}: degrees per frame, between -360 and 360", args.orbit);
+    }
+    if args.against_indirect.is_none() && !args.against_indirect_params.is_empty() {
+        bail!("--against-indirect-param needs --against-indirect");
+    }
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
     let mut technique = args.choice.create(&renderer, f.shadow_res)?;
     crate::measure::apply_indirect(&mut renderer, &f.indirect_choice())?;
+    // The target: a renderer of its own (the animated technique's state, such as clusters kept from the last
+    // frame, must not be replaced by the target's).
+    let mut target = match &args.against_indirect {
+        Some(key) => {
+            let (gpu, mut r, ..) = setup(&args.scene, &args.frame)?;
+            let t = args.choice.create(&r, f.shadow_res)?;
+            let choice = IndirectChoice { key: key.clone(), params: args.against_indirect_params.clone() };
+            crate::measure::apply_indirect(&mut r, &choice)?;
+            Some((gpu, r, t))
+        }
+        None => None,
+    };
+    let orbit_target = match &f.camera {
+        Some(text) => parse_vec3s(text)?.1,
+        None => crate::sequence::orbit_target(&camera, &scene.bounds),
+    };
     let mut previous: Option<Vec<[f32; 4]>> = None;
-    // Per frame: index, change against the previous frame, mean radiance, figures.
+    // Per frame: index, change against the previous frame, mean radiance, figures (times and errors too).
     type FrameRow = (u32, Option<f64>, f64, std::collections::BTreeMap<String, f64>);
+    let mut clock = None;
     let mut rows: Vec<FrameRow> = Vec::new();
     let mut progress = Progress::new(&format!("animate {}", args.choice.technique), f.quiet).with_unit("frame");
     for i in 0..args.frames {
         let moved: Vec<PointLight> =
             lights.iter().map(|l| PointLight { position: l.position + step * i as f32, ..*l }).collect();
+        let camera = if args.orbit != 0.0 {
+            crate::sequence::orbit_camera(&camera, orbit_target, (args.orbit * i as f32).to_radians())
+        } else {
+            camera
+        };
         let report = renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
         let image = renderer.read_hdr()?;
+        let source = report.timing.source;
+        if clock.is_some_and(|c| c != source) {
+            bail!("frame {i} was timed in {} and an earlier one in another clock", source.name());
+        }
+        clock = Some(source);
         let mean = image.iter().map(|p| ((p[0] + p[1] + p[2]) / 3.0) as f64).sum::<f64>() / image.len() as f64;
         // Mean absolute change of luminance-like (mean RGB) radiance against the previous frame.
         let change = previous.as_ref().map(|prev| {
@@ -65,18 +114,34 @@ pub fn run(args: AnimateArgs) -> Result<()> {
         if let Some(ind) = &report.indirect {
             figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
         }
+        figures.insert("ms".into(), report.total_ms);
+        for p in &report.passes {
+            *figures.entry(format!("pass.{}_ms", p.name)).or_default() += p.ms;
+        }
+        if let Some((_, r, t)) = &mut target {
+            r.render_frame(t.as_mut(), &camera, &moved, &mut |_, _| {})?;
+            let (w, h) = (r.settings().width, r.settings().height);
+            let reference = Image::new(w, h, r.read_hdr()?)?;
+            let mask = r.read_geometry_mask()?;
+            let options = CompareOptions { flip: false, ..Default::default() };
+            let m = compare::compare(&Image::new(w, h, image.clone())?, &reference, Some(&mask), &options)?;
+            figures.insert("rmse".into(), m.rmse);
+            figures.insert("psnr_db".into(), m.psnr_db.unwrap_or(f64::INFINITY));
+            figures.insert("share_over_5pct".into(), m.share_over_threshold);
+        }
         rows.push((i, change, mean, figures));
         previous = Some(image);
         progress.update(i as usize + 1, args.frames as usize);
     }
     let keys: std::collections::BTreeSet<String> = rows.iter().flat_map(|r| r.3.keys().cloned()).collect();
-    let mut csv = String::from("frame,mean_change,mean_radiance");
+    let clock = clock.map(|c| c.name()).unwrap_or_default();
+    let mut csv = String::from("frame,mean_change,mean_radiance,clock");
     for k in &keys {
         csv += &format!(",{k}");
     }
     csv += "\n";
     for (i, change, mean, figures) in &rows {
-        csv += &format!("{i},{},{mean:.6}", change.map(|c| format!("{c:.6}")).unwrap_or_default());
+        csv += &format!("{i},{},{mean:.6},{clock}", change.map(|c| format!("{c:.6}")).unwrap_or_default());
         for k in &keys {
             csv += &format!(",{}", figures.get(k).map(|v| v.to_string()).unwrap_or_default());
         }

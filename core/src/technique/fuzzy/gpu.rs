@@ -110,6 +110,9 @@ pub struct GpuKMeans {
     work: Option<wgpu::Buffer>,
     /// Per point `F` entries of (cluster, inverse-distance bits).
     pub assignment: Option<wgpu::Buffer>,
+    /// The workgroups of `km_search` (an indirect dispatch sized by the queue).
+    search_args: wgpu::Buffer,
+    search_args_stand_in: wgpu::Buffer,
     pub shape: RunShape,
     /// The most centroids a search scans whole from the normal buckets instead of walking the grid (0: always
     /// the grid). Speed only: both find the same clusters.
@@ -155,6 +158,7 @@ const ENTRIES: &[&str] = &[
     "km_update",
     "km_final",
     "km_fill",
+    "queue_args",
     "km_search",
     "rep_pick",
     "rep_finish",
@@ -163,21 +167,38 @@ const ENTRIES: &[&str] = &[
 impl GpuKMeans {
     pub fn new(gpu: &GpuContext, label: &'static str) -> GpuKMeans {
         let uniform_bytes = std::mem::size_of::<KmParamsUniform>() as u64;
-        // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment.
+        // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
+        // workgroups of the queued searches.
         let kernels = Kernels::new(
             gpu,
             "fuzzy kmeans",
             super::KMEANS.source,
             ENTRIES,
             uniform_bytes,
-            &[true, false, false, false],
+            &[true, false, false, false, false],
         );
+        let search_args = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fuzzy search workgroups"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        // Bound at binding 5 while `km_search` runs: a dispatch may not read a buffer as its indirect arguments
+        // while a bound group holds it writable.
+        let search_args_stand_in = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fuzzy search workgroups (stand-in)"),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         GpuKMeans {
             label,
             kernels,
             clusters: None,
             work: None,
             assignment: None,
+            search_args,
+            search_args_stand_in,
             shape: RunShape::default(),
             bucket_scan_limit: BUCKET_SCAN_LIMIT,
         }
@@ -195,7 +216,10 @@ impl GpuKMeans {
 
     /// Encode Algorithm 1 (and 2 as its last line) over the `params.width x params.height` points of `points`.
     /// `max_flux`: the largest flux component of the points when they are VPLs (the clusters then carry their
-    /// members' flux and mean normal), None for shading points.
+    /// members' flux and mean normal), None for shading points. `warm`: start from the last run's centroids
+    /// instead of the initial samples (the twin's [`super::kmeans::cluster_from`]; only when the last run had
+    /// the same `K`, else it starts cold), a centroid left without members moving back to its initial sample.
+    #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
         gpu: &GpuContext,
@@ -204,7 +228,9 @@ impl GpuKMeans {
         points: &wgpu::Buffer,
         params: &KMeansParams,
         max_flux: Option<f32>,
+        warm: bool,
     ) -> Result<RunShape, GpuError> {
+        let warm = warm && self.shape.clusters == RunShape::of(params).clusters && self.clusters.is_some();
         let RunShape { points: m, clusters: k, fuzziness: f } = RunShape::of(params);
         let g = params.gamma.max(1) as usize;
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
@@ -221,7 +247,7 @@ impl GpuKMeans {
                 limit >> 20
             )));
         }
-        ensure_storage(&mut self.clusters, gpu, "fuzzy clusters", (2 * k.max(1) * 48) as u64);
+        let warm = !ensure_storage(&mut self.clusters, gpu, "fuzzy clusters", (2 * k.max(1) * 48) as u64) && warm;
         ensure_storage(
             &mut self.work,
             gpu,
@@ -260,10 +286,12 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
-            options: [neighbours as u32, self.bucket_scan_limit, 0, 0],
+            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, 0],
         };
         self.kernels.write_uniform(gpu, &uniform);
-        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment]);
+        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args]);
+        let search_group =
+            self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in]);
         let over_k = groups(k);
         let over_cells = groups((cells as usize).max(NB as usize));
         let over_samples = groups(samples);
@@ -271,9 +299,16 @@ impl GpuKMeans {
         let name = format!("fuzzy clustering ({})", self.label);
         timer.compute_pass(encoder, &name, |pass| {
             pass.set_bind_group(0, &group, &[]);
+            // `km_search` runs over `km_fill`'s queue: its workgroups come from `queue_args`.
             let mut run = |entry: &str, (x, y): (u32, u32)| {
                 pass.set_pipeline(self.pipeline(entry));
-                pass.dispatch_workgroups(x, y, 1);
+                if entry == "km_search" {
+                    pass.set_bind_group(0, &search_group, &[]);
+                    pass.dispatch_workgroups_indirect(&self.search_args, 0);
+                    pass.set_bind_group(0, &group, &[]);
+                } else {
+                    pass.dispatch_workgroups(x, y, 1);
+                }
             };
             let grid = |run: &mut dyn FnMut(&str, (u32, u32))| {
                 run("grid_clear", over_cells);
@@ -281,7 +316,9 @@ impl GpuKMeans {
                 run("grid_scan", (1, 1));
                 run("grid_fill", over_k);
             };
-            run("km_init", over_k);
+            if !warm {
+                run("km_init", over_k);
+            }
             for _ in 0..params.iterations {
                 grid(&mut run);
                 run("acc_clear", over_k);
@@ -293,7 +330,8 @@ impl GpuKMeans {
             if neighbours {
                 run("km_final", over_samples);
                 run("km_fill", over_points);
-                run("km_search", over_points);
+                run("queue_args", (1, 1));
+                run("km_search", (0, 0));
             } else {
                 run("km_final", over_points);
             }

@@ -400,6 +400,14 @@ impl Sums {
 
 /// Algorithm 1 (with Algorithm 2 as its last line) over `points` (`width x height`, row-major).
 pub fn cluster(points: &[Point], params: &KMeansParams) -> Clustering {
+    cluster_from(points, params, None)
+}
+
+/// [`cluster`], started from `start` instead of step 2's initial centroids when it holds `K` of them (a warm
+/// start: the last view's centroids, the paper's section 6 proposal); each iteration then moves a centroid
+/// left without members (or inactive) back to its step-2 sample of this dataset, since its surface left the
+/// view. With `start` None or of another length it is [`cluster`].
+pub fn cluster_from(points: &[Point], params: &KMeansParams, start: Option<&[Centroid]>) -> Clustering {
     let f_max = params.fuzziness.clamp(1, MAX_F);
     let valid = |p: &Point| p.valid && p.position.is_finite() && p.normal.is_finite();
     // Step 1.
@@ -407,15 +415,18 @@ pub fn cluster(points: &[Point], params: &KMeansParams) -> Clustering {
     let s = samples.len();
     let k_count = params.clusters.min(s);
     // Step 2.
-    let mut centroids: Vec<Centroid> = (0..k_count)
-        .map(|k| {
-            let (a, b) = (k * s / k_count, (k + 1) * s / k_count);
-            match samples[a..b].iter().map(|&m| &points[m as usize]).find(|p| valid(p)) {
-                Some(p) => Centroid { position: p.position, normal: p.normal, active: true },
-                None => Centroid { position: Vec3::ZERO, normal: Vec3::Z, active: false },
-            }
-        })
-        .collect();
+    let seed = |k: usize| {
+        let (a, b) = (k * s / k_count, (k + 1) * s / k_count);
+        match samples[a..b].iter().map(|&m| &points[m as usize]).find(|p| valid(p)) {
+            Some(p) => Centroid { position: p.position, normal: p.normal, active: true },
+            None => Centroid { position: Vec3::ZERO, normal: Vec3::Z, active: false },
+        }
+    };
+    let warm = start.filter(|c| c.len() == k_count);
+    let mut centroids: Vec<Centroid> = match warm {
+        Some(c) => c.to_vec(),
+        None => (0..k_count).map(seed).collect(),
+    };
     let nearest_one = |grid: &Grid, centroids: &[Centroid], p: &Point| -> Option<(f32, u32, bool)> {
         let (best, any) = grid.nearest(centroids, params.n_t, p.position, p.normal, 1, params.max_ring);
         match best.first() {
@@ -436,12 +447,14 @@ pub fn cluster(points: &[Point], params: &KMeansParams) -> Clustering {
                 sums[k as usize].add(params, p);
             }
         }
-        for (c, s) in centroids.iter_mut().zip(&sums) {
+        for (k, (c, s)) in centroids.iter_mut().zip(&sums).enumerate() {
             if c.active && s.count > 0 {
                 c.position = s.position(params);
                 if let Some(n) = s.normal() {
                     c.normal = n;
                 }
+            } else if warm.is_some() {
+                *c = seed(k);
             }
         }
     }

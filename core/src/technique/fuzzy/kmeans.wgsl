@@ -5,9 +5,10 @@
 // nearest with inverse distances. WGSL has no float atomics: members add their position as a fraction of the
 // bounds and their normal as (n + 1) / 2, times 2^24, into 64-bit sums made of two atomic u32 (the carry is
 // added to the high word when the low word wraps), so a mean keeps 2^-24 of the bounds whatever the count.
-// Entry points, one dispatch each, in this order (see gpu.rs): km_init; per iteration grid_clear, grid_count,
-// grid_scan, grid_fill, acc_clear, km_assign, km_update; then the grid again, acc_clear, km_final (over the
-// samples with neighbour lists, then km_fill and km_search over the other points), rep_pick, rep_finish.
+// Entry points, one dispatch each, in this order (see gpu.rs): km_init (not in a warm start: the centroids are
+// the last run's); per iteration grid_clear, grid_count, grid_scan, grid_fill, acc_clear, km_assign, km_update;
+// then the grid again, acc_clear, km_final (over the samples with neighbour lists, then km_fill, queue_args and
+// km_search, dispatched indirectly over km_fill's queue), rep_pick, rep_finish.
 // `KmParams`, `KmPoint` mirror core/src/technique/fuzzy/gpu.rs. The search is in kmeans_search.wgsl, Algorithm 2
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
 
@@ -49,7 +50,8 @@ struct KmParams {
     flux_scale: vec4<f32>,
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search scans
-    // whole from the normal buckets instead of walking the grid (0: always the grid)
+    // whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
+    // last run's centroids): km_update moves a centroid left without members back to its initial sample
     options: vec4<u32>,
 }
 
@@ -71,6 +73,9 @@ struct KmPoint {
 @group(0) @binding(3) var<storage, read_write> work: array<atomic<u32>>;
 // Per point, F entries of (cluster, bitcast inverse distance); NONE where empty.
 @group(0) @binding(4) var<storage, read_write> assignment: array<u32>;
+// The workgroups of km_search (x, y, z), written by queue_args from the queue's length: an indirect dispatch,
+// so that the points km_fill did not queue cost no workgroup.
+@group(0) @binding(5) var<storage, read_write> search_args: array<u32>;
 
 fn global_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * 64u;
@@ -178,11 +183,14 @@ fn mean_normal(k: u32, count: u32, fallback: vec3<f32>) -> vec3<f32> {
 
 @compute @workgroup_size(64)
 fn km_init(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k = id.x;
-    let kc = km.cluster_count;
-    if k >= kc {
-        return;
+    if id.x < km.cluster_count {
+        seed(id.x);
     }
+}
+
+// Centroid k's initial position: the first valid sample at or after k S / K (inactive when its share has none).
+fn seed(k: u32) {
+    let kc = km.cluster_count;
     let s = km.sample_count;
     // k S / K without overflowing u32 (K <= 65,536).
     let a = k * (s / kc) + (k * (s % kc)) / kc;
@@ -355,6 +363,11 @@ fn km_update(@builtin(global_invocation_id) id: vec3<u32>) {
     let count = atomicLoad(&work[k * ACC + ACC_COUNT]);
     let c = centroid(k);
     if c.position.w < 0.5 || count == 0u {
+        // A warm start's centroid without members (its surface left the view or is hidden now) starts again
+        // from its initial sample, as Algorithm 1 would have placed it in this view.
+        if km.options.z == 1u {
+            seed(k);
+        }
         return;
     }
     let base = k * ACC;

@@ -134,6 +134,16 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     record(m, p, f_max);
 }
 
+// One invocation: km_search's workgroups from the length of km_fill's queue (x at most 32,768, as
+// `global_index` expects; none when the queue is empty).
+@compute @workgroup_size(1)
+fn queue_args() {
+    let g = (atomicLoad(&work[queue_base()]) + 63u) / 64u;
+    search_args[0] = min(g, 32768u);
+    search_args[1] = max((g + 32767u) / 32768u, 1u);
+    search_args[2] = 1u;
+}
+
 // The points km_fill queued: the grid search.
 @compute @workgroup_size(64)
 fn km_search(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {

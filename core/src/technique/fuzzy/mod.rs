@@ -181,6 +181,8 @@ pub struct FuzzyClustering {
     clustered_view: Option<ClusteredView>,
     /// This frame reuses the last frame's shading-point clusters.
     sp_reused: bool,
+    /// This frame's shading-point k-means starts from the last view's centroids (`warm_iterations`).
+    sp_warm: bool,
     /// Wall time of the last step's readback of the clusters (and the inspection's maps).
     readback_ms: f64,
     /// The kind of the last encoded step (its label when steps are timed on the CPU).
@@ -277,6 +279,7 @@ impl FuzzyClustering {
             vpl_reused: false,
             clustered_view: None,
             sp_reused: false,
+            sp_warm: false,
             readback_ms: 0.0,
             last_step: "fuzzy shading",
         }
@@ -325,7 +328,8 @@ impl FuzzyClustering {
         if let Some(kp) = vpl_kp.as_ref().filter(|_| !self.vpl_reused) {
             self.clustered_vpls = None;
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
-            self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, &ctx.vpls.buffer.buffer, kp, Some(max_flux))?;
+            let vpls = &ctx.vpls.buffer.buffer;
+            self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, vpls, kp, Some(max_flux), false)?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
         if let Some(kp) = sp_kp.as_ref().filter(|_| !self.sp_reused) {
@@ -346,7 +350,9 @@ impl FuzzyClustering {
                 pass.dispatch_workgroups(x, y, 1);
             });
             let points = self.sp_points.as_ref().expect("ensured");
-            self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp, None)?;
+            let run = KMeansParams { iterations: self.params.warm_iterations, ..*kp };
+            let (kp_run, warm) = if self.sp_warm { (&run, true) } else { (kp, false) };
+            self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp_run, None, warm)?;
             self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
         Ok(())
@@ -579,6 +585,15 @@ impl Technique for FuzzyClustering {
                         && done == kp
                 })
             });
+        // A moved view (same scene, image size and settings) starts its k-means from the last view's centroids.
+        self.sp_warm = !self.sp_reused
+            && self.params.warm_iterations > 0
+            && sp_kp.as_ref().is_some_and(|kp| {
+                self.clustered_view.as_ref().is_some_and(|(bvh, _, size, done)| {
+                    self.bvh.as_ref().is_some_and(|b| Arc::ptr_eq(b, bvh)) && *size == ctx.size && done == kp
+                })
+            });
+        self.counts.figures.insert("sp clusters warm-started".into(), if self.sp_warm { 1.0 } else { 0.0 });
         self.counts.figures.insert("vpl clusters reused".into(), if self.vpl_reused { 1.0 } else { 0.0 });
         self.counts.figures.insert("sp clusters reused".into(), if self.sp_reused { 1.0 } else { 0.0 });
         if let Some(kp) = &vpl_kp {

@@ -25,6 +25,10 @@ pub struct FuzzyParams {
     /// `gamma`.
     pub gamma: u32,
     pub iterations: u32,
+    /// Iterations of the shading points' k-means when it starts from the last view's centroids (same scene,
+    /// image size and settings, the camera moved): the paper's section 6 proposal. 0: every view starts from
+    /// Algorithm 1's initial samples.
+    pub warm_iterations: u32,
     pub n_t: f32,
     /// `hard`, `fuzzy` or `weighted`.
     pub mode: String,
@@ -63,6 +67,7 @@ impl Default for FuzzyParams {
             fuzziness: 6,
             gamma: 4,
             iterations: 8,
+            warm_iterations: 2,
             n_t: 3f32.sqrt() / 2.0,
             mode: "weighted".into(),
             cluster: "both".into(),
@@ -176,6 +181,15 @@ impl FuzzyParams {
                 value: ParamValue::Int(p.iterations as i64),
             },
             Param {
+                key: "warm_iterations",
+                label: "Iterations after a camera move",
+                help: "Shading-point k-means iterations when a moved view starts from the last view's centroids \
+                       (a centroid left without members starts again from its initial sample; the paper's \
+                       proposed future work); 0: every view starts over from Algorithm 1's initial samples",
+                kind: ParamKind::Int { min: 0, max: 100 },
+                value: ParamValue::Int(p.warm_iterations as i64),
+            },
+            Param {
                 key: "n_t",
                 label: "n_t (normal threshold)",
                 help: "Points whose normals' cosine is at most n_t never share a cluster (eq. 7; paper: sqrt(3)/2)",
@@ -266,6 +280,7 @@ impl FuzzyParams {
             ("f", ParamValue::Int(v)) => p.fuzziness = *v as u32,
             ("gamma", ParamValue::Int(v)) => p.gamma = *v as u32,
             ("iterations", ParamValue::Int(v)) => p.iterations = *v as u32,
+            ("warm_iterations", ParamValue::Int(v)) => p.warm_iterations = *v as u32,
             ("n_t", ParamValue::Float(v)) => p.n_t = *v,
             ("bias", ParamValue::Float(v)) => p.ray_bias = *v,
             ("search", ParamValue::Choice(v)) => p.search = v.clone(),
