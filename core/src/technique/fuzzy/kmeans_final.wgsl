@@ -5,6 +5,7 @@
 
 // Algorithm 2's output for point m: its F entries (the search state), and entry 0's cluster counts the point
 // as a member (count, the least member distance for the representative; with flux, normal and flux sums).
+// Every one of the point's F entries is written (NONE and 0 past the clusters found), so no pass clears them.
 fn record(m: u32, p: KmPoint, f_max: u32) {
     let base = m * f_max * 2u;
     var first = NONE;
@@ -12,15 +13,24 @@ fn record(m: u32, p: KmPoint, f_max: u32) {
     if best_n == 0u {
         first = any_k;
         first_d = any_d;
-        if first != NONE {
-            assignment[base] = first;
+        assignment[base] = first;
+        assignment[base + 1u] = 0u;
+        for (var f = 1u; f < f_max; f++) {
+            assignment[base + 2u * f] = NONE;
+            assignment[base + 2u * f + 1u] = 0u;
         }
     } else {
         first = best_kl.x;
         first_d = best_dl.x;
-        for (var f = 0u; f < best_n; f++) {
-            assignment[base + 2u * f] = best_k(f);
-            assignment[base + 2u * f + 1u] = bitcast<u32>(1.0 / max(best_d(f), km.min_distance));
+        for (var f = 0u; f < f_max; f++) {
+            var k = NONE;
+            var w = 0u;
+            if f < best_n {
+                k = best_k(f);
+                w = bitcast<u32>(1.0 / max(best_d(f), km.min_distance));
+            }
+            assignment[base + 2u * f] = k;
+            assignment[base + 2u * f + 1u] = w;
         }
     }
     if first == NONE {
@@ -66,9 +76,9 @@ fn km_final(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
         return;
     }
     let f_max = clamp(km.fuzziness, 1u, MAX_F);
-    clear_entries(m, f_max);
     let p = km_points[m];
     if !point_valid(p) {
+        clear_entries(m, f_max);
         return;
     }
     find(p.position.xyz, p.normal.xyz, f_max);
@@ -100,9 +110,9 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         return;
     }
     let f_max = clamp(km.fuzziness, 1u, MAX_F);
-    clear_entries(m, f_max);
     let p = km_points[m];
     if !point_valid(p) {
+        clear_entries(m, f_max);
         return;
     }
     reset_best();
