@@ -111,8 +111,9 @@ pub enum Command {
     Bench(BenchArgs),
     /// Print a scene's statistics (triangles, materials, lights, bounds) and the GPU adapter.
     Info(SceneArgs),
-    /// Move the lights in small steps over a number of frames and measure the flicker: the mean
-    /// frame-to-frame change of the chosen component (and the technique's figures per frame); CSV rows.
+    /// Move the lights in small steps (and turn the camera, `--orbit`) over a number of frames and measure the
+    /// flicker: the mean frame-to-frame change of the chosen component, each frame's time and figures and, with
+    /// `--against-indirect`, its error against a target; CSV rows.
     Animate(AnimateArgs),
     /// Render an image sequence, every frame complete: the camera orbiting its target once, or the lights
     /// moving by a step a frame; numbered PNGs in a folder and, with `--gif`, one looping animated GIF.
