@@ -705,6 +705,9 @@ fn animate_turns_the_camera_and_measures_each_frame_against_a_target() {
             })
             .collect();
         assert!(rows.iter().all(|r| r.1 > 0.0 && !r.2.is_empty() && r.2 == rows[0].2), "{text}");
+        // The frame's work counts, the direct and the indirect technique's, beside its time.
+        let vpl_work: f64 = col(&lines[1], "indirect.work.vpl_pixel_evaluations").parse().unwrap();
+        assert!(vpl_work > 0.0 && header.contains(&"work.shaded_pixels"), "{text}");
         assert!(rows[1].3 > 0.0, "the camera moved, the image must change: {text}");
         rows.iter().map(|r| r.0).collect::<Vec<f64>>()
     };

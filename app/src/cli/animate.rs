@@ -111,8 +111,10 @@ pub fn run(args: AnimateArgs) -> Result<()> {
         });
         let mut figures: std::collections::BTreeMap<String, f64> =
             report.counts.technique.figures.iter().map(|(k, v)| (format!("figure.{k}"), *v)).collect();
+        figures.extend(report.work.iter().map(|(k, v)| (format!("work.{k}"), *v)));
         if let Some(ind) = &report.indirect {
             figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
+            figures.extend(ind.work.iter().map(|(k, v)| (format!("indirect.work.{k}"), *v)));
         }
         figures.insert("ms".into(), report.total_ms);
         for p in &report.passes {
