@@ -43,16 +43,34 @@ struct GBufferOut {
     @location(2) emissive: vec4<f32>,
 }
 
-@fragment
-fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+// The material's base colour at the fragment (its texture when it has one).
+fn base_color(in: VertexOut) -> vec4<f32> {
     var color = material.base_color;
     if material.emissive.w > 0.5 {
         color *= textureSample(base_color_texture, material_sampler, in.uv);
     }
-    // Alpha-tested foliage and the like (glTF MASK, OBJ cut-outs): cut out below the material's cutoff.
+    return color;
+}
+
+// Alpha-tested materials (glTF MASK, OBJ cut-outs: foliage and the like): cut out below the material's cutoff.
+// The discard keeps a rasterizer from testing depth before the shader, so opaque materials use `fs_opaque`.
+@fragment
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    let color = base_color(in);
     if color.a < material.alpha.x {
         discard;
     }
+    return gbuffer(in, front, color);
+}
+
+// Opaque materials: the same outputs without the alpha test, so hidden fragments are rejected by the depth test
+// before they are shaded.
+@fragment
+fn fs_opaque(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+    return gbuffer(in, front, base_color(in));
+}
+
+fn gbuffer(in: VertexOut, front: bool, color: vec4<f32>) -> GBufferOut {
     // Two-sided lighting: real scenes have single-sided walls seen from both sides.
     var n = normalize(in.normal);
     if !front {

@@ -81,6 +81,10 @@ impl Renderer {
                 per_material.push((material, self.draw_ranges.clone()));
                 start = end;
             }
+            // Opaque materials first (no alpha test: hidden fragments are rejected by depth before shading), then
+            // the cut-outs, whose fragments behind opaque surfaces are then rejected too.
+            let cutout = |m: u32| self.scene.material_cutout.get(m as usize).copied().unwrap_or(false);
+            per_material.sort_by_key(|(m, _)| cutout(*m));
             let t = &self.targets;
             let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
             let attachment = |view| {
@@ -92,7 +96,7 @@ impl Renderer {
                 })
             };
             let scene = &self.scene;
-            let pipeline = &self.gbuffer_pipeline;
+            let (masked_pipeline, opaque_pipeline) = (&self.gbuffer_pipeline, &self.gbuffer_opaque_pipeline);
             let camera_bg = &self.camera_bind_group;
             self.timer.render_pass(
                 &mut encoder,
@@ -113,12 +117,17 @@ impl Renderer {
                     multiview_mask: None,
                 },
                 |pass| {
-                    pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, camera_bg, &[]);
                     pass.set_vertex_buffer(0, scene.vertex_buffer.slice(..));
                     pass.set_vertex_buffer(1, scene.uv1_buffer.slice(..));
                     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                    let mut bound = None;
                     for (material, ranges) in &per_material {
+                        let masked = scene.material_cutout.get(*material as usize).copied().unwrap_or(false);
+                        if bound != Some(masked) {
+                            pass.set_pipeline(if masked { masked_pipeline } else { opaque_pipeline });
+                            bound = Some(masked);
+                        }
                         pass.set_bind_group(1, &scene.material_bind_groups[*material as usize], &[]);
                         for &(first, count) in ranges {
                             pass.draw_indexed(first..first + count, 0, 0..1);

@@ -61,7 +61,9 @@ pub struct Renderer {
     camera_uniform: wgpu::Buffer,
     camera_bind_group: wgpu::BindGroup,
     screen_bind_group: wgpu::BindGroup,
+    /// The G-buffer pass of cut-out materials (alpha-tested) and of opaque ones.
     gbuffer_pipeline: wgpu::RenderPipeline,
+    gbuffer_opaque_pipeline: wgpu::RenderPipeline,
     ambient_pipeline: wgpu::RenderPipeline,
     tonemap_pipeline: wgpu::RenderPipeline,
     tonemap_layout: wgpu::BindGroupLayout,

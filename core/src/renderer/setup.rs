@@ -36,49 +36,55 @@ impl Renderer {
             bind_group_layouts: &[Some(&layouts.camera), Some(&layouts.material)],
             immediate_size: 0,
         });
-        let gbuffer_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer"),
-            layout: Some(&gbuffer_layout),
-            vertex: wgpu::VertexState {
-                module: &gbuffer_module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
-                    }),
-                    // The second UV channel, a stream of its own (the depth passes never read it).
-                    Some(wgpu::VertexBufferLayout {
-                        array_stride: 8,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![3 => Float32x2],
-                    }),
-                ],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: SharedLayouts::DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &gbuffer_module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    Some(SharedLayouts::ALBEDO_FORMAT.into()),
-                    Some(SharedLayouts::NORMAL_FORMAT.into()),
-                    Some(SharedLayouts::EMISSIVE_FORMAT.into()),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // Cut-out materials run `fs_main` (its alpha test discards); opaque ones `fs_opaque`, whose fragments a
+        // rasterizer can reject by depth before shading them.
+        let gbuffer_pipeline_with = |fragment_entry: &str| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("gbuffer"),
+                layout: Some(&gbuffer_layout),
+                vertex: wgpu::VertexState {
+                    module: &gbuffer_module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<crate::scene::chunks::Vertex>() as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
+                        }),
+                        // The second UV channel, a stream of its own (the depth passes never read it).
+                        Some(wgpu::VertexBufferLayout {
+                            array_stride: 8,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &wgpu::vertex_attr_array![3 => Float32x2],
+                        }),
+                    ],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: SharedLayouts::DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &gbuffer_module,
+                    entry_point: Some(fragment_entry),
+                    compilation_options: Default::default(),
+                    targets: &[
+                        Some(SharedLayouts::ALBEDO_FORMAT.into()),
+                        Some(SharedLayouts::NORMAL_FORMAT.into()),
+                        Some(SharedLayouts::EMISSIVE_FORMAT.into()),
+                    ],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let gbuffer_pipeline = gbuffer_pipeline_with("fs_main");
+        let gbuffer_opaque_pipeline = gbuffer_pipeline_with("fs_opaque");
         let ambient_module = crate::gpu::pipeline::create_module(device, "ambient", shaders::AMBIENT.source);
         let ambient_pipeline = layouts.fullscreen_pipeline(
             device,
@@ -134,6 +140,7 @@ impl Renderer {
             camera_bind_group,
             screen_bind_group,
             gbuffer_pipeline,
+            gbuffer_opaque_pipeline,
             ambient_pipeline,
             tonemap_pipeline,
             tonemap_layout,
