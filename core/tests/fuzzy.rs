@@ -169,11 +169,32 @@ fn bad_parameters_and_a_sky_only_view_give_defined_images() {
     assert_eq!(report.indirect.unwrap().counts.figures["k_sp"], 0.0);
 }
 
+/// Surface points as the GPU k-means reads them (the `GpuVpl` layout; position w: 1 when valid).
+fn upload_points(
+    gpu: &shadowlab_core::gpu::GpuContext,
+    points: &[shadowlab_core::technique::fuzzy::kmeans::Point],
+) -> wgpu::Buffer {
+    use shadowlab_core::technique::fuzzy::gpu::GpuPoint;
+    use wgpu::util::DeviceExt;
+    let gpu_points: Vec<GpuPoint> = points
+        .iter()
+        .map(|p| GpuPoint {
+            position: p.position.extend(if p.valid { 1.0 } else { 0.0 }).to_array(),
+            normal: p.normal.extend(0.0).to_array(),
+            flux: [0.0; 4],
+        })
+        .collect();
+    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(&gpu_points),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
 #[test]
 fn gpu_kmeans_matches_its_cpu_twin() {
-    use shadowlab_core::technique::fuzzy::gpu::{GpuKMeans, GpuPoint};
+    use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
     use shadowlab_core::technique::fuzzy::kmeans::{self, KMeansParams, Point};
-    use wgpu::util::DeviceExt;
     let gpu = gpu();
     let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
     // Points on the five walls of a room, some invalid, as an image of 64 x 48; then the same with normals
@@ -197,19 +218,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
                 Point { position, normal, valid: i % 13 != 4 }
             })
             .collect();
-        let gpu_points: Vec<GpuPoint> = points
-            .iter()
-            .map(|p| GpuPoint {
-                position: p.position.extend(if p.valid { 1.0 } else { 0.0 }).to_array(),
-                normal: p.normal.extend(0.0).to_array(),
-                flux: [0.0; 4],
-            })
-            .collect();
-        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: None,
-            contents: bytemuck::cast_slice(&gpu_points),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let buffer = upload_points(&gpu, &points);
         let mut km = GpuKMeans::new(&gpu, "test");
         // The last three: Algorithm 2 from the neighbouring samples' lists (km_final over the samples, km_fill);
         // every case with the exact searches walking the grid, scanning the normal buckets, or either by count.
@@ -276,9 +285,8 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
     // A view clustered from Algorithm 1's samples, then a moved view (the points shifted and half of them
     // replaced by another wall) clustered from those centroids: the GPU's warm start against the twin's
     // `cluster_from` with the centroids the GPU left.
-    use shadowlab_core::technique::fuzzy::gpu::{GpuKMeans, GpuPoint};
+    use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
     use shadowlab_core::technique::fuzzy::kmeans::{self, Centroid, KMeansParams, Point};
-    use wgpu::util::DeviceExt;
     let gpu = gpu();
     let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
     let (w, h) = (64u32, 48u32);
@@ -295,21 +303,7 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
             })
             .collect()
     };
-    let upload = |points: &[Point]| {
-        let gpu_points: Vec<GpuPoint> = points
-            .iter()
-            .map(|p| GpuPoint {
-                position: p.position.extend(if p.valid { 1.0 } else { 0.0 }).to_array(),
-                normal: p.normal.extend(0.0).to_array(),
-                flux: [0.0; 4],
-            })
-            .collect();
-        gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: None,
-            contents: bytemuck::cast_slice(&gpu_points),
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
+    let upload = |points: &[Point]| upload_points(&gpu, points);
     let p = KMeansParams {
         clusters: 60,
         iterations: 6,
