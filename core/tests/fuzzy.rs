@@ -509,12 +509,20 @@ fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_c
     let mut turned = scene.camera;
     turned.position += Vec3::new(0.3, 0.1, 0.0);
     set(&mut renderer, "warm_iterations", ParamValue::Int(2)).unwrap();
+    let warm_started =
+        |r: &shadowlab_core::FrameReport| r.indirect.as_ref().unwrap().counts.figures["sp clusters warm-started"];
     let (warm, report) = frame(&mut renderer, direct.as_mut(), &turned, &moved);
-    assert_eq!(report.indirect.as_ref().unwrap().counts.figures["sp clusters warm-started"], 1.0);
+    assert_eq!(warm_started(&report), 1.0, "a step of a camera motion starts from the last view's centroids");
     set(&mut renderer, "warm_iterations", ParamValue::Int(0)).unwrap();
     let (cold, _) = frame(&mut renderer, direct.as_mut(), &turned, &moved);
     assert!(warm != cold);
     set(&mut renderer, "warm_iterations", ParamValue::Int(2)).unwrap();
+    // A jump (the camera turned by 60 degrees) starts from the samples: the view a user stops on after a long
+    // drag is clustered as fully as a first frame.
+    let mut jumped = turned;
+    jumped.orientation = glam::Quat::from_rotation_y(60f32.to_radians()) * turned.orientation;
+    let (_, report) = frame(&mut renderer, direct.as_mut(), &jumped, &moved);
+    assert_eq!(warm_started(&report), 0.0, "a 60 degree turn started from the last view's centroids");
     set(&mut renderer, "reuse", ParamValue::Choice("all".into())).unwrap();
     // A moved camera clusters again.
     let mut turned = scene.camera;

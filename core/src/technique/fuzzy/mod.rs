@@ -191,6 +191,21 @@ pub struct FuzzyClustering {
     frame_camera: Option<crate::scene::Camera>,
 }
 
+/// The largest turn (degrees) and move (share of the scene's diagonal) of the camera between two frames for
+/// which the second starts its k-means from the first's centroids (`warm_iterations`); measured up to 8 degrees
+/// a frame on the conference room (docs/techniques/fuzzy.md), where a step of the orbit moves the eye by about
+/// 7 % of the diagonal.
+const WARM_MAX_TURN_DEGREES: f32 = 15.0;
+const WARM_MAX_MOVE: f32 = 0.1;
+
+/// Whether `to` is a step of a camera motion from `from`: turned and moved a little, the same field of view.
+fn camera_step(from: &crate::scene::Camera, to: &crate::scene::Camera, scene_size: f32) -> bool {
+    let turn = from.orientation.normalize().angle_between(to.orientation.normalize()).to_degrees();
+    let moved = from.position.distance(to.position) / scene_size.max(1e-6);
+    let same_fov = (from.fov_y - to.fov_y).abs() <= 0.01 * from.fov_y.abs();
+    turn <= WARM_MAX_TURN_DEGREES && moved <= WARM_MAX_MOVE && same_fov
+}
+
 /// What a run of the shading-point clustering was made from: the scene's BVH, the camera, the image size and
 /// the k-means settings.
 type ClusteredView = (Arc<SceneBvh>, crate::scene::Camera, (u32, u32), KMeansParams);
@@ -585,12 +600,19 @@ impl Technique for FuzzyClustering {
                         && done == kp
                 })
             });
-        // A moved view (same scene, image size and settings) starts its k-means from the last view's centroids.
+        // A view moved by a step (same scene, image size and settings; the camera turned and moved a little, as
+        // from one frame of a camera motion to the next) starts its k-means from the last view's centroids. A
+        // jump (a released drag across the room, another viewpoint) starts from the samples, so that the image
+        // a user stops on is clustered as fully as a first frame.
+        let scene_size = self.scene_size;
         self.sp_warm = !self.sp_reused
             && self.params.warm_iterations > 0
             && sp_kp.as_ref().is_some_and(|kp| {
-                self.clustered_view.as_ref().is_some_and(|(bvh, _, size, done)| {
-                    self.bvh.as_ref().is_some_and(|b| Arc::ptr_eq(b, bvh)) && *size == ctx.size && done == kp
+                self.clustered_view.as_ref().is_some_and(|(bvh, camera, size, done)| {
+                    self.bvh.as_ref().is_some_and(|b| Arc::ptr_eq(b, bvh))
+                        && *size == ctx.size
+                        && done == kp
+                        && camera_step(camera, ctx.camera, scene_size)
                 })
             });
         self.counts.figures.insert("sp clusters warm-started".into(), if self.sp_warm { 1.0 } else { 0.0 });

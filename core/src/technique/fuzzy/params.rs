@@ -26,8 +26,8 @@ pub struct FuzzyParams {
     pub gamma: u32,
     pub iterations: u32,
     /// Iterations of the shading points' k-means when it starts from the last view's centroids (same scene,
-    /// image size and settings, the camera moved): the paper's section 6 proposal. 0: every view starts from
-    /// Algorithm 1's initial samples.
+    /// image size and settings, the camera moved by a step, not a jump): the paper's section 6 proposal. 0:
+    /// every view starts from Algorithm 1's initial samples.
     pub warm_iterations: u32,
     pub n_t: f32,
     /// `hard`, `fuzzy` or `weighted`.
@@ -183,9 +183,10 @@ impl FuzzyParams {
             Param {
                 key: "warm_iterations",
                 label: "Iterations after a camera move",
-                help: "Shading-point k-means iterations when a moved view starts from the last view's centroids \
-                       (a centroid left without members starts again from its initial sample; the paper's \
-                       proposed future work); 0: every view starts over from Algorithm 1's initial samples",
+                help: "Shading-point k-means iterations when a view moved by a step (turned at most 15 degrees, \
+                       moved at most a tenth of the scene) starts from the last view's centroids (a centroid left \
+                       without members starts again from its initial sample; the paper's proposed future work); \
+                       a jump, or 0 here: Algorithm 1 from the initial samples",
                 kind: ParamKind::Int { min: 0, max: 100 },
                 value: ParamValue::Int(p.warm_iterations as i64),
             },
