@@ -118,7 +118,8 @@ pub fn run(args: AnimateArgs) -> Result<()> {
         }
         figures.insert("ms".into(), report.total_ms);
         for p in &report.passes {
-            *figures.entry(format!("pass.{}_ms", p.name)).or_default() += p.ms;
+            // A pass name is a column's name: no commas in a CSV header.
+            *figures.entry(format!("pass.{}_ms", p.name.replace(',', ";"))).or_default() += p.ms;
         }
         if let Some((_, r, t)) = &mut target {
             r.render_frame(t.as_mut(), &camera, &moved, &mut |_, _| {})?;
