@@ -238,6 +238,7 @@ impl VirtualAreaLights {
         let sp = split::SplitParams {
             vals: m,
             rank: if self.params.rank == "rule" { split::Rank::Rule } else { split::Rank::Flux },
+            gain_until: self.params.gain_until as usize,
             max_cone: self.params.max_cone_degrees.to_radians(),
             max_depth: self.params.max_depth * self.scene_size * self.params.length_fraction,
             iterations: 8,

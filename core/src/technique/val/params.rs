@@ -41,6 +41,9 @@ pub struct ValParams {
     /// [`super::split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule
     /// breakers first).
     pub rank: String,
+    /// [`super::split`]: while there are fewer VALs than this, the next bisection is the one that lowers the
+    /// flux-weighted error most (then `rank` decides).
+    pub gain_until: u32,
     /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
@@ -84,6 +87,9 @@ impl Default for ValParams {
             // conference room), 45 left Sponza 0.03 higher at M = 128-160, 180 (off) leaves the Cornell box's
             // corner VALs cut across by depth (not monotone at M = 4-16).
             rank: "flux".into(),
+            // Measured (docs/techniques/val.md): 16 makes Sponza's error fall at every M and leaves every M from
+            // 64 up as `flux` alone has it on the three scenes; 32 moves M = 64.
+            gain_until: 16,
             max_cone_degrees: 40.0,
             max_depth: 0.1,
             proxy: 1.0,
@@ -167,6 +173,14 @@ impl ValParams {
                        the cone or depth rule first (the first version)",
                 kind: ParamKind::Choice(RANK_CHOICES),
                 value: ParamValue::Choice(p.rank.clone()),
+            },
+            Param {
+                key: "gain_until",
+                label: "Bisect by gain below",
+                help: "split: while there are fewer VALs than this, bisect the VAL whose bisection lowers the \
+                       flux-weighted error most (so the first, coarse VALs improve at every step); then by rank",
+                kind: ParamKind::Int { min: 0, max: 4096 },
+                value: ParamValue::Int(p.gain_until as i64),
             },
             Param {
                 key: "max_cone",
@@ -308,6 +322,7 @@ impl ValParams {
             ("split", ParamValue::Bool(v)) => p.split = *v,
             ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
+            ("gain_until", ParamValue::Int(v)) => p.gain_until = *v as u32,
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             ("proxy", ParamValue::Float(v)) => p.proxy = *v,
