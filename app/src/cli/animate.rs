@@ -1,6 +1,6 @@
 //! `shadowlab animate`: the lights moved a step a frame (and the camera turned a step about its target), the
-//! flicker measured, each frame's time (in the clock its report names) and, with `--against-indirect`, its
-//! error against a target rendered from the same camera and lights; CSV rows.
+//! flicker measured, each frame's time and passes (all frames in one clock, named in the `clock` column) and, with
+//! `--against-indirect`, its error against a target rendered from the same camera and lights; CSV rows.
 
 use std::path::PathBuf;
 
@@ -82,8 +82,8 @@ pub fn run(args: AnimateArgs) -> Result<()> {
     let mut previous: Option<Vec<[f32; 4]>> = None;
     // Per frame: index, change against the previous frame, mean radiance, figures (times and errors too).
     type FrameRow = (u32, Option<f64>, f64, std::collections::BTreeMap<String, f64>);
-    let mut clock = None;
     let mut rows: Vec<FrameRow> = Vec::new();
+    let mut reports = Vec::new();
     let mut progress = Progress::new(&format!("animate {}", args.choice.technique), f.quiet).with_unit("frame");
     for i in 0..args.frames {
         let moved: Vec<PointLight> =
@@ -95,11 +95,6 @@ pub fn run(args: AnimateArgs) -> Result<()> {
         };
         let report = renderer.render_frame(technique.as_mut(), &camera, &moved, &mut |_, _| {})?;
         let image = renderer.read_hdr()?;
-        let source = report.timing.source;
-        if clock.is_some_and(|c| c != source) {
-            bail!("frame {i} was timed in {} and an earlier one in another clock", source.name());
-        }
-        clock = Some(source);
         let mean = image.iter().map(|p| ((p[0] + p[1] + p[2]) / 3.0) as f64).sum::<f64>() / image.len() as f64;
         // Mean absolute change of luminance-like (mean RGB) radiance against the previous frame.
         let change = previous.as_ref().map(|prev| {
@@ -116,11 +111,6 @@ pub fn run(args: AnimateArgs) -> Result<()> {
             figures.extend(ind.counts.figures.iter().map(|(k, v)| (format!("indirect.figure.{k}"), *v)));
             figures.extend(ind.work.iter().map(|(k, v)| (format!("indirect.work.{k}"), *v)));
         }
-        figures.insert("ms".into(), report.total_ms);
-        for p in &report.passes {
-            // A pass name is a column's name: no commas in a CSV header.
-            *figures.entry(format!("pass.{}_ms", p.name.replace(',', ";"))).or_default() += p.ms;
-        }
         if let Some((_, r, t)) = &mut target {
             r.render_frame(t.as_mut(), &camera, &moved, &mut |_, _| {})?;
             let (w, h) = (r.settings().width, r.settings().height);
@@ -133,11 +123,23 @@ pub fn run(args: AnimateArgs) -> Result<()> {
             figures.insert("share_over_5pct".into(), m.share_over_threshold);
         }
         rows.push((i, change, mean, figures));
+        reports.push(report);
         previous = Some(image);
         progress.update(i as usize + 1, args.frames as usize);
     }
+    // Every frame's time in one clock: the GPU timestamps where every frame has trustworthy ones, else the
+    // wall-clock steps (`SHADOWLAB_TIMING=auto` may leave the timestamps in any frame), as `sweep` does.
+    let clock = crate::measure::summarize(&reports).clock;
+    for (row, report) in rows.iter_mut().zip(&reports) {
+        row.3.insert("ms".into(), report.frame_ms_in(clock));
+        let passes = if report.timing.source == clock { &report.passes } else { &report.steps };
+        for p in passes {
+            // A pass name is a column's name: no commas in a CSV header.
+            *row.3.entry(format!("pass.{}_ms", p.name.replace(',', ";"))).or_default() += p.ms;
+        }
+    }
     let keys: std::collections::BTreeSet<String> = rows.iter().flat_map(|r| r.3.keys().cloned()).collect();
-    let clock = clock.map(|c| c.name()).unwrap_or_default();
+    let clock = clock.name();
     let mut csv = String::from("frame,mean_change,mean_radiance,clock");
     for k in &keys {
         csv += &format!(",{k}");
