@@ -602,37 +602,22 @@ fn bad_indirect_input_gives_a_one_line_error() {
     assert_fails_with(&with(&["--indirect-param", "samples=4"]), "without an --indirect");
 }
 
+/// `shadowlab animate` of three frames of the Cornell box at 48x36, the indirect component over the unshadowed
+/// direct light, with `extra` arguments; the CSV it wrote (into `dir`, as `name`).
+fn animate_csv(dir: &std::path::Path, name: &str, extra: &[&str]) -> String {
+    let csv = dir.join(name);
+    let mut args = vec!["animate", "--quiet", "--scene", "cornell", "--width", "48", "--height", "36", "--frames", "3"];
+    args.extend(["--technique", "unshadowed", "--component", "indirect", "--out", csv.to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::read_to_string(&csv).unwrap()
+}
+
 #[test]
 fn animate_measures_frame_to_frame_change_and_figures() {
     let dir = out_dir("animate");
-    let csv = dir.join("frames.csv");
-    let args = [
-        "animate",
-        "--quiet",
-        "--scene",
-        "cornell",
-        "--width",
-        "48",
-        "--height",
-        "36",
-        "--vpls",
-        "128",
-        "--frames",
-        "3",
-        "--step",
-        "0.05,0,0",
-        "--technique",
-        "unshadowed",
-        "--indirect",
-        "val",
-        "--component",
-        "indirect",
-        "--out",
-        csv.to_str().unwrap(),
-    ];
-    let out = shadowlab(&args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = std::fs::read_to_string(&csv).unwrap();
+    let text = animate_csv(&dir, "frames.csv", &["--vpls", "128", "--step", "0.05,0,0", "--indirect", "val"]);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 4, "{text}");
     assert!(
@@ -658,38 +643,8 @@ fn animate_turns_the_camera_and_measures_each_frame_against_a_target() {
     // gather (no indirect shadows) it is not, and the moving camera changes the image.
     let dir = out_dir("animate-orbit");
     let run = |target: &str, name: &str| {
-        let csv = dir.join(name);
-        let args = [
-            "animate",
-            "--quiet",
-            "--scene",
-            "cornell",
-            "--width",
-            "48",
-            "--height",
-            "36",
-            "--vpls",
-            "64",
-            "--frames",
-            "3",
-            "--step",
-            "0,0,0",
-            "--orbit",
-            "15",
-            "--technique",
-            "unshadowed",
-            "--indirect",
-            "vpl-shadowmaps",
-            "--component",
-            "indirect",
-            "--against-indirect",
-            target,
-            "--out",
-            csv.to_str().unwrap(),
-        ];
-        let out = shadowlab(&args);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let text = std::fs::read_to_string(&csv).unwrap();
+        let extra = ["--vpls", "64", "--step", "0,0,0", "--orbit", "15", "--indirect", "vpl-shadowmaps"];
+        let text = animate_csv(&dir, name, &[&extra[..], &["--against-indirect", target]].concat());
         let lines: Vec<String> = text.lines().map(str::to_string).collect();
         let header: Vec<&str> = lines[0].split(',').collect();
         let col = |row: &str, key: &str| -> String {

@@ -68,8 +68,9 @@ impl Renderer {
                 .filter(|&i| frustum.intersects_aabb(&chunks[i as usize].bounds))
                 .inspect(|&i| gbuffer_triangles += chunks[i as usize].triangle_count() as u64)
                 .collect();
-            // Draw ranges per material (chunks of a material are contiguous and sorted).
-            let mut per_material: Vec<(u32, Vec<(u32, u32)>)> = Vec::new();
+            // Draw ranges per material (chunks of a material are contiguous and sorted), and whether it is cut out.
+            type MaterialDraws = (u32, bool, Vec<(u32, u32)>);
+            let mut per_material: Vec<MaterialDraws> = Vec::new();
             let mut start = 0;
             while start < visible.len() {
                 let material = chunks[visible[start] as usize].material;
@@ -78,13 +79,13 @@ impl Renderer {
                     end += 1;
                 }
                 merge_draw_ranges(chunks, visible[start..end].iter().copied(), &mut self.draw_ranges);
-                per_material.push((material, self.draw_ranges.clone()));
+                let cutout = self.scene.material_cutout.get(material as usize).copied().unwrap_or(false);
+                per_material.push((material, cutout, self.draw_ranges.clone()));
                 start = end;
             }
             // Opaque materials first (no alpha test: hidden fragments are rejected by depth before shading), then
             // the cut-outs, whose fragments behind opaque surfaces are then rejected too.
-            let cutout = |m: u32| self.scene.material_cutout.get(m as usize).copied().unwrap_or(false);
-            per_material.sort_by_key(|(m, _)| cutout(*m));
+            per_material.sort_by_key(|&(_, cutout, _)| cutout);
             let t = &self.targets;
             let clear = |c: wgpu::Color| wgpu::Operations { load: wgpu::LoadOp::Clear(c), store: wgpu::StoreOp::Store };
             let attachment = |view| {
@@ -122,13 +123,12 @@ impl Renderer {
                     pass.set_vertex_buffer(1, scene.uv1_buffer.slice(..));
                     pass.set_index_buffer(scene.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
                     let mut bound = None;
-                    for (material, ranges) in &per_material {
-                        let masked = scene.material_cutout.get(*material as usize).copied().unwrap_or(false);
+                    for &(material, masked, ref ranges) in &per_material {
                         if bound != Some(masked) {
                             pass.set_pipeline(if masked { masked_pipeline } else { opaque_pipeline });
                             bound = Some(masked);
                         }
-                        pass.set_bind_group(1, &scene.material_bind_groups[*material as usize], &[]);
+                        pass.set_bind_group(1, &scene.material_bind_groups[material as usize], &[]);
                         for &(first, count) in ranges {
                             pass.draw_indexed(first..first + count, 0, 0..1);
                         }

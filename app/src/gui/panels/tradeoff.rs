@@ -120,7 +120,7 @@ pub fn tradeoff_ui(
     ui.label(format!(
         "Error against time per frame on this view, against {} (Compare sets it): the ticked techniques, each over \
          a range of one parameter.",
-        crate::gui::views::technique_pair(&session.view.compare_against, session.against_indirect_key())
+        crate::measure::technique_pair(&session.view.compare_against, session.against_indirect_key())
     ));
     let Some(gpu) = &mut views.gpu else { return };
     // The parameters of the ticked techniques only, from the main view's instances (asking every registered

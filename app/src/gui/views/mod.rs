@@ -515,8 +515,6 @@ impl Views {
 /// The legend line of a layer whose technique's overlays do not follow a moving light or camera.
 pub const STALE_NOTE: &str = "while moving: as of the last complete frame (follows on release)";
 
-pub use crate::measure::technique_pair;
-
 /// False when `SHADOWLAB_STEP_WAIT=blocking`: every progressive step is waited for, as before steps were
 /// polled (for A/B measurements of the UI's frame rate while a frame renders).
 fn deferred_steps_allowed() -> bool {

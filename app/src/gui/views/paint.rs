@@ -4,9 +4,10 @@
 
 use eframe::egui;
 
-use super::{technique_pair, Views};
+use super::Views;
 use crate::gui::document::ViewMode;
 use crate::gui::session::Session;
+use crate::measure::technique_pair;
 
 impl Views {
     /// Paint the images of the view mode into `rect`; dragging the split line's handle moves `view.split`.

@@ -228,23 +228,36 @@ pub fn split(vpls: &[Vpl], km: &KMeansParams, sp: &SplitParams, clustering: &Clu
         lists[(k as usize).min(last)].push(i);
     }
     let mut groups: Vec<Group> = lists.into_iter().filter(|l| !l.is_empty()).map(|l| group(vpls, km, l)).collect();
+    // The gain phase: each group's bisection (its halves as groups, and the error it removes), made once per
+    // group and kept until that group is the one bisected.
+    type Cut = Option<(f32, [Group; 2])>;
+    let mut cuts: Vec<Option<Cut>> = groups.iter().map(|_| None).collect();
     while groups.len() < target {
         if groups.len() < sp.gain_until {
             // The bisection that lowers the flux-weighted error most.
-            let mut best: Option<(f32, usize, [Vec<usize>; 2])> = None;
-            for (k, g) in groups.iter().enumerate().filter(|(_, g)| !g.stuck && g.members.len() > 1) {
-                if let Some([a, b]) = bisect_by_rule(vpls, km, sp, g) {
-                    let gain =
-                        g.flux_error - group(vpls, km, a.clone()).flux_error - group(vpls, km, b.clone()).flux_error;
-                    // NaN (a VPL of NaN flux) never wins over a number, and a first candidate is always taken.
-                    if best.as_ref().is_none_or(|(g0, _, _)| gain > *g0 || g0.is_nan()) {
-                        best = Some((gain, k, [a, b]));
+            let mut best: Option<(f32, usize)> = None;
+            for (k, g) in groups.iter().enumerate() {
+                if g.stuck || g.members.len() <= 1 {
+                    continue;
+                }
+                let cut = cuts[k].get_or_insert_with(|| {
+                    bisect_by_rule(vpls, km, sp, g).map(|[a, b]| {
+                        let (a, b) = (group(vpls, km, a), group(vpls, km, b));
+                        (g.flux_error - a.flux_error - b.flux_error, [a, b])
+                    })
+                });
+                // NaN (a VPL of NaN flux) never wins over a number, and a first candidate is always taken.
+                if let Some((gain, _)) = cut {
+                    if best.is_none_or(|(g0, _)| *gain > g0 || g0.is_nan()) {
+                        best = Some((*gain, k));
                     }
                 }
             }
-            let Some((_, k, [a, b])) = best else { break };
-            groups[k] = group(vpls, km, a);
-            groups.push(group(vpls, km, b));
+            let Some((_, k)) = best else { break };
+            let Some(Some((_, [a, b]))) = cuts[k].take() else { unreachable!("the best cut was made above") };
+            groups[k] = a;
+            groups.push(b);
+            cuts.push(None);
             continue;
         }
         let pick =
