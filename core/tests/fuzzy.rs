@@ -359,6 +359,10 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
     // Without a warm start the same call clusters from the samples, as `cluster` does.
     run(&mut km, &upload(&moved), &warm, false);
     assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &warm).assignment);
+    // Asked to start warm with another K, it starts from the samples: the last run's centroids are not this K's.
+    let other_k = KMeansParams { clusters: 40, ..warm };
+    run(&mut km, &upload(&moved), &other_k, true);
+    assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &other_k).assignment);
 }
 
 #[test]

@@ -114,6 +114,8 @@ pub struct GpuKMeans {
     search_args: wgpu::Buffer,
     search_args_stand_in: wgpu::Buffer,
     pub shape: RunShape,
+    /// `K` of the last encoded run (its working centroids are what a warm start begins from).
+    encoded_clusters: Option<usize>,
     /// The most centroids a search scans whole from the normal buckets instead of walking the grid (0: always
     /// the grid). Speed only: both find the same clusters.
     bucket_scan_limit: u32,
@@ -200,6 +202,7 @@ impl GpuKMeans {
             search_args,
             search_args_stand_in,
             shape: RunShape::default(),
+            encoded_clusters: None,
             bucket_scan_limit: BUCKET_SCAN_LIMIT,
         }
     }
@@ -230,7 +233,9 @@ impl GpuKMeans {
         max_flux: Option<f32>,
         warm: bool,
     ) -> Result<RunShape, GpuError> {
-        let warm = warm && self.shape.clusters == RunShape::of(params).clusters && self.clusters.is_some();
+        // The working centroids must be a run's of the same `K` (`shape` is set by the technique before it
+        // encodes, so it cannot tell).
+        let warm = warm && self.encoded_clusters == Some(RunShape::of(params).clusters);
         let RunShape { points: m, clusters: k, fuzziness: f } = RunShape::of(params);
         let g = params.gamma.max(1) as usize;
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
@@ -256,6 +261,7 @@ impl GpuKMeans {
         );
         ensure_storage(&mut self.assignment, gpu, "fuzzy assignment", assignment_bytes);
         self.shape = RunShape { points: m, clusters: k, fuzziness: f };
+        self.encoded_clusters = Some(k);
         let (clusters, work, assignment) = (
             self.clusters.as_ref().expect("grown"),
             self.work.as_ref().expect("grown"),
