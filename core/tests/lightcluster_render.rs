@@ -118,6 +118,33 @@ fn clustering_reduces_shadow_maps_and_softens_shadows_with_a_bounded_error() {
 }
 
 #[test]
+fn a_cluster_whose_lights_are_all_behind_a_receiver_is_not_evaluated_there() {
+    // The groups above the plate, and one under the ground: every visible surface faces up, away from the
+    // ball of the lower cluster's lights, though its C_att sphere reaches them.
+    let scene = plane_and_occluder();
+    let above = lights_around_occluder();
+    let mut both = above.clone();
+    for k in 0..4 {
+        let a = k as f32 * std::f32::consts::FRAC_PI_2;
+        both.push(white_light(Vec3::new(0.5, -0.6, 0.0) + Vec3::new(a.cos(), 0.0, a.sin()) * 0.1, 4.0, 8.0));
+    }
+    let shot = |lights: &[PointLight]| {
+        Shot::direct(&scene, lights, linear_settings(W, H), "lightcluster")
+            .params(MAPS)
+            .params(&[("d_init", ParamValue::Float(0.5))])
+            .render()
+    };
+    let (img_above, report_above) = shot(&above);
+    let (img_both, report_both) = shot(&both);
+    assert_eq!(report_both.counts.technique.clusters, Some(4), "the lower group is a cluster of its own");
+    // Exact: the lower lights add nothing, and none of them is evaluated at any pixel.
+    assert_eq!(img_both, img_above);
+    let evaluations = |r: &shadowlab_core::renderer::FrameReport| r.work["light_pixel_evaluations"];
+    assert_eq!(evaluations(&report_both), evaluations(&report_above));
+    assert!(evaluations(&report_above) > 0.0);
+}
+
+#[test]
 fn visibility_of_one_cluster_draws_its_visibility_alone_in_grey() {
     // Three clusters over a plate with an occluder: cluster 0's visibility, then no cluster's (the ambient term).
     let scene = plane_and_occluder();

@@ -105,8 +105,12 @@ pub struct GpuCluster {
     pub shadow_near: f32,
     pub first_light: u32,
     pub light_count: u32,
+    /// No member light lies farther than this from `position` (a receiver facing away from that ball gets
+    /// nothing from the cluster: the shader skips its lights and its visibility).
+    pub spread: f32,
+    pub _pad: [f32; 3],
 }
-const _: () = assert!(std::mem::size_of::<GpuCluster>() == 32);
+const _: () = assert!(std::mem::size_of::<GpuCluster>() == 48);
 
 /// Soft-shadow filter of a cluster.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -367,6 +371,8 @@ impl Technique for LightCluster {
         for cluster in &self.clustering.clusters {
             let first_light = self.gpu_lights.len() as u32;
             self.gpu_lights.extend(cluster.members.iter().map(|&i| GpuLight::new(&ctx.lights[i])));
+            let spread =
+                cluster.members.iter().map(|&i| ctx.lights[i].position.distance(cluster.position)).fold(0.0, f32::max);
             self.gpu_clusters.push(GpuCluster {
                 position: cluster.position.to_array(),
                 radius: cluster.d_min.max(0.0),
@@ -374,6 +380,8 @@ impl Technique for LightCluster {
                 shadow_near: shadow_near(cluster.c_att),
                 first_light,
                 light_count: cluster.members.len() as u32,
+                spread,
+                _pad: [0.0; 3],
             });
         }
         let (res, budget) = self.params.cube.resolution_and_budget(ctx.gpu);

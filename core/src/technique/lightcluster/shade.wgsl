@@ -35,6 +35,8 @@ struct Cluster {
     shadow_near: f32,
     first_light: u32,
     light_count: u32,
+    // no member light lies farther than this from `position`
+    spread: f32,
 }
 
 @group(1) @binding(0) var<storage, read> lights: array<Light>;
@@ -229,7 +231,13 @@ fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
         }
         let cluster = clusters[index];
         // Pixels beyond C_att get nothing from the cluster (paper 3.2.2).
-        if distance(s.position, cluster.position) > cluster.c_att {
+        let to_center = cluster.position - s.position;
+        if length(to_center) > cluster.c_att {
+            continue;
+        }
+        // A receiver facing away from the ball that holds every member light gets nothing from any of them
+        // (n . (l - p) <= n . (c - p) + spread <= 0): skip their evaluations and the cluster's visibility.
+        if dot(s.normal, to_center) <= -cluster.spread {
             continue;
         }
         var unshadowed = vec3<f32>(0.0);
