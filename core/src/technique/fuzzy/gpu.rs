@@ -121,8 +121,9 @@ pub struct GpuKMeans {
     bucket_scan_limit: u32,
 }
 
-/// [`GpuKMeans`]'s default bucket scan limit: about what the grid walk of a point on an open wall visits.
-pub const BUCKET_SCAN_LIMIT: u32 = 128;
+/// [`GpuKMeans`]'s default bucket scan limit (searches for `F` > 1; the nearest alone walks the grid): measured
+/// per dispatch on the three real scenes, 256 and 512 were fastest, 64 and 128 slower (docs/techniques/fuzzy.md).
+pub const BUCKET_SCAN_LIMIT: u32 = 256;
 
 /// Grow `slot` to a storage buffer (copyable both ways) of at least `size` bytes, rounded up to a power of two
 /// so a frame that grows a little does not reallocate; true when it was (re)created.

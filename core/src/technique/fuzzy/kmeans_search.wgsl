@@ -195,9 +195,11 @@ fn unit(n: vec3<f32>) -> bool {
 // shell until F are found, which can visit every cell. A compatible centroid lies within acos(n_t) of the point's
 // normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than both (plus
 // a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's (F = 1, every
-// centroid compatible), as the exhausted search would find it.
+// centroid compatible), as the exhausted search would find it. The nearest alone (F = 1: Algorithm 1's
+// assignment) always walks the grid: its first shells hold it, and scanning the buckets took twice as long there
+// (docs/techniques/fuzzy.md, sixteenth session).
 fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if km.options.y == 0u || km.dims.w > 0u || !unit(n) {
+    if km.options.y == 0u || f_max == 1u || km.dims.w > 0u || !unit(n) {
         search(p, n, f_max);
         return;
     }
