@@ -116,8 +116,8 @@ pub struct GpuKMeans {
     pub shape: RunShape,
     /// `K` of the last encoded run (its working centroids are what a warm start begins from).
     encoded_clusters: Option<usize>,
-    /// The most centroids a search scans whole from the normal buckets instead of walking the grid (0: always
-    /// the grid). Speed only: both find the same clusters.
+    /// The most centroids a search for `F` > 1 scans whole from the normal buckets instead of walking the grid
+    /// (0: always the grid). Speed only: both find the same clusters.
     bucket_scan_limit: u32,
 }
 
@@ -208,8 +208,8 @@ impl GpuKMeans {
         }
     }
 
-    /// Sets the bucket scan limit (0: every search walks the grid; `u32::MAX`: every exact search scans the
-    /// buckets). The clusters found do not change; the tests check both paths against the CPU twin.
+    /// Sets the bucket scan limit (0: every search walks the grid; `u32::MAX`: every exact search for `F` > 1
+    /// scans the buckets; the nearest alone always walks the grid). The clusters found do not change; the tests check both paths against the CPU twin.
     pub fn set_bucket_scan_limit(&mut self, limit: u32) {
         self.bucket_scan_limit = limit;
     }

@@ -49,8 +49,8 @@ struct KmParams {
     // x: 1 / the largest flux component (has_flux), y: that component
     flux_scale: vec4<f32>,
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
-    // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search scans
-    // whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
+    // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
+    // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
     // last run's centroids): km_update moves a centroid left without members back to its initial sample
     options: vec4<u32>,
 }
