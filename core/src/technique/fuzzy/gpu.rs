@@ -6,10 +6,11 @@
 //! inverse distances). [`GpuKMeans::read_clusters`] and [`GpuKMeans::read_assignment`] read them back for the
 //! counts and overlays.
 //!
-//! Two things only the GPU does, for speed, without changing what is found (the tests compare both ways with
-//! the twin): with neighbour lists, a point whose four samples' lists hold fewer than `F` compatible clusters
-//! goes to a queue that a dispatch of its own searches (`km_fill`, `km_search`), so that the points beside it
-//! do not wait for its long search; and an exact search whose compatible centroids are few scans them whole from
+//! Three things only the GPU does, for speed, without changing what is found (the tests compare each with the
+//! twin): with neighbour lists, the four samples' lists are merged once per block of pixels between them
+//! (`km_blocks`) instead of by each of the block's points; a point whose block's list holds fewer than `F`
+//! compatible clusters goes to a queue that a dispatch of its own searches (`km_fill`, `km_search`), so that the
+//! points beside it do not wait for its long search; and an exact search whose compatible centroids are few scans them whole from
 //! an octahedral map of the centroids' normals (`find` in the shader) instead of walking the grid shell by shell
 //! until `F` are found, which for a point on a crease or a narrow face can visit every cell.
 
@@ -160,6 +161,7 @@ const ENTRIES: &[&str] = &[
     "km_assign",
     "km_update",
     "km_final",
+    "km_blocks",
     "km_fill",
     "queue_args",
     "km_search",
@@ -242,7 +244,11 @@ impl GpuKMeans {
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
         let (cell, dims) = grid_shape(params.bounds_extent, k);
         let cells = (dims[0] * dims[1] * dims[2]) as u64;
-        let assignment_bytes = m as u64 * f as u64 * 8;
+        let neighbours = params.neighbour_lists && g > 1;
+        // Per point F (cluster, inverse distance); with neighbour lists, then per block of pixels between four
+        // samples a count and up to 4 F clusters (km_blocks).
+        let block_words = if neighbours { samples as u64 * (1 + 4 * f as u64) } else { 0 };
+        let assignment_bytes = m as u64 * f as u64 * 8 + block_words * 4;
         let limit = gpu.device.limits().max_storage_buffer_binding_size;
         if assignment_bytes > limit {
             return Err(GpuError::InvalidSettings(format!(
@@ -275,7 +281,6 @@ impl GpuKMeans {
             return Ok(self.shape);
         }
         let max_flux = max_flux.filter(|v| v.is_finite() && *v > 0.0);
-        let neighbours = params.neighbour_lists && g > 1;
         let uniform = KmParamsUniform {
             point_count: m as u32,
             width: params.width,
@@ -336,6 +341,7 @@ impl GpuKMeans {
             run("acc_clear", over_k);
             if neighbours {
                 run("km_final", over_samples);
+                run("km_blocks", over_samples);
                 run("km_fill", over_points);
                 run("queue_args", (1, 1));
                 run("km_search", (0, 0));

@@ -7,8 +7,8 @@
 // added to the high word when the low word wraps), so a mean keeps 2^-24 of the bounds whatever the count.
 // Entry points, one dispatch each, in this order (see gpu.rs): km_init (not in a warm start: the centroids are
 // the last run's); per iteration grid_clear, grid_count, grid_scan, grid_fill, acc_clear, km_assign, km_update;
-// then the grid again, acc_clear, km_final (over the samples with neighbour lists, then km_fill, queue_args and
-// km_search, dispatched indirectly over km_fill's queue), rep_pick, rep_finish.
+// then the grid again, acc_clear, km_final (over the samples with neighbour lists, then km_blocks, km_fill,
+// queue_args and km_search, dispatched indirectly over km_fill's queue), rep_pick, rep_finish.
 // `KmParams`, `KmPoint` mirror core/src/technique/fuzzy/gpu.rs. The search is in kmeans_search.wgsl, Algorithm 2
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
 
@@ -71,7 +71,8 @@ struct KmPoint {
 // counts (NB), starts (NB + 1), limits (NB), items (K); then the search queue of km_fill: its length and the
 // points (up to all).
 @group(0) @binding(3) var<storage, read_write> work: array<atomic<u32>>;
-// Per point, F entries of (cluster, bitcast inverse distance); NONE where empty.
+// Per point, F entries of (cluster, bitcast inverse distance); NONE where empty. With neighbour lists, then the
+// blocks' lists (km_blocks).
 @group(0) @binding(4) var<storage, read_write> assignment: array<u32>;
 // The workgroups of km_search (x, y, z), written by queue_args from the queue's length: an indirect dispatch,
 // so that the points km_fill did not queue cost no workgroup.

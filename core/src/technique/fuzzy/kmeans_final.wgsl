@@ -1,7 +1,7 @@
 // Algorithm 2 of fuzzy/kmeans.wgsl (concatenated after it): every point's F nearest clusters with inverse
-// distances and the members they make; with neighbour lists, the samples by the search (km_final), the points
-// between them from their four samples' lists (km_fill), the long searches in a dispatch of their own
-// (km_search).
+// distances and the members they make; with neighbour lists, the samples by the search (km_final), the four
+// samples' lists merged per block of points between them (km_blocks), the points from their block's list
+// (km_fill), the long searches in a dispatch of their own (km_search).
 
 // Algorithm 2's output for point m: its F entries (the search state), and entry 0's cluster counts the point
 // as a member (count, the least member distance for the representative; with flux, normal and flux sums).
@@ -85,15 +85,76 @@ fn km_final(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
     record(m, p, f_max);
 }
 
-// A candidate from a neighbouring sample's list, once.
-fn consider_once(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if !listed(k) {
-        consider(k, p, n, f_max);
-    }
+// The lists of the blocks (with neighbour lists): after the points' F entries in `assignment`, per sample s
+// the block of pixels it is the top left corner of, the clusters of its four samples' lists, each once: a count,
+// then up to 4 F clusters.
+fn block_base(s: u32, f_max: u32) -> u32 {
+    return km.point_count * f_max * 2u + s * (1u + 4u * f_max);
 }
 
-// Algorithm 2 for the points off the sample grid (after km_final over the samples): the F nearest among the
-// clusters the four samples around the point list, by equation 7; the grid search where fewer than F of them
+// The samples (columns, rows) at the four corners of the block whose top left sample is (sx, sy): the next
+// column and row, clamped to the last (the image's last pixels lie after the last sample).
+fn block_corners(sx: u32, sy: u32) -> array<u32, 4> {
+    let g = max(km.gamma, 1u);
+    let w = max(km.width, 1u);
+    let h = max(km.height, 1u);
+    let sx1 = min(sx + 1u, (w - 1u) / g);
+    let sy1 = min(sy + 1u, (h - 1u) / g);
+    return array<u32, 4>(sy * g * w + sx * g, sy * g * w + sx1 * g, sy1 * g * w + sx * g, sy1 * g * w + sx1 * g);
+}
+
+// One invocation per block (after km_final over the samples): its four samples' lists in one, each cluster
+// once, in the order a point of the block would consider them (sample by sample, each list nearest first). The
+// gamma^2 - 1 points of the block read this list instead of merging the four themselves (kmeans.rs
+// `sample_corners`; docs/techniques/fuzzy.md, seventeenth session).
+@compute @workgroup_size(64)
+fn km_blocks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let s = global_index(id, groups);
+    if s >= km.sample_count {
+        return;
+    }
+    let g = max(km.gamma, 1u);
+    let per_row = (km.width + g - 1u) / g;
+    let f_max = clamp(km.fuzziness, 1u, MAX_F);
+    let corners = block_corners(s % per_row, s / per_row);
+    let base = block_base(s, f_max);
+    // The list so far in eight vectors of four (NONE where empty): a cluster is looked up with eight vector
+    // comparisons and appended with eight selects, in registers (a CPU rasterizer's SIMD lanes diverge less
+    // than with a loop over the list).
+    var list = array<vec4<u32>, 8>(
+        vec4<u32>(NONE), vec4<u32>(NONE), vec4<u32>(NONE), vec4<u32>(NONE),
+        vec4<u32>(NONE), vec4<u32>(NONE), vec4<u32>(NONE), vec4<u32>(NONE)
+    );
+    var n = 0u;
+    for (var c = 0u; c < 4u; c++) {
+        let sample = corners[c];
+        if sample >= km.point_count {
+            continue;
+        }
+        for (var f = 0u; f < f_max; f++) {
+            let k = assignment[sample * f_max * 2u + 2u * f];
+            if k == NONE {
+                break;
+            }
+            let kv = vec4<u32>(k);
+            var seen = false;
+            for (var v = 0u; v < 8u; v++) {
+                seen = seen || any(list[v] == kv);
+            }
+            if !seen {
+                assignment[base + 1u + n] = k;
+                for (var v = 0u; v < 8u; v++) {
+                    list[v] = select(list[v], kv, vec4<u32>(v * 4u) + vec4<u32>(0u, 1u, 2u, 3u) == vec4<u32>(n));
+                }
+                n++;
+            }
+        }
+    }
+    assignment[base] = n;
+}
+
+// Algorithm 2 for the points off the sample grid (after km_blocks): the F nearest among the clusters the four
+// samples around the point list (its block's list), by equation 7; the grid search where fewer than F of them
 // are compatible (kmeans.rs `sample_corners`, `neighbour_lists`).
 @compute @workgroup_size(64)
 fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -103,7 +164,6 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     }
     let g = km.gamma;
     let w = max(km.width, 1u);
-    let h = max(km.height, 1u);
     let x = m % w;
     let y = m / w;
     if x % g == 0u && y % g == 0u {
@@ -116,23 +176,10 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         return;
     }
     reset_best();
-    let x0 = x / g * g;
-    let y0 = y / g * g;
-    let x1 = min(x0 + g, (w - 1u) / g * g);
-    let y1 = min(y0 + g, (h - 1u) / g * g);
-    let corners = array<u32, 4>(y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1);
-    for (var c = 0u; c < 4u; c++) {
-        let s = corners[c];
-        if s >= km.point_count {
-            continue;
-        }
-        for (var f = 0u; f < f_max; f++) {
-            let k = assignment[s * f_max * 2u + 2u * f];
-            if k == NONE {
-                break;
-            }
-            consider_once(k, p.position.xyz, p.normal.xyz, f_max);
-        }
+    let base = block_base((y / g) * ((w + g - 1u) / g) + x / g, f_max);
+    let n = assignment[base];
+    for (var i = 0u; i < n; i++) {
+        consider(assignment[base + 1u + i], p.position.xyz, p.normal.xyz, f_max);
     }
     if best_n < f_max {
         // The grid search is long where it is needed (few compatible clusters near a crease): it goes to a

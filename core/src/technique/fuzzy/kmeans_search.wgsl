@@ -44,10 +44,6 @@ fn less(d: f32, k: u32, d2: f32, k2: u32) -> bool {
     return d < d2 || (d == d2 && k < k2);
 }
 
-fn listed(k: u32) -> bool {
-    return any(best_kl == vec4<u32>(k)) || any(best_kh == vec4<u32>(k));
-}
-
 // Insert (d, k) into the sorted list: the entries it precedes move one place down (the last one drops out).
 fn insert_best(d: f32, k: u32, f_max: u32) {
     let dv = vec4<f32>(d);
