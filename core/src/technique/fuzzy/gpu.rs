@@ -156,8 +156,6 @@ const ENTRIES: &[&str] = &[
     "grid_clear",
     "grid_count",
     "grid_scan",
-    "grid_fill",
-    "acc_clear",
     "km_assign",
     "km_update",
     "km_final",
@@ -305,7 +303,8 @@ impl GpuKMeans {
         let search_group =
             self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in]);
         let over_k = groups(k);
-        let over_cells = groups((cells as usize).max(NB as usize));
+        // grid_clear also clears the clusters' accumulators.
+        let over_cells = groups((cells as usize).max(NB as usize).max(k));
         let over_samples = groups(samples);
         let over_points = groups(m);
         let name = format!("fuzzy clustering ({})", self.label);
@@ -326,19 +325,16 @@ impl GpuKMeans {
                 run("grid_clear", over_cells);
                 run("grid_count", over_k);
                 run("grid_scan", (1, 1));
-                run("grid_fill", over_k);
             };
             if !warm {
                 run("km_init", over_k);
             }
             for _ in 0..params.iterations {
                 grid(&mut run);
-                run("acc_clear", over_k);
                 run("km_assign", over_samples);
                 run("km_update", over_k);
             }
             grid(&mut run);
-            run("acc_clear", over_k);
             if neighbours {
                 run("km_final", over_samples);
                 run("km_blocks", over_samples);

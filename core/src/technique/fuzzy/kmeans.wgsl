@@ -6,8 +6,8 @@
 // bounds and their normal as (n + 1) / 2, times 2^24, into 64-bit sums made of two atomic u32 (the carry is
 // added to the high word when the low word wraps), so a mean keeps 2^-24 of the bounds whatever the count.
 // Entry points, one dispatch each, in this order (see gpu.rs): km_init (not in a warm start: the centroids are
-// the last run's); per iteration grid_clear, grid_count, grid_scan, grid_fill, acc_clear, km_assign, km_update;
-// then the grid again, acc_clear, km_final (over the samples with neighbour lists, then km_blocks, km_fill,
+// the last run's); per iteration grid_clear (with the accumulators), grid_count, grid_scan (with the fill),
+// km_assign, km_update; then the grid again, km_final (over the samples with neighbour lists, then km_blocks, km_fill,
 // queue_args and km_search, dispatched indirectly over km_fill's queue), rep_pick, rep_finish.
 // `KmParams`, `KmPoint` mirror core/src/technique/fuzzy/gpu.rs. The search is in kmeans_search.wgsl, Algorithm 2
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
@@ -206,6 +206,9 @@ fn seed(k: u32) {
     }
 }
 
+// The grid's cell counts and the normal buckets cleared, and the clusters' accumulators (and km_fill's queue)
+// for the assignment that follows the grid: one dispatch over max(cells, NB, K) (the grid's passes do not touch
+// the accumulators; km_update, before it, has read them).
 @compute @workgroup_size(64)
 fn grid_clear(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < km.cells {
@@ -214,6 +217,17 @@ fn grid_clear(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < NB {
         atomicStore(&work[nb_counts_base() + id.x], 0u);
         atomicStore(&work[nb_limits_base() + id.x], NONE);
+    }
+    let k = id.x;
+    if k < km.cluster_count {
+        for (var j = 0u; j < ACC; j++) {
+            atomicStore(&work[k * ACC + j], 0u);
+        }
+        atomicStore(&work[k * ACC + ACC_BEST], NONE);
+        atomicStore(&work[k * ACC + ACC_REP], NONE);
+    }
+    if k == 0u {
+        atomicStore(&work[queue_base()], 0u);
     }
 }
 
@@ -241,7 +255,9 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>) {
 
 var<workgroup> scan_partial: array<u32, 256>;
 
-// One workgroup: exclusive prefix sum of the cell counts into the starts; the counts become the fill cursors.
+// One workgroup: exclusive prefix sum of the cell counts into the starts, the counts becoming the fill cursors;
+// then the centroids into their cells and normal buckets (one dispatch instead of two: on a CPU rasterizer a
+// dispatch costs about as much as filling a few thousand centroids).
 @compute @workgroup_size(256)
 fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
     let t = lid.x;
@@ -292,14 +308,14 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
         atomicStore(&work[counts_base() + c], 0u);
         running += n;
     }
+    storageBarrier();
+    for (var k = t; k < km.cluster_count; k += 256u) {
+        fill_cell(k);
+    }
 }
 
-@compute @workgroup_size(64)
-fn grid_fill(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k = id.x;
-    if k >= km.cluster_count {
-        return;
-    }
+// Centroid k into its cell's and its normal bucket's lists (the starts scanned, the cursors at zero).
+fn fill_cell(k: u32) {
     let c = centroid(k);
     if c.position.w > 0.5 {
         let cell = cell_index(cell_of(c.position.xyz));
@@ -308,22 +324,6 @@ fn grid_fill(@builtin(global_invocation_id) id: vec3<u32>) {
         let b = normal_bucket(c.normal.xyz);
         let nb_slot = atomicLoad(&work[nb_starts_base() + b]) + atomicAdd(&work[nb_counts_base() + b], 1u);
         atomicStore(&work[nb_items_base() + nb_slot], k);
-    }
-}
-
-@compute @workgroup_size(64)
-fn acc_clear(@builtin(global_invocation_id) id: vec3<u32>) {
-    let k = id.x;
-    if k >= km.cluster_count {
-        return;
-    }
-    for (var j = 0u; j < ACC; j++) {
-        atomicStore(&work[k * ACC + j], 0u);
-    }
-    atomicStore(&work[k * ACC + ACC_BEST], NONE);
-    atomicStore(&work[k * ACC + ACC_REP], NONE);
-    if k == 0u {
-        atomicStore(&work[queue_base()], 0u);
     }
 }
 
