@@ -169,6 +169,73 @@ fn bad_parameters_and_a_sky_only_view_give_defined_images() {
     assert_eq!(report.indirect.unwrap().counts.figures["k_sp"], 0.0);
 }
 
+/// `km_blocks`: each block's merged list is its four corner samples' lists, each cluster once, in the order of
+/// the corners and of each list (what a pixel of the block considered before), on an image whose last column and
+/// row of pixels lie after the last sample (gamma 3 on 64 x 47: clamped corners).
+#[test]
+fn a_blocks_merged_list_holds_each_cluster_of_its_four_samples_once() {
+    use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
+    use shadowlab_core::technique::fuzzy::kmeans::{self, KMeansParams, Point};
+    let gpu = gpu();
+    let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
+    let (w, h) = (64u32, 47u32);
+    let points: Vec<Point> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 / w as f32, (i / w) as f32 / h as f32);
+            let (position, normal) = if (i / 5 + i / 200) % 3 == 0 {
+                (Vec3::new(x * 4.0 - 2.0, 0.0, y * 4.0 - 2.0), Vec3::Y)
+            } else {
+                (Vec3::new(x * 4.0 - 2.0, y * 3.0, -2.0), Vec3::Z)
+            };
+            Point { position, normal, valid: i % 17 != 3 }
+        })
+        .collect();
+    let buffer = upload_points(&gpu, &points);
+    let mut km = GpuKMeans::new(&gpu, "test");
+    for (gamma, f) in [(3u32, 6usize), (2, 8), (4, 3)] {
+        let p = KMeansParams {
+            clusters: 60,
+            iterations: 4,
+            gamma,
+            fuzziness: f,
+            n_t: 3f32.sqrt() / 2.0,
+            min_distance: 1e-6,
+            max_ring: 0,
+            neighbour_lists: true,
+            width: w,
+            height: h,
+            bounds_min: Vec3::new(-2.0, 0.0, -2.0),
+            bounds_extent: Vec3::new(4.0, 3.0, 4.0),
+        };
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
+        gpu.queue.submit([encoder.finish()]);
+        let (assignment, _) = km.read_assignment(&gpu).unwrap();
+        let blocks = km.read_block_lists(&gpu, &p).unwrap();
+        let (g, wu) = (gamma as usize, w as usize);
+        let per_row = wu.div_ceil(g);
+        assert_eq!(blocks.len(), per_row * (h as usize).div_ceil(g), "gamma {gamma}");
+        let mut longest = 0;
+        for (s, list) in blocks.iter().enumerate() {
+            // The block's top left pixel: its corners as kmeans.rs finds them for a pixel of the block.
+            let (sx, sy) = (s % per_row, s / per_row);
+            let corners = kmeans::sample_corners(&p, sy * g * wu + sx * g);
+            let mut expected = Vec::new();
+            for c in corners {
+                for &k in assignment[c * f..c * f + f].iter().take_while(|&&k| k != u32::MAX) {
+                    if !expected.contains(&k) {
+                        expected.push(k);
+                    }
+                }
+            }
+            assert_eq!(list, &expected, "gamma {gamma} F {f} block {s}");
+            longest = longest.max(list.len());
+        }
+        // The four lists differ somewhere: a block holds more than one sample's F.
+        assert!(longest > f, "gamma {gamma}: the longest merged list has {longest} clusters");
+    }
+}
+
 /// Surface points as the GPU k-means reads them (the `GpuVpl` layout; position w: 1 when valid).
 fn upload_points(
     gpu: &shadowlab_core::gpu::GpuContext,

@@ -365,6 +365,23 @@ impl GpuKMeans {
         Ok(bytemuck::pod_collect_to_vec(&bytes[k * 48..2 * k * 48]))
     }
 
+    /// The blocks' merged lists of the last run with neighbour lists (`km_blocks`): per sample, the clusters of
+    /// the four samples at the corners of the block of pixels it is the top left corner of, each once, in the
+    /// order `km_fill` considers them; empty without neighbour lists. For tests and inspection.
+    pub fn read_block_lists(&self, gpu: &GpuContext, params: &KMeansParams) -> Result<Vec<Vec<u32>>, GpuError> {
+        let Some(buffer) = &self.assignment else { return Ok(Vec::new()) };
+        let RunShape { points: m, fuzziness: f, .. } = self.shape;
+        let g = params.gamma.max(1) as usize;
+        let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
+        let stride = 1 + 4 * f;
+        if m == 0 || !params.neighbour_lists || g == 1 || buffer.size() < ((m * f * 2 + samples * stride) * 4) as u64 {
+            return Ok(Vec::new());
+        }
+        let bytes = readback::read_buffer(gpu, buffer)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[m * f * 8..(m * f * 2 + samples * stride) * 4]);
+        Ok(words.chunks_exact(stride).map(|block| block[1..1 + (block[0] as usize).min(4 * f)].to_vec()).collect())
+    }
+
     /// The assignment of the last run: per point, `F` (cluster or `u32::MAX`, inverse distance).
     pub fn read_assignment(&self, gpu: &GpuContext) -> Result<(Vec<u32>, Vec<f32>), GpuError> {
         let Some(buffer) = &self.assignment else { return Ok((Vec::new(), Vec::new())) };
