@@ -174,6 +174,46 @@ pub fn vals_of(vpls: &[Vpl], centres: &[(Vec3, Vec3)], assignment: &[u32]) -> Ve
     vals
 }
 
+/// Each VAL's `Delta` from how its VPLs' flux spreads (`size=spread`, beyond the paper), instead of the diagonal
+/// of their bounding rectangle (section 6): the side of the square whose uniform emission has the same
+/// flux-weighted second moment in the VAL's plane, `sqrt(6)` times the RMS distance of the VPLs from their
+/// flux-weighted centre (a uniform square of side `W` has `W^2 / 6`), at most the rectangle's diagonal. A VAL
+/// whose flux comes from a small patch with a few faint VPLs far off gets the patch's size, and a square VAL its
+/// side rather than its diagonal: the penumbra of a square light of side `W` is `W (d - z) / z` across it. Flux is
+/// weighed by the sum of its RGB components. A VAL without VPLs (or with one) gets 0.
+pub fn spread_sizes(clustering: &Clustering, vpls: &[Vpl]) -> Vec<f32> {
+    let m = clustering.vals.len();
+    let mut weight = vec![0.0f64; m];
+    let mut first = vec![glam::DVec2::ZERO; m];
+    let mut second = vec![0.0f64; m];
+    for (v, &k) in vpls.iter().zip(&clustering.assignment) {
+        let Some(val) = clustering.vals.get(k as usize) else { continue };
+        let w = (v.flux.x + v.flux.y + v.flux.z) as f64;
+        if w.is_nan() || w <= 0.0 || !w.is_finite() {
+            continue;
+        }
+        let rel = v.position - val.position;
+        let q = glam::DVec2::new(rel.dot(val.axis_u) as f64, rel.dot(val.axis_v) as f64);
+        let k = k as usize;
+        weight[k] += w;
+        first[k] += q * w;
+        second[k] += q.length_squared() * w;
+    }
+    clustering
+        .vals
+        .iter()
+        .enumerate()
+        .map(|(k, val)| {
+            if weight[k] <= 0.0 {
+                return 0.0;
+            }
+            let mean = first[k] / weight[k];
+            let variance = (second[k] / weight[k] - mean.length_squared()).max(0.0);
+            ((6.0 * variance).sqrt() as f32).min(val.size())
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,5 +319,40 @@ mod tests {
         let o = cluster(&opposite, &params(1), None);
         assert!(o.vals[0].normal.is_finite() && (o.vals[0].normal.length() - 1.0).abs() < 1e-4);
         assert!(cluster(&[], &params(30), None).vals.is_empty());
+    }
+
+    #[test]
+    fn a_vals_spread_size_is_the_side_of_its_uniform_square_and_ignores_faint_outliers() {
+        let val = |vpls: &[Vpl]| {
+            let assignment = vec![0u32; vpls.len()];
+            let vals = vals_of(vpls, &[(Vec3::ZERO, Vec3::Y)], &assignment);
+            Clustering { vals, assignment, non_empty: 1 }
+        };
+        let at = |x: f32, z: f32, flux: f32| Vpl {
+            position: Vec3::new(x, 0.0, z),
+            normal: Vec3::Y,
+            flux: Vec3::splat(flux),
+            light: 0,
+            from: Vec3::ZERO,
+        };
+        // A 41 x 41 grid over a 2 m square: side 2 (the grid's variance is (n + 1) / (n - 1) of the continuum's),
+        // the rectangle's diagonal 2 sqrt(2).
+        let square: Vec<Vpl> =
+            (0..41 * 41).map(|i| at((i % 41) as f32 / 20.0 - 1.0, (i / 41) as f32 / 20.0 - 1.0, 1.0)).collect();
+        let c = val(&square);
+        let spread = spread_sizes(&c, &square)[0];
+        assert!((spread - 2.0 * (42.0f32 / 40.0).sqrt()).abs() < 1e-3, "{spread}");
+        assert!((c.vals[0].size() - 2.0 * 2f32.sqrt()).abs() < 1e-4);
+        // The same patch with one VPL of a thousandth of its flux 10 m away: the rectangle grows past 10 m, the
+        // spread barely moves.
+        let mut outlier = square.clone();
+        outlier.push(at(10.0, 0.0, 1e-3 * square.len() as f32));
+        let c = val(&outlier);
+        let spread = spread_sizes(&c, &outlier)[0];
+        assert!(c.vals[0].size() > 10.0 && spread < 2.4, "{} {spread}", c.vals[0].size());
+        // One VPL, or none with flux: no size.
+        assert_eq!(spread_sizes(&val(&square[..1]), &square[..1]), vec![0.0]);
+        let dark: Vec<Vpl> = square.iter().map(|v| Vpl { flux: Vec3::ZERO, ..*v }).collect();
+        assert_eq!(spread_sizes(&val(&dark), &dark), vec![0.0]);
     }
 }

@@ -146,6 +146,8 @@ pub struct VirtualAreaLights {
     uniform: wgpu::Buffer,
     vpls: Arc<VplSet>,
     clustering: Clustering,
+    /// Each VAL's `Delta` this frame (`size`).
+    sizes: Vec<f32>,
     previous_centres: Vec<(Vec3, Vec3)>,
     casters: Vec<ParaboloidCaster>,
     batch_size: usize,
@@ -200,6 +202,7 @@ impl VirtualAreaLights {
             uniform,
             vpls: Arc::default(),
             clustering: Clustering::default(),
+            sizes: Vec::new(),
             previous_centres: Vec::new(),
             casters: Vec::new(),
             batch_size: 1,
@@ -338,17 +341,23 @@ impl Technique for VirtualAreaLights {
                 *r = r.max(v.position.distance(*c));
             }
         }
+        // Delta of the penumbra estimate (the near plane stays a share of the rectangle's size).
+        self.sizes = match self.params.size.as_str() {
+            "spread" => kmeans::spread_sizes(&self.clustering, vpls),
+            _ => self.clustering.vals.iter().map(|v| v.size()).collect(),
+        };
         let gpu_vals: Vec<GpuVal> = self
             .clustering
             .vals
             .iter()
             .zip(&centres)
             .zip(&radius)
-            .map(|((v, &centre), &r)| {
+            .zip(&self.sizes)
+            .map(|(((v, &centre), &r), &size)| {
                 let near = (NEAR_FRACTION * v.size()).max(self.scene_size * 1e-5);
                 self.casters.push(ParaboloidCaster { centre, normal: v.normal, near, far });
                 GpuVal {
-                    centre: centre.extend(v.size()).to_array(),
+                    centre: centre.extend(size).to_array(),
                     normal: v.normal.extend(v.count as f32).to_array(),
                     depth: [near, far, r + self.scene_size * 1e-6, 0.0],
                 }

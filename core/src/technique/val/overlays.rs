@@ -99,7 +99,15 @@ impl VirtualAreaLights {
                 vec![
                     format!("VAL {index} ({} with VPLs)", c.non_empty),
                     format!("{} VPLs, flux ({:.3}, {:.3}, {:.3})", v.count, v.flux.x, v.flux.y, v.flux.z),
-                    format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
+                    match self.sizes.get(index).filter(|&&d| d != v.size()) {
+                        Some(d) => format!(
+                            "rectangle {:.3} x {:.3} (diagonal {:.3}), Δ {d:.3} from the spread",
+                            2.0 * v.half_u,
+                            2.0 * v.half_v,
+                            v.size()
+                        ),
+                        None => format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
+                    },
                     format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
                 ]
             }

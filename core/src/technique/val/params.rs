@@ -15,6 +15,10 @@ pub struct ValParams {
     pub length_fraction: f32,
     /// `pcss`, `cssm` or `hard`.
     pub visibility: String,
+    /// `Delta`, each VAL's size in the penumbra estimate: `bounds`, the diagonal of its VPLs' bounding rectangle
+    /// (section 6), or `spread`, the side of the square with its VPLs' flux-weighted second moment
+    /// ([`super::kmeans::spread_sizes`], beyond the paper).
+    pub size: String,
     pub shadow_resolution: u32,
     /// Side of the blocker-search and PCF grid.
     pub grid: u32,
@@ -69,6 +73,7 @@ impl Default for ValParams {
             // L = the diagonal to L = a tenth of it.
             length_fraction: 0.1,
             visibility: "pcss".into(),
+            size: "bounds".into(),
             shadow_resolution: 256,
             grid: 5,
             bias_world: 0.01,
@@ -100,6 +105,7 @@ impl Default for ValParams {
 }
 
 const VISIBILITY_CHOICES: &[&str] = &["pcss", "cssm", "hard"];
+const SIZE_CHOICES: &[&str] = &["bounds", "spread"];
 const CLUSTERING_CHOICES: &[&str] = &["gpu", "cpu"];
 const RANK_CHOICES: &[&str] = &["flux", "rule"];
 
@@ -207,6 +213,15 @@ impl ValParams {
                 value: ParamValue::Choice(p.visibility.clone()),
             },
             Param {
+                key: "size",
+                label: "VAL size (Δ)",
+                help: "The size in the penumbra estimate: bounds: the diagonal of the VPLs' bounding rectangle (the \
+                       paper); spread: the side of the square with the VPLs' flux-weighted second moment (a faint \
+                       VPL far off does not widen it)",
+                kind: ParamKind::Choice(SIZE_CHOICES),
+                value: ParamValue::Choice(p.size.clone()),
+            },
+            Param {
                 key: "shadow_res",
                 label: "Map resolution",
                 help: "Texels per side of each VAL's paraboloid map",
@@ -308,6 +323,7 @@ impl ValParams {
             ("w_a", ParamValue::Float(v)) => p.w_a = *v,
             ("length", ParamValue::Float(v)) => p.length_fraction = *v,
             ("visibility", ParamValue::Choice(v)) => p.visibility = v.clone(),
+            ("size", ParamValue::Choice(v)) => p.size = v.clone(),
             ("shadow_res", ParamValue::Int(v)) => p.shadow_resolution = *v as u32,
             ("grid", ParamValue::Int(v)) => p.grid = *v as u32,
             ("bias", ParamValue::Float(v)) => p.bias_world = *v,
