@@ -146,8 +146,6 @@ pub struct VirtualAreaLights {
     uniform: wgpu::Buffer,
     vpls: Arc<VplSet>,
     clustering: Clustering,
-    /// Each VAL's `Delta` this frame (`size`).
-    sizes: Vec<f32>,
     previous_centres: Vec<(Vec3, Vec3)>,
     casters: Vec<ParaboloidCaster>,
     batch_size: usize,
@@ -202,7 +200,6 @@ impl VirtualAreaLights {
             uniform,
             vpls: Arc::default(),
             clustering: Clustering::default(),
-            sizes: Vec::new(),
             previous_centres: Vec::new(),
             casters: Vec::new(),
             batch_size: 1,
@@ -211,6 +208,16 @@ impl VirtualAreaLights {
             counts: TechniqueCounts::default(),
             clustering_ms: 0.0,
             maps: MapGeometry::default(),
+        }
+    }
+}
+
+impl VirtualAreaLights {
+    /// Each VAL's `Delta` in the penumbra estimate (`size`): its rectangle's diagonal or its VPLs' spread.
+    fn sizes(&self, vpls: &[crate::vpl::Vpl]) -> Vec<f32> {
+        match self.params.size.as_str() {
+            "spread" => kmeans::spread_sizes(&self.clustering, vpls),
+            _ => self.clustering.vals.iter().map(|v| v.size()).collect(),
         }
     }
 }
@@ -342,17 +349,14 @@ impl Technique for VirtualAreaLights {
             }
         }
         // Delta of the penumbra estimate (the near plane stays a share of the rectangle's size).
-        self.sizes = match self.params.size.as_str() {
-            "spread" => kmeans::spread_sizes(&self.clustering, vpls),
-            _ => self.clustering.vals.iter().map(|v| v.size()).collect(),
-        };
+        let sizes = self.sizes(vpls);
         let gpu_vals: Vec<GpuVal> = self
             .clustering
             .vals
             .iter()
             .zip(&centres)
             .zip(&radius)
-            .zip(&self.sizes)
+            .zip(&sizes)
             .map(|(((v, &centre), &r), &size)| {
                 let near = (NEAR_FRACTION * v.size()).max(self.scene_size * 1e-5);
                 self.casters.push(ParaboloidCaster { centre, normal: v.normal, near, far });

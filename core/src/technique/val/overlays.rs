@@ -99,7 +99,7 @@ impl VirtualAreaLights {
                 vec![
                     format!("VAL {index} ({} with VPLs)", c.non_empty),
                     format!("{} VPLs, flux ({:.3}, {:.3}, {:.3})", v.count, v.flux.x, v.flux.y, v.flux.z),
-                    match self.sizes.get(index).filter(|&&d| d != v.size()) {
+                    match self.sizes(&self.vpls.vpls).get(index).filter(|&&d| d != v.size()) {
                         Some(d) => format!(
                             "rectangle {:.3} x {:.3} (diagonal {:.3}), Δ {d:.3} from the spread",
                             2.0 * v.half_u,
