@@ -1,5 +1,6 @@
 //! What fuzzy clustering shows and teaches: its overlay layers (clusters of shading points and of VPLs, the
-//! probe's memberships), their legends and hover texts, and the Explain steps of the paper.
+//! probe's memberships), their legends and hover texts, the per-pixel cluster maps and the probe's shadow rays,
+//! and the Explain steps of the paper.
 
 use super::*;
 
@@ -272,5 +273,75 @@ impl FuzzyClustering {
             l
         }));
         layers
+    }
+}
+
+impl FuzzyClustering {
+    /// The per-pixel ID maps of the shading-point clusters (hard, and blended by the mode's weights) from the
+    /// read-back assignment.
+    pub(super) fn build_pixel_maps(&mut self) {
+        let ins = &mut self.inspection;
+        let (w, h) = ins.size;
+        let f = self.sp_kmeans.shape.fuzziness.max(1);
+        let pixels = w as usize * h as usize;
+        if ins.sp_assignment.is_empty() || ins.sp_assignment.len() != pixels * f {
+            return;
+        }
+        ins.hard_map = Some(Arc::new(ins.sp_assignment.iter().step_by(f).copied().collect()));
+        let mode = self.params.shade_mode();
+        let blend: Vec<[u8; 4]> = (0..pixels)
+            .map(|m| {
+                let e = &ins.sp_assignment[m * f..m * f + f];
+                if e[0] == u32::MAX {
+                    return [0, 0, 0, 0];
+                }
+                let weights = kmeans::weights(mode, e, &ins.sp_inverse[m * f..m * f + f]);
+                let mut c = [0.0f32; 3];
+                for (&k, &wt) in e.iter().zip(&weights) {
+                    if k != u32::MAX && wt > 0.0 {
+                        let col = index_color(k as usize);
+                        for i in 0..3 {
+                            c[i] += wt * col[i];
+                        }
+                    }
+                }
+                [(c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8, 140]
+            })
+            .collect();
+        ins.blend_map = Some(Arc::new(blend));
+    }
+
+    /// The probe overlay: the chosen pixel's F clusters (their representatives) and a shadow ray from each to
+    /// every light (at most 4,096 lines), green when visible, red when blocked, traced on the CPU through the
+    /// BVH with the same offsets as the GPU.
+    pub(super) fn probe_overlay(&self, ctx: &FrameContext, lights: &[GpuPoint]) -> Vec<Overlay> {
+        let (w, h) = self.inspection.size;
+        let (x, y) = (self.params.probe_x, self.params.probe_y);
+        let f = self.sp_kmeans.shape.fuzziness;
+        if x < 0 || y < 0 || x as u32 >= w || y as u32 >= h || self.inspection.sp_assignment.is_empty() {
+            return Vec::new();
+        }
+        let Some(bvh) = &self.bvh else { return Vec::new() };
+        let pixel = (y as usize) * w as usize + x as usize;
+        let entries = &self.inspection.sp_assignment[pixel * f..pixel * f + f];
+        let live: Vec<&GpuPoint> = lights.iter().filter(|l| l.exists()).collect();
+        let used = entries.iter().take_while(|&&k| k != u32::MAX).count().max(1);
+        let stride = (used * live.len()).div_ceil(4096).max(1);
+        let mut out = Vec::new();
+        for &k in entries.iter().take_while(|&&k| k != u32::MAX) {
+            let Some(rep) = self.inspection.sp_clusters.get(k as usize).filter(|r| r.exists()) else { continue };
+            out.push(Overlay::Point { position: rep.position(), color: index_color(k as usize), radius_px: 7.0 });
+            let eps = self.params.ray_bias * (ctx.camera.position - rep.position()).length().max(1.0);
+            let origin = rep.position() + rep.normal() * eps;
+            for light in live.iter().step_by(stride) {
+                let target = light.position() + light.normal() * eps;
+                let to = target - origin;
+                let d = to.length();
+                let visible = d <= 2.0 * eps || bvh.closest_hit(origin, to / d, d - eps).is_none();
+                let color = if visible { [0.2, 1.0, 0.3, 0.8] } else { [1.0, 0.2, 0.2, 0.8] };
+                out.push(Overlay::Line { from: rep.position(), to: light.position(), color });
+            }
+        }
+        out
     }
 }
