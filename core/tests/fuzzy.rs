@@ -193,20 +193,7 @@ fn a_blocks_merged_list_holds_each_cluster_of_its_four_samples_once() {
     let buffer = upload_points(&gpu, &points);
     let mut km = GpuKMeans::new(&gpu, "test");
     for (gamma, f) in [(3u32, 6usize), (2, 8), (4, 3)] {
-        let p = KMeansParams {
-            clusters: 60,
-            iterations: 4,
-            gamma,
-            fuzziness: f,
-            n_t: 3f32.sqrt() / 2.0,
-            min_distance: 1e-6,
-            max_ring: 0,
-            neighbour_lists: true,
-            width: w,
-            height: h,
-            bounds_min: Vec3::new(-2.0, 0.0, -2.0),
-            bounds_extent: Vec3::new(4.0, 3.0, 4.0),
-        };
+        let p = KMeansParams { iterations: 4, ..room_kmeans_params(w, h, 60, gamma, f, true) };
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
         gpu.queue.submit([encoder.finish()]);
@@ -233,6 +220,32 @@ fn a_blocks_merged_list_holds_each_cluster_of_its_four_samples_once() {
         }
         // The four lists differ somewhere: a block holds more than one sample's F.
         assert!(longest > f, "gamma {gamma}: the longest merged list has {longest} clusters");
+    }
+}
+
+/// The GPU k-means tests' parameters: an image of `w` x `h` points of the room of bounds (-2, 0, -2) + (4, 3, 4),
+/// the paper's n_t, exact searches, neighbour lists as given; the rest as each test sets it.
+fn room_kmeans_params(
+    w: u32,
+    h: u32,
+    clusters: usize,
+    gamma: u32,
+    fuzziness: usize,
+    neighbour_lists: bool,
+) -> shadowlab_core::technique::fuzzy::kmeans::KMeansParams {
+    shadowlab_core::technique::fuzzy::kmeans::KMeansParams {
+        clusters,
+        iterations: 6,
+        gamma,
+        fuzziness,
+        n_t: 3f32.sqrt() / 2.0,
+        min_distance: 1e-6,
+        max_ring: 0,
+        neighbour_lists,
+        width: w,
+        height: h,
+        bounds_min: Vec3::new(-2.0, 0.0, -2.0),
+        bounds_extent: Vec3::new(4.0, 3.0, 4.0),
     }
 }
 
@@ -301,20 +314,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
                 (600, 3, 4, 0, true),
                 (150, 6, 3, 1, true),
             ] {
-                let p = KMeansParams {
-                    clusters: k,
-                    iterations: 6,
-                    gamma,
-                    fuzziness: f,
-                    n_t: 3f32.sqrt() / 2.0,
-                    min_distance: 1e-6,
-                    max_ring,
-                    neighbour_lists,
-                    width: w,
-                    height: h,
-                    bounds_min: Vec3::new(-2.0, 0.0, -2.0),
-                    bounds_extent: Vec3::new(4.0, 3.0, 4.0),
-                };
+                let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, neighbour_lists) };
                 let cpu = kmeans::cluster(&points, &p);
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
@@ -371,20 +371,8 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
             .collect()
     };
     let upload = |points: &[Point]| upload_points(&gpu, points);
-    let p = KMeansParams {
-        clusters: 60,
-        iterations: 6,
-        gamma: 2,
-        fuzziness: 4,
-        n_t: 3f32.sqrt() / 2.0,
-        min_distance: 1e-6,
-        max_ring: 0,
-        neighbour_lists: true,
-        width: w,
-        height: h,
-        bounds_min: Vec3::new(-2.0, 0.0, -2.0),
-        bounds_extent: Vec3::new(4.5, 3.0, 4.0),
-    };
+    // The room's bounds widened along x: the shifted views stay inside them.
+    let p = KMeansParams { bounds_extent: Vec3::new(4.5, 3.0, 4.0), ..room_kmeans_params(w, h, 60, 2, 4, true) };
     let mut km = GpuKMeans::new(&gpu, "test");
     let run = |km: &mut GpuKMeans, points: &wgpu::Buffer, p: &KMeansParams, warm: bool| {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

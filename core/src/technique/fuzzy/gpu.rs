@@ -10,9 +10,10 @@
 //! twin): with neighbour lists, the four samples' lists are merged once per block of pixels between them
 //! (`km_blocks`) instead of by each of the block's points; a point whose block's list holds fewer than `F`
 //! compatible clusters goes to a queue that a dispatch of its own searches (`km_fill`, `km_search`), so that the
-//! points beside it do not wait for its long search; and an exact search whose compatible centroids are few scans them whole from
-//! an octahedral map of the centroids' normals (`find` in the shader) instead of walking the grid shell by shell
-//! until `F` are found, which for a point on a crease or a narrow face can visit every cell.
+//! points beside it do not wait for its long search; and an exact search whose compatible centroids are few
+//! scans them whole from an octahedral map of the centroids' normals (`find` in the shader) instead of walking
+//! the grid shell by shell until `F` are found, which for a point on a crease or a narrow face can visit every
+//! cell.
 
 use glam::Vec3;
 

@@ -189,7 +189,7 @@ pub fn spread_sizes(clustering: &Clustering, vpls: &[Vpl]) -> Vec<f32> {
     for (v, &k) in vpls.iter().zip(&clustering.assignment) {
         let Some(val) = clustering.vals.get(k as usize) else { continue };
         let w = (v.flux.x + v.flux.y + v.flux.z) as f64;
-        if w.is_nan() || w <= 0.0 || !w.is_finite() {
+        if !w.is_finite() || w <= 0.0 {
             continue;
         }
         let rel = v.position - val.position;

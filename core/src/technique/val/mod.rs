@@ -220,9 +220,7 @@ impl VirtualAreaLights {
             _ => self.clustering.vals.iter().map(|v| v.size()).collect(),
         }
     }
-}
 
-impl VirtualAreaLights {
     /// Step 2's k-means settings for this frame's scene size.
     fn kmeans_params(&self) -> KMeansParams {
         let m = (self.params.vals as usize).min(MAX_VALS);
