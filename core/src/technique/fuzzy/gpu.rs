@@ -308,45 +308,56 @@ impl GpuKMeans {
         let over_cells = groups((cells as usize).max(NB as usize).max(k));
         let over_samples = groups(samples);
         let over_points = groups(m);
-        let name = format!("fuzzy clustering ({})", self.label);
-        timer.compute_pass(encoder, &name, |pass| {
+        // Three timed passes (the stages of the report's per-pass times; one pass cost the same): Algorithm 1's
+        // iterations; the grid of the final centroids and Algorithm 2's assignment (the samples' searches, the
+        // blocks' lists, the fill from them); the searches of the points the fill queued and the representatives.
+        let stage = |what: &str| format!("fuzzy clustering ({}): {what}", self.label);
+        let dispatch = |pass: &mut wgpu::ComputePass<'_>, entry: &str, (x, y): (u32, u32)| {
+            pass.set_pipeline(self.pipeline(entry));
+            if entry == "km_search" {
+                // `km_search` runs over `km_fill`'s queue: its workgroups come from `queue_args`.
+                pass.set_bind_group(0, &search_group, &[]);
+                pass.dispatch_workgroups_indirect(&self.search_args, 0);
+                pass.set_bind_group(0, &group, &[]);
+            } else {
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        };
+        let grid = |pass: &mut wgpu::ComputePass<'_>| {
+            dispatch(pass, "grid_clear", over_cells);
+            dispatch(pass, "grid_count", over_k);
+            dispatch(pass, "grid_scan", (1, 1));
+        };
+        timer.compute_pass(encoder, &stage("iterations"), |pass| {
             pass.set_bind_group(0, &group, &[]);
-            // `km_search` runs over `km_fill`'s queue: its workgroups come from `queue_args`.
-            let mut run = |entry: &str, (x, y): (u32, u32)| {
-                pass.set_pipeline(self.pipeline(entry));
-                if entry == "km_search" {
-                    pass.set_bind_group(0, &search_group, &[]);
-                    pass.dispatch_workgroups_indirect(&self.search_args, 0);
-                    pass.set_bind_group(0, &group, &[]);
-                } else {
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-            };
-            let grid = |run: &mut dyn FnMut(&str, (u32, u32))| {
-                run("grid_clear", over_cells);
-                run("grid_count", over_k);
-                run("grid_scan", (1, 1));
-            };
             if !warm {
-                run("km_init", over_k);
+                dispatch(pass, "km_init", over_k);
             }
             for _ in 0..params.iterations {
-                grid(&mut run);
-                run("km_assign", over_samples);
-                run("km_update", over_k);
+                grid(pass);
+                dispatch(pass, "km_assign", over_samples);
+                dispatch(pass, "km_update", over_k);
             }
-            grid(&mut run);
+        });
+        timer.compute_pass(encoder, &stage("assignment"), |pass| {
+            pass.set_bind_group(0, &group, &[]);
+            grid(pass);
             if neighbours {
-                run("km_final", over_samples);
-                run("km_blocks", over_samples);
-                run("km_fill", over_points);
-                run("queue_args", (1, 1));
-                run("km_search", (0, 0));
+                dispatch(pass, "km_final", over_samples);
+                dispatch(pass, "km_blocks", over_samples);
+                dispatch(pass, "km_fill", over_points);
+                dispatch(pass, "queue_args", (1, 1));
             } else {
-                run("km_final", over_points);
+                dispatch(pass, "km_final", over_points);
             }
-            run("rep_pick", over_points);
-            run("rep_finish", over_k);
+        });
+        timer.compute_pass(encoder, &stage("search"), |pass| {
+            pass.set_bind_group(0, &group, &[]);
+            if neighbours {
+                dispatch(pass, "km_search", (0, 0));
+            }
+            dispatch(pass, "rep_pick", over_points);
+            dispatch(pass, "rep_finish", over_k);
         });
         Ok(self.shape)
     }

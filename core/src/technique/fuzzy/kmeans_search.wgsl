@@ -124,11 +124,22 @@ fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
 // F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
 fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     reset_best();
+    search_shells(p, n, f_max, 0, 0x7fffffff, 0xffffffffu);
+}
+
+// The shell `search_shells` stopped before when it returned false.
+var<private> next_shell: i32;
+
+// The shells from r0 (the search state holding those before it) until the search is finished (true, as `search`
+// would end it) or, unfinished (false, `next_shell` the next one), after shell max_r or after the first shell
+// that brings the block walked to more than `budget` cells.
+fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, budget: u32) -> bool {
     let c = cell_of(p);
     let dims = vec3<i32>(km.dims.xyz);
     let far = max(c, dims - 1 - c);
     let reach = max(far.x, max(far.y, far.z));
-    var r = 0;
+    var r = r0;
+    var finished = false;
     loop {
         let lo = max(c - vec3<i32>(r), vec3<i32>(0));
         let hi = min(c + vec3<i32>(r), dims - 1);
@@ -152,10 +163,17 @@ fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
         // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
         let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
         if (r >= 1 && (complete || ring_done)) || r >= reach {
+            finished = true;
+            break;
+        }
+        let side = u32(2 * r + 1);
+        if r >= max_r || side * side * side > budget {
+            next_shell = r + 1;
             break;
         }
         r++;
     }
+    return finished;
 }
 
 // The normal buckets: the octahedral cell of a normal, the direction of a cell's centre.
@@ -185,19 +203,33 @@ fn unit(n: vec3<f32>) -> bool {
     return abs(dot(n, n) - 1.0) < 1e-3;
 }
 
-// The F nearest compatible centroids (the search state), exactly as `search` finds them. Where the buckets that
-// can hold a compatible centroid hold at most options.y centroids (a point on a crease or a narrow face, whose
-// compatible centroids are few and may be far), they are scanned whole instead of walking the grid shell by
-// shell until F are found, which can visit every cell. A compatible centroid lies within acos(n_t) of the point's
-// normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than both (plus
-// a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's (F = 1, every
-// centroid compatible), as the exhausted search would find it. The nearest alone (F = 1: Algorithm 1's
-// assignment) always walks the grid: its first shells hold it, and scanning the buckets took twice as long there
-// (docs/techniques/fuzzy.md, sixteenth session).
+// The F nearest compatible centroids (the search state), exactly as `search` finds them, with the work bounded.
+// Walking the grid shell by shell until F are found can visit every cell: a point with no compatible centroid
+// near it (on a crease, a narrow face, or a surface that came into view since a warm start's centroids were
+// placed) walks the grid whole, and on a real GPU that one invocation held its whole dispatch (the shading
+// points' clustering took 68-81 % of the H200's frame at 1024x720: docs/techniques/fuzzy.md, eighteenth
+// session). So the walk goes on only while the block it has walked holds fewer cells than the normal buckets
+// that can hold a compatible centroid hold centroids; then those buckets are scanned whole. Where they hold at
+// most options.y centroids, a search for F > 1 scans them at once. The nearest alone (F = 1: Algorithm 1's
+// assignment) first walks NEAREST_SHELLS shells: they hold it for nearly every point, and counting the buckets
+// for every point took twice as long on lavapipe (sixteenth session). A compatible centroid lies within
+// acos(n_t) of the point's normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is
+// farther than both (plus a margin for rounding) holds none. When none is compatible, the nearest by position is
+// the grid's (F = 1, every centroid compatible), as the exhausted search would find it.
+const NEAREST_SHELLS: i32 = 2;
+
 fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if km.options.y == 0u || f_max == 1u || km.dims.w > 0u || !unit(n) {
+    if km.options.y == 0u || km.dims.w > 0u || !unit(n) {
         search(p, n, f_max);
         return;
+    }
+    reset_best();
+    var from_shell = 0;
+    if f_max == 1u {
+        if search_shells(p, n, 1u, 0, NEAREST_SHELLS, 0xffffffffu) {
+            return;
+        }
+        from_shell = next_shell;
     }
     var mask_lo = 0u;
     var mask_hi = 0u;
@@ -218,8 +250,7 @@ fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
             mask_hi |= 1u << (b - 32u);
         }
     }
-    if total > km.options.y {
-        search(p, n, f_max);
+    if total > km.options.y && search_shells(p, n, f_max, from_shell, 0x7fffffff, total) {
         return;
     }
     reset_best();
