@@ -223,6 +223,71 @@ fn a_blocks_merged_list_holds_each_cluster_of_its_four_samples_once() {
     }
 }
 
+#[test]
+fn the_points_short_of_f_clusters_get_the_same_clusters_searched_in_place_or_queued() {
+    use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
+    use shadowlab_core::technique::fuzzy::kmeans::KMeansParams;
+    let gpu = gpu();
+    let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
+    let (w, h) = (64u32, 48u32);
+    // Tilted normals: many pixels find fewer than F compatible clusters in their block's list and search.
+    let points = room_points(w, h, 1.2);
+    let buffer = upload_points(&gpu, &points);
+    let mut km = GpuKMeans::new(&gpu, "test");
+    for (k, f, gamma, max_ring) in [(20usize, 6usize, 2u32, 0u32), (600, 3, 4, 0), (150, 6, 3, 1), (150, 8, 2, 0)] {
+        let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, true) };
+        let mut runs = Vec::new();
+        for in_place in [false, true] {
+            km.set_search_in_place(in_place);
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
+            gpu.queue.submit([encoder.finish()]);
+            runs.push((km.read_assignment(&gpu).unwrap(), km.read_clusters(&gpu).unwrap()));
+        }
+        let ((queued, queued_w), queued_clusters) = &runs[0];
+        let ((in_place, in_place_w), in_place_clusters) = &runs[1];
+        assert_eq!(queued, in_place, "K = {k} F = {f}: the clusters differ");
+        assert_eq!(queued_w, in_place_w, "K = {k} F = {f}: the weights differ");
+        let members = |c: &Vec<shadowlab_core::technique::fuzzy::gpu::GpuPoint>| -> Vec<u32> {
+            c.iter().map(|c| c.members()).collect()
+        };
+        assert_eq!(members(queued_clusters), members(in_place_clusters), "K = {k} F = {f}");
+        // The path is taken: some pixels hold a cluster that their block's merged list does not (they searched).
+        let blocks = km.read_block_lists(&gpu, &p).unwrap();
+        let (g, wu) = (gamma as usize, w as usize);
+        let searched = (0..points.len())
+            .filter(|&m| (m % wu) % g != 0 || (m / wu) % g != 0)
+            .filter(|&m| {
+                let block = &blocks[(m / wu / g) * wu.div_ceil(g) + (m % wu) / g];
+                queued[m * f..m * f + f].iter().any(|&c| c != u32::MAX && !block.contains(&c))
+            })
+            .count();
+        assert!(searched > 0, "K = {k} F = {f}: no pixel searched beyond its block's list");
+    }
+}
+
+/// Points on the five walls of a room of bounds (-2, 0, -2) + (4, 3, 4) as an image of `w` x `h`, some invalid,
+/// their normals tilted by up to `tilt` (1.2: about 50 degrees, as on curved or slanted surfaces).
+fn room_points(w: u32, h: u32, tilt: f32) -> Vec<shadowlab_core::technique::fuzzy::kmeans::Point> {
+    use shadowlab_core::technique::fuzzy::kmeans::Point;
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 / w as f32, (i / w) as f32 / h as f32);
+            let wall = (i / 7 + i / 311) % 5;
+            let (position, normal) = match wall {
+                0 => (Vec3::new(x * 4.0 - 2.0, 0.0, y * 4.0 - 2.0), Vec3::Y),
+                1 => (Vec3::new(x * 4.0 - 2.0, y * 3.0, -2.0), Vec3::Z),
+                2 => (Vec3::new(-2.0, y * 3.0, x * 4.0 - 2.0), Vec3::X),
+                3 => (Vec3::new(2.0, y * 3.0, x * 4.0 - 2.0), -Vec3::X),
+                _ => (Vec3::new(x * 4.0 - 2.0, 3.0, y * 4.0 - 2.0), -Vec3::Y),
+            };
+            let hash = |k: u32| ((i.wrapping_mul(2_654_435_761).wrapping_add(k * 40_503)) % 1000) as f32 / 1000.0 - 0.5;
+            let normal = (normal + tilt * Vec3::new(hash(1), hash(2), hash(3))).normalize();
+            Point { position, normal, valid: i % 13 != 4 }
+        })
+        .collect()
+}
+
 /// The GPU k-means tests' parameters: an image of `w` x `h` points of the room of bounds (-2, 0, -2) + (4, 3, 4),
 /// the paper's n_t, exact searches, neighbour lists as given; the rest as each test sets it.
 fn room_kmeans_params(
@@ -281,23 +346,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
     // tilted by up to 50 degrees (normals off the axes, as on curved or slanted surfaces).
     let (w, h) = (64u32, 48u32);
     for tilt in [0.0f32, 1.2] {
-        let points: Vec<Point> = (0..w * h)
-            .map(|i| {
-                let (x, y) = ((i % w) as f32 / w as f32, (i / w) as f32 / h as f32);
-                let wall = (i / 7 + i / 311) % 5;
-                let (position, normal) = match wall {
-                    0 => (Vec3::new(x * 4.0 - 2.0, 0.0, y * 4.0 - 2.0), Vec3::Y),
-                    1 => (Vec3::new(x * 4.0 - 2.0, y * 3.0, -2.0), Vec3::Z),
-                    2 => (Vec3::new(-2.0, y * 3.0, x * 4.0 - 2.0), Vec3::X),
-                    3 => (Vec3::new(2.0, y * 3.0, x * 4.0 - 2.0), -Vec3::X),
-                    _ => (Vec3::new(x * 4.0 - 2.0, 3.0, y * 4.0 - 2.0), -Vec3::Y),
-                };
-                let hash =
-                    |k: u32| ((i.wrapping_mul(2_654_435_761).wrapping_add(k * 40_503)) % 1000) as f32 / 1000.0 - 0.5;
-                let normal = (normal + tilt * Vec3::new(hash(1), hash(2), hash(3))).normalize();
-                Point { position, normal, valid: i % 13 != 4 }
-            })
-            .collect();
+        let points = room_points(w, h, tilt);
         let buffer = upload_points(&gpu, &points);
         let mut km = GpuKMeans::new(&gpu, "test");
         // The last three: Algorithm 2 from the neighbouring samples' lists (km_final over the samples, km_fill);

@@ -121,6 +121,12 @@ pub struct GpuKMeans {
     /// The most centroids a search for `F` > 1 scans whole from the normal buckets instead of walking the grid
     /// (0: always the grid). Speed only: both find the same clusters.
     bucket_scan_limit: u32,
+    /// Algorithm 2's points that their block's list leaves short of `F` compatible clusters: searched by
+    /// `km_fill` itself (true) or queued for `km_search` (false). Speed only: the same clusters either way. In
+    /// place on a real GPU, where it measured 13 % less clustering time on the H200 (the queue's dispatch cost
+    /// more than the waiting it saved); queued on a CPU rasterizer, where a long search holds only its own lane
+    /// (docs/techniques/fuzzy.md, eighteenth session).
+    search_in_place: bool,
 }
 
 /// [`GpuKMeans`]'s default bucket scan limit (searches for `F` > 1; the nearest alone walks the grid): measured
@@ -206,6 +212,7 @@ impl GpuKMeans {
             shape: RunShape::default(),
             encoded_clusters: None,
             bucket_scan_limit: BUCKET_SCAN_LIMIT,
+            search_in_place: gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
         }
     }
 
@@ -213,6 +220,13 @@ impl GpuKMeans {
     /// scans the buckets; the nearest alone always walks the grid). The clusters found do not change; the tests check both paths against the CPU twin.
     pub fn set_bucket_scan_limit(&mut self, limit: u32) {
         self.bucket_scan_limit = limit;
+    }
+
+    /// Whether `km_fill` searches the points short of `F` compatible clusters itself instead of queueing them
+    /// for `km_search` (the default: in place on a real GPU, queued on a CPU rasterizer). The clusters found do
+    /// not change; a test checks both.
+    pub fn set_search_in_place(&mut self, in_place: bool) {
+        self.search_in_place = in_place;
     }
 
     fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
@@ -297,7 +311,7 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
-            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, 0],
+            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, self.search_in_place as u32],
         };
         self.kernels.write_uniform(gpu, &uniform);
         let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args]);

@@ -51,7 +51,8 @@ struct KmParams {
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
     // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
-    // last run's centroids): km_update moves a centroid left without members back to its initial sample
+    // last run's centroids): km_update moves a centroid left without members back to its initial sample; w: 1:
+    // km_fill searches the points short of F compatible clusters itself instead of queueing them for km_search
     options: vec4<u32>,
 }
 
