@@ -339,7 +339,7 @@ fn upload_points(
 #[test]
 fn gpu_kmeans_matches_its_cpu_twin() {
     use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
-    use shadowlab_core::technique::fuzzy::kmeans::{self, KMeansParams, Point};
+    use shadowlab_core::technique::fuzzy::kmeans::{self, KMeansParams};
     let gpu = gpu();
     let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
     // Points on the five walls of a room, some invalid, as an image of 64 x 48; then the same with normals
