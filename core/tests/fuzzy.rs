@@ -237,8 +237,8 @@ fn the_points_short_of_f_clusters_get_the_same_clusters_searched_in_place_or_que
     for (k, f, gamma, max_ring) in [(20usize, 6usize, 2u32, 0u32), (600, 3, 4, 0), (150, 6, 3, 1), (150, 8, 2, 0)] {
         let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, true) };
         let mut runs = Vec::new();
-        for in_place in [false, true] {
-            km.set_search_in_place(in_place);
+        for gpu_schedule in [false, true] {
+            km.set_gpu_schedule(&gpu, gpu_schedule);
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
             gpu.queue.submit([encoder.finish()]);
@@ -350,9 +350,14 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         let buffer = upload_points(&gpu, &points);
         let mut km = GpuKMeans::new(&gpu, "test");
         // The last three: Algorithm 2 from the neighbouring samples' lists (km_final over the samples, km_fill);
-        // every case with the exact searches walking the grid, scanning the normal buckets, or either by count.
-        for scan_limit in [0, u32::MAX, shadowlab_core::technique::fuzzy::gpu::BUCKET_SCAN_LIMIT] {
+        // every case with the exact searches walking the grid, scanning the normal buckets, or either by count,
+        // in a CPU rasterizer's schedule and in a real GPU's (bounded walks, the short lists searched in place).
+        let limit = shadowlab_core::technique::fuzzy::gpu::BUCKET_SCAN_LIMIT;
+        for (scan_limit, gpu_schedule) in
+            [(0, false), (u32::MAX, false), (limit, false), (limit, true), (u32::MAX, true)]
+        {
             km.set_bucket_scan_limit(scan_limit);
+            km.set_gpu_schedule(&gpu, gpu_schedule);
             for (k, f, gamma, max_ring, neighbour_lists) in [
                 (1usize, 1usize, 1u32, 0u32, false),
                 (20, 6, 2, 0, false),
@@ -381,7 +386,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
                 // Measured: every F-list agrees, tilted normals or not.
                 assert!(
                     all_same as f32 >= 0.995 * points.len() as f32,
-                    "tilt {tilt} K = {k} scan limit {scan_limit}: {all_same} F-lists agree"
+                    "tilt {tilt} K = {k} scan limit {scan_limit} GPU schedule {gpu_schedule}: {all_same} F-lists agree"
                 );
                 for m in (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]) {
                     let (a, b) = (inverse[m * f], cpu.inverse_distance[m * f]);
@@ -428,45 +433,59 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
         km.encode(&gpu, &timer, &mut encoder, points, p, None, warm).unwrap();
         gpu.queue.submit([encoder.finish()]);
     };
-    let first = view(0.0, w);
-    run(&mut km, &upload(&first), &p, false);
-    let start: Vec<Centroid> = km
-        .read_centroids(&gpu)
-        .unwrap()
-        .iter()
-        .map(|c| Centroid { position: c.position(), normal: c.normal(), active: c.exists() })
-        .collect();
-    assert_eq!(start, kmeans::cluster(&first, &p).centroids, "the cold run is the twin's");
-    // The floor moved by 0.3 and the right half of the image is a wall none of the centroids is on.
-    let moved = view(0.3, w / 2);
-    let warm = KMeansParams { iterations: 2, ..p };
-    run(&mut km, &upload(&moved), &warm, true);
-    let cpu = kmeans::cluster_from(&moved, &warm, Some(&start));
-    let gpu_centroids = km.read_centroids(&gpu).unwrap();
-    let (assignment, _) = km.read_assignment(&gpu).unwrap();
-    let f = cpu.fuzziness;
-    let same = (0..moved.len()).filter(|&m| assignment[m * f..m * f + f] == cpu.assignment[m * f..m * f + f]).count();
-    assert!(same as f32 >= 0.995 * moved.len() as f32, "{same} of {} F-lists agree", moved.len());
-    for (g, c) in gpu_centroids.iter().zip(&cpu.centroids) {
-        assert_eq!(g.exists(), c.active);
-        assert!(!c.active || (g.position() - c.position).length() < 1e-4, "{g:?} vs {c:?}");
+    // Both schedules: a CPU rasterizer's and a real GPU's (whose bounded searches this view's new wall, with no
+    // compatible centroid near it, takes).
+    for gpu_schedule in [false, true] {
+        km.set_gpu_schedule(&gpu, gpu_schedule);
+        let first = view(0.0, w);
+        run(&mut km, &upload(&first), &p, false);
+        let start: Vec<Centroid> = km
+            .read_centroids(&gpu)
+            .unwrap()
+            .iter()
+            .map(|c| Centroid { position: c.position(), normal: c.normal(), active: c.exists() })
+            .collect();
+        assert_eq!(
+            start,
+            kmeans::cluster(&first, &p).centroids,
+            "the cold run is the twin's (GPU schedule {gpu_schedule})"
+        );
+        // The floor moved by 0.3 and the right half of the image is a wall none of the centroids is on.
+        let moved = view(0.3, w / 2);
+        let warm = KMeansParams { iterations: 2, ..p };
+        run(&mut km, &upload(&moved), &warm, true);
+        let cpu = kmeans::cluster_from(&moved, &warm, Some(&start));
+        let gpu_centroids = km.read_centroids(&gpu).unwrap();
+        let (assignment, _) = km.read_assignment(&gpu).unwrap();
+        let f = cpu.fuzziness;
+        let same =
+            (0..moved.len()).filter(|&m| assignment[m * f..m * f + f] == cpu.assignment[m * f..m * f + f]).count();
+        assert!(
+            same as f32 >= 0.995 * moved.len() as f32,
+            "GPU schedule {gpu_schedule}: {same} of {} F-lists agree",
+            moved.len()
+        );
+        for (g, c) in gpu_centroids.iter().zip(&cpu.centroids) {
+            assert_eq!(g.exists(), c.active);
+            assert!(!c.active || (g.position() - c.position).length() < 1e-4, "{g:?} vs {c:?}");
+        }
+        // Centroids whose floor points left the view started again on this view's samples: the wall has
+        // clusters (its points are not all taken by floor clusters by position), and none is inactive.
+        let on_wall = cpu.centroids.iter().filter(|c| c.active && c.normal.dot(-Vec3::X) > 0.9).count();
+        assert!(on_wall >= 10, "{on_wall} centroids on the wall that came into view");
+        let wall_points: Vec<usize> = (0..moved.len()).filter(|&m| moved[m].valid && m as u32 % w >= w / 2).collect();
+        assert!(wall_points.iter().all(|&m| {
+            let k = cpu.assignment[m * f];
+            k != u32::MAX && cpu.inverse_distance[m * f] > 0.0
+        }));
+        // Without a warm start the same call clusters from the samples, as `cluster` does.
+        run(&mut km, &upload(&moved), &warm, false);
+        assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &warm).assignment);
+        // Asked to start warm with another K, it starts from the samples: the last run's centroids are not this K's.
+        let other_k = KMeansParams { clusters: 40, ..warm };
+        run(&mut km, &upload(&moved), &other_k, true);
+        assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &other_k).assignment);
     }
-    // Centroids whose floor points left the view started again on this view's samples: the wall has
-    // clusters (its points are not all taken by floor clusters by position), and none is inactive.
-    let on_wall = cpu.centroids.iter().filter(|c| c.active && c.normal.dot(-Vec3::X) > 0.9).count();
-    assert!(on_wall >= 10, "{on_wall} centroids on the wall that came into view");
-    let wall_points: Vec<usize> = (0..moved.len()).filter(|&m| moved[m].valid && m as u32 % w >= w / 2).collect();
-    assert!(wall_points.iter().all(|&m| {
-        let k = cpu.assignment[m * f];
-        k != u32::MAX && cpu.inverse_distance[m * f] > 0.0
-    }));
-    // Without a warm start the same call clusters from the samples, as `cluster` does.
-    run(&mut km, &upload(&moved), &warm, false);
-    assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &warm).assignment);
-    // Asked to start warm with another K, it starts from the samples: the last run's centroids are not this K's.
-    let other_k = KMeansParams { clusters: 40, ..warm };
-    run(&mut km, &upload(&moved), &other_k, true);
-    assert_eq!(km.read_assignment(&gpu).unwrap().0, kmeans::cluster(&moved, &other_k).assignment);
 }
 
 #[test]

@@ -16,7 +16,8 @@ pub struct Kernels {
 
 impl Kernels {
     /// The entry points `entries` of `source`, over a uniform of `uniform_bytes` and one storage buffer per
-    /// flag of `read_only` (binding `1 + i`, read-only when the flag is set).
+    /// flag of `read_only` (binding `1 + i`, read-only when the flag is set), with the module's pipeline-overridable
+    /// constants set to `constants` (compiled in: code a constant rules out costs nothing).
     pub fn new(
         gpu: &GpuContext,
         label: &'static str,
@@ -24,6 +25,7 @@ impl Kernels {
         entries: &[&'static str],
         uniform_bytes: u64,
         read_only: &[bool],
+        constants: &[(&str, f64)],
     ) -> Kernels {
         let device = &gpu.device;
         let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -54,7 +56,7 @@ impl Kernels {
                     layout: Some(&pipeline_layout),
                     module: &module,
                     entry_point: Some(entry),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions { constants, ..Default::default() },
                     cache: None,
                 });
                 (entry, pipeline)

@@ -121,12 +121,15 @@ pub struct GpuKMeans {
     /// The most centroids a search for `F` > 1 scans whole from the normal buckets instead of walking the grid
     /// (0: always the grid). Speed only: both find the same clusters.
     bucket_scan_limit: u32,
-    /// Algorithm 2's points that their block's list leaves short of `F` compatible clusters: searched by
-    /// `km_fill` itself (true) or queued for `km_search` (false). Speed only: the same clusters either way. In
-    /// place on a real GPU, where it measured 13 % less clustering time on the H200 (the queue's dispatch cost
-    /// more than the waiting it saved); queued on a CPU rasterizer, where a long search holds only its own lane
-    /// (docs/techniques/fuzzy.md, eighteenth session).
-    search_in_place: bool,
+    /// The schedule for a real GPU (true) or a CPU rasterizer (false). Speed only: the same clusters either way
+    /// (docs/techniques/fuzzy.md, eighteenth session). On a GPU a dispatch lasts as long as its slowest
+    /// invocation, so the searches are bounded (the nearest alone walks two shells, then the compatible normal
+    /// buckets are scanned where walking on would cost more) and Algorithm 2's points that their block's list
+    /// leaves short of `F` compatible clusters are searched by `km_fill` itself; on the H200 at 1024x720 the
+    /// clustering took 10.6 instead of 18.7 ms on the conference room. On a CPU rasterizer a long search holds
+    /// only its own lane: the nearest walks the grid to its end and the short lists are queued for `km_search`
+    /// (the bounded search made lavapipe's clustering about 50 % slower).
+    gpu_schedule: bool,
 }
 
 /// [`GpuKMeans`]'s default bucket scan limit (searches for `F` > 1; the nearest alone walks the grid): measured
@@ -174,19 +177,27 @@ const ENTRIES: &[&str] = &[
     "rep_finish",
 ];
 
+/// The k-means kernels for a real GPU's schedule or a CPU rasterizer's: the WGSL's `GPU_SCHEDULE`, a
+/// pipeline-overridable constant, so each compiles without the other's code (a uniform switch instead made
+/// lavapipe's clustering about 50 % slower: its compiler kept the GPU's searches inlined into every kernel).
+fn kernels(gpu: &GpuContext, gpu_schedule: bool) -> Kernels {
+    // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
+    // workgroups of the queued searches.
+    Kernels::new(
+        gpu,
+        "fuzzy kmeans",
+        super::KMEANS.source,
+        ENTRIES,
+        std::mem::size_of::<KmParamsUniform>() as u64,
+        &[true, false, false, false, false],
+        &[("GPU_SCHEDULE", if gpu_schedule { 1.0 } else { 0.0 })],
+    )
+}
+
 impl GpuKMeans {
     pub fn new(gpu: &GpuContext, label: &'static str) -> GpuKMeans {
-        let uniform_bytes = std::mem::size_of::<KmParamsUniform>() as u64;
-        // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
-        // workgroups of the queued searches.
-        let kernels = Kernels::new(
-            gpu,
-            "fuzzy kmeans",
-            super::KMEANS.source,
-            ENTRIES,
-            uniform_bytes,
-            &[true, false, false, false, false],
-        );
+        let gpu_schedule = gpu.adapter_info.device_type != wgpu::DeviceType::Cpu;
+        let kernels = kernels(gpu, gpu_schedule);
         let search_args = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fuzzy search workgroups"),
             size: 16,
@@ -212,7 +223,7 @@ impl GpuKMeans {
             shape: RunShape::default(),
             encoded_clusters: None,
             bucket_scan_limit: BUCKET_SCAN_LIMIT,
-            search_in_place: gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
+            gpu_schedule,
         }
     }
 
@@ -222,11 +233,14 @@ impl GpuKMeans {
         self.bucket_scan_limit = limit;
     }
 
-    /// Whether `km_fill` searches the points short of `F` compatible clusters itself instead of queueing them
-    /// for `km_search` (the default: in place on a real GPU, queued on a CPU rasterizer). The clusters found do
-    /// not change; a test checks both.
-    pub fn set_search_in_place(&mut self, in_place: bool) {
-        self.search_in_place = in_place;
+    /// Sets the schedule: a real GPU's (bounded searches, the short lists searched in place) or a CPU
+    /// rasterizer's (the default follows the adapter's device type). The clusters found do not change; the tests
+    /// check both.
+    pub fn set_gpu_schedule(&mut self, gpu: &GpuContext, gpu_schedule: bool) {
+        if gpu_schedule != self.gpu_schedule {
+            self.kernels = kernels(gpu, gpu_schedule);
+            self.gpu_schedule = gpu_schedule;
+        }
     }
 
     fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
@@ -311,7 +325,7 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
-            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, self.search_in_place as u32],
+            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, 0],
         };
         self.kernels.write_uniform(gpu, &uniform);
         let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args]);

@@ -13,6 +13,10 @@
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
 
 const MAX_F: u32 = 8u;
+// A real GPU's schedule (true: kmeans_search.wgsl `find`'s bounded searches, and km_fill searching the points
+// short of F compatible clusters itself instead of queueing them for km_search) or a CPU rasterizer's (gpu.rs
+// `kernels`: set per pipeline, so each compiles without the other's code).
+override GPU_SCHEDULE: bool = false;
 const NONE: u32 = 0xffffffffu;
 const FIXED: f32 = 16777216.0;
 // Words of `work` per cluster: position sums (lo, hi) x 3, normal sums (lo, hi) x 3, member count, best
@@ -51,8 +55,7 @@ struct KmParams {
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
     // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
-    // last run's centroids): km_update moves a centroid left without members back to its initial sample; w: 1:
-    // km_fill searches the points short of F compatible clusters itself instead of queueing them for km_search
+    // last run's centroids): km_update moves a centroid left without members back to its initial sample
     options: vec4<u32>,
 }
 

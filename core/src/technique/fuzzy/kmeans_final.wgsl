@@ -181,8 +181,8 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     for (var i = 0u; i < n; i++) {
         consider(assignment[base + 1u + i], p.position.xyz, p.normal.xyz, f_max);
     }
-    if best_n < f_max && km.options.w == 1u {
-        // On a real GPU: the search in place (the queue's dispatch cost more than the waiting it saved).
+    if best_n < f_max && GPU_SCHEDULE {
+        // A real GPU's schedule: the search in place (the queue's dispatch cost more than the waiting it saved).
         find(p.position.xyz, p.normal.xyz, f_max);
     } else if best_n < f_max {
         // The grid search is long where it is needed (few compatible clusters near a crease): on a CPU

@@ -124,7 +124,38 @@ fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
 // F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
 fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     reset_best();
-    search_shells(p, n, f_max, 0, 0x7fffffff, 0xffffffffu);
+    let c = cell_of(p);
+    let dims = vec3<i32>(km.dims.xyz);
+    let far = max(c, dims - 1 - c);
+    let reach = max(far.x, max(far.y, far.z));
+    var r = 0;
+    loop {
+        let lo = max(c - vec3<i32>(r), vec3<i32>(0));
+        let hi = min(c + vec3<i32>(r), dims - 1);
+        for (var z = lo.z; z <= hi.z; z++) {
+            for (var y = lo.y; y <= hi.y; y++) {
+                if abs(z - c.z) == r || abs(y - c.y) == r {
+                    for (var x = lo.x; x <= hi.x; x++) {
+                        visit_cell(vec3<i32>(x, y, z), p, n, f_max);
+                    }
+                } else {
+                    if c.x - r >= 0 {
+                        visit_cell(vec3<i32>(c.x - r, y, z), p, n, f_max);
+                    }
+                    if c.x + r < dims.x {
+                        visit_cell(vec3<i32>(c.x + r, y, z), p, n, f_max);
+                    }
+                }
+            }
+        }
+        let complete = best_n == f_max && best_d(f_max - 1u) <= guarantee(p, c, r);
+        // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
+        let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
+        if (r >= 1 && (complete || ring_done)) || r >= reach {
+            break;
+        }
+        r++;
+    }
 }
 
 // The shell `search_shells` stopped before when it returned false.
@@ -132,7 +163,9 @@ var<private> next_shell: i32;
 
 // The shells from r0 (the search state holding those before it) until the search is finished (true, as `search`
 // would end it) or, unfinished (false, `next_shell` the next one), after shell max_r or after the first shell
-// that brings the block walked to more than `budget` cells.
+// that brings the block walked to more than `budget` cells: a real GPU's schedule. `search` above is the same
+// walk without the bounds, kept apart for a CPU rasterizer's: calling this from it made lavapipe's clustering
+// about 50 % slower (its compiler shaped the shared loop worse; measured on the Cornell box's orbit).
 fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, budget: u32) -> bool {
     let c = cell_of(p);
     let dims = vec3<i32>(km.dims.xyz);
@@ -203,23 +236,26 @@ fn unit(n: vec3<f32>) -> bool {
     return abs(dot(n, n) - 1.0) < 1e-3;
 }
 
-// The F nearest compatible centroids (the search state), exactly as `search` finds them, with the work bounded.
-// Walking the grid shell by shell until F are found can visit every cell: a point with no compatible centroid
-// near it (on a crease, a narrow face, or a surface that came into view since a warm start's centroids were
-// placed) walks the grid whole, and on a real GPU that one invocation held its whole dispatch (the shading
-// points' clustering took 68-81 % of the H200's frame at 1024x720: docs/techniques/fuzzy.md, eighteenth
-// session). So the walk goes on only while the block it has walked holds fewer cells than the normal buckets
-// that can hold a compatible centroid hold centroids; then those buckets are scanned whole. Where they hold at
-// most options.y centroids, a search for F > 1 scans them at once. The nearest alone (F = 1: Algorithm 1's
-// assignment) first walks NEAREST_SHELLS shells: they hold it for nearly every point, and counting the buckets
-// for every point took twice as long on lavapipe (sixteenth session). A compatible centroid lies within
-// acos(n_t) of the point's normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is
-// farther than both (plus a margin for rounding) holds none. When none is compatible, the nearest by position is
-// the grid's (F = 1, every centroid compatible), as the exhausted search would find it.
+// The F nearest compatible centroids (the search state), exactly as `search` finds them. Where the buckets that
+// can hold a compatible centroid hold at most options.y centroids (a point on a crease or a narrow face, whose
+// compatible centroids are few and may be far), a search for F > 1 scans them whole instead of walking the grid
+// shell by shell until F are found, which can visit every cell. A compatible centroid lies within acos(n_t) of
+// the point's normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than
+// both (plus a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's
+// (F = 1, every centroid compatible), as the exhausted search would find it.
+// A CPU rasterizer's schedule (GPU_SCHEDULE false): the nearest alone (F = 1: Algorithm 1's assignment) walks the grid
+// (its first shells hold it, and counting the buckets for every point took twice as long on lavapipe: sixteenth
+// session), and so does a search whose buckets hold more than options.y centroids.
+// A real GPU's (GPU_SCHEDULE true): a dispatch lasts as long as its slowest invocation, and a point with no
+// compatible centroid near it (a surface that came into view since a warm start's centroids were placed) walked
+// the grid whole and held its dispatch (the shading points' clustering took 69-81 % of the H200's frame at
+// 1024x720: docs/techniques/fuzzy.md, eighteenth session). So the nearest alone walks NEAREST_SHELLS shells
+// first and only a point they leave unfinished counts the buckets; a walk goes on only while the block it has
+// walked holds fewer cells than those buckets hold centroids; then they are scanned whole.
 const NEAREST_SHELLS: i32 = 2;
 
 fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if km.options.y == 0u || km.dims.w > 0u || !unit(n) {
+    if km.options.y == 0u || km.dims.w > 0u || !unit(n) || (f_max == 1u && !GPU_SCHEDULE) {
         search(p, n, f_max);
         return;
     }
@@ -250,8 +286,14 @@ fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
             mask_hi |= 1u << (b - 32u);
         }
     }
-    if total > km.options.y && search_shells(p, n, f_max, from_shell, 0x7fffffff, total) {
-        return;
+    if total > km.options.y {
+        if !GPU_SCHEDULE {
+            search(p, n, f_max);
+            return;
+        }
+        if search_shells(p, n, f_max, from_shell, 0x7fffffff, total) {
+            return;
+        }
     }
     reset_best();
     for (var b = 0u; b < NB; b++) {

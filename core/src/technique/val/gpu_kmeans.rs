@@ -75,6 +75,7 @@ impl GpuKMeans {
             &entries,
             uniform_bytes,
             &[true, false, false, false],
+            &[],
         );
         GpuKMeans { kernels, vals: None, acc: None, assignment: None }
     }
