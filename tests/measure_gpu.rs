@@ -146,3 +146,52 @@ fn full_run_refuses_a_software_adapter() {
     assert!(stderr.contains(&adapter), "the refusal does not name the adapter:\n{stderr}");
     assert!(stderr.contains("100x slower") && stderr.contains("--smoke"), "the refusal does not say why:\n{stderr}");
 }
+
+#[test]
+fn smoke_tradeoff_run_writes_three_curves_each_with_a_pareto_front_and_the_orbit() {
+    let adapter = adapter();
+    let out = measure_gpu(&["--smoke", "--tradeoff"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "measure-gpu --smoke --tradeoff failed ({:?}):\n{stdout}\n{stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "a run panicked:\n{stderr}");
+    let heading = stdout.lines().next().unwrap_or_default();
+    assert_eq!(heading, format!("### {adapter}: trade-off curves"), "not headed by the adapter:\n{stdout}");
+    assert!(stdout.contains("smoke run: tiny sizes, not a measurement"), "no smoke label:\n{stdout}");
+    let dir = repo().join("target/measure-gpu/smoke/tradeoff");
+    // Each curve: its CSV with every setting tried (the target not among them), a front, and its plot.
+    for (name, settings, metric) in
+        [("lightcluster", 4 + 6 + 3, "RMSE"), ("insm", 2 + 2, "shadow error"), ("val", 4 + 2 + 2, "FLIP")]
+    {
+        let csv = std::fs::read_to_string(dir.join(format!("{name}.csv"))).unwrap();
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |h: &str| header.iter().position(|c| *c == h).unwrap_or_else(|| panic!("no {h} in {name}.csv"));
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        assert_eq!(rows.len(), settings, "{name}: one row per setting:\n{csv}");
+        assert!(rows.iter().all(|r| r[col("metric")] == metric), "{name}: the metric is not {metric}:\n{csv}");
+        assert!(rows.iter().any(|r| r[col("pareto")] == "true"), "{name}: no setting on the front:\n{csv}");
+        assert!(rows.iter().all(|r| r[col("ms")].parse::<f64>().is_ok_and(|v| v > 0.0)), "{name}: times:\n{csv}");
+        let png = std::fs::metadata(dir.join(format!("{name}.png"))).unwrap();
+        assert!(png.len() > 1000, "{name}.png is {} bytes", png.len());
+        assert!(stdout.contains(&format!("{name} (")), "{name} is not in the summary:\n{stdout}");
+    }
+    // The orbit runs on the shared scenes: there with them (in CI they must be there), left out and said so
+    // without them.
+    let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
+    if shared.is_dir() {
+        let orbit = std::fs::read_to_string(dir.join("fuzzy-orbit.md")).unwrap();
+        for scene in ["conference", "sponza", "cornell"] {
+            assert!(orbit.lines().any(|l| l.starts_with(&format!("| {scene} |")) && l.contains('%')), "{orbit}");
+        }
+        assert!(stdout.contains("fuzzy clustering while the camera moves"), "no orbit in the summary:\n{stdout}");
+    } else {
+        assert!(
+            !std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false"),
+            "the shared scenes are missing at {}: the orbit needs them",
+            shared.display()
+        );
+        assert!(stderr.contains("orbit left out"), "the orbit's absence is not said:\n{stderr}");
+        eprintln!("NOT RUN: the fuzzy orbit part (no shared scenes at {})", shared.display());
+    }
+}

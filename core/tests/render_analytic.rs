@@ -147,7 +147,11 @@ fn zero_lights_render_ambient_only() {
     assert_matches_analytic("ambient-only", &scene.camera, &[], &r.hdr);
     assert_eq!(r.report.counts.technique.shadow_maps, 0);
     assert_eq!(r.report.counts.lights_total, 0);
-    assert!(r.report.passes.iter().any(|p| p.name == "gbuffer"));
+    // The G-buffer is timed: its pass in the timestamps, or its step ("gbuffer + ambient") when
+    // `SHADOWLAB_TIMING=auto` fell back to the steps (timestamps covering under half a step, as on a loaded
+    // machine: this test once failed so while other runs shared the CPU).
+    assert!(r.report.passes.iter().any(|p| p.name.starts_with("gbuffer")), "{:?}", r.report.passes);
+    assert!(r.report.steps.iter().any(|p| p.name.starts_with("gbuffer")), "{:?}", r.report.steps);
 }
 
 #[test]

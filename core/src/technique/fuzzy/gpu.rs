@@ -128,7 +128,8 @@ pub struct GpuKMeans {
     /// leaves short of `F` compatible clusters are searched by `km_fill` itself; on the H200 at 1024x720 the
     /// clustering took 10.6 instead of 18.7 ms on the conference room. On a CPU rasterizer a long search holds
     /// only its own lane: the nearest walks the grid to its end and the short lists are queued for `km_search`
-    /// (the bounded search made lavapipe's clustering about 50 % slower).
+    /// (the GPU schedule's code, run or only compiled in behind a uniform switch, made lavapipe's clustering
+    /// about 50 % slower).
     gpu_schedule: bool,
 }
 
@@ -179,7 +180,7 @@ const ENTRIES: &[&str] = &[
 
 /// The k-means kernels for a real GPU's schedule or a CPU rasterizer's: the WGSL's `GPU_SCHEDULE`, a
 /// pipeline-overridable constant, so each compiles without the other's code (a uniform switch instead made
-/// lavapipe's clustering about 50 % slower: its compiler kept the GPU's searches inlined into every kernel).
+/// lavapipe's clustering about 50 % slower in its own schedule).
 fn kernels(gpu: &GpuContext, gpu_schedule: bool) -> Kernels {
     // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
     // workgroups of the queued searches.

@@ -164,8 +164,8 @@ var<private> next_shell: i32;
 // The shells from r0 (the search state holding those before it) until the search is finished (true, as `search`
 // would end it) or, unfinished (false, `next_shell` the next one), after shell max_r or after the first shell
 // that brings the block walked to more than `budget` cells: a real GPU's schedule. `search` above is the same
-// walk without the bounds, kept apart for a CPU rasterizer's: calling this from it made lavapipe's clustering
-// about 50 % slower (its compiler shaped the shared loop worse; measured on the Cornell box's orbit).
+// walk without the bounds, kept apart so that a CPU rasterizer's kernels (GPU_SCHEDULE false, which compiles
+// this out) run the walk exactly as before the GPU schedule existed.
 fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, budget: u32) -> bool {
     let c = cell_of(p);
     let dims = vec3<i32>(km.dims.xyz);
@@ -243,9 +243,9 @@ fn unit(n: vec3<f32>) -> bool {
 // the point's normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than
 // both (plus a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's
 // (F = 1, every centroid compatible), as the exhausted search would find it.
-// A CPU rasterizer's schedule (GPU_SCHEDULE false): the nearest alone (F = 1: Algorithm 1's assignment) walks the grid
-// (its first shells hold it, and counting the buckets for every point took twice as long on lavapipe: sixteenth
-// session), and so does a search whose buckets hold more than options.y centroids.
+// A CPU rasterizer's schedule (GPU_SCHEDULE false): the nearest alone (F = 1: Algorithm 1's assignment) walks
+// the grid (its first shells hold it, and counting the buckets for every point took twice as long on lavapipe:
+// sixteenth session), and so does a search whose buckets hold more than options.y centroids.
 // A real GPU's (GPU_SCHEDULE true): a dispatch lasts as long as its slowest invocation, and a point with no
 // compatible centroid near it (a surface that came into view since a warm start's centroids were placed) walked
 // the grid whole and held its dispatch (the shading points' clustering took 69-81 % of the H200's frame at
