@@ -165,7 +165,9 @@ impl InsmParams {
                 help: "The share of the reconstructed meshes' triangles the per-light maps draw: below 1 the meshes \
                        are simplified by edge collapse (a border only along itself; beyond the paper), the collapse stopping \
                        at 'Simplify error' too: set this low and let the error bound decide. 1: as triangulated \
-                       (the wireframe overlay always shows the triangulation)",
+                       (the wireframe overlay always shows the triangulation). The simplification is CPU work in \
+                       every frame: it pays where drawing triangles is the cost (a software rasterizer), and on \
+                       a real GPU, where the maps' texels are, it can cost more than it saves",
                 kind: ParamKind::Float { min: 0.01, max: 1.0 },
                 value: ParamValue::Float(self.simplify),
             },
