@@ -124,38 +124,7 @@ fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
 // F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
 fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     reset_best();
-    let c = cell_of(p);
-    let dims = vec3<i32>(km.dims.xyz);
-    let far = max(c, dims - 1 - c);
-    let reach = max(far.x, max(far.y, far.z));
-    var r = 0;
-    loop {
-        let lo = max(c - vec3<i32>(r), vec3<i32>(0));
-        let hi = min(c + vec3<i32>(r), dims - 1);
-        for (var z = lo.z; z <= hi.z; z++) {
-            for (var y = lo.y; y <= hi.y; y++) {
-                if abs(z - c.z) == r || abs(y - c.y) == r {
-                    for (var x = lo.x; x <= hi.x; x++) {
-                        visit_cell(vec3<i32>(x, y, z), p, n, f_max);
-                    }
-                } else {
-                    if c.x - r >= 0 {
-                        visit_cell(vec3<i32>(c.x - r, y, z), p, n, f_max);
-                    }
-                    if c.x + r < dims.x {
-                        visit_cell(vec3<i32>(c.x + r, y, z), p, n, f_max);
-                    }
-                }
-            }
-        }
-        let complete = best_n == f_max && best_d(f_max - 1u) <= guarantee(p, c, r);
-        // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
-        let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
-        if (r >= 1 && (complete || ring_done)) || r >= reach {
-            break;
-        }
-        r++;
-    }
+    search_shells(p, n, f_max, 0, 0x7fffffff, 0xffffffffu);
 }
 
 // The shell `search_shells` stopped before when it returned false.
@@ -163,9 +132,8 @@ var<private> next_shell: i32;
 
 // The shells from r0 (the search state holding those before it) until the search is finished (true, as `search`
 // would end it) or, unfinished (false, `next_shell` the next one), after shell max_r or after the first shell
-// that brings the block walked to more than `budget` cells: a real GPU's schedule. `search` above is the same
-// walk without the bounds, kept apart so that a CPU rasterizer's kernels (GPU_SCHEDULE false, which compiles
-// this out) run the walk exactly as before the GPU schedule existed.
+// that brings the block walked to more than `budget` cells (the bounds: a real GPU's schedule; `search` walks
+// without them; with its own copy of the loop instead, lavapipe's clustering measured the same).
 fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, budget: u32) -> bool {
     let c = cell_of(p);
     let dims = vec3<i32>(km.dims.xyz);
