@@ -25,6 +25,8 @@ fn measure_gpu(args: &[&str]) -> Output {
         .env_remove("SHADOWLAB_TIMING")
         .env_remove("WARMUP")
         .env_remove("REPEAT")
+        // The shared scenes where the tests look for them (`../shared/scenes`), not a user's other folder.
+        .env_remove("SHADOWLAB_SCENES")
         .output()
         .expect("run scripts/measure-gpu")
 }
