@@ -224,7 +224,10 @@ fn a_blocks_merged_list_holds_each_cluster_of_its_four_samples_once() {
 }
 
 #[test]
-fn the_points_short_of_f_clusters_get_the_same_clusters_searched_in_place_or_queued() {
+fn the_searches_a_workgroup_finishes_find_the_clusters_one_invocation_finds() {
+    // A CPU rasterizer's schedule (every search by one invocation; km_fill's short lists queued for km_search)
+    // against a real GPU's (the grid's first shells, then a workgroup per unfinished search, over the queue): the
+    // same clusters, weights and members, and the workgroups' path taken.
     use shadowlab_core::technique::fuzzy::gpu::GpuKMeans;
     use shadowlab_core::technique::fuzzy::kmeans::KMeansParams;
     let gpu = gpu();
@@ -237,29 +240,40 @@ fn the_points_short_of_f_clusters_get_the_same_clusters_searched_in_place_or_que
     for (k, f, gamma, max_ring) in [(20usize, 6usize, 2u32, 0u32), (600, 3, 4, 0), (150, 6, 3, 1), (150, 8, 2, 0)] {
         let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, true) };
         let mut runs = Vec::new();
-        for gpu_schedule in [false, true] {
+        for (gpu_schedule, near_shells, fine_above) in [(false, 2, 0), (true, 2, 16), (true, 0, 1), (false, 2, 1)] {
             km.set_gpu_schedule(&gpu, gpu_schedule);
+            km.set_near_shells(near_shells);
+            km.set_fine_above(fine_above);
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
             gpu.queue.submit([encoder.finish()]);
-            runs.push((km.read_assignment(&gpu).unwrap(), km.read_clusters(&gpu).unwrap()));
+            let queued = km.read_queue_len(&gpu, &p).unwrap();
+            runs.push((km.read_assignment(&gpu).unwrap(), km.read_clusters(&gpu).unwrap(), queued));
         }
-        let ((queued, queued_w), queued_clusters) = &runs[0];
-        let ((in_place, in_place_w), in_place_clusters) = &runs[1];
-        assert_eq!(queued, in_place, "K = {k} F = {f}: the clusters differ");
-        assert_eq!(queued_w, in_place_w, "K = {k} F = {f}: the weights differ");
         let members = |c: &Vec<shadowlab_core::technique::fuzzy::gpu::GpuPoint>| -> Vec<u32> {
             c.iter().map(|c| c.members()).collect()
         };
-        assert_eq!(members(queued_clusters), members(in_place_clusters), "K = {k} F = {f}");
-        // The path is taken: some pixels hold a cluster that their block's merged list does not (they searched).
+        let ((alone, alone_w), alone_clusters, alone_queued) = &runs[0];
+        for ((wide, wide_w), wide_clusters, _) in &runs[1..] {
+            assert_eq!(alone, wide, "K = {k} F = {f}: the clusters differ");
+            assert_eq!(alone_w, wide_w, "K = {k} F = {f}: the weights differ");
+            assert_eq!(members(alone_clusters), members(wide_clusters), "K = {k} F = {f}");
+        }
+        // The paths are taken: km_fill queued pixels short of F compatible clusters for km_search; with no shell
+        // walked first (the paper's ring-limited search aside, which the buckets do not serve) the real GPU's
+        // schedule queued pixels for the workgroups.
+        assert!(*alone_queued > 0, "K = {k} F = {f}: km_fill queued nothing");
+        if max_ring == 0 {
+            assert!(runs[2].2 > 0, "K = {k} F = {f}: no search went to a workgroup");
+        }
+        // Some pixels hold a cluster that their block's merged list does not (they searched).
         let blocks = km.read_block_lists(&gpu, &p).unwrap();
         let (g, wu) = (gamma as usize, w as usize);
         let searched = (0..points.len())
             .filter(|&m| (m % wu) % g != 0 || (m / wu) % g != 0)
             .filter(|&m| {
                 let block = &blocks[(m / wu / g) * wu.div_ceil(g) + (m % wu) / g];
-                queued[m * f..m * f + f].iter().any(|&c| c != u32::MAX && !block.contains(&c))
+                alone[m * f..m * f + f].iter().any(|&c| c != u32::MAX && !block.contains(&c))
             })
             .count();
         assert!(searched > 0, "K = {k} F = {f}: no pixel searched beyond its block's list");
@@ -351,13 +365,24 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         let mut km = GpuKMeans::new(&gpu, "test");
         // The last three: Algorithm 2 from the neighbouring samples' lists (km_final over the samples, km_fill);
         // every case with the exact searches walking the grid, scanning the normal buckets, or either by count,
-        // in a CPU rasterizer's schedule and in a real GPU's (bounded walks, the short lists searched in place).
+        // in a CPU rasterizer's schedule and in a real GPU's (the first shells, then a workgroup per unfinished
+        // search; with 0 shells nearly every search is a workgroup's).
         let limit = shadowlab_core::technique::fuzzy::gpu::BUCKET_SCAN_LIMIT;
-        for (scan_limit, gpu_schedule) in
-            [(0, false), (u32::MAX, false), (limit, false), (limit, true), (u32::MAX, true)]
-        {
+        // The grid's fine level: the default crowd, none (0), and every cell holding two or more (1).
+        let fine = shadowlab_core::technique::fuzzy::gpu::FINE_ABOVE;
+        for (scan_limit, gpu_schedule, near_shells, fine_above) in [
+            (0, false, 2, fine),
+            (u32::MAX, false, 2, 0),
+            (limit, false, 2, 1),
+            (limit, true, 2, fine),
+            (u32::MAX, true, 2, 1),
+            (limit, true, 0, 0),
+            (limit, true, 1, 1),
+        ] {
             km.set_bucket_scan_limit(scan_limit);
             km.set_gpu_schedule(&gpu, gpu_schedule);
+            km.set_near_shells(near_shells);
+            km.set_fine_above(fine_above);
             for (k, f, gamma, max_ring, neighbour_lists) in [
                 (1usize, 1usize, 1u32, 0u32, false),
                 (20, 6, 2, 0, false),
@@ -386,7 +411,8 @@ fn gpu_kmeans_matches_its_cpu_twin() {
                 // Measured: every F-list agrees, tilted normals or not.
                 assert!(
                     all_same as f32 >= 0.995 * points.len() as f32,
-                    "tilt {tilt} K = {k} scan limit {scan_limit} GPU schedule {gpu_schedule}: {all_same} F-lists agree"
+                    "tilt {tilt} K = {k} scan limit {scan_limit} GPU schedule {gpu_schedule} shells {near_shells} \
+                     fine above {fine_above}: {all_same} F-lists agree"
                 );
                 for m in (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]) {
                     let (a, b) = (inverse[m * f], cpu.inverse_distance[m * f]);
@@ -433,10 +459,11 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
         km.encode(&gpu, &timer, &mut encoder, points, p, None, warm).unwrap();
         gpu.queue.submit([encoder.finish()]);
     };
-    // Both schedules: a CPU rasterizer's and a real GPU's (whose bounded searches this view's new wall, with no
-    // compatible centroid near it, takes).
-    for gpu_schedule in [false, true] {
+    // Both schedules: a CPU rasterizer's and a real GPU's (whose workgroup-wide searches this view's new wall,
+    // with no compatible centroid near it, takes; with 0 shells nearly every search).
+    for (gpu_schedule, near_shells) in [(false, 2), (true, 2), (true, 0)] {
         km.set_gpu_schedule(&gpu, gpu_schedule);
+        km.set_near_shells(near_shells);
         let first = view(0.0, w);
         run(&mut km, &upload(&first), &p, false);
         let start: Vec<Centroid> = km

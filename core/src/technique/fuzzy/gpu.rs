@@ -44,9 +44,11 @@ struct KmParamsUniform {
     bounds_min: [f32; 4],
     bounds_extent: [f32; 4],
     flux_scale: [f32; 4],
+    fine_dims: [u32; 4],
+    fine_cell: [f32; 4],
     options: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 128);
+const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 160);
 
 /// A point, cluster or light as the shaders store it (`KmPoint`, `Vpl`, `Endpoint`: the `GpuVpl` layout).
 #[repr(C)]
@@ -110,6 +112,8 @@ pub struct GpuKMeans {
     /// `2 K` points: the clusters as lights / endpoints, then the working centroids.
     pub clusters: Option<wgpu::Buffer>,
     work: Option<wgpu::Buffer>,
+    /// The grid and the normal buckets as the searches read them (`grid` in the shader: plain words, not atomics).
+    grid: Option<wgpu::Buffer>,
     /// Per point `F` entries of (cluster, inverse-distance bits).
     pub assignment: Option<wgpu::Buffer>,
     /// The workgroups of `km_search` (an indirect dispatch sized by the queue).
@@ -131,11 +135,33 @@ pub struct GpuKMeans {
     /// (the GPU schedule's code, run or only compiled in behind a uniform switch, made lavapipe's clustering
     /// about 50 % slower).
     gpu_schedule: bool,
+    /// A real GPU's schedule: the grid shells every point walks before an unfinished search goes to a workgroup.
+    near_shells: u32,
+    /// The crowd of a point's coarse cell above which its searches use the grid's fine level (0: no fine level).
+    fine_above: u32,
+    /// Each dispatch in a timed pass of its own (`fuzzy clustering (<label>): <stage>: <entry>`), for profiling;
+    /// off: one timed pass per stage.
+    time_dispatches: bool,
 }
 
 /// [`GpuKMeans`]'s default bucket scan limit (searches for `F` > 1; the nearest alone walks the grid): measured
 /// per dispatch on the three real scenes, 256 and 512 were fastest, 64 and 128 slower (docs/techniques/fuzzy.md).
 pub const BUCKET_SCAN_LIMIT: u32 = 256;
+
+/// The grid's fine level: its cells per coarse cell along each axis (kmeans.wgsl `level_cell`).
+pub const FINE: u32 = 8;
+
+/// [`GpuKMeans`]'s default crowd of a point's coarse cell above which its searches use the fine level.
+pub const FINE_ABOVE: u32 = 16;
+
+/// The cells of the fine level's hash table for `k` centroids (a power of two, about two per centroid).
+fn fine_table(k: usize) -> u64 {
+    (2 * k as u64).next_power_of_two().max(64)
+}
+
+/// [`GpuKMeans`]'s default grid shells before a workgroup-wide search (a real GPU's schedule): the two shells
+/// (125 cells) that the eighteenth session's bounded nearest search walked.
+pub const NEAR_SHELLS: u32 = 2;
 
 /// Grow `slot` to a storage buffer (copyable both ways) of at least `size` bytes, rounded up to a power of two
 /// so a frame that grows a little does not reallocate; true when it was (re)created.
@@ -176,6 +202,9 @@ const ENTRIES: &[&str] = &[
     "km_search",
     "rep_pick",
     "rep_finish",
+    "grid_fill",
+    "km_assign_wide",
+    "km_search_wide",
 ];
 
 /// The k-means kernels for a real GPU's schedule or a CPU rasterizer's: the WGSL's `GPU_SCHEDULE`, a
@@ -183,14 +212,14 @@ const ENTRIES: &[&str] = &[
 /// lavapipe's clustering about 50 % slower in its own schedule).
 fn kernels(gpu: &GpuContext, gpu_schedule: bool) -> Kernels {
     // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
-    // workgroups of the queued searches.
+    // workgroups of the queued searches; 6: the grid and the normal buckets.
     Kernels::new(
         gpu,
         "fuzzy kmeans",
         super::KMEANS.source,
         ENTRIES,
         std::mem::size_of::<KmParamsUniform>() as u64,
-        &[true, false, false, false, false],
+        &[true, false, false, false, false, false],
         &[("GPU_SCHEDULE", if gpu_schedule { 1.0 } else { 0.0 })],
     )
 }
@@ -218,6 +247,7 @@ impl GpuKMeans {
             kernels,
             clusters: None,
             work: None,
+            grid: None,
             assignment: None,
             search_args,
             search_args_stand_in,
@@ -225,7 +255,29 @@ impl GpuKMeans {
             encoded_clusters: None,
             bucket_scan_limit: BUCKET_SCAN_LIMIT,
             gpu_schedule,
+            time_dispatches: false,
+            near_shells: NEAR_SHELLS,
+            fine_above: FINE_ABOVE,
         }
+    }
+
+    /// Sets the grid shells a real GPU's schedule walks before an unfinished search goes to a workgroup of its
+    /// own (0: nearly every search does, which the tests use to check that path against the CPU twin). Speed
+    /// only: the clusters found do not change.
+    pub fn set_near_shells(&mut self, shells: u32) {
+        self.near_shells = shells;
+    }
+
+    /// Sets the crowd of a point's coarse grid cell above which its searches use the fine level (0: the grid has
+    /// no fine level). Speed only: the clusters found do not change.
+    pub fn set_fine_above(&mut self, crowd: u32) {
+        self.fine_above = crowd;
+    }
+
+    /// Times each dispatch in a pass of its own (profiling: the report then names every kernel; the passes'
+    /// timestamps cost a little) instead of one pass per stage.
+    pub fn set_time_dispatches(&mut self, on: bool) {
+        self.time_dispatches = on;
     }
 
     /// Sets the bucket scan limit (0: every search walks the grid; `u32::MAX`: every exact search for `F` > 1
@@ -272,6 +324,7 @@ impl GpuKMeans {
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
         let (cell, dims) = grid_shape(params.bounds_extent, k);
         let cells = (dims[0] * dims[1] * dims[2]) as u64;
+        let fine = if self.fine_above > 0 { fine_table(k) } else { 0 };
         let neighbours = params.neighbour_lists && g > 1;
         // Per point F (cluster, inverse distance); with neighbour lists, then per block of pixels between four
         // samples a count and up to 4 F clusters (km_blocks).
@@ -292,14 +345,16 @@ impl GpuKMeans {
             &mut self.work,
             gpu,
             "fuzzy kmeans work",
-            (k as u64 * ACC + 2 * cells + 1 + k as u64 + 3 * NB + 1 + k as u64 + 1 + m as u64) * 4,
+            (k as u64 * ACC + cells + fine + 2 * NB + 1 + m as u64) * 4,
         );
+        ensure_storage(&mut self.grid, gpu, "fuzzy kmeans grid", (cells + fine + 1 + 3 * k as u64 + 2 * NB + 1) * 4);
         ensure_storage(&mut self.assignment, gpu, "fuzzy assignment", assignment_bytes);
         self.shape = RunShape { points: m, clusters: k, fuzziness: f };
         self.encoded_clusters = Some(k);
-        let (clusters, work, assignment) = (
+        let (clusters, work, grid, assignment) = (
             self.clusters.as_ref().expect("grown"),
             self.work.as_ref().expect("grown"),
+            self.grid.as_ref().expect("grown"),
             self.assignment.as_ref().expect("grown"),
         );
         if k == 0 || m == 0 {
@@ -326,68 +381,90 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
-            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, 0],
+            fine_dims: [dims[0] * FINE, dims[1] * FINE, dims[2] * FINE, fine as u32],
+            fine_cell: [cell / FINE as f32, self.fine_above as f32, 0.0, 0.0],
+            options: [neighbours as u32, self.bucket_scan_limit, warm as u32, self.near_shells],
         };
         self.kernels.write_uniform(gpu, &uniform);
-        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args]);
+        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args, grid]);
         let search_group =
-            self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in]);
+            self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in, grid]);
         let over_k = groups(k);
         // grid_clear also clears the clusters' accumulators.
-        let over_cells = groups((cells as usize).max(NB as usize).max(k));
+        let over_cells = groups(((cells + fine) as usize).max(NB as usize).max(k));
         let over_samples = groups(samples);
         let over_points = groups(m);
-        // Three timed passes (the stages of the report's per-pass times; one pass cost the same): Algorithm 1's
-        // iterations; the grid of the final centroids and Algorithm 2's assignment (the samples' searches, the
-        // blocks' lists, the fill from them); the searches of the points the fill queued and the representatives.
-        let stage = |what: &str| format!("fuzzy clustering ({}): {what}", self.label);
+        // The dispatches in order, each with its stage: Algorithm 1's iterations; the grid of the final centroids
+        // and Algorithm 2's assignment (the samples' searches, the blocks' lists, the fill from them); the
+        // searches of the points the fill queued and the representatives. Timed as one pass per stage (the
+        // report's per-pass times; one pass for all cost the same) or, for profiling, one pass per dispatch.
+        let mut plan: Vec<(&str, &str, (u32, u32))> = Vec::new();
+        let gpu_schedule = self.gpu_schedule;
+        let grid_build = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage| {
+            plan.push((stage, "grid_clear", over_cells));
+            plan.push((stage, "grid_count", over_k));
+            plan.push((stage, "grid_scan", (1, 1)));
+            if gpu_schedule {
+                plan.push((stage, "grid_fill", over_k));
+            }
+        };
+        // A real GPU's schedule: the searches the grid's first shells left unfinished, a workgroup each, over
+        // the queue (its workgroups from `queue_args`).
+        let wide = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage, entry| {
+            if gpu_schedule {
+                plan.push((stage, "queue_args", (1, 1)));
+                plan.push((stage, entry, (0, 0)));
+            }
+        };
+        if !warm {
+            plan.push(("iterations", "km_init", over_k));
+        }
+        for _ in 0..params.iterations {
+            grid_build(&mut plan, "iterations");
+            plan.push(("iterations", "km_assign", over_samples));
+            wide(&mut plan, "iterations", "km_assign_wide");
+            plan.push(("iterations", "km_update", over_k));
+        }
+        grid_build(&mut plan, "assignment");
+        if neighbours {
+            plan.push(("assignment", "km_final", over_samples));
+            // The samples' lists complete before the blocks merge them.
+            wide(&mut plan, "assignment", "km_search_wide");
+            plan.push(("assignment", "km_blocks", over_samples));
+            plan.push(("assignment", "km_fill", over_points));
+            plan.push(("assignment", "queue_args", (1, 1)));
+            plan.push(("search", if gpu_schedule { "km_search_wide" } else { "km_search" }, (0, 0)));
+        } else {
+            plan.push(("assignment", "km_final", over_points));
+            wide(&mut plan, "search", "km_search_wide");
+        }
+        plan.push(("search", "rep_pick", over_points));
+        plan.push(("search", "rep_finish", over_k));
         let dispatch = |pass: &mut wgpu::ComputePass<'_>, entry: &str, (x, y): (u32, u32)| {
             pass.set_pipeline(self.pipeline(entry));
-            if entry == "km_search" {
-                // `km_search` runs over `km_fill`'s queue: its workgroups come from `queue_args`.
+            if matches!(entry, "km_search" | "km_search_wide" | "km_assign_wide") {
                 pass.set_bind_group(0, &search_group, &[]);
                 pass.dispatch_workgroups_indirect(&self.search_args, 0);
-                pass.set_bind_group(0, &group, &[]);
             } else {
+                pass.set_bind_group(0, &group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             }
         };
-        let grid = |pass: &mut wgpu::ComputePass<'_>| {
-            dispatch(pass, "grid_clear", over_cells);
-            dispatch(pass, "grid_count", over_k);
-            dispatch(pass, "grid_scan", (1, 1));
-        };
-        timer.compute_pass(encoder, &stage("iterations"), |pass| {
-            pass.set_bind_group(0, &group, &[]);
-            if !warm {
-                dispatch(pass, "km_init", over_k);
+        let label = self.label;
+        if self.time_dispatches {
+            for &(stage, entry, size) in &plan {
+                let name = format!("fuzzy clustering ({label}): {stage}: {entry}");
+                timer.compute_pass(encoder, &name, |pass| dispatch(pass, entry, size));
             }
-            for _ in 0..params.iterations {
-                grid(pass);
-                dispatch(pass, "km_assign", over_samples);
-                dispatch(pass, "km_update", over_k);
+        } else {
+            for stage in ["iterations", "assignment", "search"] {
+                timer.compute_pass(encoder, &format!("fuzzy clustering ({label}): {stage}"), |pass| {
+                    for &(_, entry, size) in plan.iter().filter(|d| d.0 == stage) {
+                        dispatch(pass, entry, size);
+                    }
+                });
             }
-        });
-        timer.compute_pass(encoder, &stage("assignment"), |pass| {
-            pass.set_bind_group(0, &group, &[]);
-            grid(pass);
-            if neighbours {
-                dispatch(pass, "km_final", over_samples);
-                dispatch(pass, "km_blocks", over_samples);
-                dispatch(pass, "km_fill", over_points);
-                dispatch(pass, "queue_args", (1, 1));
-            } else {
-                dispatch(pass, "km_final", over_points);
-            }
-        });
-        timer.compute_pass(encoder, &stage("search"), |pass| {
-            pass.set_bind_group(0, &group, &[]);
-            if neighbours {
-                dispatch(pass, "km_search", (0, 0));
-            }
-            dispatch(pass, "rep_pick", over_points);
-            dispatch(pass, "rep_finish", over_k);
-        });
+        }
         Ok(self.shape)
     }
 
@@ -421,6 +498,18 @@ impl GpuKMeans {
         let bytes = readback::read_buffer(gpu, buffer)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[m * f * 8..(m * f * 2 + samples * stride) * 4]);
         Ok(words.chunks_exact(stride).map(|block| block[1..1 + (block[0] as usize).min(4 * f)].to_vec()).collect())
+    }
+
+    /// The length of the last run's search queue: the points `km_fill` left to `km_search` (a CPU rasterizer's
+    /// schedule) or to `km_search_wide` (a real GPU's). For tests that a path is taken.
+    pub fn read_queue_len(&self, gpu: &GpuContext, params: &KMeansParams) -> Result<u32, GpuError> {
+        let Some(buffer) = &self.work else { return Ok(0) };
+        let (_, dims) = grid_shape(params.bounds_extent, self.shape.clusters);
+        let cells = (dims[0] * dims[1] * dims[2]) as usize;
+        let fine = if self.fine_above > 0 { fine_table(self.shape.clusters) as usize } else { 0 };
+        let word = self.shape.clusters * ACC as usize + cells + fine + 2 * NB as usize;
+        let bytes = readback::read_buffer(gpu, buffer)?;
+        Ok(bytemuck::pod_read_unaligned(&bytes[word * 4..word * 4 + 4]))
     }
 
     /// The assignment of the last run: per point, `F` (cluster or `u32::MAX`, inverse distance).

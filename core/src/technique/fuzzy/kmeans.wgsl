@@ -5,10 +5,12 @@
 // nearest with inverse distances. WGSL has no float atomics: members add their position as a fraction of the
 // bounds and their normal as (n + 1) / 2, times 2^24, into 64-bit sums made of two atomic u32 (the carry is
 // added to the high word when the low word wraps), so a mean keeps 2^-24 of the bounds whatever the count.
-// Entry points, one dispatch each, in this order (see gpu.rs): km_init (not in a warm start: the centroids are
-// the last run's); per iteration grid_clear (with the accumulators), grid_count, grid_scan (with the fill),
-// km_assign, km_update; then the grid again, km_final (over the samples with neighbour lists, then km_blocks, km_fill,
-// queue_args and km_search, dispatched indirectly over km_fill's queue), rep_pick, rep_finish.
+// Entry points, one dispatch each, in the order of gpu.rs `encode`: km_init (not in a warm start: the centroids
+// are the last run's); per iteration grid_clear (with the accumulators and the queue), grid_count, grid_scan
+// (with the fill; a real GPU: then grid_fill), km_assign (a real GPU: then queue_args and km_assign_wide over
+// the samples it queued); km_update; then the grid again, km_final (over the samples with neighbour lists; a real
+// GPU: queue_args, km_search_wide), km_blocks, km_fill, queue_args and km_search (a real GPU: km_search_wide),
+// dispatched indirectly over the queue, rep_pick, rep_finish.
 // `KmParams`, `KmPoint` mirror core/src/technique/fuzzy/gpu.rs. The search is in kmeans_search.wgsl, Algorithm 2
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
 
@@ -52,6 +54,12 @@ struct KmParams {
     bounds_extent: vec4<f32>,
     // x: 1 / the largest flux component (has_flux), y: that component
     flux_scale: vec4<f32>,
+    // The fine level of the grid (a real GPU's schedule and a CPU rasterizer's alike): xyz its cells per axis
+    // (FINE times the coarse level's), w: the cells of its hash table (0: no fine level)
+    fine_dims: vec4<u32>,
+    // x: the fine level's cell, y: the most centroids a point's coarse cell holds before its searches use the
+    // fine level
+    fine_cell: vec4<f32>,
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
     // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
@@ -71,9 +79,9 @@ struct KmPoint {
 // [0, K): the clusters as lights / endpoints (representative's position, w: 1 when it has members; normal, w:
 // members; flux). [K, 2K): the working centroids (position, w: 1 active; normal).
 @group(0) @binding(2) var<storage, read_write> clusters: array<KmPoint>;
-// K * ACC accumulators, then the grid: counts (cells), starts (cells + 1), items (K); then the normal buckets:
-// counts (NB), starts (NB + 1), limits (NB), items (K); then the search queue of km_fill: its length and the
-// points (up to all).
+// K * ACC accumulators, then the grid's cell counts (both levels; the fill cursors while the centroids are filled), the normal
+// buckets' counts (cursors) and least cosines (grid_count's atomicMin); then the search queue of km_fill: its
+// length and the points (up to all).
 @group(0) @binding(3) var<storage, read_write> work: array<atomic<u32>>;
 // Per point, F entries of (cluster, bitcast inverse distance); NONE where empty. With neighbour lists, then the
 // blocks' lists (km_blocks).
@@ -81,6 +89,12 @@ struct KmPoint {
 // The workgroups of km_search (x, y, z), written by queue_args from the queue's length: an indirect dispatch,
 // so that the points km_fill did not queue cost no workgroup.
 @group(0) @binding(5) var<storage, read_write> search_args: array<u32>;
+// The grid and the normal buckets as the searches read them, written by grid_scan and grid_fill only: the cells'
+// starts (both levels' cells + 1), their items (2 K: the coarse level's, then the fine one's), the buckets' starts
+// (NB + 1), their limits (NB, f32 bits), their items (K). Not
+// in `work`: the searches read these words thousands of times a point, and an atomic load is not cached near
+// the core on a real GPU (a relaxed load at device scope goes to the shared cache), a plain load is.
+@group(0) @binding(6) var<storage, read_write> grid: array<u32>;
 
 fn global_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * 64u;
@@ -90,20 +104,29 @@ fn counts_base() -> u32 {
     return km.cluster_count * ACC;
 }
 
+fn nb_counts_base() -> u32 {
+    return counts_base() + all_cells();
+}
+
+fn nb_least_base() -> u32 {
+    return nb_counts_base() + NB;
+}
+
+fn queue_base() -> u32 {
+    return nb_least_base() + NB;
+}
+
+// `grid`'s parts.
 fn starts_base() -> u32 {
-    return counts_base() + km.cells;
+    return 0u;
 }
 
 fn items_base() -> u32 {
-    return starts_base() + km.cells + 1u;
-}
-
-fn nb_counts_base() -> u32 {
-    return items_base() + km.cluster_count;
+    return all_cells() + 1u;
 }
 
 fn nb_starts_base() -> u32 {
-    return nb_counts_base() + NB;
+    return items_base() + 2u * km.cluster_count;
 }
 
 fn nb_limits_base() -> u32 {
@@ -112,10 +135,6 @@ fn nb_limits_base() -> u32 {
 
 fn nb_items_base() -> u32 {
     return nb_limits_base() + NB;
-}
-
-fn queue_base() -> u32 {
-    return nb_items_base() + km.cluster_count;
 }
 
 fn point_valid(p: KmPoint) -> bool {
@@ -133,15 +152,57 @@ fn centroid(k: u32) -> KmPoint {
     return clusters[km.cluster_count + k];
 }
 
-fn cell_of(p: vec3<f32>) -> vec3<i32> {
-    let c = floor((p - km.bounds_min.xyz) / km.cell);
-    let top = vec3<f32>(km.dims.xyz) - 1.0;
+// The grid has two levels, each holding every centroid, so that a search in either finds the same clusters:
+// the coarse (level 0; kmeans.rs `grid_shape`, the twin's grid) and a fine one, FINE times finer along each axis,
+// whose cells go to a hash table (their count would be FINE^3 times the coarse one's). A point whose coarse cell
+// holds more than fine_cell.y centroids searches the fine level: the centroids follow the pixels, so near the
+// camera a coarse cell can hold hundreds of them (on the H200, Sponza's 2-shell walks alone took 1.3 ms per
+// iteration: docs/techniques/fuzzy.md, nineteenth session). A hash cell holds its cell's centroids and maybe
+// others': a search considers those too, which cannot change what it finds.
+fn level_cell(l: u32) -> f32 {
+    if l == 1u {
+        return km.fine_cell.x;
+    }
+    return km.cell;
+}
+
+fn level_dims(l: u32) -> vec3<i32> {
+    if l == 1u {
+        return vec3<i32>(km.fine_dims.xyz);
+    }
+    return vec3<i32>(km.dims.xyz);
+}
+
+fn cell_of(p: vec3<f32>, l: u32) -> vec3<i32> {
+    let c = floor((p - km.bounds_min.xyz) / level_cell(l));
+    let top = vec3<f32>(level_dims(l)) - 1.0;
     return vec3<i32>(clamp(c, vec3<f32>(0.0), top));
 }
 
-fn cell_index(c: vec3<i32>) -> u32 {
+// The cell's index into the counts and starts: the coarse level's cells, then the fine level's hash table.
+fn cell_index(c: vec3<i32>, l: u32) -> u32 {
     let u = vec3<u32>(c);
+    if l == 1u {
+        let h = (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
+        return km.cells + (h & (km.fine_dims.w - 1u));
+    }
     return u.x + km.dims.x * (u.y + km.dims.y * u.z);
+}
+
+// The cells of both levels (the counts and starts).
+fn all_cells() -> u32 {
+    return km.cells + km.fine_dims.w;
+}
+
+// The level a search around p uses: the fine one where p's coarse cell is crowded (never for the paper's
+// ring-limited search, whose rings are the coarse level's cells).
+fn level_of(p: vec3<f32>) -> u32 {
+    if km.fine_dims.w == 0u || km.dims.w > 0u {
+        return 0u;
+    }
+    let i = cell_index(cell_of(p, 0u), 0u);
+    let count = grid[starts_base() + i + 1u] - grid[starts_base() + i];
+    return u32(f32(count) > km.fine_cell.y);
 }
 
 fn add64(word: u32, v: u32) {
@@ -215,12 +276,12 @@ fn seed(k: u32) {
 // the accumulators; km_update, before it, has read them).
 @compute @workgroup_size(64)
 fn grid_clear(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < km.cells {
+    if id.x < all_cells() {
         atomicStore(&work[counts_base() + id.x], 0u);
     }
     if id.x < NB {
         atomicStore(&work[nb_counts_base() + id.x], 0u);
-        atomicStore(&work[nb_limits_base() + id.x], NONE);
+        atomicStore(&work[nb_least_base() + id.x], NONE);
     }
     let k = id.x;
     if k < km.cluster_count {
@@ -243,7 +304,10 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let c = centroid(k);
     if c.position.w > 0.5 {
-        atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz))], 1u);
+        atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz, 0u), 0u)], 1u);
+        if km.fine_dims.w > 0u {
+            atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz, 1u), 1u)], 1u);
+        }
         // The bucket's cone: the least cosine between its axis and a member's normal (order-preserving as the
         // bits of cos + 2); a normal that is not unit opens the cone whole, so its bucket is never skipped.
         let n = c.normal.xyz;
@@ -253,19 +317,21 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>) {
         if unit(n) {
             cosine = clamp(dot(n, bucket_axis(b)), -1.0, 1.0);
         }
-        atomicMin(&work[nb_limits_base() + b], bitcast<u32>(cosine + 2.0));
+        atomicMin(&work[nb_least_base() + b], bitcast<u32>(cosine + 2.0));
     }
 }
 
 var<workgroup> scan_partial: array<u32, 256>;
+var<workgroup> scan_buckets: array<u32, NB>;
 
-// One workgroup: exclusive prefix sum of the cell counts into the starts, the counts becoming the fill cursors;
-// then the centroids into their cells and normal buckets (one dispatch instead of two: on a CPU rasterizer a
-// dispatch costs about as much as filling a few thousand centroids).
+// One workgroup: exclusive prefix sum of the cell counts into the starts, the counts becoming the fill cursors,
+// and the normal buckets' starts and limits (an invocation each); then, on a CPU rasterizer, the centroids into
+// their cells and normal buckets (one dispatch instead of two: there a dispatch costs about as much as filling a
+// few thousand centroids; a real GPU fills them in `grid_fill`, over every centroid at once).
 @compute @workgroup_size(256)
 fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
     let t = lid.x;
-    let cells = km.cells;
+    let cells = all_cells();
     let chunk = (cells + 255u) / 256u;
     let first = min(t * chunk, cells);
     let last = min(first + chunk, cells);
@@ -274,6 +340,9 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
         sum += atomicLoad(&work[counts_base() + c]);
     }
     scan_partial[t] = sum;
+    if t < NB {
+        scan_buckets[t] = atomicLoad(&work[nb_counts_base() + t]);
+    }
     workgroupBarrier();
     if t == 0u {
         var running = 0u;
@@ -282,39 +351,53 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
             scan_partial[i] = running;
             running += v;
         }
-        atomicStore(&work[starts_base() + cells], running);
-        // The normal buckets (64, one invocation is enough): starts, fill cursors, and each bucket's limit: the
-        // least cosine between a point's normal and the axis for which a member can be within acos(n_t).
-        var nb_running = 0u;
-        let theta = acos(clamp(km.n_t, -1.0, 1.0));
-        for (var b = 0u; b < NB; b++) {
-            let n = atomicLoad(&work[nb_counts_base() + b]);
-            atomicStore(&work[nb_starts_base() + b], nb_running);
-            atomicStore(&work[nb_counts_base() + b], 0u);
-            nb_running += n;
-            var limit = -2.0;
-            if n > 0u {
-                let spread = acos(clamp(bitcast<f32>(atomicLoad(&work[nb_limits_base() + b])) - 2.0, -1.0, 1.0));
-                let reach = theta + spread + NB_MARGIN;
-                if reach < 3.14159 {
-                    limit = cos(reach);
-                }
-            }
-            atomicStore(&work[nb_limits_base() + b], bitcast<u32>(limit));
+        grid[starts_base() + cells] = running;
+    }
+    if t < NB {
+        // Bucket t: its start, fill cursor, and limit: the least cosine between a point's normal and the axis for
+        // which a member can be within acos(n_t).
+        var start = 0u;
+        for (var b = 0u; b < t; b++) {
+            start += scan_buckets[b];
         }
-        atomicStore(&work[nb_starts_base() + NB], nb_running);
+        let n = scan_buckets[t];
+        grid[nb_starts_base() + t] = start;
+        atomicStore(&work[nb_counts_base() + t], 0u);
+        if t == NB - 1u {
+            grid[nb_starts_base() + NB] = start + n;
+        }
+        var limit = -2.0;
+        if n > 0u {
+            let theta = acos(clamp(km.n_t, -1.0, 1.0));
+            let spread = acos(clamp(bitcast<f32>(atomicLoad(&work[nb_least_base() + t])) - 2.0, -1.0, 1.0));
+            let reach = theta + spread + NB_MARGIN;
+            if reach < 3.14159 {
+                limit = cos(reach);
+            }
+        }
+        grid[nb_limits_base() + t] = bitcast<u32>(limit);
     }
     workgroupBarrier();
     var running = scan_partial[t];
     for (var c = first; c < last; c++) {
         let n = atomicLoad(&work[counts_base() + c]);
-        atomicStore(&work[starts_base() + c], running);
+        grid[starts_base() + c] = running;
         atomicStore(&work[counts_base() + c], 0u);
         running += n;
     }
-    storageBarrier();
-    for (var k = t; k < km.cluster_count; k += 256u) {
-        fill_cell(k);
+    if !GPU_SCHEDULE {
+        storageBarrier();
+        for (var k = t; k < km.cluster_count; k += 256u) {
+            fill_cell(k);
+        }
+    }
+}
+
+// A real GPU's schedule: the centroids into their cells and buckets, one invocation each (after grid_scan).
+@compute @workgroup_size(64)
+fn grid_fill(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < km.cluster_count {
+        fill_cell(id.x);
     }
 }
 
@@ -322,22 +405,44 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
 fn fill_cell(k: u32) {
     let c = centroid(k);
     if c.position.w > 0.5 {
-        let cell = cell_index(cell_of(c.position.xyz));
-        let slot = atomicLoad(&work[starts_base() + cell]) + atomicAdd(&work[counts_base() + cell], 1u);
-        atomicStore(&work[items_base() + slot], k);
+        for (var l = 0u; l < select(1u, 2u, km.fine_dims.w > 0u); l++) {
+            let cell = cell_index(cell_of(c.position.xyz, l), l);
+            let slot = grid[starts_base() + cell] + atomicAdd(&work[counts_base() + cell], 1u);
+            grid[items_base() + slot] = k;
+        }
         let b = normal_bucket(c.normal.xyz);
-        let nb_slot = atomicLoad(&work[nb_starts_base() + b]) + atomicAdd(&work[nb_counts_base() + b], 1u);
-        atomicStore(&work[nb_items_base() + nb_slot], k);
+        let nb_slot = grid[nb_starts_base() + b] + atomicAdd(&work[nb_counts_base() + b], 1u);
+        grid[nb_items_base() + nb_slot] = k;
     }
 }
 
 // The nearest cluster of a point: entry 0 of the search, or the nearest by position when none is compatible.
 fn nearest_cluster(p: KmPoint) -> u32 {
     find(p.position.xyz, p.normal.xyz, 1u);
+    return nearest_found();
+}
+
+fn nearest_found() -> u32 {
     if best_n > 0u {
         return best_kl.x;
     }
     return any_k;
+}
+
+// Point m (a sample, a pixel) into the queue of the workgroup-wide searches (a real GPU's schedule).
+fn enqueue(m: u32) {
+    let q = atomicAdd(&work[queue_base()], 1u);
+    atomicStore(&work[queue_base() + 1u + q], m);
+}
+
+// Algorithm 1's assignment step: the sample's centroid takes it into its sums.
+fn assign_to(k: u32, p: KmPoint) {
+    if k == NONE {
+        return;
+    }
+    accumulate_position(k, p);
+    accumulate_normal(k, p);
+    atomicAdd(&work[k * ACC + ACC_COUNT], 1u);
 }
 
 @compute @workgroup_size(64)
@@ -346,17 +451,35 @@ fn km_assign(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if s >= km.sample_count {
         return;
     }
-    let p = km_points[sample_point(s)];
+    let m = sample_point(s);
+    let p = km_points[m];
     if !point_valid(p) {
         return;
     }
-    let k = nearest_cluster(p);
-    if k == NONE {
+    if GPU_SCHEDULE {
+        if !find_near(p.position.xyz, p.normal.xyz, 1u) {
+            enqueue(m);
+            return;
+        }
+        assign_to(nearest_found(), p);
+    } else {
+        assign_to(nearest_cluster(p), p);
+    }
+}
+
+// A real GPU's schedule: the samples km_assign queued, a workgroup each (its workgroups from queue_args).
+@compute @workgroup_size(64)
+fn km_assign_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                  @builtin(local_invocation_id) lid: vec3<u32>) {
+    let m = wide_item(wid, groups, lid.x);
+    if m == NONE {
         return;
     }
-    accumulate_position(k, p);
-    accumulate_normal(k, p);
-    atomicAdd(&work[k * ACC + ACC_COUNT], 1u);
+    let p = km_points[m];
+    wide_find(p.position.xyz, p.normal.xyz, 1u, lid.x);
+    if lid.x == 0u {
+        assign_to(nearest_found(), p);
+    }
 }
 
 @compute @workgroup_size(64)

@@ -1,7 +1,8 @@
 // Algorithm 2 of fuzzy/kmeans.wgsl (concatenated after it): every point's F nearest clusters with inverse
 // distances and the members they make; with neighbour lists, the samples by the search (km_final), the four
 // samples' lists merged per block of points between them (km_blocks), the points from their block's list
-// (km_fill), the long searches in a dispatch of their own (km_search).
+// (km_fill), the long searches in a dispatch of their own (km_search; on a real GPU km_search_wide, a workgroup
+// per point, also for the samples km_final left unfinished, before km_blocks reads their lists).
 
 // Algorithm 2's output for point m: its F entries (the search state), and entry 0's cluster counts the point
 // as a member (count, the least member distance for the representative; with flux, normal and flux sums).
@@ -81,7 +82,14 @@ fn km_final(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
         clear_entries(m, f_max);
         return;
     }
-    find(p.position.xyz, p.normal.xyz, f_max);
+    if GPU_SCHEDULE {
+        if !find_near(p.position.xyz, p.normal.xyz, f_max) {
+            enqueue(m);
+            return;
+        }
+    } else {
+        find(p.position.xyz, p.normal.xyz, f_max);
+    }
     record(m, p, f_max);
 }
 
@@ -110,6 +118,10 @@ fn block_corners(sx: u32, sy: u32) -> array<u32, 4> {
 @compute @workgroup_size(64)
 fn km_blocks(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let s = global_index(id, groups);
+    if s == 0u {
+        // The queue of km_final's samples has been searched (a real GPU's schedule): km_fill's starts empty.
+        atomicStore(&work[queue_base()], 0u);
+    }
     if s >= km.sample_count {
         return;
     }
@@ -182,23 +194,30 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         consider(assignment[base + 1u + i], p.position.xyz, p.normal.xyz, f_max);
     }
     if best_n < f_max && GPU_SCHEDULE {
-        // A real GPU's schedule: the search in place (the queue's dispatch cost more than the waiting it saved).
-        find(p.position.xyz, p.normal.xyz, f_max);
+        // A real GPU's schedule: the grid's first shells here, the workgroup-wide search where they do not finish.
+        if !find_near(p.position.xyz, p.normal.xyz, f_max) {
+            enqueue(m);
+            return;
+        }
     } else if best_n < f_max {
         // The grid search is long where it is needed (few compatible clusters near a crease): on a CPU
         // rasterizer it goes to a queue of its own (km_search) so that the invocations beside it do not wait.
-        let q = atomicAdd(&work[queue_base()], 1u);
-        atomicStore(&work[queue_base() + 1u + q], m);
+        enqueue(m);
         return;
     }
     record(m, p, f_max);
 }
 
-// One invocation: km_search's workgroups from the length of km_fill's queue (x at most 32,768, as
-// `global_index` expects; none when the queue is empty).
+// One invocation: the workgroups of the search over the queue from its length (x at most 32,768, as
+// `global_index` and `wide_item` expect; none when the queue is empty): km_search's 64 points a workgroup, or
+// on a real GPU km_assign_wide's and km_search_wide's one.
 @compute @workgroup_size(1)
 fn queue_args() {
-    let g = (atomicLoad(&work[queue_base()]) + 63u) / 64u;
+    let queued = atomicLoad(&work[queue_base()]);
+    var g = (queued + 63u) / 64u;
+    if GPU_SCHEDULE {
+        g = queued;
+    }
     search_args[0] = min(g, 32768u);
     search_args[1] = max((g + 32767u) / 32768u, 1u);
     search_args[2] = 1u;
@@ -216,4 +235,20 @@ fn km_search(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     let p = km_points[m];
     find(p.position.xyz, p.normal.xyz, f_max);
     record(m, p, f_max);
+}
+
+// A real GPU's schedule: the points (or samples) the grid's first shells left unfinished, a workgroup each.
+@compute @workgroup_size(64)
+fn km_search_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                  @builtin(local_invocation_id) lid: vec3<u32>) {
+    let m = wide_item(wid, groups, lid.x);
+    if m == NONE {
+        return;
+    }
+    let f_max = clamp(km.fuzziness, 1u, MAX_F);
+    let p = km_points[m];
+    wide_find(p.position.xyz, p.normal.xyz, f_max, lid.x);
+    if lid.x == 0u {
+        record(m, p, f_max);
+    }
 }

@@ -67,7 +67,10 @@ fn insert_best(d: f32, k: u32, f_max: u32) {
 // The nearest by position is only used when no compatible centroid is found, so it is kept only while none is.
 // A full list rejects a farther candidate with one comparison.
 fn consider(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    let c = centroid(k);
+    consider_centroid(k, centroid(k), p, n, f_max);
+}
+
+fn consider_centroid(k: u32, c: KmPoint, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     let d = length(p - c.position.xyz);
     if best_n == 0u && (any_k == NONE || less(d, k, any_d, any_k)) {
         any_d = d;
@@ -83,38 +86,47 @@ fn consider(k: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
 
 // The distance from p to the box of cell c; a border cell's box reaches to infinity outwards (centroids beyond
 // the bounds are binned into it).
-fn cell_distance(c: vec3<i32>, p: vec3<f32>) -> f32 {
-    let lo = km.bounds_min.xyz + vec3<f32>(c) * km.cell;
-    let hi = lo + vec3<f32>(km.cell);
-    let top = vec3<i32>(km.dims.xyz) - 1;
+fn cell_distance(c: vec3<i32>, l: u32, p: vec3<f32>) -> f32 {
+    let lo = km.bounds_min.xyz + vec3<f32>(c) * level_cell(l);
+    let hi = lo + vec3<f32>(level_cell(l));
+    let top = level_dims(l) - 1;
     let below = select(lo - p, vec3<f32>(0.0), c == vec3<i32>(0));
     let above = select(p - hi, vec3<f32>(0.0), c == top);
     return length(max(max(below, above), vec3<f32>(0.0)));
 }
 
 // A cell farther than the F-th centroid found cannot change the list once it is full.
-fn visit_cell(c: vec3<i32>, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if best_n == f_max && cell_distance(c, p) > best_d(f_max - 1u) {
+fn visit_cell(c: vec3<i32>, l: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
+    if best_n == f_max && cell_distance(c, l, p) > best_d(f_max - 1u) {
         return;
     }
-    let i = cell_index(c);
-    let s = atomicLoad(&work[starts_base() + i]);
-    let e = atomicLoad(&work[starts_base() + i + 1u]);
+    let i = cell_index(c, l);
+    let s = grid[starts_base() + i];
+    let e = grid[starts_base() + i + 1u];
     for (var j = s; j < e; j++) {
-        consider(atomicLoad(&work[items_base() + j]), p, n, f_max);
+        let k = grid[items_base() + j];
+        let ck = centroid(k);
+        // A fine cell's hash slot may hold other cells' centroids: each is considered in its own cell only (a
+        // walk can meet a slot more than once).
+        if l == 1u && any(cell_of(ck.position.xyz, 1u) != c) {
+            continue;
+        }
+        consider_centroid(k, ck, p, n, f_max);
     }
 }
 
 // How far every centroid outside the block of radius r around cell c is from p at least: the distance to the
 // block's nearest face with cells beyond it (kmeans.rs `Grid::guarantee`).
-fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
+fn guarantee(p: vec3<f32>, c: vec3<i32>, l: u32, r: i32) -> f32 {
     var g = 3.0e38;
+    let cell = level_cell(l);
+    let dims = level_dims(l);
     for (var a = 0; a < 3; a++) {
         if c[a] - r > 0 {
-            g = min(g, p[a] - (km.bounds_min[a] + f32(c[a] - r) * km.cell));
+            g = min(g, p[a] - (km.bounds_min[a] + f32(c[a] - r) * cell));
         }
-        if c[a] + r < i32(km.dims[a]) - 1 {
-            g = min(g, km.bounds_min[a] + f32(c[a] + r + 1) * km.cell - p[a]);
+        if c[a] + r < dims[a] - 1 {
+            g = min(g, km.bounds_min[a] + f32(c[a] + r + 1) * cell - p[a]);
         }
     }
     return g;
@@ -124,22 +136,19 @@ fn guarantee(p: vec3<f32>, c: vec3<i32>, r: i32) -> f32 {
 // F-th distance found is within the guarantee (every unvisited centroid is farther) or the grid is exhausted.
 fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
     reset_best();
-    search_shells(p, n, f_max, 0, 0x7fffffff, 0xffffffffu);
+    search_shells(p, n, f_max, 0x7fffffff);
 }
 
-// The shell `search_shells` stopped before when it returned false.
-var<private> next_shell: i32;
-
-// The shells from r0 (the search state holding those before it) until the search is finished (true, as `search`
-// would end it) or, unfinished (false, `next_shell` the next one), after shell max_r or after the first shell
-// that brings the block walked to more than `budget` cells (the bounds: a real GPU's schedule; `search` walks
-// without them; with its own copy of the loop instead, lavapipe's clustering measured the same).
-fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, budget: u32) -> bool {
-    let c = cell_of(p);
-    let dims = vec3<i32>(km.dims.xyz);
+// The shells around p in its level (`level_of`) until the search is finished (true) or, unfinished (false),
+// after shell max_r (a real GPU's schedule; `search` walks without the bound; with its own copy of the loop
+// instead, lavapipe's clustering measured the same).
+fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, max_r: i32) -> bool {
+    let l = level_of(p);
+    let c = cell_of(p, l);
+    let dims = level_dims(l);
     let far = max(c, dims - 1 - c);
     let reach = max(far.x, max(far.y, far.z));
-    var r = r0;
+    var r = 0;
     var finished = false;
     loop {
         let lo = max(c - vec3<i32>(r), vec3<i32>(0));
@@ -148,28 +157,26 @@ fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, r0: i32, max_r: i32, bu
             for (var y = lo.y; y <= hi.y; y++) {
                 if abs(z - c.z) == r || abs(y - c.y) == r {
                     for (var x = lo.x; x <= hi.x; x++) {
-                        visit_cell(vec3<i32>(x, y, z), p, n, f_max);
+                        visit_cell(vec3<i32>(x, y, z), l, p, n, f_max);
                     }
                 } else {
                     if c.x - r >= 0 {
-                        visit_cell(vec3<i32>(c.x - r, y, z), p, n, f_max);
+                        visit_cell(vec3<i32>(c.x - r, y, z), l, p, n, f_max);
                     }
                     if c.x + r < dims.x {
-                        visit_cell(vec3<i32>(c.x + r, y, z), p, n, f_max);
+                        visit_cell(vec3<i32>(c.x + r, y, z), l, p, n, f_max);
                     }
                 }
             }
         }
-        let complete = best_n == f_max && best_d(f_max - 1u) <= guarantee(p, c, r);
+        let complete = best_n == f_max && best_d(f_max - 1u) <= guarantee(p, c, l, r);
         // dims.w > 0: stop after that ring once a compatible centroid is found (1: the paper's 27 cells).
         let ring_done = km.dims.w > 0u && r >= i32(km.dims.w) && best_n > 0u;
         if (r >= 1 && (complete || ring_done)) || r >= reach {
             finished = true;
             break;
         }
-        let side = u32(2 * r + 1);
-        if r >= max_r || side * side * side > budget {
-            next_shell = r + 1;
+        if r >= max_r {
             break;
         }
         r++;
@@ -204,81 +211,167 @@ fn unit(n: vec3<f32>) -> bool {
     return abs(dot(n, n) - 1.0) < 1e-3;
 }
 
-// The F nearest compatible centroids (the search state), exactly as `search` finds them. Where the buckets that
-// can hold a compatible centroid hold at most options.y centroids (a point on a crease or a narrow face, whose
+// The F nearest compatible centroids (the search state), exactly as `search` finds them (a CPU rasterizer's
+// schedule; a real GPU's is `find_near` and the workgroup-wide `wide_find` below). Where the buckets that can
+// hold a compatible centroid hold at most options.y centroids (a point on a crease or a narrow face, whose
 // compatible centroids are few and may be far), a search for F > 1 scans them whole instead of walking the grid
 // shell by shell until F are found, which can visit every cell. A compatible centroid lies within acos(n_t) of
 // the point's normal and within its bucket's spread of the bucket's axis, so a bucket whose axis is farther than
 // both (plus a margin for rounding) holds none. When none is compatible, the nearest by position is the grid's
-// (F = 1, every centroid compatible), as the exhausted search would find it.
-// A CPU rasterizer's schedule (GPU_SCHEDULE false): the nearest alone (F = 1: Algorithm 1's assignment) walks
-// the grid (its first shells hold it, and counting the buckets for every point took twice as long on lavapipe:
-// sixteenth session), and so does a search whose buckets hold more than options.y centroids.
-// A real GPU's (GPU_SCHEDULE true): a dispatch lasts as long as its slowest invocation, and a point with no
-// compatible centroid near it (a surface that came into view since a warm start's centroids were placed) walked
-// the grid whole and held its dispatch (the shading points' clustering took 69-81 % of the H200's frame at
-// 1024x720: docs/techniques/fuzzy.md, eighteenth session). So the nearest alone walks NEAREST_SHELLS shells
-// first and only a point they leave unfinished counts the buckets; a walk goes on only while the block it has
-// walked holds fewer cells than those buckets hold centroids; then they are scanned whole.
-const NEAREST_SHELLS: i32 = 2;
-
+// (F = 1, every centroid compatible), as the exhausted search would find it. The nearest alone (F = 1:
+// Algorithm 1's assignment) walks the grid (its first shells hold it, and counting the buckets for every point
+// took twice as long on lavapipe: sixteenth session), and so does a search whose buckets hold more than
+// options.y centroids.
 fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
-    if km.options.y == 0u || km.dims.w > 0u || !unit(n) || (f_max == 1u && !GPU_SCHEDULE) {
+    if !bucket_scan(n) || f_max == 1u {
         search(p, n, f_max);
         return;
     }
     reset_best();
-    var from_shell = 0;
-    if f_max == 1u {
-        if search_shells(p, n, 1u, 0, NEAREST_SHELLS, 0xffffffffu) {
-            return;
-        }
-        from_shell = next_shell;
-    }
-    var mask_lo = 0u;
-    var mask_hi = 0u;
     var total = 0u;
     for (var b = 0u; b < NB; b++) {
-        let limit = bitcast<f32>(atomicLoad(&work[nb_limits_base() + b]));
-        if limit > -1.5 && dot(n, bucket_axis(b)) < limit {
-            continue;
-        }
-        let count = atomicLoad(&work[nb_starts_base() + b + 1u]) - atomicLoad(&work[nb_starts_base() + b]);
-        if count == 0u {
-            continue;
-        }
-        total += count;
-        if b < 32u {
-            mask_lo |= 1u << b;
-        } else {
-            mask_hi |= 1u << (b - 32u);
+        if compatible_bucket(b, n) {
+            total += grid[nb_starts_base() + b + 1u] - grid[nb_starts_base() + b];
         }
     }
     if total > km.options.y {
-        if !GPU_SCHEDULE {
-            search(p, n, f_max);
-            return;
-        }
-        if search_shells(p, n, f_max, from_shell, 0x7fffffff, total) {
-            return;
-        }
+        search(p, n, f_max);
+        return;
     }
-    reset_best();
     for (var b = 0u; b < NB; b++) {
-        let bit = select(mask_hi >> (b - 32u), mask_lo >> b, b < 32u) & 1u;
-        if bit == 0u {
+        if !compatible_bucket(b, n) {
             continue;
         }
-        let s = atomicLoad(&work[nb_starts_base() + b]);
-        let e = atomicLoad(&work[nb_starts_base() + b + 1u]);
+        let s = grid[nb_starts_base() + b];
+        let e = grid[nb_starts_base() + b + 1u];
         for (var j = s; j < e; j++) {
-            consider(atomicLoad(&work[nb_items_base() + j]), p, n, f_max);
+            consider(grid[nb_items_base() + j], p, n, f_max);
         }
     }
     if best_n == 0u {
-        all_compatible = true;
-        search(p, n, 1u);
-        all_compatible = false;
+        nearest_by_position(p, n);
+    }
+}
+
+// Whether the normal buckets may serve the search of a point of normal n (else only the grid does: the paper's
+// ring-limited search, a bucket scan limit of 0, a normal that is not unit).
+fn bucket_scan(n: vec3<f32>) -> bool {
+    return km.options.y > 0u && km.dims.w == 0u && unit(n);
+}
+
+// Whether bucket b can hold a centroid compatible with normal n.
+fn compatible_bucket(b: u32, n: vec3<f32>) -> bool {
+    let limit = bitcast<f32>(grid[nb_limits_base() + b]);
+    return !(limit > -1.5 && dot(n, bucket_axis(b)) < limit);
+}
+
+// No compatible centroid: the nearest by position (the grid's, F = 1, every centroid compatible) as `any`.
+fn nearest_by_position(p: vec3<f32>, n: vec3<f32>) {
+    all_compatible = true;
+    search(p, n, 1u);
+    all_compatible = false;
+    let k = best_kl.x;
+    let d = best_dl.x;
+    reset_best();
+    any_k = k;
+    any_d = d;
+}
+
+// A real GPU's schedule (GPU_SCHEDULE true). A dispatch lasts as long as its slowest invocation, and a point whose
+// compatible centroids are far (a crease, a chair's leg, a surface that came into view since a warm start's
+// centroids were placed) walks far: on the H200 at 1024x720 such walks made the shading points' clustering 69-81 %
+// of a moving camera's frame (docs/techniques/fuzzy.md, eighteenth and nineteenth sessions). So every point walks
+// the grid's first options.w shells (`find_near`: finished there for most points, exactly as `search`), and a
+// point they leave unfinished is queued for a workgroup of its own (`km_assign_wide`, `km_search_wide`), whose 64
+// invocations scan the compatible buckets' centroids together (`wide_find`), as `find` would scan them alone.
+
+// True when the search of p finished within the first options.w shells (or the buckets cannot serve it, and the
+// grid search ran whole here); false: the point goes to the workgroup-wide search.
+fn find_near(p: vec3<f32>, n: vec3<f32>, f_max: u32) -> bool {
+    if !bucket_scan(n) {
+        search(p, n, f_max);
+        return true;
+    }
+    reset_best();
+    return search_shells(p, n, f_max, i32(km.options.w));
+}
+
+const WIDE: u32 = 64u;
+var<workgroup> wide_ok: array<u32, NB>;
+var<workgroup> wide_d: array<f32, 512>;
+var<workgroup> wide_k: array<u32, 512>;
+var<workgroup> wide_point: u32;
+var<workgroup> wide_found: u32;
+
+// The queued point of this workgroup (NONE past the queue's end), the same for all its invocations.
+fn wide_item(wid: vec3<u32>, groups: vec3<u32>, t: u32) -> u32 {
+    if t == 0u {
+        let i = wid.x + wid.y * groups.x;
+        var m = NONE;
+        if i < atomicLoad(&work[queue_base()]) {
+            m = atomicLoad(&work[queue_base() + 1u + i]);
+        }
+        wide_point = m;
+    }
+    return workgroupUniformLoad(&wide_point);
+}
+
+// Invocation t's F nearest to the workgroup's memory; invocation 0 merges the WIDE lists into its search state
+// (each centroid is in one list: no duplicates) and tells the workgroup how many it holds.
+fn wide_merge(f_max: u32, t: u32) -> u32 {
+    for (var f = 0u; f < MAX_F; f++) {
+        wide_d[t * MAX_F + f] = best_d(f);
+        wide_k[t * MAX_F + f] = best_k(f);
+    }
+    workgroupBarrier();
+    if t == 0u {
+        reset_best();
+        for (var i = 0u; i < WIDE; i++) {
+            for (var f = 0u; f < f_max; f++) {
+                let k = wide_k[i * MAX_F + f];
+                let d = wide_d[i * MAX_F + f];
+                // Each list is sorted: the rest of it is farther.
+                if k == NONE || (best_n == f_max && !less(d, k, best_d(f_max - 1u), best_k(f_max - 1u))) {
+                    break;
+                }
+                insert_best(d, k, f_max);
+            }
+        }
+        wide_found = best_n;
+    }
+    return workgroupUniformLoad(&wide_found);
+}
+
+// `find` by the workgroup: the compatible buckets' centroids scanned by all WIDE invocations, invocation 0's search
+// state holding the F nearest (or, when none is compatible, the nearest by position as `any`, from every active
+// centroid).
+fn wide_find(p: vec3<f32>, n: vec3<f32>, f_max: u32, t: u32) {
+    wide_ok[t] = u32(compatible_bucket(t, n));
+    workgroupBarrier();
+    reset_best();
+    for (var b = 0u; b < NB; b++) {
+        if wide_ok[b] == 0u {
+            continue;
+        }
+        let s = grid[nb_starts_base() + b];
+        let e = grid[nb_starts_base() + b + 1u];
+        for (var j = s + t; j < e; j += WIDE) {
+            consider(grid[nb_items_base() + j], p, n, f_max);
+        }
+    }
+    if wide_merge(f_max, t) > 0u {
+        return;
+    }
+    reset_best();
+    all_compatible = true;
+    for (var k = t; k < km.cluster_count; k += WIDE) {
+        if centroid(k).position.w > 0.5 {
+            consider(k, p, n, 1u);
+        }
+    }
+    all_compatible = false;
+    wide_merge(1u, t);
+    if t == 0u {
         let k = best_kl.x;
         let d = best_dl.x;
         reset_best();

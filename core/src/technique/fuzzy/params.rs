@@ -54,6 +54,12 @@ pub struct FuzzyParams {
     pub assign: String,
     /// Lights one shading step sums.
     pub lights_per_step: u32,
+    /// Time each clustering dispatch in a pass of its own (profiling) instead of one pass per stage.
+    pub time_dispatches: bool,
+    /// A real GPU's schedule: the grid shells a search walks before a workgroup finishes it (speed only).
+    pub near_shells: u32,
+    /// The crowd of a point's coarse grid cell above which its searches use the fine level (0: none; speed only).
+    pub fine_above: u32,
 }
 
 impl Default for FuzzyParams {
@@ -78,6 +84,9 @@ impl Default for FuzzyParams {
             probe_y: -1,
             rays_per_step: 1 << 22,
             search: "exact".into(),
+            time_dispatches: false,
+            near_shells: super::gpu::NEAR_SHELLS,
+            fine_above: super::gpu::FINE_ABOVE,
             assign: "neighbours".into(),
             lights_per_step: crate::technique::MAX_LIGHT_WORK_PER_PASS as u32,
         }
@@ -267,6 +276,33 @@ impl FuzzyParams {
                 kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
                 value: ParamValue::Int(p.lights_per_step as i64),
             },
+            Param {
+                key: "time_dispatches",
+                label: "Time each clustering dispatch",
+                help: "Time every dispatch of the clustering as a pass of its own (`fuzzy clustering (...): \
+                       <stage>: <kernel>`) instead of one pass per stage: where the clustering's time goes, at the \
+                       cost of a timestamp pair per dispatch (the image does not change)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.time_dispatches),
+            },
+            Param {
+                key: "near_shells",
+                label: "Shells before a workgroup search",
+                help: "On a GPU (not a software rasterizer): the grid shells around a point that its search walks \
+                       alone; a search they leave unfinished goes to a workgroup of its own whose 64 invocations \
+                       scan the compatible centroids together. Speed only: the clusters do not change",
+                kind: ParamKind::Int { min: 0, max: 16 },
+                value: ParamValue::Int(p.near_shells as i64),
+            },
+            Param {
+                key: "fine_above",
+                label: "Fine grid above",
+                help: "The centroids a point's grid cell may hold before its cluster searches use the grid's fine \
+                       level (8 x 8 x 8 cells per cell, hashed): near the camera the clusters are small and a cell \
+                       holds hundreds of them; 0: no fine level. Speed only: the clusters do not change",
+                kind: ParamKind::Int { min: 0, max: 65_536 },
+                value: ParamValue::Int(p.fine_above as i64),
+            },
         ]
     }
 
@@ -293,6 +329,9 @@ impl FuzzyParams {
             ("probe_y", ParamValue::Int(v)) => p.probe_y = *v as i32,
             ("rays_per_step", ParamValue::Int(v)) => p.rays_per_step = *v as u32,
             ("lights_per_step", ParamValue::Int(v)) => p.lights_per_step = *v as u32,
+            ("time_dispatches", ParamValue::Bool(v)) => p.time_dispatches = *v,
+            ("near_shells", ParamValue::Int(v)) => p.near_shells = *v as u32,
+            ("fine_above", ParamValue::Int(v)) => p.fine_above = *v as u32,
             _ => unreachable!("check_param accepted an unknown key"),
         }
     }

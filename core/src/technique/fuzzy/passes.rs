@@ -51,6 +51,9 @@ impl FuzzyClustering {
             self.clustered_vpls = None;
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
             let vpls = &ctx.vpls.buffer.buffer;
+            self.vpl_kmeans.set_time_dispatches(self.params.time_dispatches);
+            self.vpl_kmeans.set_near_shells(self.params.near_shells);
+            self.vpl_kmeans.set_fine_above(self.params.fine_above);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, vpls, kp, Some(max_flux), false)?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
@@ -74,6 +77,9 @@ impl FuzzyClustering {
             let points = self.sp_points.as_ref().expect("ensured");
             let run = KMeansParams { iterations: self.params.warm_iterations, ..*kp };
             let (kp_run, warm) = if self.sp_warm { (&run, true) } else { (kp, false) };
+            self.sp_kmeans.set_time_dispatches(self.params.time_dispatches);
+            self.sp_kmeans.set_near_shells(self.params.near_shells);
+            self.sp_kmeans.set_fine_above(self.params.fine_above);
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp_run, None, warm)?;
             self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
