@@ -240,10 +240,10 @@ fn the_searches_a_workgroup_finishes_find_the_clusters_one_invocation_finds() {
     for (k, f, gamma, max_ring) in [(20usize, 6usize, 2u32, 0u32), (600, 3, 4, 0), (150, 6, 3, 1), (150, 8, 2, 0)] {
         let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, true) };
         let mut runs = Vec::new();
-        for (gpu_schedule, near_shells, fine_above) in [(false, 2, 0), (true, 2, 16), (true, 0, 1), (false, 2, 1)] {
+        for (gpu_schedule, near_shells, fine_levels) in [(false, 2, 0), (true, 2, 1), (true, 0, 3), (true, 2, 2)] {
             km.set_gpu_schedule(&gpu, gpu_schedule);
             km.set_near_shells(near_shells);
-            km.set_fine_above(fine_above);
+            km.set_fine_levels(fine_levels, 1);
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
             gpu.queue.submit([encoder.finish()]);
@@ -368,21 +368,22 @@ fn gpu_kmeans_matches_its_cpu_twin() {
         // in a CPU rasterizer's schedule and in a real GPU's (the first shells, then a workgroup per unfinished
         // search; with 0 shells nearly every search is a workgroup's).
         let limit = shadowlab_core::technique::fuzzy::gpu::BUCKET_SCAN_LIMIT;
-        // The grid's fine level: the default crowd, none (0), and every cell holding two or more (1).
-        let fine = shadowlab_core::technique::fuzzy::gpu::FINE_ABOVE;
-        for (scan_limit, gpu_schedule, near_shells, fine_above) in [
-            (0, false, 2, fine),
-            (u32::MAX, false, 2, 0),
-            (limit, false, 2, 1),
-            (limit, true, 2, fine),
-            (u32::MAX, true, 2, 1),
-            (limit, true, 0, 0),
-            (limit, true, 1, 1),
+        // A real GPU's grid levels: the defaults, none, and two or three with every cell of two or more centroids
+        // descending (a crowd of 1). A CPU rasterizer's grid is the coarse level alone.
+        use shadowlab_core::technique::fuzzy::gpu::{FINE_ABOVE as CROWD, FINE_LEVELS as LEVELS};
+        for (scan_limit, gpu_schedule, near_shells, (fine_levels, fine_above)) in [
+            (0, false, 2, (0, CROWD)),
+            (u32::MAX, false, 2, (0, CROWD)),
+            (limit, false, 2, (0, CROWD)),
+            (limit, true, 2, (LEVELS, CROWD)),
+            (u32::MAX, true, 2, (3, 1)),
+            (limit, true, 0, (0, CROWD)),
+            (limit, true, 1, (2, 1)),
         ] {
             km.set_bucket_scan_limit(scan_limit);
             km.set_gpu_schedule(&gpu, gpu_schedule);
             km.set_near_shells(near_shells);
-            km.set_fine_above(fine_above);
+            km.set_fine_levels(fine_levels, fine_above);
             for (k, f, gamma, max_ring, neighbour_lists) in [
                 (1usize, 1usize, 1u32, 0u32, false),
                 (20, 6, 2, 0, false),
@@ -412,7 +413,7 @@ fn gpu_kmeans_matches_its_cpu_twin() {
                 assert!(
                     all_same as f32 >= 0.995 * points.len() as f32,
                     "tilt {tilt} K = {k} scan limit {scan_limit} GPU schedule {gpu_schedule} shells {near_shells} \
-                     fine above {fine_above}: {all_same} F-lists agree"
+                     fine levels {fine_levels} above {fine_above}: {all_same} F-lists agree"
                 );
                 for m in (0..points.len()).filter(|&m| assignment[m * f] == cpu.assignment[m * f]) {
                     let (a, b) = (inverse[m * f], cpu.inverse_distance[m * f]);

@@ -44,11 +44,10 @@ struct KmParamsUniform {
     bounds_min: [f32; 4],
     bounds_extent: [f32; 4],
     flux_scale: [f32; 4],
-    fine_dims: [u32; 4],
-    fine_cell: [f32; 4],
+    fine: [u32; 4],
     options: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 160);
+const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 144);
 
 /// A point, cluster or light as the shaders store it (`KmPoint`, `Vpl`, `Endpoint`: the `GpuVpl` layout).
 #[repr(C)]
@@ -137,7 +136,9 @@ pub struct GpuKMeans {
     gpu_schedule: bool,
     /// A real GPU's schedule: the grid shells every point walks before an unfinished search goes to a workgroup.
     near_shells: u32,
-    /// The crowd of a point's coarse cell above which its searches use the grid's fine level (0: no fine level).
+    /// The grid's finer levels (0: the coarse one alone) and the crowd of a point's cell above which its searches
+    /// use the next one.
+    fine_levels: u32,
     fine_above: u32,
     /// Each dispatch in a timed pass of its own (`fuzzy clustering (<label>): <stage>: <entry>`), for profiling;
     /// off: one timed pass per stage.
@@ -148,15 +149,18 @@ pub struct GpuKMeans {
 /// per dispatch on the three real scenes, 256 and 512 were fastest, 64 and 128 slower (docs/techniques/fuzzy.md).
 pub const BUCKET_SCAN_LIMIT: u32 = 256;
 
-/// The grid's fine level: its cells per coarse cell along each axis (kmeans.wgsl `level_cell`).
-pub const FINE: u32 = 8;
+/// [`GpuKMeans`]'s default finer levels of the grid (each 4 x 4 x 4 cells per cell of the one before;
+/// kmeans.wgsl `level_cell`): most levels a search may descend to.
+pub const FINE_LEVELS: u32 = 1;
 
-/// [`GpuKMeans`]'s default crowd of a point's coarse cell above which its searches use the fine level.
-pub const FINE_ABOVE: u32 = 16;
+/// [`GpuKMeans`]'s default crowd of a point's cell above which its searches use the next finer level.
+pub const FINE_ABOVE: u32 = 128;
 
-/// The cells of the fine level's hash table for `k` centroids (a power of two, about two per centroid).
+/// The cells of each finer level's hash table for `k` centroids (a power of two, one to two per centroid: the
+/// single-workgroup scan of `grid_scan` runs over them every iteration; with two to four per centroid the H200's
+/// scan took 0.09 instead of 0.06 ms).
 fn fine_table(k: usize) -> u64 {
-    (2 * k as u64).next_power_of_two().max(64)
+    (k as u64).next_power_of_two().max(64)
 }
 
 /// [`GpuKMeans`]'s default grid shells before a workgroup-wide search (a real GPU's schedule): the two shells
@@ -203,6 +207,8 @@ const ENTRIES: &[&str] = &[
     "rep_pick",
     "rep_finish",
     "grid_fill",
+    "grid_sums",
+    "grid_starts",
     "km_assign_wide",
     "km_search_wide",
 ];
@@ -257,6 +263,7 @@ impl GpuKMeans {
             gpu_schedule,
             time_dispatches: false,
             near_shells: NEAR_SHELLS,
+            fine_levels: FINE_LEVELS,
             fine_above: FINE_ABOVE,
         }
     }
@@ -268,9 +275,11 @@ impl GpuKMeans {
         self.near_shells = shells;
     }
 
-    /// Sets the crowd of a point's coarse grid cell above which its searches use the fine level (0: the grid has
-    /// no fine level). Speed only: the clusters found do not change.
-    pub fn set_fine_above(&mut self, crowd: u32) {
+    /// Sets the grid's finer levels (at most 3; 0: the coarse level alone) and the crowd of a point's cell above
+    /// which its searches use the next one, in a real GPU's schedule (a CPU rasterizer's grid is the coarse level
+    /// alone). Speed only: the clusters found do not change.
+    pub fn set_fine_levels(&mut self, levels: u32, crowd: u32) {
+        self.fine_levels = levels.min(3);
         self.fine_above = crowd;
     }
 
@@ -324,7 +333,11 @@ impl GpuKMeans {
         let samples = (params.width as usize).div_ceil(g) * (params.height as usize).div_ceil(g);
         let (cell, dims) = grid_shape(params.bounds_extent, k);
         let cells = (dims[0] * dims[1] * dims[2]) as u64;
-        let fine = if self.fine_above > 0 { fine_table(k) } else { 0 };
+        // The finer levels are a real GPU's: on lavapipe their grids cost more than they saved (at 240x160 few
+        // cells are crowded).
+        let fine_levels = if self.gpu_schedule { self.fine_levels } else { 0 };
+        let fine = fine_levels as u64 * fine_table(k);
+        let levels = fine_levels as u64 + 1;
         let neighbours = params.neighbour_lists && g > 1;
         // Per point F (cluster, inverse distance); with neighbour lists, then per block of pixels between four
         // samples a count and up to 4 F clusters (km_blocks).
@@ -347,7 +360,9 @@ impl GpuKMeans {
             "fuzzy kmeans work",
             (k as u64 * ACC + cells + fine + 2 * NB + 1 + m as u64) * 4,
         );
-        ensure_storage(&mut self.grid, gpu, "fuzzy kmeans grid", (cells + fine + 1 + 3 * k as u64 + 2 * NB + 1) * 4);
+        let scan_blocks = (cells + fine).div_ceil(256);
+        let grid_words = cells + fine + 1 + (levels + 1) * k as u64 + 2 * NB + 1 + scan_blocks;
+        ensure_storage(&mut self.grid, gpu, "fuzzy kmeans grid", grid_words * 4);
         ensure_storage(&mut self.assignment, gpu, "fuzzy assignment", assignment_bytes);
         self.shape = RunShape { points: m, clusters: k, fuzziness: f };
         self.encoded_clusters = Some(k);
@@ -381,8 +396,7 @@ impl GpuKMeans {
             bounds_min: params.bounds_min.extend(0.0).to_array(),
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
-            fine_dims: [dims[0] * FINE, dims[1] * FINE, dims[2] * FINE, fine as u32],
-            fine_cell: [cell / FINE as f32, self.fine_above as f32, 0.0, 0.0],
+            fine: [fine_levels, fine_table(k) as u32, self.fine_above, 0],
             options: [neighbours as u32, self.bucket_scan_limit, warm as u32, self.near_shells],
         };
         self.kernels.write_uniform(gpu, &uniform);
@@ -403,9 +417,13 @@ impl GpuKMeans {
         let grid_build = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage| {
             plan.push((stage, "grid_clear", over_cells));
             plan.push((stage, "grid_count", over_k));
-            plan.push((stage, "grid_scan", (1, 1)));
             if gpu_schedule {
+                plan.push((stage, "grid_sums", (scan_blocks as u32, 1)));
+                plan.push((stage, "grid_scan", (1, 1)));
+                plan.push((stage, "grid_starts", (scan_blocks as u32, 1)));
                 plan.push((stage, "grid_fill", over_k));
+            } else {
+                plan.push((stage, "grid_scan", (1, 1)));
             }
         };
         // A real GPU's schedule: the searches the grid's first shells left unfinished, a workgroup each, over
@@ -506,7 +524,8 @@ impl GpuKMeans {
         let Some(buffer) = &self.work else { return Ok(0) };
         let (_, dims) = grid_shape(params.bounds_extent, self.shape.clusters);
         let cells = (dims[0] * dims[1] * dims[2]) as usize;
-        let fine = if self.fine_above > 0 { fine_table(self.shape.clusters) as usize } else { 0 };
+        let fine_levels = if self.gpu_schedule { self.fine_levels } else { 0 };
+        let fine = fine_levels as usize * fine_table(self.shape.clusters) as usize;
         let word = self.shape.clusters * ACC as usize + cells + fine + 2 * NB as usize;
         let bytes = readback::read_buffer(gpu, buffer)?;
         Ok(bytemuck::pod_read_unaligned(&bytes[word * 4..word * 4 + 4]))

@@ -54,12 +54,10 @@ struct KmParams {
     bounds_extent: vec4<f32>,
     // x: 1 / the largest flux component (has_flux), y: that component
     flux_scale: vec4<f32>,
-    // The fine level of the grid (a real GPU's schedule and a CPU rasterizer's alike): xyz its cells per axis
-    // (FINE times the coarse level's), w: the cells of its hash table (0: no fine level)
-    fine_dims: vec4<u32>,
-    // x: the fine level's cell, y: the most centroids a point's coarse cell holds before its searches use the
-    // fine level
-    fine_cell: vec4<f32>,
+    // The grid's finer levels (a real GPU's schedule and a CPU rasterizer's alike): x: how many (0: the coarse
+    // level alone), y: the cells of each one's hash table, z: the most centroids a point's cell holds before its
+    // searches use the next finer level
+    fine: vec4<u32>,
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
     // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
@@ -79,7 +77,7 @@ struct KmPoint {
 // [0, K): the clusters as lights / endpoints (representative's position, w: 1 when it has members; normal, w:
 // members; flux). [K, 2K): the working centroids (position, w: 1 active; normal).
 @group(0) @binding(2) var<storage, read_write> clusters: array<KmPoint>;
-// K * ACC accumulators, then the grid's cell counts (both levels; the fill cursors while the centroids are filled), the normal
+// K * ACC accumulators, then the grid's cell counts (all levels; the fill cursors while the centroids are filled), the normal
 // buckets' counts (cursors) and least cosines (grid_count's atomicMin); then the search queue of km_fill: its
 // length and the points (up to all).
 @group(0) @binding(3) var<storage, read_write> work: array<atomic<u32>>;
@@ -90,7 +88,7 @@ struct KmPoint {
 // so that the points km_fill did not queue cost no workgroup.
 @group(0) @binding(5) var<storage, read_write> search_args: array<u32>;
 // The grid and the normal buckets as the searches read them, written by grid_scan and grid_fill only: the cells'
-// starts (both levels' cells + 1), their items (2 K: the coarse level's, then the fine one's), the buckets' starts
+// starts (all levels' cells + 1), their items (K per level, the coarse level's first), the buckets' starts
 // (NB + 1), their limits (NB, f32 bits), their items (K). Not
 // in `work`: the searches read these words thousands of times a point, and an atomic load is not cached near
 // the core on a real GPU (a relaxed load at device scope goes to the shared cache), a plain load is.
@@ -126,7 +124,7 @@ fn items_base() -> u32 {
 }
 
 fn nb_starts_base() -> u32 {
-    return items_base() + 2u * km.cluster_count;
+    return items_base() + (km.fine.x + 1u) * km.cluster_count;
 }
 
 fn nb_limits_base() -> u32 {
@@ -135,6 +133,15 @@ fn nb_limits_base() -> u32 {
 
 fn nb_items_base() -> u32 {
     return nb_limits_base() + NB;
+}
+
+// A real GPU's schedule: the cells' counts summed per block of 256 (grid_sums), then those sums' starts (grid_scan).
+fn scan_blocks_base() -> u32 {
+    return nb_items_base() + km.cluster_count;
+}
+
+fn scan_blocks() -> u32 {
+    return (all_cells() + 255u) / 256u;
 }
 
 fn point_valid(p: KmPoint) -> bool {
@@ -152,25 +159,26 @@ fn centroid(k: u32) -> KmPoint {
     return clusters[km.cluster_count + k];
 }
 
-// The grid has two levels, each holding every centroid, so that a search in either finds the same clusters:
-// the coarse (level 0; kmeans.rs `grid_shape`, the twin's grid) and a fine one, FINE times finer along each axis,
-// whose cells go to a hash table (their count would be FINE^3 times the coarse one's). A point whose coarse cell
-// holds more than fine_cell.y centroids searches the fine level: the centroids follow the pixels, so near the
-// camera a coarse cell can hold hundreds of them (on the H200, Sponza's 2-shell walks alone took 1.3 ms per
-// iteration: docs/techniques/fuzzy.md, nineteenth session). A hash cell holds its cell's centroids and maybe
-// others': a search considers those too, which cannot change what it finds.
+// The grid has levels, each holding every centroid, so that a search in any finds the same clusters: the coarse
+// (level 0; kmeans.rs `grid_shape`, the twin's grid) and up to three finer ones, each 4 times finer along each
+// axis than the one before, whose cells go to a hash table each (their count would be 64 times the coarser
+// one's). A point whose cell holds more than fine.z centroids searches the next finer level: the centroids follow
+// the pixels, so near the camera a coarse cell can hold hundreds of them (on the H200, Sponza's 2-shell walks
+// alone took 1.3 ms per iteration: docs/techniques/fuzzy.md, nineteenth session). A hash cell holds its cell's
+// centroids and maybe others': a search considers each centroid in its own cell only.
 fn level_cell(l: u32) -> f32 {
-    if l == 1u {
-        return km.fine_cell.x;
+    if l == 0u {
+        return km.cell;
     }
-    return km.cell;
+    // A power of two: every use of a level's cell is the same float.
+    return km.cell / f32(1u << (2u * l));
 }
 
 fn level_dims(l: u32) -> vec3<i32> {
-    if l == 1u {
-        return vec3<i32>(km.fine_dims.xyz);
+    if l == 0u {
+        return vec3<i32>(km.dims.xyz);
     }
-    return vec3<i32>(km.dims.xyz);
+    return vec3<i32>(km.dims.xyz * (1u << (2u * l)));
 }
 
 fn cell_of(p: vec3<f32>, l: u32) -> vec3<i32> {
@@ -179,30 +187,39 @@ fn cell_of(p: vec3<f32>, l: u32) -> vec3<i32> {
     return vec3<i32>(clamp(c, vec3<f32>(0.0), top));
 }
 
-// The cell's index into the counts and starts: the coarse level's cells, then the fine level's hash table.
+// The cell's index into the counts and starts: the coarse level's cells, then each finer level's hash table.
 fn cell_index(c: vec3<i32>, l: u32) -> u32 {
     let u = vec3<u32>(c);
-    if l == 1u {
+    if l > 0u {
         let h = (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
-        return km.cells + (h & (km.fine_dims.w - 1u));
+        return km.cells + (l - 1u) * km.fine.y + (h & (km.fine.y - 1u));
     }
     return u.x + km.dims.x * (u.y + km.dims.y * u.z);
 }
 
-// The cells of both levels (the counts and starts).
+// The cells of all levels (the counts and starts).
 fn all_cells() -> u32 {
-    return km.cells + km.fine_dims.w;
+    return km.cells + km.fine.x * km.fine.y;
 }
 
-// The level a search around p uses: the fine one where p's coarse cell is crowded (never for the paper's
-// ring-limited search, whose rings are the coarse level's cells).
+// The level a search around p uses: the first whose cell around p holds at most fine.z centroids, or the finest
+// (always the coarse level for the paper's ring-limited search, whose rings are its cells).
 fn level_of(p: vec3<f32>) -> u32 {
-    if km.fine_dims.w == 0u || km.dims.w > 0u {
+    if km.dims.w > 0u {
         return 0u;
     }
-    let i = cell_index(cell_of(p, 0u), 0u);
-    let count = grid[starts_base() + i + 1u] - grid[starts_base() + i];
-    return u32(f32(count) > km.fine_cell.y);
+    var l = 0u;
+    loop {
+        if l >= km.fine.x {
+            break;
+        }
+        let i = cell_index(cell_of(p, l), l);
+        if grid[starts_base() + i + 1u] - grid[starts_base() + i] <= km.fine.z {
+            break;
+        }
+        l++;
+    }
+    return l;
 }
 
 fn add64(word: u32, v: u32) {
@@ -304,9 +321,8 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let c = centroid(k);
     if c.position.w > 0.5 {
-        atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz, 0u), 0u)], 1u);
-        if km.fine_dims.w > 0u {
-            atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz, 1u), 1u)], 1u);
+        for (var l = 0u; l <= km.fine.x; l++) {
+            atomicAdd(&work[counts_base() + cell_index(cell_of(c.position.xyz, l), l)], 1u);
         }
         // The bucket's cone: the least cosine between its axis and a member's normal (order-preserving as the
         // bits of cos + 2); a normal that is not unit opens the cone whole, so its bucket is never skipped.
@@ -324,20 +340,32 @@ fn grid_count(@builtin(global_invocation_id) id: vec3<u32>) {
 var<workgroup> scan_partial: array<u32, 256>;
 var<workgroup> scan_buckets: array<u32, NB>;
 
+// What grid_scan sums: on a CPU rasterizer the cells' counts, on a real GPU their sums per block of 256.
+fn scan_value(i: u32) -> u32 {
+    if GPU_SCHEDULE {
+        return grid[scan_blocks_base() + i];
+    }
+    return atomicLoad(&work[counts_base() + i]);
+}
+
 // One workgroup: exclusive prefix sum of the cell counts into the starts, the counts becoming the fill cursors,
 // and the normal buckets' starts and limits (an invocation each); then, on a CPU rasterizer, the centroids into
 // their cells and normal buckets (one dispatch instead of two: there a dispatch costs about as much as filling a
-// few thousand centroids; a real GPU fills them in `grid_fill`, over every centroid at once).
+// few thousand centroids). A real GPU's schedule spreads the work over the GPU (on the H200 the single
+// workgroup's scan over every cell took 0.06-0.09 ms of each iteration): grid_sums sums the counts per block of
+// 256 cells, this workgroup scans those sums, grid_starts scans each block from its sum's start, and grid_fill
+// fills the centroids, an invocation each.
 @compute @workgroup_size(256)
 fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
     let t = lid.x;
     let cells = all_cells();
-    let chunk = (cells + 255u) / 256u;
-    let first = min(t * chunk, cells);
-    let last = min(first + chunk, cells);
+    let values = select(cells, scan_blocks(), GPU_SCHEDULE);
+    let chunk = (values + 255u) / 256u;
+    let first = min(t * chunk, values);
+    let last = min(first + chunk, values);
     var sum = 0u;
     for (var c = first; c < last; c++) {
-        sum += atomicLoad(&work[counts_base() + c]);
+        sum += scan_value(c);
     }
     scan_partial[t] = sum;
     if t < NB {
@@ -380,9 +408,13 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
     workgroupBarrier();
     var running = scan_partial[t];
     for (var c = first; c < last; c++) {
-        let n = atomicLoad(&work[counts_base() + c]);
-        grid[starts_base() + c] = running;
-        atomicStore(&work[counts_base() + c], 0u);
+        let n = scan_value(c);
+        if GPU_SCHEDULE {
+            grid[scan_blocks_base() + c] = running;
+        } else {
+            grid[starts_base() + c] = running;
+            atomicStore(&work[counts_base() + c], 0u);
+        }
         running += n;
     }
     if !GPU_SCHEDULE {
@@ -393,7 +425,51 @@ fn grid_scan(@builtin(local_invocation_id) lid: vec3<u32>) {
     }
 }
 
-// A real GPU's schedule: the centroids into their cells and buckets, one invocation each (after grid_scan).
+var<workgroup> block_scan: array<u32, 256>;
+
+// Block `wid`'s 256 cell counts: their inclusive prefix sums in `block_scan` (Hillis-Steele), the count of cell
+// `i` returned.
+fn scan_block(i: u32, t: u32) -> u32 {
+    var v = 0u;
+    if i < all_cells() {
+        v = atomicLoad(&work[counts_base() + i]);
+    }
+    block_scan[t] = v;
+    workgroupBarrier();
+    for (var o = 1u; o < 256u; o <<= 1u) {
+        var add = 0u;
+        if t >= o {
+            add = block_scan[t - o];
+        }
+        workgroupBarrier();
+        block_scan[t] += add;
+        workgroupBarrier();
+    }
+    return v;
+}
+
+// A real GPU's schedule: each block of 256 cells' total count (before grid_scan).
+@compute @workgroup_size(256)
+fn grid_sums(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    scan_block(wid.x * 256u + lid.x, lid.x);
+    if lid.x == 255u {
+        grid[scan_blocks_base() + wid.x] = block_scan[255];
+    }
+}
+
+// A real GPU's schedule: each cell's start from its block's (grid_scan) and the counts before it in the block;
+// the counts become the fill cursors (after grid_scan).
+@compute @workgroup_size(256)
+fn grid_starts(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>) {
+    let i = wid.x * 256u + lid.x;
+    let v = scan_block(i, lid.x);
+    if i < all_cells() {
+        grid[starts_base() + i] = grid[scan_blocks_base() + wid.x] + block_scan[lid.x] - v;
+        atomicStore(&work[counts_base() + i], 0u);
+    }
+}
+
+// A real GPU's schedule: the centroids into their cells and buckets, one invocation each (after grid_starts).
 @compute @workgroup_size(64)
 fn grid_fill(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < km.cluster_count {
@@ -405,7 +481,7 @@ fn grid_fill(@builtin(global_invocation_id) id: vec3<u32>) {
 fn fill_cell(k: u32) {
     let c = centroid(k);
     if c.position.w > 0.5 {
-        for (var l = 0u; l < select(1u, 2u, km.fine_dims.w > 0u); l++) {
+        for (var l = 0u; l <= km.fine.x; l++) {
             let cell = cell_index(cell_of(c.position.xyz, l), l);
             let slot = grid[starts_base() + cell] + atomicAdd(&work[counts_base() + cell], 1u);
             grid[items_base() + slot] = k;

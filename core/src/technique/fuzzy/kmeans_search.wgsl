@@ -108,7 +108,7 @@ fn visit_cell(c: vec3<i32>, l: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
         let ck = centroid(k);
         // A fine cell's hash slot may hold other cells' centroids: each is considered in its own cell only (a
         // walk can meet a slot more than once).
-        if l == 1u && any(cell_of(ck.position.xyz, 1u) != c) {
+        if l > 0u && any(cell_of(ck.position.xyz, l) != c) {
             continue;
         }
         consider_centroid(k, ck, p, n, f_max);
@@ -140,10 +140,14 @@ fn search(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
 }
 
 // The shells around p in its level (`level_of`) until the search is finished (true) or, unfinished (false),
-// after shell max_r (a real GPU's schedule; `search` walks without the bound; with its own copy of the loop
-// instead, lavapipe's clustering measured the same).
-fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, max_r: i32) -> bool {
+// after shell max_r, FINE_SHELLS more in a finer level, whose cells are smaller (a real GPU's
+// schedule; `search` walks without the bound; with its own copy of the loop instead, lavapipe's clustering
+// measured the same).
+const FINE_SHELLS: i32 = 2;
+
+fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, near_r: i32) -> bool {
     let l = level_of(p);
+    let max_r = select(near_r, near_r + FINE_SHELLS, l > 0u && near_r < 0x7fff0000);
     let c = cell_of(p, l);
     let dims = level_dims(l);
     let far = max(c, dims - 1 - c);
@@ -228,10 +232,18 @@ fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
         return;
     }
     reset_best();
+    var mask_lo = 0u;
+    var mask_hi = 0u;
     var total = 0u;
     for (var b = 0u; b < NB; b++) {
         if compatible_bucket(b, n) {
-            total += grid[nb_starts_base() + b + 1u] - grid[nb_starts_base() + b];
+            let count = grid[nb_starts_base() + b + 1u] - grid[nb_starts_base() + b];
+            total += count;
+            if count > 0u && b < 32u {
+                mask_lo |= 1u << b;
+            } else if count > 0u {
+                mask_hi |= 1u << (b - 32u);
+            }
         }
     }
     if total > km.options.y {
@@ -239,7 +251,8 @@ fn find(p: vec3<f32>, n: vec3<f32>, f_max: u32) {
         return;
     }
     for (var b = 0u; b < NB; b++) {
-        if !compatible_bucket(b, n) {
+        let bit = select(mask_hi >> (b - 32u), mask_lo >> b, b < 32u) & 1u;
+        if bit == 0u {
             continue;
         }
         let s = grid[nb_starts_base() + b];

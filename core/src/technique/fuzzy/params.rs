@@ -58,7 +58,9 @@ pub struct FuzzyParams {
     pub time_dispatches: bool,
     /// A real GPU's schedule: the grid shells a search walks before a workgroup finishes it (speed only).
     pub near_shells: u32,
-    /// The crowd of a point's coarse grid cell above which its searches use the fine level (0: none; speed only).
+    /// The grid's finer levels (0: none) and the crowd of a point's cell above which its searches use the next
+    /// one (speed only).
+    pub fine_levels: u32,
     pub fine_above: u32,
 }
 
@@ -86,6 +88,7 @@ impl Default for FuzzyParams {
             search: "exact".into(),
             time_dispatches: false,
             near_shells: super::gpu::NEAR_SHELLS,
+            fine_levels: super::gpu::FINE_LEVELS,
             fine_above: super::gpu::FINE_ABOVE,
             assign: "neighbours".into(),
             lights_per_step: crate::technique::MAX_LIGHT_WORK_PER_PASS as u32,
@@ -295,11 +298,19 @@ impl FuzzyParams {
                 value: ParamValue::Int(p.near_shells as i64),
             },
             Param {
+                key: "fine_levels",
+                label: "Finer grid levels",
+                help: "Levels of the cluster grid finer than its cells (each 4 x 4 x 4 cells per cell of the one \
+                       before, hashed): near the camera the clusters are small and a cell holds hundreds of them; \
+                       0: the cells alone. Speed only: the clusters do not change",
+                kind: ParamKind::Int { min: 0, max: 3 },
+                value: ParamValue::Int(p.fine_levels as i64),
+            },
+            Param {
                 key: "fine_above",
-                label: "Fine grid above",
-                help: "The centroids a point's grid cell may hold before its cluster searches use the grid's fine \
-                       level (8 x 8 x 8 cells per cell, hashed): near the camera the clusters are small and a cell \
-                       holds hundreds of them; 0: no fine level. Speed only: the clusters do not change",
+                label: "Finer level above",
+                help: "The centroids a point's grid cell may hold before its cluster searches use the next finer \
+                       level. Speed only: the clusters do not change",
                 kind: ParamKind::Int { min: 0, max: 65_536 },
                 value: ParamValue::Int(p.fine_above as i64),
             },
@@ -331,6 +342,7 @@ impl FuzzyParams {
             ("lights_per_step", ParamValue::Int(v)) => p.lights_per_step = *v as u32,
             ("time_dispatches", ParamValue::Bool(v)) => p.time_dispatches = *v,
             ("near_shells", ParamValue::Int(v)) => p.near_shells = *v as u32,
+            ("fine_levels", ParamValue::Int(v)) => p.fine_levels = *v as u32,
             ("fine_above", ParamValue::Int(v)) => p.fine_above = *v as u32,
             _ => unreachable!("check_param accepted an unknown key"),
         }

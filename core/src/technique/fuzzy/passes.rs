@@ -53,7 +53,7 @@ impl FuzzyClustering {
             let vpls = &ctx.vpls.buffer.buffer;
             self.vpl_kmeans.set_time_dispatches(self.params.time_dispatches);
             self.vpl_kmeans.set_near_shells(self.params.near_shells);
-            self.vpl_kmeans.set_fine_above(self.params.fine_above);
+            self.vpl_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, vpls, kp, Some(max_flux), false)?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
@@ -79,7 +79,7 @@ impl FuzzyClustering {
             let (kp_run, warm) = if self.sp_warm { (&run, true) } else { (kp, false) };
             self.sp_kmeans.set_time_dispatches(self.params.time_dispatches);
             self.sp_kmeans.set_near_shells(self.params.near_shells);
-            self.sp_kmeans.set_fine_above(self.params.fine_above);
+            self.sp_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp_run, None, warm)?;
             self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
