@@ -693,3 +693,44 @@ fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_c
     let (e_warm, e_cold) = (rel_rmse(&warm, &truth), rel_rmse(&cold, &truth));
     assert!(e_warm <= 1.1 * e_cold, "warm start {e_warm} against {e_cold} from the initial samples");
 }
+
+#[test]
+fn timing_every_clustering_dispatch_names_each_kernel_and_renders_the_same() {
+    // `time_dispatches` puts each dispatch of the clustering in a timed pass of its own (profiling on a real GPU)
+    // instead of one pass per stage: the report names the kernels, and the image does not change.
+    let scene = room();
+    let Rendered { mut renderer, hdr: staged, .. } = Shot::indirect(&scene, &lights(), settings(256), "fuzzy")
+        .params(&[int("k_vpl", 32), choice("reuse", "none")])
+        .render_keeping();
+    let names = |r: &shadowlab_core::FrameReport| -> Vec<String> {
+        r.indirect.as_ref().unwrap().passes.iter().map(|p| p.name.clone()).collect()
+    };
+    // GPU timestamps: the clock that times passes apart (auto may leave lavapipe's for the steps' wall time).
+    renderer.set_timing_mode(shadowlab_core::timing::TimingMode::Gpu);
+    let mut direct = create(&renderer, "unshadowed", &[]);
+    let (staged_again, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &lights());
+    assert!(staged_again == staged);
+    let staged_names = names(&report);
+    for stage in ["iterations", "assignment", "search"] {
+        let name = format!("fuzzy clustering (shading points): {stage}");
+        assert!(staged_names.contains(&name), "no pass {name:?} in {staged_names:?}");
+    }
+    renderer.indirect_mut().unwrap().set_param("time_dispatches", &ParamValue::Bool(true)).unwrap();
+    let (apart, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &lights());
+    assert!(apart == staged, "timing each dispatch changed the image");
+    let apart_names = names(&report);
+    // The VPLs have no neighbour lists (every VPL is a sample): their Algorithm 2 is km_final alone.
+    let kernels = [
+        ("shading points", "iterations: km_assign"),
+        ("shading points", "iterations: grid_scan"),
+        ("shading points", "assignment: km_fill"),
+        ("shading points", "search: rep_pick"),
+        ("vpls", "iterations: km_init"),
+        ("vpls", "assignment: km_final"),
+    ];
+    for (label, kernel) in kernels {
+        let name = format!("fuzzy clustering ({label}): {kernel}");
+        assert!(apart_names.contains(&name), "no pass {name:?} in {apart_names:?}");
+    }
+    assert!(!apart_names.iter().any(|n| n == "fuzzy clustering (shading points): assignment"));
+}

@@ -6,14 +6,17 @@
 //! inverse distances). [`GpuKMeans::read_clusters`] and [`GpuKMeans::read_assignment`] read them back for the
 //! counts and overlays.
 //!
-//! Three things only the GPU does, for speed, without changing what is found (the tests compare each with the
-//! twin): with neighbour lists, the four samples' lists are merged once per block of pixels between them
-//! (`km_blocks`) instead of by each of the block's points; a point whose block's list holds fewer than `F`
-//! compatible clusters goes to a queue that a dispatch of its own searches (`km_fill`, `km_search`), so that the
-//! points beside it do not wait for its long search; and an exact search whose compatible centroids are few
+//! Things only the GPU does, for speed, without changing what is found (the tests compare each with the twin):
+//! with neighbour lists, the four samples' lists are merged once per block of pixels between them
+//! (`km_blocks`) instead of by each of the block's points; an exact search whose compatible centroids are few
 //! scans them whole from an octahedral map of the centroids' normals (`find` in the shader) instead of walking
 //! the grid shell by shell until `F` are found, which for a point on a crease or a narrow face can visit every
-//! cell.
+//! cell; and long searches are queued for a dispatch of their own, so that the points beside them do not wait.
+//! That last one has two schedules (`GPU_SCHEDULE`): a CPU rasterizer's queues `km_fill`'s points short of `F`
+//! compatible clusters for `km_search`, one invocation each; a real GPU's walks the first `near_shells` shells
+//! of every search and queues the unfinished ones for `km_assign_wide` / `km_search_wide`, a workgroup of 64
+//! each scanning the compatible buckets together, searches finer hashed grid levels where a cell is crowded,
+//! and spreads the grid's prefix sum over the GPU (docs/techniques/fuzzy.md, nineteenth session).
 
 use glam::Vec3;
 
@@ -125,14 +128,13 @@ pub struct GpuKMeans {
     /// (0: always the grid). Speed only: both find the same clusters.
     bucket_scan_limit: u32,
     /// The schedule for a real GPU (true) or a CPU rasterizer (false). Speed only: the same clusters either way
-    /// (docs/techniques/fuzzy.md, eighteenth session). On a GPU a dispatch lasts as long as its slowest
-    /// invocation, so the searches are bounded (the nearest alone walks two shells, then the compatible normal
-    /// buckets are scanned where walking on would cost more) and Algorithm 2's points that their block's list
-    /// leaves short of `F` compatible clusters are searched by `km_fill` itself; on the H200 at 1024x720 the
-    /// clustering took 10.6 instead of 18.7 ms on the conference room. On a CPU rasterizer a long search holds
-    /// only its own lane: the nearest walks the grid to its end and the short lists are queued for `km_search`
-    /// (the GPU schedule's code, run or only compiled in behind a uniform switch, made lavapipe's clustering
-    /// about 50 % slower).
+    /// (docs/techniques/fuzzy.md, eighteenth and nineteenth sessions). On a GPU a dispatch lasts as long as its
+    /// slowest invocation, so every search walks `near_shells` shells alone and the unfinished ones go to a
+    /// workgroup each (`km_assign_wide`, `km_search_wide`), crowded cells are searched in finer grid levels, and
+    /// the grid's scan is spread over the GPU; on the H200 at 1024x720 the clustering took 2.9 instead of 10.5 ms
+    /// on the conference room. On a CPU rasterizer a long search holds only its own lane: the nearest walks the
+    /// grid to its end and the short lists are queued for `km_search` (the GPU schedule's code, run or only
+    /// compiled in behind a uniform switch, made lavapipe's clustering about 50 % slower).
     gpu_schedule: bool,
     /// A real GPU's schedule: the grid shells every point walks before an unfinished search goes to a workgroup.
     near_shells: u32,
@@ -164,7 +166,7 @@ fn fine_table(k: usize) -> u64 {
 }
 
 /// [`GpuKMeans`]'s default grid shells before a workgroup-wide search (a real GPU's schedule): the two shells
-/// (125 cells) that the eighteenth session's bounded nearest search walked.
+/// (125 cells) that the eighteenth session's bounded nearest search walked (1 and 3 were no faster on the H200).
 pub const NEAR_SHELLS: u32 = 2;
 
 /// Grow `slot` to a storage buffer (copyable both ways) of at least `size` bytes, rounded up to a power of two
@@ -295,7 +297,7 @@ impl GpuKMeans {
         self.bucket_scan_limit = limit;
     }
 
-    /// Sets the schedule: a real GPU's (bounded searches, the short lists searched in place) or a CPU
+    /// Sets the schedule: a real GPU's (two shells per point, then a workgroup per unfinished search) or a CPU
     /// rasterizer's (the default follows the adapter's device type). The clusters found do not change; the tests
     /// check both.
     pub fn set_gpu_schedule(&mut self, gpu: &GpuContext, gpu_schedule: bool) {

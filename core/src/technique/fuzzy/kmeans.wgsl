@@ -15,9 +15,9 @@
 // (km_final, km_fill, km_search) in kmeans_final.wgsl; the three are one module.
 
 const MAX_F: u32 = 8u;
-// A real GPU's schedule (true: kmeans_search.wgsl `find`'s bounded searches, and km_fill searching the points
-// short of F compatible clusters itself instead of queueing them for km_search) or a CPU rasterizer's (gpu.rs
-// `kernels`: set per pipeline, so each compiles without the other's code).
+// A real GPU's schedule (true: kmeans_search.wgsl `find_near` for every point and a workgroup per unfinished
+// search, the grid's finer levels and its scan over many workgroups) or a CPU rasterizer's (gpu.rs `kernels`:
+// set per pipeline, so each compiles without the other's code).
 override GPU_SCHEDULE: bool = false;
 const NONE: u32 = 0xffffffffu;
 const FIXED: f32 = 16777216.0;
@@ -166,8 +166,11 @@ fn centroid(k: u32) -> KmPoint {
 // the pixels, so near the camera a coarse cell can hold hundreds of them (on the H200, Sponza's 2-shell walks
 // alone took 1.3 ms per iteration: docs/techniques/fuzzy.md, nineteenth session). A hash cell holds its cell's
 // centroids and maybe others': a search considers each centroid in its own cell only.
+// The finer levels are a real GPU's only (gpu.rs `encode`): GPU_SCHEDULE, a pipeline constant, leaves a CPU
+// rasterizer's kernels the coarse level's code alone (with the levels' code compiled in, lavapipe's clustering
+// took 1-2 points more of the orbit's frame).
 fn level_cell(l: u32) -> f32 {
-    if l == 0u {
+    if !GPU_SCHEDULE || l == 0u {
         return km.cell;
     }
     // A power of two: every use of a level's cell is the same float.
@@ -175,7 +178,7 @@ fn level_cell(l: u32) -> f32 {
 }
 
 fn level_dims(l: u32) -> vec3<i32> {
-    if l == 0u {
+    if !GPU_SCHEDULE || l == 0u {
         return vec3<i32>(km.dims.xyz);
     }
     return vec3<i32>(km.dims.xyz * (1u << (2u * l)));
@@ -190,7 +193,7 @@ fn cell_of(p: vec3<f32>, l: u32) -> vec3<i32> {
 // The cell's index into the counts and starts: the coarse level's cells, then each finer level's hash table.
 fn cell_index(c: vec3<i32>, l: u32) -> u32 {
     let u = vec3<u32>(c);
-    if l > 0u {
+    if GPU_SCHEDULE && l > 0u {
         let h = (u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u);
         return km.cells + (l - 1u) * km.fine.y + (h & (km.fine.y - 1u));
     }
@@ -205,7 +208,7 @@ fn all_cells() -> u32 {
 // The level a search around p uses: the first whose cell around p holds at most fine.z centroids, or the finest
 // (always the coarse level for the paper's ring-limited search, whose rings are its cells).
 fn level_of(p: vec3<f32>) -> u32 {
-    if km.dims.w > 0u {
+    if !GPU_SCHEDULE || km.dims.w > 0u {
         return 0u;
     }
     var l = 0u;

@@ -108,7 +108,7 @@ fn visit_cell(c: vec3<i32>, l: u32, p: vec3<f32>, n: vec3<f32>, f_max: u32) {
         let ck = centroid(k);
         // A fine cell's hash slot may hold other cells' centroids: each is considered in its own cell only (a
         // walk can meet a slot more than once).
-        if l > 0u && any(cell_of(ck.position.xyz, l) != c) {
+        if GPU_SCHEDULE && l > 0u && any(cell_of(ck.position.xyz, l) != c) {
             continue;
         }
         consider_centroid(k, ck, p, n, f_max);
@@ -147,7 +147,7 @@ const FINE_SHELLS: i32 = 2;
 
 fn search_shells(p: vec3<f32>, n: vec3<f32>, f_max: u32, near_r: i32) -> bool {
     let l = level_of(p);
-    let max_r = select(near_r, near_r + FINE_SHELLS, l > 0u && near_r < 0x7fff0000);
+    let max_r = select(near_r, near_r + FINE_SHELLS, GPU_SCHEDULE && l > 0u && near_r < 0x7fff0000);
     let c = cell_of(p, l);
     let dims = level_dims(l);
     let far = max(c, dims - 1 - c);
