@@ -240,9 +240,13 @@ fn the_searches_a_workgroup_finishes_find_the_clusters_one_invocation_finds() {
     for (k, f, gamma, max_ring) in [(20usize, 6usize, 2u32, 0u32), (600, 3, 4, 0), (150, 6, 3, 1), (150, 8, 2, 0)] {
         let p = KMeansParams { max_ring, ..room_kmeans_params(w, h, k, gamma, f, true) };
         let mut runs = Vec::new();
-        for (gpu_schedule, near_shells, fine_levels) in [(false, 2, 0), (true, 2, 1), (true, 0, 3), (true, 2, 2)] {
+        // The last: searches that stop alone after 16 cells and centroids.
+        for (gpu_schedule, near_shells, fine_levels, near_budget) in
+            [(false, 2, 0, 0), (true, 2, 1, 0), (true, 0, 3, 0), (true, 2, 2, 0), (true, 2, 1, 16)]
+        {
             km.set_gpu_schedule(&gpu, gpu_schedule);
             km.set_near_shells(near_shells);
+            km.set_near_budget(near_budget);
             km.set_fine_levels(fine_levels, 1);
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
@@ -695,7 +699,7 @@ fn a_frame_of_the_same_view_reuses_the_shading_point_clusters_and_renders_what_c
 }
 
 #[test]
-fn timing_every_clustering_dispatch_names_each_kernel_and_renders_the_same() {
+fn timing_every_clustering_dispatch_and_either_schedule_render_the_same() {
     // `time_dispatches` puts each dispatch of the clustering in a timed pass of its own (profiling on a real GPU)
     // instead of one pass per stage: the report names the kernels, and the image does not change.
     let scene = room();
@@ -733,4 +737,57 @@ fn timing_every_clustering_dispatch_names_each_kernel_and_renders_the_same() {
         assert!(apart_names.contains(&name), "no pass {name:?} in {apart_names:?}");
     }
     assert!(!apart_names.iter().any(|n| n == "fuzzy clustering (shading points): assignment"));
+    // A real GPU's schedule on this adapter (`schedule=gpu`): its kernels run, the image is the same.
+    renderer.indirect_mut().unwrap().set_param("schedule", &ParamValue::Choice("gpu".into())).unwrap();
+    let (gpu_schedule, report) = frame(&mut renderer, direct.as_mut(), &scene.camera, &lights());
+    assert!(gpu_schedule == staged, "a real GPU's schedule changed the image");
+    let names = names(&report);
+    for kernel in ["iterations: grid_sums", "iterations: km_assign_wide", "search: km_search_wide"] {
+        let name = format!("fuzzy clustering (shading points): {kernel}");
+        assert!(names.contains(&name), "no pass {name:?} in {names:?}");
+    }
+}
+
+#[test]
+fn the_search_counts_add_up_to_the_points_each_kernel_searched_and_queued() {
+    // `count_searches`: per kind of search the points, cells, centroids and queued points. The points queued by
+    // one kernel are the points the next searched, and every valid point is searched once per pass over it.
+    use shadowlab_core::technique::fuzzy::gpu::{GpuKMeans, SEARCH_KINDS};
+    let gpu = gpu();
+    let timer = shadowlab_core::timing::PassTimer::new(&gpu).unwrap();
+    let (w, h) = (64u32, 48u32);
+    let points = room_points(w, h, 1.2);
+    let buffer = upload_points(&gpu, &points);
+    let p = room_kmeans_params(w, h, 150, 4, 6, true);
+    let valid = |m: &usize| points[*m].valid;
+    let g = p.gamma as usize;
+    let on_grid = |m: &usize| (m % w as usize) % g == 0 && (m / w as usize) % g == 0;
+    let samples = (0..points.len()).filter(valid).filter(on_grid).count() as u32;
+    let between = (0..points.len()).filter(valid).filter(|m| !on_grid(m)).count() as u32;
+    let mut km = GpuKMeans::new(&gpu, "test");
+    assert_eq!(km.read_search_counts(&gpu).unwrap(), None, "counting is off by default");
+    km.set_count_searches(&gpu, true);
+    for (gpu_schedule, near_shells) in [(false, 2), (true, 2), (true, 0)] {
+        km.set_gpu_schedule(&gpu, gpu_schedule);
+        km.set_near_shells(near_shells);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        km.encode(&gpu, &timer, &mut encoder, &buffer, &p, None, false).unwrap();
+        gpu.queue.submit([encoder.finish()]);
+        let c = km.read_search_counts(&gpu).unwrap().expect("counting");
+        let [assign, assign_wide, last, fill, search] = c;
+        let at = format!("GPU schedule {gpu_schedule}, {near_shells} shells: {SEARCH_KINDS:?} {c:?}");
+        assert_eq!(assign.points, p.iterations * samples, "{at}");
+        assert_eq!(last.points, samples, "{at}");
+        assert_eq!(fill.points, between, "{at}");
+        assert_eq!(assign_wide.points, assign.queued, "{at}");
+        assert_eq!(search.points, last.queued + fill.queued, "{at}");
+        assert!(fill.queued > 0 && assign.cells > 0 && assign.centroids > 0 && fill.centroids > 0, "{at}");
+        if gpu_schedule {
+            // With no shell walked alone, every unfinished sample search goes to a workgroup.
+            assert!(near_shells > 0 || (assign.queued > 0 && last.queued > 0), "{at}");
+        } else {
+            assert_eq!(assign.queued + last.queued + assign_wide.points, 0, "{at}");
+        }
+        assert!(assign.most > 0 && assign.most <= assign.cells + assign.centroids, "{at}");
+    }
 }

@@ -48,9 +48,10 @@ struct KmParamsUniform {
     bounds_extent: [f32; 4],
     flux_scale: [f32; 4],
     fine: [u32; 4],
+    sched: [u32; 4],
     options: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 144);
+const _: () = assert!(std::mem::size_of::<KmParamsUniform>() == 160);
 
 /// A point, cluster or light as the shaders store it (`KmPoint`, `Vpl`, `Endpoint`: the `GpuVpl` layout).
 #[repr(C)]
@@ -121,6 +122,9 @@ pub struct GpuKMeans {
     /// The workgroups of `km_search` (an indirect dispatch sized by the queue).
     search_args: wgpu::Buffer,
     search_args_stand_in: wgpu::Buffer,
+    /// The searches' work counts (`search_counts` in the shader), written with `count_searches` only.
+    search_counts: wgpu::Buffer,
+    count_searches: bool,
     pub shape: RunShape,
     /// `K` of the last encoded run (its working centroids are what a warm start begins from).
     encoded_clusters: Option<usize>,
@@ -136,8 +140,10 @@ pub struct GpuKMeans {
     /// grid to its end and the short lists are queued for `km_search` (the GPU schedule's code, run or only
     /// compiled in behind a uniform switch, made lavapipe's clustering about 50 % slower).
     gpu_schedule: bool,
-    /// A real GPU's schedule: the grid shells every point walks before an unfinished search goes to a workgroup.
+    /// A real GPU's schedule: the grid shells every point walks, and the cells and centroids it visits (0: no
+    /// bound), before an unfinished search goes to a workgroup.
     near_shells: u32,
+    near_budget: u32,
     /// The grid's finer levels (0: the coarse one alone) and the crowd of a point's cell above which its searches
     /// use the next one.
     fine_levels: u32,
@@ -164,6 +170,9 @@ pub const FINE_ABOVE: u32 = 128;
 fn fine_table(k: usize) -> u64 {
     (k as u64).next_power_of_two().max(64)
 }
+
+/// [`GpuKMeans`]'s default bound on the cells and centroids a search visits alone (a real GPU's schedule; 0: none).
+pub const NEAR_BUDGET: u32 = 0;
 
 /// [`GpuKMeans`]'s default grid shells before a workgroup-wide search (a real GPU's schedule): the two shells
 /// (125 cells) that the eighteenth session's bounded nearest search walked (1 and 3 were no faster on the H200).
@@ -215,27 +224,47 @@ const ENTRIES: &[&str] = &[
     "km_search_wide",
 ];
 
+/// The kinds of search whose work [`GpuKMeans::read_search_counts`] reports, in the shader's order
+/// (kmeans.wgsl `COUNT_ASSIGN` ...).
+pub const SEARCH_KINDS: [&str; 5] = ["km_assign", "km_assign_wide", "km_final", "km_fill", "km_search"];
+
+/// One kind of search's work in a run (with [`GpuKMeans::set_count_searches`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SearchCounts {
+    /// Points searched (summed over the iterations for `km_assign`).
+    pub points: u32,
+    /// Grid cells visited and centroids considered, by all invocations.
+    pub cells: u32,
+    pub centroids: u32,
+    /// Points queued for a search of their own.
+    pub queued: u32,
+    /// The most cells and centroids one invocation visited.
+    pub most: u32,
+}
+
 /// The k-means kernels for a real GPU's schedule or a CPU rasterizer's: the WGSL's `GPU_SCHEDULE`, a
 /// pipeline-overridable constant, so each compiles without the other's code (a uniform switch instead made
-/// lavapipe's clustering about 50 % slower in its own schedule).
-fn kernels(gpu: &GpuContext, gpu_schedule: bool) -> Kernels {
+/// lavapipe's clustering about 50 % slower in its own schedule); `COUNT_WORK` the same for the searches' work
+/// counts.
+fn kernels(gpu: &GpuContext, gpu_schedule: bool, count_work: bool) -> Kernels {
     // Binding 1: the points (read); 2-4: the clusters, the working centroids, the assignment; 5: the
-    // workgroups of the queued searches; 6: the grid and the normal buckets.
+    // workgroups of the queued searches; 6: the grid and the normal buckets; 7: the searches' work counts.
+    let flag = |on: bool| if on { 1.0 } else { 0.0 };
     Kernels::new(
         gpu,
         "fuzzy kmeans",
         super::KMEANS.source,
         ENTRIES,
         std::mem::size_of::<KmParamsUniform>() as u64,
-        &[true, false, false, false, false, false],
-        &[("GPU_SCHEDULE", if gpu_schedule { 1.0 } else { 0.0 })],
+        &[true, false, false, false, false, false, false],
+        &[("GPU_SCHEDULE", flag(gpu_schedule)), ("COUNT_WORK", flag(count_work))],
     )
 }
 
 impl GpuKMeans {
     pub fn new(gpu: &GpuContext, label: &'static str) -> GpuKMeans {
         let gpu_schedule = gpu.adapter_info.device_type != wgpu::DeviceType::Cpu;
-        let kernels = kernels(gpu, gpu_schedule);
+        let kernels = kernels(gpu, gpu_schedule, false);
         let search_args = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("fuzzy search workgroups"),
             size: 16,
@@ -250,9 +279,17 @@ impl GpuKMeans {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
+        let search_counts = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fuzzy search counts"),
+            size: (SEARCH_KINDS.len() * 5 * 4) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         GpuKMeans {
             label,
             kernels,
+            search_counts,
+            count_searches: false,
             clusters: None,
             work: None,
             grid: None,
@@ -265,6 +302,7 @@ impl GpuKMeans {
             gpu_schedule,
             time_dispatches: false,
             near_shells: NEAR_SHELLS,
+            near_budget: NEAR_BUDGET,
             fine_levels: FINE_LEVELS,
             fine_above: FINE_ABOVE,
         }
@@ -275,6 +313,12 @@ impl GpuKMeans {
     /// only: the clusters found do not change.
     pub fn set_near_shells(&mut self, shells: u32) {
         self.near_shells = shells;
+    }
+
+    /// Sets the cells and centroids a real GPU's schedule lets a search visit alone before a workgroup finishes
+    /// it (0: only the shells bound it). Speed only: the clusters found do not change.
+    pub fn set_near_budget(&mut self, budget: u32) {
+        self.near_budget = budget;
     }
 
     /// Sets the grid's finer levels (at most 3; 0: the coarse level alone) and the crowd of a point's cell above
@@ -302,9 +346,37 @@ impl GpuKMeans {
     /// check both.
     pub fn set_gpu_schedule(&mut self, gpu: &GpuContext, gpu_schedule: bool) {
         if gpu_schedule != self.gpu_schedule {
-            self.kernels = kernels(gpu, gpu_schedule);
+            self.kernels = kernels(gpu, gpu_schedule, self.count_searches);
             self.gpu_schedule = gpu_schedule;
         }
+    }
+
+    /// Whether the kernels are a real GPU's schedule.
+    pub fn gpu_schedule(&self) -> bool {
+        self.gpu_schedule
+    }
+
+    /// Counts the searches' work (cells visited, centroids considered, points queued per kind of search; read
+    /// with [`GpuKMeans::read_search_counts`]). The kernels count with atomics: slower, the same clusters.
+    pub fn set_count_searches(&mut self, gpu: &GpuContext, on: bool) {
+        if on != self.count_searches {
+            self.kernels = kernels(gpu, self.gpu_schedule, on);
+            self.count_searches = on;
+        }
+    }
+
+    /// The searches' work in the last run, per kind ([`SEARCH_KINDS`]); None unless counting.
+    pub fn read_search_counts(&self, gpu: &GpuContext) -> Result<Option<[SearchCounts; 5]>, GpuError> {
+        if !self.count_searches {
+            return Ok(None);
+        }
+        let bytes = readback::read_buffer(gpu, &self.search_counts)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+        let mut counts = [SearchCounts::default(); 5];
+        for (c, w) in counts.iter_mut().zip(words.chunks_exact(5)) {
+            *c = SearchCounts { points: w[0], cells: w[1], centroids: w[2], queued: w[3], most: w[4] };
+        }
+        Ok(Some(counts))
     }
 
     fn pipeline(&self, entry: &str) -> &wgpu::ComputePipeline {
@@ -374,6 +446,9 @@ impl GpuKMeans {
             self.grid.as_ref().expect("grown"),
             self.assignment.as_ref().expect("grown"),
         );
+        if self.count_searches {
+            encoder.clear_buffer(&self.search_counts, 0, None);
+        }
         if k == 0 || m == 0 {
             // Nothing to cluster: no cluster exists and every point is unassigned.
             encoder.clear_buffer(clusters, 0, None);
@@ -399,12 +474,16 @@ impl GpuKMeans {
             bounds_extent: params.bounds_extent.max(Vec3::splat(1e-12)).extend(0.0).to_array(),
             flux_scale: [1.0 / max_flux.unwrap_or(1.0), max_flux.unwrap_or(1.0), 0.0, 0.0],
             fine: [fine_levels, fine_table(k) as u32, self.fine_above, 0],
+            sched: [self.near_budget, 0, 0, 0],
             options: [neighbours as u32, self.bucket_scan_limit, warm as u32, self.near_shells],
         };
         self.kernels.write_uniform(gpu, &uniform);
-        let group = self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args, grid]);
-        let search_group =
-            self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in, grid]);
+        let counts = &self.search_counts;
+        let group =
+            self.kernels.bind_group(gpu, &[points, clusters, work, assignment, &self.search_args, grid, counts]);
+        let search_group = self
+            .kernels
+            .bind_group(gpu, &[points, clusters, work, assignment, &self.search_args_stand_in, grid, counts]);
         let over_k = groups(k);
         // grid_clear also clears the clusters' accumulators.
         let over_cells = groups(((cells + fine) as usize).max(NB as usize).max(k));

@@ -19,6 +19,8 @@ const MAX_F: u32 = 8u;
 // search, the grid's finer levels and its scan over many workgroups) or a CPU rasterizer's (gpu.rs `kernels`:
 // set per pipeline, so each compiles without the other's code).
 override GPU_SCHEDULE: bool = false;
+// Count the searches' work into `search_counts` (gpu.rs `set_count_searches`; compiled out otherwise).
+override COUNT_WORK: bool = false;
 const NONE: u32 = 0xffffffffu;
 const FIXED: f32 = 16777216.0;
 // Words of `work` per cluster: position sums (lo, hi) x 3, normal sums (lo, hi) x 3, member count, best
@@ -58,6 +60,9 @@ struct KmParams {
     // level alone), y: the cells of each one's hash table, z: the most centroids a point's cell holds before its
     // searches use the next finer level
     fine: vec4<u32>,
+    // A real GPU's schedule: x: the cells and centroids a point's search visits alone before it goes to a
+    // workgroup's (0: no bound but the shells)
+    sched: vec4<u32>,
     // x: 1: Algorithm 2 searches the grid for the samples only; km_fill gives the other points the F nearest of
     // their four neighbouring samples' lists (kmeans.rs `neighbour_lists`); y: the most centroids a search for F > 1
     // scans whole from the normal buckets instead of walking the grid (0: always the grid); z: 1: a warm start (the
@@ -93,6 +98,37 @@ struct KmPoint {
 // in `work`: the searches read these words thousands of times a point, and an atomic load is not cached near
 // the core on a real GPU (a relaxed load at device scope goes to the shared cache), a plain load is.
 @group(0) @binding(6) var<storage, read_write> grid: array<u32>;
+// With COUNT_WORK, per kind of search (SEARCH_KINDS, gpu.rs `SEARCH_KINDS`) 5 words: the points searched, the
+// cells visited, the centroids considered, the points queued for a search of their own, the most cells and
+// centroids one invocation visited.
+@group(0) @binding(7) var<storage, read_write> search_counts: array<atomic<u32>>;
+
+// The kinds of search counted: km_assign (0), km_assign_wide (1), km_final (2), km_fill (3), km_search and
+// km_search_wide (4).
+const COUNT_ASSIGN: u32 = 0u;
+const COUNT_ASSIGN_WIDE: u32 = 1u;
+const COUNT_FINAL: u32 = 2u;
+const COUNT_FILL: u32 = 3u;
+const COUNT_SEARCH: u32 = 4u;
+var<private> counted_cells: u32;
+var<private> counted_centroids: u32;
+
+// One invocation's search work into its kind's counts (`point`: it counts a point searched; `queued`: the point
+// went to a search of its own).
+fn count_search(kind: u32, point: bool, queued: bool) {
+    if COUNT_WORK {
+        let b = kind * 5u;
+        if point {
+            atomicAdd(&search_counts[b], 1u);
+        }
+        atomicAdd(&search_counts[b + 1u], counted_cells);
+        atomicAdd(&search_counts[b + 2u], counted_centroids);
+        if queued {
+            atomicAdd(&search_counts[b + 3u], 1u);
+        }
+        atomicMax(&search_counts[b + 4u], counted_cells + counted_centroids);
+    }
+}
 
 fn global_index(id: vec3<u32>, groups: vec3<u32>) -> u32 {
     return id.x + id.y * groups.x * 64u;
@@ -538,12 +574,14 @@ fn km_assign(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     if GPU_SCHEDULE {
         if !find_near(p.position.xyz, p.normal.xyz, 1u) {
             enqueue(m);
+            count_search(COUNT_ASSIGN, true, true);
             return;
         }
         assign_to(nearest_found(), p);
     } else {
         assign_to(nearest_cluster(p), p);
     }
+    count_search(COUNT_ASSIGN, true, false);
 }
 
 // A real GPU's schedule: the samples km_assign queued, a workgroup each (its workgroups from queue_args).
@@ -556,6 +594,7 @@ fn km_assign_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     }
     let p = km_points[m];
     wide_find(p.position.xyz, p.normal.xyz, 1u, lid.x);
+    count_search(COUNT_ASSIGN_WIDE, lid.x == 0u, false);
     if lid.x == 0u {
         assign_to(nearest_found(), p);
     }

@@ -85,11 +85,13 @@ fn km_final(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
     if GPU_SCHEDULE {
         if !find_near(p.position.xyz, p.normal.xyz, f_max) {
             enqueue(m);
+            count_search(COUNT_FINAL, true, true);
             return;
         }
     } else {
         find(p.position.xyz, p.normal.xyz, f_max);
     }
+    count_search(COUNT_FINAL, true, false);
     record(m, p, f_max);
 }
 
@@ -197,14 +199,17 @@ fn km_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         // A real GPU's schedule: the grid's first shells here, the workgroup-wide search where they do not finish.
         if !find_near(p.position.xyz, p.normal.xyz, f_max) {
             enqueue(m);
+            count_search(COUNT_FILL, true, true);
             return;
         }
     } else if best_n < f_max {
         // The grid search is long where it is needed (few compatible clusters near a crease): on a CPU
         // rasterizer it goes to a queue of its own (km_search) so that the invocations beside it do not wait.
         enqueue(m);
+        count_search(COUNT_FILL, true, true);
         return;
     }
+    count_search(COUNT_FILL, true, false);
     record(m, p, f_max);
 }
 
@@ -234,6 +239,7 @@ fn km_search(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
     let f_max = clamp(km.fuzziness, 1u, MAX_F);
     let p = km_points[m];
     find(p.position.xyz, p.normal.xyz, f_max);
+    count_search(COUNT_SEARCH, true, false);
     record(m, p, f_max);
 }
 
@@ -248,6 +254,7 @@ fn km_search_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
     let f_max = clamp(km.fuzziness, 1u, MAX_F);
     let p = km_points[m];
     wide_find(p.position.xyz, p.normal.xyz, f_max, lid.x);
+    count_search(COUNT_SEARCH, lid.x == 0u, false);
     if lid.x == 0u {
         record(m, p, f_max);
     }

@@ -58,10 +58,17 @@ pub struct FuzzyParams {
     pub time_dispatches: bool,
     /// A real GPU's schedule: the grid shells a search walks before a workgroup finishes it (speed only).
     pub near_shells: u32,
+    /// A real GPU's schedule: the cells and centroids a search visits alone (0: no bound; speed only).
+    pub near_budget: u32,
     /// The grid's finer levels (0: none) and the crowd of a point's cell above which its searches use the next
     /// one (speed only).
     pub fine_levels: u32,
     pub fine_above: u32,
+    /// The clustering's schedule: `auto` (from the adapter: a real GPU's or a CPU rasterizer's), `gpu` or `cpu`
+    /// (speed only).
+    pub schedule: String,
+    /// Count the searches' work (cells, centroids, queued points per kernel) into the counts (slower).
+    pub count_searches: bool,
 }
 
 impl Default for FuzzyParams {
@@ -88,8 +95,11 @@ impl Default for FuzzyParams {
             search: "exact".into(),
             time_dispatches: false,
             near_shells: super::gpu::NEAR_SHELLS,
+            near_budget: super::gpu::NEAR_BUDGET,
             fine_levels: super::gpu::FINE_LEVELS,
             fine_above: super::gpu::FINE_ABOVE,
+            schedule: "auto".into(),
+            count_searches: false,
             assign: "neighbours".into(),
             lights_per_step: crate::technique::MAX_LIGHT_WORK_PER_PASS as u32,
         }
@@ -127,6 +137,7 @@ const MODE_CHOICES: &[&str] = &["weighted", "fuzzy", "hard"];
 const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
 const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
 const ASSIGN_CHOICES: &[&str] = &["neighbours", "search"];
+const SCHEDULE_CHOICES: &[&str] = &["auto", "gpu", "cpu"];
 const REUSE_CHOICES: &[&str] = &["all", "vpls", "none"];
 
 impl FuzzyParams {
@@ -298,6 +309,15 @@ impl FuzzyParams {
                 value: ParamValue::Int(p.near_shells as i64),
             },
             Param {
+                key: "near_budget",
+                label: "Steps before a workgroup search",
+                help: "On a GPU (not a software rasterizer): the grid cells and centroids a point's search visits \
+                       alone before a workgroup finishes it (0: the shells alone bound it). Speed only: the \
+                       clusters do not change",
+                kind: ParamKind::Int { min: 0, max: 1 << 20 },
+                value: ParamValue::Int(p.near_budget as i64),
+            },
+            Param {
                 key: "fine_levels",
                 label: "Finer grid levels",
                 help: "Levels of the cluster grid finer than its cells (each 4 x 4 x 4 cells per cell of the one \
@@ -313,6 +333,24 @@ impl FuzzyParams {
                        level. Speed only: the clusters do not change",
                 kind: ParamKind::Int { min: 0, max: 65_536 },
                 value: ParamValue::Int(p.fine_above as i64),
+            },
+            Param {
+                key: "schedule",
+                label: "Clustering schedule",
+                help: "auto: from the adapter; gpu: a real GPU's (two grid shells per point, then a workgroup per \
+                       unfinished search, finer grid levels, the grid's scan over many workgroups); cpu: a software \
+                       rasterizer's (each search by one invocation). Speed only: the clusters do not change",
+                kind: ParamKind::Choice(SCHEDULE_CHOICES),
+                value: ParamValue::Choice(p.schedule.clone()),
+            },
+            Param {
+                key: "count_searches",
+                label: "Count the searches' work",
+                help: "Count the grid cells visited, the centroids considered and the points queued by each kernel \
+                       of the shading points' clustering, in the counts (`sp <kernel>: ...`; atomics: slower, the \
+                       same clusters)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.count_searches),
             },
         ]
     }
@@ -342,8 +380,11 @@ impl FuzzyParams {
             ("lights_per_step", ParamValue::Int(v)) => p.lights_per_step = *v as u32,
             ("time_dispatches", ParamValue::Bool(v)) => p.time_dispatches = *v,
             ("near_shells", ParamValue::Int(v)) => p.near_shells = *v as u32,
+            ("near_budget", ParamValue::Int(v)) => p.near_budget = *v as u32,
             ("fine_levels", ParamValue::Int(v)) => p.fine_levels = *v as u32,
             ("fine_above", ParamValue::Int(v)) => p.fine_above = *v as u32,
+            ("schedule", ParamValue::Choice(v)) => p.schedule = v.clone(),
+            ("count_searches", ParamValue::Bool(v)) => p.count_searches = *v,
             _ => unreachable!("check_param accepted an unknown key"),
         }
     }

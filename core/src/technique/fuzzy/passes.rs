@@ -52,7 +52,10 @@ impl FuzzyClustering {
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
             let vpls = &ctx.vpls.buffer.buffer;
             self.vpl_kmeans.set_time_dispatches(self.params.time_dispatches);
+            let schedule = self.schedule(ctx.gpu);
+            self.vpl_kmeans.set_gpu_schedule(ctx.gpu, schedule);
             self.vpl_kmeans.set_near_shells(self.params.near_shells);
+            self.vpl_kmeans.set_near_budget(self.params.near_budget);
             self.vpl_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, vpls, kp, Some(max_flux), false)?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
@@ -78,12 +81,26 @@ impl FuzzyClustering {
             let run = KMeansParams { iterations: self.params.warm_iterations, ..*kp };
             let (kp_run, warm) = if self.sp_warm { (&run, true) } else { (kp, false) };
             self.sp_kmeans.set_time_dispatches(self.params.time_dispatches);
+            let schedule = self.schedule(ctx.gpu);
+            self.sp_kmeans.set_gpu_schedule(ctx.gpu, schedule);
+            self.sp_kmeans.set_count_searches(ctx.gpu, self.params.count_searches);
             self.sp_kmeans.set_near_shells(self.params.near_shells);
+            self.sp_kmeans.set_near_budget(self.params.near_budget);
             self.sp_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp_run, None, warm)?;
             self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
         Ok(())
+    }
+
+    /// The clustering's schedule: a real GPU's (true) or a CPU rasterizer's, from the `schedule` parameter or the
+    /// adapter.
+    fn schedule(&self, gpu: &crate::gpu::GpuContext) -> bool {
+        match self.params.schedule.as_str() {
+            "gpu" => true,
+            "cpu" => false,
+            _ => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
+        }
     }
 
     /// The last step: the clusters read back for the counts (and, with `inspect`, the assignments for the
@@ -110,6 +127,16 @@ impl FuzzyClustering {
         let live = |c: &[GpuPoint]| c.iter().filter(|p| p.exists()).count();
         if vpl_clustered {
             self.counts.figures.insert("k_vpl".into(), live(&self.inspection.vpl_clusters) as f64);
+        }
+        if let Some(counts) = self.sp_kmeans.read_search_counts(ctx.gpu)?.filter(|_| sp_clustered) {
+            for (kind, c) in gpu::SEARCH_KINDS.iter().zip(counts) {
+                let mut put = |what: &str, v: u32| self.counts.figures.insert(format!("sp {kind}: {what}"), v as f64);
+                put("points", c.points);
+                put("cells visited", c.cells);
+                put("centroids considered", c.centroids);
+                put("points queued", c.queued);
+                put("most cells + centroids of one invocation", c.most);
+            }
         }
         if sp_clustered {
             let sp_live = live(&self.inspection.sp_clusters);
