@@ -761,7 +761,7 @@ fn the_search_counts_add_up_to_the_points_each_kernel_searched_and_queued() {
     let p = room_kmeans_params(w, h, 150, 4, 6, true);
     let valid = |m: &usize| points[*m].valid;
     let g = p.gamma as usize;
-    let on_grid = |m: &usize| (m % w as usize) % g == 0 && (m / w as usize) % g == 0;
+    let on_grid = |m: &usize| (m % w as usize).is_multiple_of(g) && (m / w as usize).is_multiple_of(g);
     let samples = (0..points.len()).filter(valid).filter(on_grid).count() as u32;
     let between = (0..points.len()).filter(valid).filter(|m| !on_grid(m)).count() as u32;
     let mut km = GpuKMeans::new(&gpu, "test");
