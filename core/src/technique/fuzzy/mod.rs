@@ -87,6 +87,7 @@ const KMEANS: WgslModule = crate::wgsl!(
     "fuzzy_kmeans",
     [
         "core/src/technique/fuzzy/kmeans.wgsl",
+        "core/src/technique/fuzzy/kmeans_grid.wgsl",
         "core/src/technique/fuzzy/kmeans_search.wgsl",
         "core/src/technique/fuzzy/kmeans_final.wgsl"
     ]
