@@ -51,12 +51,7 @@ impl FuzzyClustering {
             self.clustered_vpls = None;
             let max_flux = self.vpls.vpls.iter().map(|v| v.flux.max_element()).fold(0.0f32, f32::max);
             let vpls = &ctx.vpls.buffer.buffer;
-            self.vpl_kmeans.set_time_dispatches(self.params.time_dispatches);
-            let schedule = self.schedule(ctx.gpu);
-            self.vpl_kmeans.set_gpu_schedule(ctx.gpu, schedule);
-            self.vpl_kmeans.set_near_shells(self.params.near_shells);
-            self.vpl_kmeans.set_near_budget(self.params.near_budget);
-            self.vpl_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
+            configure(&mut self.vpl_kmeans, ctx.gpu, &self.params, false);
             self.vpl_kmeans.encode(ctx.gpu, ctx.timer, encoder, vpls, kp, Some(max_flux), false)?;
             self.clustered_vpls = Some((self.vpls.clone(), *kp));
         }
@@ -80,27 +75,11 @@ impl FuzzyClustering {
             let points = self.sp_points.as_ref().expect("ensured");
             let run = KMeansParams { iterations: self.params.warm_iterations, ..*kp };
             let (kp_run, warm) = if self.sp_warm { (&run, true) } else { (kp, false) };
-            self.sp_kmeans.set_time_dispatches(self.params.time_dispatches);
-            let schedule = self.schedule(ctx.gpu);
-            self.sp_kmeans.set_gpu_schedule(ctx.gpu, schedule);
-            self.sp_kmeans.set_count_searches(ctx.gpu, self.params.count_searches);
-            self.sp_kmeans.set_near_shells(self.params.near_shells);
-            self.sp_kmeans.set_near_budget(self.params.near_budget);
-            self.sp_kmeans.set_fine_levels(self.params.fine_levels, self.params.fine_above);
+            configure(&mut self.sp_kmeans, ctx.gpu, &self.params, self.params.count_searches);
             self.sp_kmeans.encode(ctx.gpu, ctx.timer, encoder, points, kp_run, None, warm)?;
             self.clustered_view = self.bvh.clone().map(|bvh| (bvh, *ctx.camera, ctx.size, *kp));
         }
         Ok(())
-    }
-
-    /// The clustering's schedule: a real GPU's (true) or a CPU rasterizer's, from the `schedule` parameter or the
-    /// adapter.
-    fn schedule(&self, gpu: &crate::gpu::GpuContext) -> bool {
-        match self.params.schedule.as_str() {
-            "gpu" => true,
-            "cpu" => false,
-            _ => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
-        }
     }
 
     /// The last step: the clusters read back for the counts (and, with `inspect`, the assignments for the
@@ -271,4 +250,21 @@ impl FuzzyClustering {
         self.shade_pass.encode_lights(ctx, encoder, "fuzzy shading", &group, batch, lights);
         Ok(())
     }
+}
+
+/// A k-means run's speed-only settings from the technique's parameters (the clusters do not change with them):
+/// the schedule (`schedule`: a real GPU's or a CPU rasterizer's, `auto` from the adapter), the dispatches' timing,
+/// the searches' work counts, the shells and work a search does alone, the grid's finer levels.
+fn configure(km: &mut GpuKMeans, gpu: &crate::gpu::GpuContext, params: &FuzzyParams, count_searches: bool) {
+    let gpu_schedule = match params.schedule.as_str() {
+        "gpu" => true,
+        "cpu" => false,
+        _ => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
+    };
+    km.set_gpu_schedule(gpu, gpu_schedule);
+    km.set_count_searches(gpu, count_searches);
+    km.set_time_dispatches(params.time_dispatches);
+    km.set_near_shells(params.near_shells);
+    km.set_near_budget(params.near_budget);
+    km.set_fine_levels(params.fine_levels, params.fine_above);
 }
