@@ -403,5 +403,10 @@ fn every_entry_creates_its_technique_which_accepts_its_software_defaults() {
             let now = technique.params().into_iter().find(|p| p.key == key).unwrap().value;
             assert_eq!(now, value, "{}: software default {key} did not take", entry.key);
         }
+        // The app folds the tuning parameters into a section of their own: each must be one of the technique's.
+        let keys: Vec<&str> = technique.params().iter().map(|p| p.key).collect();
+        for key in technique.tuning_params() {
+            assert!(keys.contains(key), "{}: tuning parameter {key} is not a parameter", entry.key);
+        }
     }
 }

@@ -297,6 +297,11 @@ pub trait Technique {
     fn probe_params(&self) -> Option<(&'static str, &'static str)> {
         None
     }
+    /// The keys of parameters that change only how the work is scheduled, timed or counted, never the image
+    /// (the tests of each technique check that): the app folds them into a "Tuning" section of its panel.
+    fn tuning_params(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// True for indirect techniques that gather the frame's VPLs (the renderer generates them only then).
     fn uses_vpls(&self) -> bool {
         false

@@ -129,11 +129,15 @@ fn params_panel(
     for (k, v) in user.iter() {
         let _ = technique.set_param(k, v);
     }
-    for p in technique.params() {
+    // The parameters that only schedule, time or count the work go last, folded ("Tuning").
+    let tuning = technique.tuning_params();
+    let (params, tuned): (Vec<_>, Vec<_>) = technique.params().into_iter().partition(|p| !tuning.contains(&p.key));
+    let mut edits = Vec::new();
+    for p in &params {
         let changed = match (&p.kind, &p.value) {
             (ParamKind::Cameras { max, selected_by }, ParamValue::Cameras(list)) => {
                 let in_use = technique.cameras_in_use(p.key);
-                let edited = cameras_ui(ui, &p, *max, list, &in_use, view_camera, selected_camera);
+                let edited = cameras_ui(ui, p, *max, list, &in_use, view_camera, selected_camera);
                 if edited.is_some() {
                     // Edited cameras are the ones the technique should use: select them.
                     if let Some((key, value)) = selected_by {
@@ -148,10 +152,20 @@ fn params_panel(
             }
             _ => param_ui(ui, &p.kind, &p.value, p.label, p.help),
         };
-        if let Some(v) = changed {
-            if technique.set_param(p.key, &v).is_ok() {
-                user.insert(p.key.to_string(), v);
-            }
+        edits.extend(changed.map(|v| (p.key, v)));
+    }
+    if !tuned.is_empty() {
+        egui::CollapsingHeader::new("Tuning (speed only: the image does not change)")
+            .id_salt(("tuning", technique.key()))
+            .show(ui, |ui| {
+                for p in &tuned {
+                    edits.extend(param_ui(ui, &p.kind, &p.value, p.label, p.help).map(|v| (p.key, v)));
+                }
+            });
+    }
+    for (key, v) in edits {
+        if technique.set_param(key, &v).is_ok() {
+            user.insert(key.to_string(), v);
         }
     }
 }

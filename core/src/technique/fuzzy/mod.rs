@@ -330,6 +330,10 @@ impl Technique for FuzzyClustering {
         Some(("probe_x", "probe_y"))
     }
 
+    fn tuning_params(&self) -> &'static [&'static str] {
+        params::TUNING
+    }
+
     fn explain(&self) -> Vec<super::ExplainStep> {
         self.explain_steps()
     }

@@ -138,6 +138,20 @@ const CLUSTER_CHOICES: &[&str] = &["both", "sp", "vpl"];
 const SEARCH_CHOICES: &[&str] = &["exact", "paper"];
 const ASSIGN_CHOICES: &[&str] = &["neighbours", "search"];
 const SCHEDULE_CHOICES: &[&str] = &["auto", "gpu", "cpu"];
+
+/// The parameters that change how the clustering and the frame's steps are scheduled, timed or counted, never the
+/// image (`Technique::tuning_params`; core/tests/fuzzy.rs renders the same image with each changed).
+pub const TUNING: &[&str] = &[
+    "rays_per_step",
+    "lights_per_step",
+    "schedule",
+    "near_shells",
+    "near_budget",
+    "fine_levels",
+    "fine_above",
+    "time_dispatches",
+    "count_searches",
+];
 const REUSE_CHOICES: &[&str] = &["all", "vpls", "none"];
 
 impl FuzzyParams {
