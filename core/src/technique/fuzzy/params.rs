@@ -248,7 +248,7 @@ impl FuzzyParams {
                 help: "neighbours: a pixel off the gamma grid takes its F nearest among the clusters of the four \
                        samples around it (a grid search where fewer than F match its normal; the samples search \
                        the grid); search: every pixel searches the grid, as the paper does (slower on a software \
-                       rasterizer, faster on a real GPU: docs/techniques/fuzzy.md)",
+                       rasterizer, no faster on an NVIDIA H200: docs/techniques/fuzzy.md)",
                 kind: ParamKind::Choice(ASSIGN_CHOICES),
                 value: ParamValue::Choice(p.assign.clone()),
             },
