@@ -377,7 +377,10 @@ fn wide_merge(f_max: u32, t: u32) -> u32 {
 // centroid). (A walk of the grid by the workgroup, shell by shell, before the scan was tried: exact, but on the
 // conference room at 1024x720 it did as much work as the scan, 6.7 million cells and 13.9 million centroids
 // against 20.7 million centroids, and more in its longest invocation, 302 steps against 85: the points queued
-// here have no F compatible centroids near them.)
+// here have no F compatible centroids near them. Lists per normal bucket and cell 4 times coarser than the grid's,
+// walked by the workgroup near the point first, were tried too: exact, 3.4 times fewer centroids considered on the
+// conference room, 6.1 against 20.7 million, but a crowded cell made one invocation's work 10 times the scan's
+// longest, 841 steps against 85, and a workgroup waits for it; not timed on a GPU, backed out.)
 fn wide_find(p: vec3<f32>, n: vec3<f32>, f_max: u32, t: u32) {
     wide_ok[t] = u32(compatible_bucket(t, n));
     workgroupBarrier();
