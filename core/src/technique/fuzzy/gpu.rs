@@ -466,7 +466,10 @@ impl GpuKMeans {
         let mut plan: Vec<(&str, &str, (u32, u32))> = Vec::new();
         let gpu_schedule = self.gpu_schedule;
         let grid_build = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage| {
-            plan.push((stage, "grid_clear", over_cells));
+            // The run's first grid clears; every later one follows a km_update, which clears as it goes.
+            if !plan.iter().any(|d| d.1 == "km_update") {
+                plan.push((stage, "grid_clear", over_cells));
+            }
             plan.push((stage, "grid_count", over_k));
             if gpu_schedule {
                 plan.push((stage, "grid_sums", (scan_blocks as u32, 1)));
@@ -492,7 +495,7 @@ impl GpuKMeans {
             grid_build(&mut plan, "iterations");
             plan.push(("iterations", "km_assign", over_samples));
             wide(&mut plan, "iterations", "km_assign_wide");
-            plan.push(("iterations", "km_update", over_k));
+            plan.push(("iterations", "km_update", over_cells));
         }
         grid_build(&mut plan, "assignment");
         if neighbours {

@@ -6,7 +6,8 @@
 // bounds and their normal as (n + 1) / 2, times 2^24, into 64-bit sums made of two atomic u32 (the carry is
 // added to the high word when the low word wraps), so a mean keeps 2^-24 of the bounds whatever the count.
 // Entry points, one dispatch each, in the order of gpu.rs `encode`: km_init (not in a warm start: the centroids
-// are the last run's); per iteration grid_clear (with the accumulators and the queue), grid_count, grid_scan
+// are the last run's); grid_clear before the first grid (with the accumulators and the queue; km_update clears
+// them for every later one); per iteration grid_count, grid_scan
 // (with the fill; a real GPU: then grid_fill), km_assign (a real GPU: then queue_args and km_assign_wide over
 // the samples it queued); km_update; then the grid again, km_final (over the samples with neighbour lists; a real
 // GPU: queue_args, km_search_wide), km_blocks, km_fill, queue_args and km_search (a real GPU: km_search_wide),
@@ -333,10 +334,16 @@ fn km_assign_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups
 
 @compute @workgroup_size(64)
 fn km_update(@builtin(global_invocation_id) id: vec3<u32>) {
+    // Centroid k moved to its members' mean, then its accumulators (and entry k of the grid's counts) cleared
+    // for the next grid (kmeans_grid.wgsl `clear_for_grid`). Dispatched over max(cells, NB, K).
     let k = id.x;
-    if k >= km.cluster_count {
-        return;
+    if k < km.cluster_count {
+        update_centroid(k);
     }
+    clear_for_grid(k);
+}
+
+fn update_centroid(k: u32) {
     let count = atomicLoad(&work[k * ACC + ACC_COUNT]);
     let c = centroid(k);
     if c.position.w < 0.5 || count == 0u {

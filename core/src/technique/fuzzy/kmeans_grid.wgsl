@@ -68,29 +68,34 @@ fn level_of(p: vec3<f32>) -> u32 {
     return l;
 }
 
-// The grid's cell counts and the normal buckets cleared, and the clusters' accumulators (and km_fill's queue)
-// for the assignment that follows the grid: one dispatch over max(cells, NB, K) (the grid's passes do not touch
-// the accumulators; km_update, before it, has read them).
-@compute @workgroup_size(64)
-fn grid_clear(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x < all_cells() {
-        atomicStore(&work[counts_base() + id.x], 0u);
+// The grid's cell counts and the normal buckets cleared, and the clusters' accumulators (and the search queue)
+// for the assignment that follows the grid: entry i of each, one dispatch over max(cells, NB, K). grid_clear runs
+// before a run's first grid only: every later grid follows a km_update, which clears them as it goes (a grid's
+// counts are read only by the grid's own passes, the accumulators only by km_update and the representatives'
+// passes, the queue by the searches before it; one dispatch less per iteration).
+fn clear_for_grid(i: u32) {
+    if i < all_cells() {
+        atomicStore(&work[counts_base() + i], 0u);
     }
-    if id.x < NB {
-        atomicStore(&work[nb_counts_base() + id.x], 0u);
-        atomicStore(&work[nb_least_base() + id.x], NONE);
+    if i < NB {
+        atomicStore(&work[nb_counts_base() + i], 0u);
+        atomicStore(&work[nb_least_base() + i], NONE);
     }
-    let k = id.x;
-    if k < km.cluster_count {
+    if i < km.cluster_count {
         for (var j = 0u; j < ACC; j++) {
-            atomicStore(&work[k * ACC + j], 0u);
+            atomicStore(&work[i * ACC + j], 0u);
         }
-        atomicStore(&work[k * ACC + ACC_BEST], NONE);
-        atomicStore(&work[k * ACC + ACC_REP], NONE);
+        atomicStore(&work[i * ACC + ACC_BEST], NONE);
+        atomicStore(&work[i * ACC + ACC_REP], NONE);
     }
-    if k == 0u {
+    if i == 0u {
         atomicStore(&work[queue_base()], 0u);
     }
+}
+
+@compute @workgroup_size(64)
+fn grid_clear(@builtin(global_invocation_id) id: vec3<u32>) {
+    clear_for_grid(id.x);
 }
 
 @compute @workgroup_size(64)
