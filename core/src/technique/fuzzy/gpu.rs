@@ -195,8 +195,12 @@ pub(super) fn ensure_storage(slot: &mut Option<wgpu::Buffer>, gpu: &GpuContext, 
     true
 }
 
+/// One dispatch of a k-means run: its timed stage, its kernel and its workgroups (None: over the search queue,
+/// as `queue_args` wrote them, an indirect dispatch).
+type Step = (&'static str, &'static str, Option<(u32, u32)>);
+
 /// Workgroups of 64 for `n` invocations, as `(x, y)` (x at most 32,768: `global_index` in the shader).
-fn groups(n: usize) -> (u32, u32) {
+pub(super) fn groups(n: usize) -> (u32, u32) {
     let g = n.div_ceil(64).max(1) as u32;
     if g <= 65_535 {
         (g, 1)
@@ -335,11 +339,6 @@ impl GpuKMeans {
         }
     }
 
-    /// Whether the kernels are a real GPU's schedule.
-    pub fn gpu_schedule(&self) -> bool {
-        self.gpu_schedule
-    }
-
     /// Counts the searches' work (cells visited, centroids considered, points queued per kind of search; read
     /// with [`GpuKMeans::read_search_counts`]). The kernels count with atomics: slower, the same clusters.
     pub fn set_count_searches(&mut self, gpu: &GpuContext, on: bool) {
@@ -463,63 +462,71 @@ impl GpuKMeans {
         // and Algorithm 2's assignment (the samples' searches, the blocks' lists, the fill from them); the
         // searches of the points the fill queued and the representatives. Timed as one pass per stage (the
         // report's per-pass times; one pass for all cost the same) or, for profiling, one pass per dispatch.
-        let mut plan: Vec<(&str, &str, (u32, u32))> = Vec::new();
+        let mut plan: Vec<Step> = Vec::new();
         let gpu_schedule = self.gpu_schedule;
-        let grid_build = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage| {
-            // The run's first grid clears; every later one follows a km_update, which clears as it goes.
-            if !plan.iter().any(|d| d.1 == "km_update") {
-                plan.push((stage, "grid_clear", over_cells));
+        // `clear`: the run's first grid; every later one follows a km_update, which clears as it goes.
+        let grid_build = |plan: &mut Vec<_>, stage, clear: bool| {
+            if clear {
+                plan.push((stage, "grid_clear", Some(over_cells)));
             }
-            plan.push((stage, "grid_count", over_k));
+            plan.push((stage, "grid_count", Some(over_k)));
             if gpu_schedule {
-                plan.push((stage, "grid_sums", (scan_blocks as u32, 1)));
-                plan.push((stage, "grid_scan", (1, 1)));
-                plan.push((stage, "grid_starts", (scan_blocks as u32, 1)));
-                plan.push((stage, "grid_fill", over_k));
+                plan.push((stage, "grid_sums", Some((scan_blocks as u32, 1))));
+                plan.push((stage, "grid_scan", Some((1, 1))));
+                plan.push((stage, "grid_starts", Some((scan_blocks as u32, 1))));
+                plan.push((stage, "grid_fill", Some(over_k)));
             } else {
-                plan.push((stage, "grid_scan", (1, 1)));
+                plan.push((stage, "grid_scan", Some((1, 1))));
             }
         };
-        // A real GPU's schedule: the searches the grid's first shells left unfinished, a workgroup each, over
-        // the queue (its workgroups from `queue_args`).
-        let wide = |plan: &mut Vec<(&str, &str, (u32, u32))>, stage, entry| {
-            if gpu_schedule {
-                plan.push((stage, "queue_args", (1, 1)));
-                plan.push((stage, entry, (0, 0)));
-            }
+        // The search over the queue: on a real GPU a workgroup per queued point (`km_assign_wide`,
+        // `km_search_wide`), on a CPU rasterizer `km_search`, 64 points a workgroup.
+        let over_queue = |plan: &mut Vec<_>, stage, entry| {
+            plan.push((stage, "queue_args", Some((1, 1))));
+            plan.push((stage, entry, None));
         };
         if !warm {
-            plan.push(("iterations", "km_init", over_k));
+            plan.push(("iterations", "km_init", Some(over_k)));
         }
-        for _ in 0..params.iterations {
-            grid_build(&mut plan, "iterations");
-            plan.push(("iterations", "km_assign", over_samples));
-            wide(&mut plan, "iterations", "km_assign_wide");
-            plan.push(("iterations", "km_update", over_cells));
+        for i in 0..params.iterations {
+            grid_build(&mut plan, "iterations", i == 0);
+            plan.push(("iterations", "km_assign", Some(over_samples)));
+            if gpu_schedule {
+                over_queue(&mut plan, "iterations", "km_assign_wide");
+            }
+            plan.push(("iterations", "km_update", Some(over_cells)));
         }
-        grid_build(&mut plan, "assignment");
+        grid_build(&mut plan, "assignment", params.iterations == 0);
+        let search = if gpu_schedule { "km_search_wide" } else { "km_search" };
         if neighbours {
-            plan.push(("assignment", "km_final", over_samples));
-            // The samples' lists complete before the blocks merge them.
-            wide(&mut plan, "assignment", "km_search_wide");
-            plan.push(("assignment", "km_blocks", over_samples));
-            plan.push(("assignment", "km_fill", over_points));
-            plan.push(("assignment", "queue_args", (1, 1)));
-            plan.push(("search", if gpu_schedule { "km_search_wide" } else { "km_search" }, (0, 0)));
+            plan.push(("assignment", "km_final", Some(over_samples)));
+            if gpu_schedule {
+                // The samples' lists complete before the blocks merge them.
+                over_queue(&mut plan, "assignment", "km_search_wide");
+            }
+            plan.push(("assignment", "km_blocks", Some(over_samples)));
+            plan.push(("assignment", "km_fill", Some(over_points)));
+            plan.push(("assignment", "queue_args", Some((1, 1))));
+            plan.push(("search", search, None));
         } else {
-            plan.push(("assignment", "km_final", over_points));
-            wide(&mut plan, "search", "km_search_wide");
+            plan.push(("assignment", "km_final", Some(over_points)));
+            if gpu_schedule {
+                over_queue(&mut plan, "search", "km_search_wide");
+            }
         }
-        plan.push(("search", "rep_pick", over_points));
-        plan.push(("search", "rep_finish", over_k));
-        let dispatch = |pass: &mut wgpu::ComputePass<'_>, entry: &str, (x, y): (u32, u32)| {
+        plan.push(("search", "rep_pick", Some(over_points)));
+        plan.push(("search", "rep_finish", Some(over_k)));
+        let dispatch = |pass: &mut wgpu::ComputePass<'_>, entry: &str, size: Option<(u32, u32)>| {
             pass.set_pipeline(self.pipeline(entry));
-            if matches!(entry, "km_search" | "km_search_wide" | "km_assign_wide") {
-                pass.set_bind_group(0, &search_group, &[]);
-                pass.dispatch_workgroups_indirect(&self.search_args, 0);
-            } else {
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
+            match size {
+                Some((x, y)) => {
+                    pass.set_bind_group(0, &group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                None => {
+                    pass.set_bind_group(0, &search_group, &[]);
+                    pass.dispatch_workgroups_indirect(&self.search_args, 0);
+                }
             }
         };
         let label = self.label;

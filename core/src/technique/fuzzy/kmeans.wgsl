@@ -320,15 +320,9 @@ fn km_assign(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
 @compute @workgroup_size(64)
 fn km_assign_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_id) lid: vec3<u32>) {
-    let m = wide_item(wid, groups, lid.x);
-    if m == NONE {
-        return;
-    }
-    let p = km_points[m];
-    wide_find(p.position.xyz, p.normal.xyz, 1u, lid.x);
-    count_search(COUNT_ASSIGN_WIDE, lid.x == 0u, false);
-    if lid.x == 0u {
-        assign_to(nearest_found(), p);
+    let m = wide_search(wid, groups, lid.x, 1u, COUNT_ASSIGN_WIDE);
+    if m != NONE && lid.x == 0u {
+        assign_to(nearest_found(), km_points[m]);
     }
 }
 

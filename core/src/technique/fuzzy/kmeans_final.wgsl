@@ -247,15 +247,9 @@ fn km_search(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgrou
 @compute @workgroup_size(64)
 fn km_search_wide(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                   @builtin(local_invocation_id) lid: vec3<u32>) {
-    let m = wide_item(wid, groups, lid.x);
-    if m == NONE {
-        return;
-    }
     let f_max = clamp(km.fuzziness, 1u, MAX_F);
-    let p = km_points[m];
-    wide_find(p.position.xyz, p.normal.xyz, f_max, lid.x);
-    count_search(COUNT_SEARCH, lid.x == 0u, false);
-    if lid.x == 0u {
-        record(m, p, f_max);
+    let m = wide_search(wid, groups, lid.x, f_max, COUNT_SEARCH);
+    if m != NONE && lid.x == 0u {
+        record(m, km_points[m], f_max);
     }
 }

@@ -346,6 +346,19 @@ fn wide_item(wid: vec3<u32>, groups: vec3<u32>, t: u32) -> u32 {
     return workgroupUniformLoad(&wide_point);
 }
 
+// The workgroup's queued point (NONE past the queue's end), searched by `wide_find` and counted as `kind`:
+// invocation 0's search state holds its F nearest (km_assign_wide, km_search_wide).
+fn wide_search(wid: vec3<u32>, groups: vec3<u32>, t: u32, f_max: u32, kind: u32) -> u32 {
+    let m = wide_item(wid, groups, t);
+    if m == NONE {
+        return NONE;
+    }
+    let p = km_points[m];
+    wide_find(p.position.xyz, p.normal.xyz, f_max, t);
+    count_search(kind, t == 0u, false);
+    return m;
+}
+
 // Invocation t's F nearest to the workgroup's memory; invocation 0 merges the WIDE lists into its search state
 // (each centroid is in one list: no duplicates) and tells the workgroup how many it holds.
 fn wide_merge(f_max: u32, t: u32) -> u32 {

@@ -193,9 +193,7 @@ impl FuzzyClustering {
                 },
             ],
         });
-        let words = rows * self.words_per_row;
-        let g = words.div_ceil(64).max(1) as u32;
-        let (x, y) = if g <= 65_535 { (g, 1) } else { (32_768, g.div_ceil(32_768)) };
+        let (x, y) = gpu::groups(rows * self.words_per_row);
         let bvh = self.bvh_group.as_ref().expect("prepare bound the BVH");
         ctx.timer.compute_pass(encoder, "fuzzy visibility", |pass| {
             pass.set_pipeline(&self.vis_pipeline);
