@@ -269,6 +269,8 @@ fn the_searches_a_workgroup_finishes_find_the_clusters_one_invocation_finds() {
         assert!(*alone_queued > 0, "K = {k} F = {f}: km_fill queued nothing");
         if max_ring == 0 {
             assert!(runs[2].2 > 0, "K = {k} F = {f}: no search went to a workgroup");
+            // A work budget of 16 sends more of km_fill's searches to the workgroups than two shells alone do.
+            assert!(runs[4].2 > runs[1].2, "K = {k} F = {f}: the budget queued {} against {}", runs[4].2, runs[1].2);
         }
         // Some pixels hold a cluster that their block's merged list does not (they searched).
         let blocks = km.read_block_lists(&gpu, &p).unwrap();

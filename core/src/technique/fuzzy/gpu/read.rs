@@ -11,7 +11,8 @@ use crate::gpu::GpuContext;
 /// (kmeans.wgsl `COUNT_ASSIGN` ...).
 pub const SEARCH_KINDS: [&str; 5] = ["km_assign", "km_assign_wide", "km_final", "km_fill", "km_search"];
 
-/// One kind of search's work in a run (with [`GpuKMeans::set_count_searches`]).
+/// One kind of search's work in a run (with [`GpuKMeans::set_count_searches`]). 32-bit sums on the GPU: past
+/// 2^32 (billions of centroids, far beyond 1024x720) they wrap.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SearchCounts {
     /// Points searched (summed over the iterations for `km_assign`).
