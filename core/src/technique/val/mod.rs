@@ -99,6 +99,9 @@ const KMEANS: WgslModule = crate::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl",
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
 const NEAR_FRACTION: f32 = 0.1;
 
+/// A VAL map's centre lies this share of the scene's diagonal in front of the VAL (off its surfaces).
+const MAP_OFFSET: f32 = 2e-3;
+
 /// Most VALs per frame (the per-pixel visibility array of `val/gather.wgsl`).
 pub const MAX_VALS: usize = 256;
 
@@ -153,8 +156,13 @@ pub struct VirtualAreaLights {
     scene_size: f32,
     counts: TechniqueCounts,
     clustering_ms: f64,
+    /// The scene BVH's build time when this frame built it (the first frame with a hidden weight).
+    bvh_build_ms: Option<f64>,
     /// What the VAL maps draw: the scene with its long edges cut, simplified with `proxy` below 1.
     maps: MapGeometry,
+    /// The scene's BVH and bounds, from the last frame (the hidden members' weight in [`split`]; a preview of
+    /// another scene's VPLs goes without it).
+    bvh: Option<(Arc<crate::accel::scene_bvh::SceneBvh>, crate::scene::Aabb)>,
 }
 
 impl VirtualAreaLights {
@@ -207,7 +215,9 @@ impl VirtualAreaLights {
             scene_size: 1.0,
             counts: TechniqueCounts::default(),
             clustering_ms: 0.0,
+            bvh_build_ms: None,
             maps: MapGeometry::default(),
+            bvh: None,
         }
     }
 }
@@ -238,7 +248,7 @@ impl VirtualAreaLights {
     }
 
     /// Step 2's refinement ([`split`]) of a k-means result, shared by the frame and the overlays' preview.
-    fn refine(&self, vpls: &[crate::vpl::Vpl], base: Clustering) -> Clustering {
+    fn refine(&self, vpls: &[crate::vpl::Vpl], scene_bounds: crate::scene::Aabb, base: Clustering) -> Clustering {
         if !self.params.split {
             return base;
         }
@@ -250,8 +260,24 @@ impl VirtualAreaLights {
             max_cone: self.params.max_cone_degrees.to_radians(),
             max_depth: self.params.max_depth * self.scene_size * self.params.length_fraction,
             iterations: 8,
+            hidden_weight: self.params.hidden_weight,
         };
-        split::split(vpls, &self.kmeans_params(), &sp, &base)
+        // Whether a VAL's map centre sees a VPL: a segment between them, stopped a ten-thousandth of the scene
+        // short of the VPL's surface, against the scene's BVH (cut-outs let it through, as in every tracer).
+        let bvh = self.bvh.as_ref().filter(|(_, bounds)| *bounds == scene_bounds).map(|(b, _)| b);
+        let eps = self.scene_size * 1e-4;
+        let occluded = |a: Vec3, b: Vec3| {
+            let Some(bvh) = bvh else { return false };
+            let d = b - a;
+            let len = d.length();
+            len.is_finite()
+                && len > 2.0 * eps
+                && crate::accel::bvh::occluded_cpu_filtered(&bvh.cpu, a, d / len, len - eps, &|t, u, v| {
+                    !bvh.cutouts.cut_out(t, u, v)
+                })
+        };
+        let sight = split::Sight { occluded: &occluded, offset: self.scene_size * MAP_OFFSET };
+        split::split(vpls, &self.kmeans_params(), &sp, bvh.map(|_| &sight), &base)
     }
 }
 
@@ -288,12 +314,18 @@ impl Technique for VirtualAreaLights {
         self.vpls = ctx.vpls.clone();
         self.scene_size = ctx.scene_bounds.size().length().max(1e-6);
         let base = kmeans::cluster(&self.vpls.vpls, &self.kmeans_params(), None);
-        self.clustering = self.refine(&self.vpls.vpls, base);
+        self.clustering = self.refine(&self.vpls.vpls, ctx.scene_bounds, base);
         crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers: Vec::new() }
     }
 
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
+        self.bvh_build_ms = None;
+        if self.params.split && self.params.hidden_weight > 0.0 {
+            let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
+            self.bvh = Some((bvh, ctx.scene.bounds));
+            self.bvh_build_ms = build_ms;
+        }
         let bounds = ctx.scene.bounds;
         self.scene_size = bounds.size().length().max(1e-6);
         let vpls = &self.vpls.vpls;
@@ -310,7 +342,7 @@ impl Technique for VirtualAreaLights {
             kmeans::cluster(vpls, &kp, warm)
         };
         let k_means_vals = base.vals.len();
-        self.clustering = self.refine(vpls, base);
+        self.clustering = self.refine(vpls, bounds, base);
         // A refined `C` is the CPU's: the GPU k-means' buffer holds the unrefined one.
         self.gpu_map &= !self.params.split;
         self.previous_centres = self.clustering.vals.iter().map(|v| (v.position, v.normal)).collect();
@@ -333,7 +365,7 @@ impl Technique for VirtualAreaLights {
             return Ok(0);
         }
         // The GPU side of steps 2-3: VALs (map centre, size, depth range) and C.
-        let offset = self.scene_size * 2e-3;
+        let offset = self.scene_size * MAP_OFFSET;
         let far = self.scene_size * 1.01;
         self.casters.clear();
         let centres: Vec<Vec3> = self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect();
@@ -493,7 +525,8 @@ impl Technique for VirtualAreaLights {
 
     fn cpu_times(&self) -> Vec<PassTime> {
         let clustering = PassTime { name: "val clustering".into(), ms: self.clustering_ms, count: 1 };
-        std::iter::once(clustering).chain(self.maps.build_time()).collect()
+        let bvh = self.bvh_build_ms.map(|ms| PassTime { name: "bvh build".into(), ms, count: 1 });
+        std::iter::once(clustering).chain(bvh).chain(self.maps.build_time()).collect()
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {

@@ -48,6 +48,9 @@ pub struct ValParams {
     /// [`super::split`]: while there are fewer VALs than this, the next bisection is the one that lowers the
     /// flux-weighted error most (then `rank` decides).
     pub gain_until: u32,
+    /// [`super::split`]: ranked by flux, a VAL's flux-weighted error counts `1 + hidden_weight * h` times, `h` the
+    /// share of its VPLs' luminance its map's centre does not see (a ray each, the scene's BVH; 0: off).
+    pub hidden_weight: f32,
     /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
@@ -95,6 +98,10 @@ impl Default for ValParams {
             // Measured (docs/techniques/val.md): 16 makes Sponza's error fall at every M and leaves every M from
             // 64 up as `flux` alone has it on the three scenes; 32 moves M = 64.
             gain_until: 16,
+            // Measured (docs/techniques/val.md, twentieth session) at 0, 1, 2, 3, 4 and 8: 2 lowers Sponza's error
+            // at every M from 96 up (0.0781 at M = 192 against 0.0830) and keeps it falling at every M; the
+            // conference room's rises 3-5 % at M = 30-96 and falls from 128 up; the Cornell box's is unchanged.
+            hidden_weight: 2.0,
             max_cone_degrees: 40.0,
             max_depth: 0.1,
             proxy: 1.0,
@@ -187,6 +194,14 @@ impl ValParams {
                        flux-weighted error most (so the first, coarse VALs improve at every step); then by rank",
                 kind: ParamKind::Int { min: 0, max: 4096 },
                 value: ParamValue::Int(p.gain_until as i64),
+            },
+            Param {
+                key: "hidden_weight",
+                label: "Hidden VPL weight",
+                help: "split, rank flux: a VAL's flux-weighted error counts 1 + this x the share of its VPLs' light \
+                       its map's centre cannot see (a ray per VPL); 0: the flux rank alone",
+                kind: ParamKind::Float { min: 0.0, max: 100.0 },
+                value: ParamValue::Float(p.hidden_weight),
             },
             Param {
                 key: "max_cone",
@@ -339,6 +354,7 @@ impl ValParams {
             ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
             ("gain_until", ParamValue::Int(v)) => p.gain_until = *v as u32,
+            ("hidden_weight", ParamValue::Float(v)) => p.hidden_weight = *v,
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             ("proxy", ParamValue::Float(v)) => p.proxy = *v,
