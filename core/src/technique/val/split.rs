@@ -310,9 +310,10 @@ pub fn split(
         // pick as testing every VAL, with rays for a few).
         let weighted = sp.rank == Rank::Flux && sp.hidden_weight > 0.0 && sight.is_some();
         let k = loop {
-            let pick = groups.iter().enumerate().filter(|(_, g)| !g.stuck && g.members.len() > 1).max_by(
-                |(_, a), (_, b)| priority(a, sp).partial_cmp(&priority(b, sp)).unwrap_or(std::cmp::Ordering::Equal),
-            );
+            let pick =
+                groups.iter().enumerate().filter(|(_, g)| !g.stuck && g.members.len() > 1).max_by(|(_, a), (_, b)| {
+                    priority(a, sp).partial_cmp(&priority(b, sp)).unwrap_or(std::cmp::Ordering::Equal)
+                });
             let Some((k, g)) = pick else { break None };
             match (weighted, sight, g.hidden) {
                 (true, Some(s), None) => groups[k].hidden = Some(hidden_share(vpls, &groups[k], s)),
