@@ -37,18 +37,18 @@
 
 pub mod clustering;
 pub mod grid;
+mod overlays;
+mod params;
+
+pub use params::{Filter, LightClusterParams};
 
 use glam::Vec3;
 
-use super::{
-    check_param, FrameContext, Overlay, OverlayLayer, Param, ParamError, ParamKind, ParamValue, Technique,
-    TechniqueCounts,
-};
+use super::{check_param, FrameContext, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts};
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_params::CubeMapParams;
 use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, MapGeometry};
 use crate::renderer::gpu_data::{shadow_near, GpuLight};
 use crate::renderer::layouts::SharedLayouts;
@@ -111,55 +111,6 @@ pub struct GpuCluster {
     pub _pad: [f32; 3],
 }
 const _: () = assert!(std::mem::size_of::<GpuCluster>() == 48);
-
-/// Soft-shadow filter of a cluster.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Filter {
-    Pcf,
-    Pcss,
-}
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct LightClusterParams {
-    pub d_init: f32,
-    /// `z_far` of the view-adaptive scaling; 0 uses the camera's far plane.
-    pub z_far: f32,
-    pub adaptive: bool,
-    pub filter: Filter,
-    pub samples: u32,
-    /// PCSS: in the blocker search and the filter, decide from the first half of the samples where they agree
-    /// (all lit or all shadowed), and take the rest only where they disagree (beyond the paper; PCF keeps its
-    /// fixed samples).
-    pub early_out: bool,
-    /// Cube-map resolution, bias, normal offset, batch memory.
-    pub cube: CubeMapParams,
-    /// Render the reference path when clustering merges nothing (the paper's worst case).
-    pub fallback: bool,
-    /// Draw only this cluster's soft visibility, as grey (the Explain panel's step 5); None: shade them all.
-    pub visibility_of: Option<u32>,
-    /// The share of the scene's triangles the cluster maps draw ([`crate::scene::proxy`]; 1: the scene itself).
-    pub proxy: f32,
-    /// How far the simplified surface may move from the scene's, as a share of the scene's diagonal.
-    pub proxy_error: f32,
-}
-
-impl Default for LightClusterParams {
-    fn default() -> Self {
-        LightClusterParams {
-            d_init: 0.5,
-            z_far: 0.0,
-            adaptive: true,
-            filter: Filter::Pcss,
-            samples: 8,
-            early_out: true,
-            cube: CubeMapParams::default(),
-            fallback: true,
-            visibility_of: None,
-            proxy: 1.0,
-            proxy_error: 0.0005,
-        }
-    }
-}
 
 pub struct LightCluster {
     pub params: LightClusterParams,
@@ -238,96 +189,12 @@ impl Technique for LightCluster {
     }
 
     fn params(&self) -> Vec<Param> {
-        let p = &self.params;
-        let mut params = vec![
-            Param {
-                key: "d_init",
-                label: "d_init",
-                help: "Initial minimum distance between cluster centers (world units)",
-                kind: ParamKind::Float { min: 0.0, max: 1000.0 },
-                value: ParamValue::Float(p.d_init),
-            },
-            Param {
-                key: "z_far",
-                label: "z_far",
-                help: "Distance at which d_min reaches 0 (0: the camera's far plane)",
-                kind: ParamKind::Float { min: 0.0, max: 1.0e6 },
-                value: ParamValue::Float(p.z_far),
-            },
-            Param {
-                key: "adaptive",
-                label: "View-adaptive d_min",
-                help: "Scale d_min by the distance to the camera (off: constant d_init, no flicker)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.adaptive),
-            },
-            Param {
-                key: "filter",
-                label: "Filter",
-                help: "PCF (fixed width) or PCSS (contact-hardening)",
-                kind: ParamKind::Choice(&["pcf", "pcss"]),
-                value: ParamValue::Choice(if p.filter == Filter::Pcf { "pcf" } else { "pcss" }.into()),
-            },
-            Param {
-                key: "samples",
-                label: "Samples",
-                help: "Poisson-disk samples per cluster and pixel",
-                kind: ParamKind::Int { min: 1, max: 64 },
-                value: ParamValue::Int(p.samples as i64),
-            },
-            Param {
-                key: "early_out",
-                label: "PCSS early out",
-                help: "PCSS: stop after the first half of the samples when they agree (all lit or all shadowed)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.early_out),
-            },
-            Param {
-                key: "fallback",
-                label: "Reference when nothing clusters",
-                help: "Use the reference path when every visible light is its own cluster (the paper's worst case)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.fallback),
-            },
-            Param {
-                key: "visibility_of",
-                label: "Visibility of one cluster",
-                help: "-1: shade every cluster; k: draw only cluster k's soft visibility, in grey over the ambient \
-                       light (white: lit, black: in its shadow; nothing beyond its C_att)",
-                kind: ParamKind::Int { min: -1, max: 1 << 20 },
-                value: ParamValue::Int(p.visibility_of.map_or(-1, i64::from)),
-            },
-            Param::map_proxy(p.proxy),
-            Param::map_proxy_error(
-                "proxy: the farthest the simplified surface may move from the scene's, as a share of the scene's \
-                 diagonal (the simplification stops there, above the share asked for if need be); the lookups' \
-                 depth bias grows by as much",
-                p.proxy_error,
-            ),
-        ];
-        params.extend(p.cube.params());
-        params
+        self.params.describe()
     }
 
     fn set_param(&mut self, key: &str, value: &ParamValue) -> Result<(), ParamError> {
         check_param(self.key(), &self.params(), key, value)?;
-        let p = &mut self.params;
-        match (key, value) {
-            ("d_init", ParamValue::Float(v)) => p.d_init = *v,
-            ("z_far", ParamValue::Float(v)) => p.z_far = *v,
-            ("adaptive", ParamValue::Bool(v)) => p.adaptive = *v,
-            ("filter", ParamValue::Choice(v)) => p.filter = if v == "pcf" { Filter::Pcf } else { Filter::Pcss },
-            ("samples", ParamValue::Int(v)) => p.samples = *v as u32,
-            ("early_out", ParamValue::Bool(v)) => p.early_out = *v,
-            ("fallback", ParamValue::Bool(v)) => p.fallback = *v,
-            ("visibility_of", ParamValue::Int(v)) => p.visibility_of = u32::try_from(*v).ok(),
-            ("proxy", ParamValue::Float(v)) => p.proxy = *v,
-            ("proxy_error", ParamValue::Float(v)) => p.proxy_error = *v,
-            _ => {
-                let known = p.cube.set(key, value);
-                debug_assert!(known, "check_param accepted an unknown key");
-            }
-        }
+        self.params.set(key, value);
         Ok(())
     }
 
@@ -518,27 +385,7 @@ impl Technique for LightCluster {
     /// Per pixel, the cluster whose center is nearest among those whose `C_att` reaches the pixel: the cluster
     /// whose shadow map shades it most.
     fn pixel_ids(&self, positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
-        let clusters = &self.clustering.clusters;
-        // A grid of the C_att spheres: each pixel tests the clusters of its cell, not all (the app draws this map
-        // on its UI thread; testing every cluster is 460 M distance tests for 0.9 M pixels and 500 clusters).
-        let grid = crate::math::SphereGrid::new(&clusters.iter().map(|c| (c.position, c.c_att)).collect::<Vec<_>>());
-        let ids = positions
-            .iter()
-            .map(|p| {
-                let Some(p) = p else { return u32::MAX };
-                let mut best = (u32::MAX, f32::INFINITY);
-                for i in grid.candidates(*p) {
-                    let c = &clusters[i as usize];
-                    let d = c.position.distance_squared(*p);
-                    // Ties to the lower index, as the full scan had it.
-                    if d <= c.c_att * c.c_att && (d < best.1 || (d == best.1 && i < best.0)) {
-                        best = (i, d);
-                    }
-                }
-                best.0
-            })
-            .collect();
-        Some(("cluster per pixel", ids))
+        self.pixel_id_map(positions)
     }
 
     /// Step 1 again (about 0.1 ms for hundreds of lights), so the clusters follow a dragged light or camera.
@@ -556,100 +403,11 @@ impl Technique for LightCluster {
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let clusters = &self.clustering.clusters;
-        let valid = |i: usize| i < lights.len();
-        let mut by_cluster = Vec::new();
-        let mut centers = Vec::new();
-        let mut lines = Vec::new();
-        let mut d_min_spheres = Vec::new();
-        let mut c_att_spheres = Vec::new();
-        for (ci, c) in clusters.iter().enumerate() {
-            let color = cluster_color(ci);
-            for &m in c.members.iter().filter(|&&m| valid(m)) {
-                by_cluster.push(Overlay::Point { position: lights[m].position, color, radius_px: 4.0 });
-                if m != c.center {
-                    lines.push(Overlay::Line { from: lights[m].position, to: c.position, color });
-                }
-            }
-            centers.push(Overlay::Point { position: c.position, color: [1.0, 1.0, 1.0, 1.0], radius_px: 7.0 });
-            let translucent = [color[0], color[1], color[2], 0.5];
-            d_min_spheres.push(Overlay::Sphere { center: c.position, radius: c.d_min, color: translucent });
-            c_att_spheres.push(Overlay::Sphere {
-                center: c.position,
-                radius: c.c_att,
-                color: [color[0], color[1], color[2], 0.2],
-            });
-        }
-        vec![
-            OverlayLayer { name: "lights by cluster", visible_by_default: true, primitives: by_cluster },
-            OverlayLayer { name: "cluster centers", visible_by_default: true, primitives: centers },
-            OverlayLayer { name: "member -> center", visible_by_default: true, primitives: lines },
-            OverlayLayer { name: "d_min spheres", visible_by_default: false, primitives: d_min_spheres },
-            OverlayLayer { name: "C_att spheres", visible_by_default: false, primitives: c_att_spheres },
-        ]
+        self.overlay_layers(lights)
     }
 
     fn explain(&self) -> Vec<super::ExplainStep> {
-        use super::ExplainStep;
-        vec![
-            ExplainStep {
-                title: "1. Visible lights",
-                text: "Lights whose range sphere (L_att) misses the view frustum are culled; the visible ones are \
-                       sorted by L_att, largest first. Each dot is a visible light.",
-                layers: &["lights by cluster"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "2. Cluster centers",
-                text: "A light becomes a center when it is farther than d_min = d_init·(1 − |C_pos|/z_far) from \
-                       every center so far: clusters are smaller far from the camera. White dots: centers; circles: \
-                       d_min.",
-                layers: &["cluster centers", "d_min spheres"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "3. Members joined to centers",
-                text: "Every other light joins its nearest center; the cluster's range grows to \
-                       C_att = max(C_att, d_C + L_att). Lines: member -> center; large circles: C_att.",
-                layers: &["lights by cluster", "member -> center", "C_att spheres"],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "4. One cube map per cluster",
-                text: if self.params.proxy < 1.0 {
-                    "One cube shadow map per cluster, rendered from its center with far plane C_att (the Shadow \
-                     maps panel shows the last batch's), drawn from a simplified copy of the scene ('Map geometry \
-                     kept', beyond the paper; the depth bias grows by its 'Proxy error')."
-                } else {
-                    "One cube shadow map per cluster, rendered from its center with far plane C_att (the Shadow \
-                     maps panel shows the last batch's)."
-                },
-                layers: &["cluster centers"],
-                shows_shadow_maps: true,
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "5. Soft visibility per cluster",
-                text: "Per pixel and cluster within C_att: visibility of a disc light of radius d_min (PCF, or \
-                       PCSS: blocker search, penumbra w = d_min (d_r − d_b) / d_b), multiplied into the summed \
-                       light of the cluster's members. Shown: cluster 0's visibility alone, in grey (white lit, \
-                       black shadowed; the parameter visibility_of picks another cluster).",
-                layers: &["cluster centers"],
-                shows_shadow_maps: false,
-                params: &[("visibility_of", "0")],
-                ..Default::default()
-            },
-            ExplainStep {
-                title: "6. Final image",
-                text: "The sum over clusters; compare it with the reference (View, Difference).",
-                layers: &[],
-                shows_shadow_maps: false,
-                ..Default::default()
-            },
-        ]
+        self.explain_steps()
     }
 
     fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
@@ -663,45 +421,10 @@ impl Technique for LightCluster {
     }
 
     fn light_details(&self, index: usize) -> Option<super::LightDetails> {
-        let (ci, c) = self.clustering.clusters.iter().enumerate().find(|(_, c)| c.members.contains(&index))?;
-        let role = if c.center == index { "its center" } else { "a member" };
-        Some(super::LightDetails {
-            lines: vec![
-                format!("cluster {ci} ({role}): {} lights, center light {}", c.members.len(), c.center),
-                format!("d_min {:.3} · C_att {:.3} · radius d_C {:.3}", c.d_min, c.c_att, c.radius),
-            ],
-            group: c.members.clone(),
-        })
+        self.cluster_details(index)
     }
 
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        use super::{Glyph, LegendEntry};
-        let n = self.clustering.clusters.len();
-        let white = [1.0; 4];
-        let palette = cluster_color(0);
-        let mut legend = match layer.name {
-            "lights by cluster" => vec![LegendEntry::new(
-                Glyph::Palette,
-                palette,
-                format!("a visible light, in its cluster's colour ({n} clusters)"),
-            )],
-            "cluster centers" => {
-                vec![LegendEntry::new(Glyph::Dot, white, "a cluster's center: its cube map is rendered from here")]
-            }
-            "member -> center" => vec![LegendEntry::new(Glyph::Palette, palette, "joins a member light to its center")],
-            "d_min spheres" => vec![LegendEntry::new(
-                Glyph::Circle,
-                palette,
-                "d_min = d_init·(1 − |C_pos|/z_far): the cluster's disc-light radius",
-            )],
-            "C_att spheres" => vec![LegendEntry::new(
-                Glyph::Circle,
-                palette,
-                "C_att: the cluster's range; pixels beyond it skip the cluster",
-            )],
-            _ => super::light_layer_legend(layer).unwrap_or_default(),
-        };
-        legend.extend(layer.summary());
-        legend
+        self.legend_of(layer)
     }
 }
