@@ -18,10 +18,11 @@ impl VirtualAreaLights {
                 title: "2. Clustering into VALs",
                 text: if self.params.split {
                     "From k-means over position and normal (d = w_x dx / L + w_a da; by default one VAL), the VAL \
-                     carrying the most light times its spread is cut in two until there are M: by normal across a \
-                     corner, by depth across a column and the wall behind it, else in the paper's metric (our \
-                     addition; 'split' off gives the paper's k-means alone). Each VAL gets its VPLs' mean position \
-                     and normal and their bounding rectangle."
+                     carrying the most light times its spread (weighted up by the share of its light whose VPLs \
+                     its map's centre cannot see: 'Hidden VPL weight') is cut in two until there are M: by normal \
+                     across a corner, by depth across a column and the wall behind it, else in the paper's metric \
+                     (our addition; 'split' off gives the paper's k-means alone). Each VAL gets its VPLs' mean \
+                     position and normal and their bounding rectangle."
                 } else {
                     "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
                      VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle."
