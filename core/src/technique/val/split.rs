@@ -138,10 +138,18 @@ fn priority(g: &Group, sp: &SplitParams) -> (Rule, f32) {
 }
 
 /// The share of `g`'s members' luminance whose VPL its map's centre does not see.
+/// At most this many of a VAL's members are tested (every `len / SIGHT_SAMPLES`-th, rounded up): with 1,024 VPLs
+/// the VALs tested have fewer, and 65,536 VPLs cast about 0.1 M rays instead of 0.5 M (Sponza: the clustering
+/// 144 ms without the weight, 413 ms testing every member).
+const SIGHT_SAMPLES: usize = 256;
+
+/// The share of `g`'s members' luminance whose VPL its map's centre does not see (estimated from
+/// [`SIGHT_SAMPLES`] evenly strided members of a larger VAL).
 fn hidden_share(vpls: &[Vpl], g: &Group, sight: &Sight) -> f32 {
     let eye = g.position + g.normal * sight.offset;
     let (mut hidden, mut total) = (0.0f32, 0.0f32);
-    for &i in &g.members {
+    let stride = g.members.len().div_ceil(SIGHT_SAMPLES).max(1);
+    for &i in g.members.iter().step_by(stride) {
         let y = luminance(vpls[i].flux);
         total += y;
         if (sight.occluded)(eye, vpls[i].position) {
@@ -492,6 +500,29 @@ mod tests {
         assert!(rays.get() > 0 && rays.get() <= 400, "one ray per member of each VAL tested: {}", rays.get());
         // A weight too small to outweigh A's larger error leaves the flux rank's pick.
         assert_eq!(on_b(&with(0.01, Some(&sight))), 1);
+    }
+
+    #[test]
+    fn a_large_vals_hidden_share_is_estimated_from_a_bounded_sample() {
+        // 1,000 VPLs along a line, a wall hiding those past x = 7 from the centre (x = 5): 30 % hidden.
+        let v: Vec<Vpl> = (0..1000)
+            .map(|i| Vpl {
+                position: Vec3::new(i as f32 / 100.0, 0.0, 0.0),
+                normal: Vec3::Y,
+                flux: Vec3::ONE,
+                light: 0,
+                from: Vec3::ZERO,
+            })
+            .collect();
+        let g = group(&v, &km(1), (0..1000).collect());
+        let rays = std::cell::Cell::new(0usize);
+        let wall = |_: Vec3, b: Vec3| {
+            rays.set(rays.get() + 1);
+            b.x > 7.0
+        };
+        let h = hidden_share(&v, &g, &Sight { occluded: &wall, offset: 0.01 });
+        assert!(rays.get() <= SIGHT_SAMPLES, "{} rays", rays.get());
+        assert!((h - 0.3).abs() < 0.02, "hidden share {h}");
     }
 
     /// The sum of `Y d^2` over the VALs of `c`.
