@@ -100,7 +100,8 @@ impl Default for ValParams {
             gain_until: 16,
             // Measured (docs/techniques/val.md, twentieth session) at 0, 1, 2, 3, 4 and 8: 2 lowers Sponza's error
             // at every M from 96 up (0.0781 at M = 192 against 0.0830) and keeps it falling at every M; the
-            // conference room's rises 3-5 % at M = 30-96 and falls from 128 up; the Cornell box's is unchanged.
+            // conference room's rises 2-5 % at M = 30-96 and 224, falls at 128-192 and 256; the Cornell box's is
+            // unchanged.
             hidden_weight: 2.0,
             max_cone_degrees: 40.0,
             max_depth: 0.1,

@@ -19,11 +19,11 @@
 //!    does not see (a ray each against the scene's BVH, [`Sight`]): the paper's Fig. 7 fault, a centre inside
 //!    geometry or behind an occluder from some of its VPLs, whose one map then shows them a different world
 //!    (on Sponza, VALs whose VPLs lie on both sides of a pillar or an arch). Only a VAL that may be next is
-//!    tested (its key is bounded by `1 + hidden_weight` times its error), so a frame casts a few thousand rays. (`Rank::Rule`, the first
-//!    version, took every VAL that breaks a rule below before any other, by unweighted error within a class;
-//!    on the conference room it then spent bisections 2-173 of 192 on VALs of two to twenty VPLs that spread
-//!    in depth while a 10 m VAL of 46 VPLs on the ceiling stayed whole: FLIP 0.11 at M = 160, 0.063 ranked
-//!    by flux.) *How* it is split depends on the rule it breaks: a *normal cone* (the largest angle between a
+//!    tested (its key is bounded by `1 + hidden_weight` times its error), so a frame casts a few thousand rays.
+//!    (`Rank::Rule`, the first version, took every VAL that breaks a rule below before any other, by unweighted
+//!    error within a class; on the conference room it then spent bisections 2-173 of 192 on VALs of two to
+//!    twenty VPLs that spread in depth while a 10 m VAL of 46 VPLs on the ceiling stayed whole: FLIP 0.11 at
+//!    M = 160, 0.063 ranked by flux.) *How* it is split depends on the rule it breaks: a *normal cone* (the largest angle between a
 //!    member's normal and the VAL's normal) wider than `max_cone` splits it by normal (a room corner into its
 //!    walls); else a *depth spread* (its members' extent along its normal: the floor and a table top, a
 //!    column's face and the wall behind it) over `max_depth` splits it by depth; else the paper's metric. A
@@ -137,7 +137,6 @@ fn priority(g: &Group, sp: &SplitParams) -> (Rule, f32) {
     }
 }
 
-/// The share of `g`'s members' luminance whose VPL its map's centre does not see.
 /// At most this many of a VAL's members are tested (every `len / SIGHT_SAMPLES`-th, rounded up): with 1,024 VPLs
 /// the VALs tested have fewer, and 65,536 VPLs cast about 0.1 M rays instead of 0.5 M (Sponza: the clustering
 /// 144 ms without the weight, 413 ms testing every member).
