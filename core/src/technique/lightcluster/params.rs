@@ -2,8 +2,8 @@
 //! samples), the Explain panel's one-cluster view, the simplified copy beyond the paper and the cube maps'
 //! shared settings, with their keys, ranges and help texts.
 
-use super::super::{Param, ParamKind, ParamValue};
 use crate::renderer::cube_params::CubeMapParams;
+use crate::technique::{Param, ParamKind, ParamValue};
 
 /// Soft-shadow filter of a cluster.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -127,7 +127,7 @@ impl LightClusterParams {
         params
     }
 
-    /// Set one parameter ([`super::super::check_param`] has checked its key and value); an unknown key is the
+    /// Set one parameter ([`crate::technique::check_param`] has checked its key and value); an unknown key is the
     /// cube maps' or nothing.
     pub fn set(&mut self, key: &str, value: &ParamValue) {
         match (key, value) {
