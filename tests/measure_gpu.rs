@@ -55,11 +55,12 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 11] = [
+const COMPARISONS: [&str; 12] = [
     "LightCluster d_init=0.5 vs reference",
     "LightCluster d_init=0.5, maps from a simplified copy",
     "LightCluster d_init=1.6 vs reference",
     "LightCluster d_init=1.6, maps from a simplified copy",
+    "LightCluster d_init=0.5, centers by greedy covering",
     "LightCluster d_init=1.6, simplified copy and cluster maps at half resolution",
     "INSM vs reference",
     "INSM, meshes simplified",

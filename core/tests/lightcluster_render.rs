@@ -358,3 +358,38 @@ fn the_penumbra_is_the_same_toward_a_cube_corner_as_toward_a_face_centre() {
         );
     }
 }
+
+/// A ring of eight lights 0.14 m around a point above the plate, `d_min` 0.15 without view-adaptive scaling: a
+/// light covers its two neighbours (0.107 m away) and no other (0.198 m). The paper's order makes four centers
+/// (the 1st, 3rd, 5th and 7th light); covering greedily (`centers=cover`) three, each cluster still within
+/// `d_min` of its center, so the shadows stay as close to the reference.
+#[test]
+fn centers_by_covering_take_fewer_cluster_maps_for_the_same_bound() {
+    let scene = plane_and_occluder();
+    let lights: Vec<PointLight> = (0..8)
+        .map(|k| {
+            let a = k as f32 * std::f32::consts::TAU / 8.0;
+            white_light(Vec3::new(0.3, 3.0, 0.2) + Vec3::new(a.cos(), 0.0, a.sin()) * 0.14, 4.0, 8.0)
+        })
+        .collect();
+    let (reference, _) = Shot::direct(&scene, &lights, linear_settings(W, H), "reference").params(MAPS).render();
+    let mut images = Vec::new();
+    for (centers, count) in [("paper", 4), ("cover", 3)] {
+        let (lc, report) = Shot::direct(&scene, &lights, linear_settings(W, H), "lightcluster")
+            .params(MAPS)
+            .params(&[
+                ("d_init", ParamValue::Float(0.15)),
+                ("adaptive", ParamValue::Bool(false)),
+                ("centers", ParamValue::Choice(centers.into())),
+            ])
+            .render();
+        let c = &report.counts.technique;
+        assert_eq!(c.clusters, Some(count), "{centers}");
+        assert_eq!(c.shadow_maps, count, "{centers}");
+        let (_, share) = compare(&lc, &reference, 0.05);
+        assert!(share < 0.05, "{centers}: {:.1}% of pixels differ from the reference by more than 5%", share * 100.0);
+        images.push(lc);
+    }
+    let (_, share) = compare(&images[1], &images[0], 0.05);
+    assert!(share < 0.02, "covering changed {:.1}% of pixels by more than 5%", share * 100.0);
+}

@@ -36,11 +36,12 @@
 //! reference path (and so the worst case's fallback) always draws the scene itself.
 
 pub mod clustering;
+pub mod cover;
 pub mod grid;
 mod overlays;
 mod params;
 
-pub use params::{Filter, LightClusterParams};
+pub use params::{Centers, Filter, LightClusterParams};
 
 use glam::Vec3;
 
@@ -138,6 +139,8 @@ pub struct LightCluster {
     /// How far the copy's surface may lie from the scene's (world units; 0 without a copy): added to the
     /// lookups' bias, so a receiver behind a surface the collapse moved toward the light does not shadow itself.
     proxy_bias: f32,
+    /// `centers=cover` gave way to the paper's selection this frame (lights too dense for its neighbour lists).
+    cover_fallback: bool,
 }
 
 impl LightCluster {
@@ -165,12 +168,28 @@ impl LightCluster {
             using_reference: false,
             maps: MapGeometry::default(),
             proxy_bias: 0.0,
+            cover_fallback: false,
         }
     }
 
     /// The clustering of the last frame.
     pub fn clustering(&self) -> &Clustering {
         &self.clustering
+    }
+
+    /// Steps 2-4 (section 3.1) for the `visible` lights: the paper's centers, or with `centers=cover` those of
+    /// greedy covering ([`cover`]; the paper's when the lights are too dense for it, `cover_fallback` set).
+    fn cluster(&mut self, lights: &[PointLight], visible: &[usize], camera: &crate::scene::Camera) {
+        let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { camera.z_far };
+        let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
+        self.cover_fallback = false;
+        if self.params.centers == Centers::Cover {
+            if cover::cluster_cover(lights, visible, camera.position, &cluster_params, &mut self.clustering) {
+                return;
+            }
+            self.cover_fallback = true;
+        }
+        self.clusterer.cluster_visible_into(lights, visible, camera.position, &cluster_params, &mut self.clustering);
     }
 }
 
@@ -201,16 +220,8 @@ impl Technique for LightCluster {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         // Step 1: clustering on the CPU.
         let start = std::time::Instant::now();
-        let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
-        let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
         // Step 1 (frustum culling) is the renderer's light list, shared with every technique.
-        self.clusterer.cluster_visible_into(
-            ctx.lights,
-            &ctx.visible_lights.indices,
-            ctx.camera.position,
-            &cluster_params,
-            &mut self.clustering,
-        );
+        self.cluster(ctx.lights, &ctx.visible_lights.indices, ctx.camera);
         self.clustering_ms = start.elapsed().as_secs_f64() * 1000.0;
         let visible = self.clustering.visible;
         let cluster_count = self.clustering.clusters.len();
@@ -256,6 +267,10 @@ impl Technique for LightCluster {
         let batches = cluster_count.div_ceil(self.batch_size);
         self.counts =
             TechniqueCounts { lights_visible: visible, batches, clusters: Some(cluster_count), ..Default::default() };
+        if self.params.centers == Centers::Cover {
+            // 1: the lights were too dense for the covering, and the paper's centers were used.
+            self.counts.figures.insert("cover_fallback".into(), f64::from(u8::from(self.cover_fallback)));
+        }
         // The cluster maps' geometry: a cube map draws edges straight as they are, so nothing is cut (max_edge 0).
         let scene_size = ctx.scene.bounds.size().length();
         let geometry = ProxyParams {
@@ -390,15 +405,7 @@ impl Technique for LightCluster {
 
     /// Step 1 again (about 0.1 ms for hundreds of lights), so the clusters follow a dragged light or camera.
     fn update_overlays(&mut self, ctx: &crate::technique::OverlayContext) -> crate::technique::OverlayUpdate {
-        let z_far = if self.params.z_far > 0.0 { self.params.z_far } else { ctx.camera.z_far };
-        let cluster_params = ClusterParams { d_init: self.params.d_init, z_far, adaptive: self.params.adaptive };
-        self.clusterer.cluster_visible_into(
-            ctx.lights,
-            ctx.visible,
-            ctx.camera.position,
-            &cluster_params,
-            &mut self.clustering,
-        );
+        self.cluster(ctx.lights, ctx.visible, ctx.camera);
         crate::technique::OverlayUpdate::live()
     }
 

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{cluster_color, LightCluster};
+use super::{cluster_color, Centers, LightCluster};
 use crate::scene::PointLight;
 use crate::technique::{ExplainStep, Glyph, LegendEntry, LightDetails, Overlay, OverlayLayer};
 
@@ -82,9 +82,16 @@ impl LightCluster {
             },
             ExplainStep {
                 title: "2. Cluster centers",
-                text: "A light becomes a center when it is farther than d_min = d_init·(1 − |C_pos|/z_far) from \
-                       every center so far: clusters are smaller far from the camera. White dots: centers; circles: \
-                       d_min.",
+                text: if self.params.centers == Centers::Cover {
+                    "A center covers the lights within its d_min = d_init·(1 − |C_pos|/z_far): clusters are smaller \
+                     far from the camera. Next comes the light that covers the most lights not covered yet \
+                     ('Cluster centers: cover', beyond the paper, whose order takes more centers). White dots: \
+                     centers; circles: d_min."
+                } else {
+                    "A light becomes a center when it is farther than d_min = d_init·(1 − |C_pos|/z_far) from \
+                     every center so far: clusters are smaller far from the camera. White dots: centers; circles: \
+                     d_min."
+                },
                 layers: &["cluster centers", "d_min spheres"],
                 shows_shadow_maps: false,
                 ..Default::default()

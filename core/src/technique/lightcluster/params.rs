@@ -12,9 +12,20 @@ pub enum Filter {
     Pcss,
 }
 
+/// How cluster centers are chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Centers {
+    /// The paper's: in order of `L_att`, a light no center covers yet becomes one.
+    Paper,
+    /// Greedy covering: the light covering the most uncovered lights next (beyond the paper; [`super::cover`]).
+    Cover,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightClusterParams {
     pub d_init: f32,
+    /// How step 3 picks the centers (the same covering relation either way).
+    pub centers: Centers,
     /// `z_far` of the view-adaptive scaling; 0 uses the camera's far plane.
     pub z_far: f32,
     pub adaptive: bool,
@@ -40,6 +51,7 @@ impl Default for LightClusterParams {
     fn default() -> Self {
         LightClusterParams {
             d_init: 0.5,
+            centers: Centers::Paper,
             z_far: 0.0,
             adaptive: true,
             filter: Filter::Pcss,
@@ -64,6 +76,14 @@ impl LightClusterParams {
                 help: "Initial minimum distance between cluster centers (world units)",
                 kind: ParamKind::Float { min: 0.0, max: 1000.0 },
                 value: ParamValue::Float(self.d_init),
+            },
+            Param {
+                key: "centers",
+                label: "Cluster centers",
+                help: "paper: in order of range, a light no center covers becomes one; cover: the light covering the \
+                       most lights not yet covered (beyond the paper: fewer clusters, each within d_min as before)",
+                kind: ParamKind::Choice(&["paper", "cover"]),
+                value: ParamValue::Choice(if self.centers == Centers::Cover { "cover" } else { "paper" }.into()),
             },
             Param {
                 key: "z_far",
@@ -132,6 +152,9 @@ impl LightClusterParams {
     pub fn set(&mut self, key: &str, value: &ParamValue) {
         match (key, value) {
             ("d_init", ParamValue::Float(v)) => self.d_init = *v,
+            ("centers", ParamValue::Choice(v)) => {
+                self.centers = if v == "cover" { Centers::Cover } else { Centers::Paper }
+            }
             ("z_far", ParamValue::Float(v)) => self.z_far = *v,
             ("adaptive", ParamValue::Bool(v)) => self.adaptive = *v,
             ("filter", ParamValue::Choice(v)) => self.filter = if v == "pcf" { Filter::Pcf } else { Filter::Pcss },
