@@ -47,7 +47,9 @@ fn around<'a>(g: &'a HashMap<IVec3, Vec<u32>>, p: Vec3, cell: f32) -> impl Itera
     let c = cell_of(p, cell);
     (-1..=1).flat_map(move |z| {
         (-1..=1).flat_map(move |y| {
-            (-1..=1).flat_map(move |x| g.get(&(c + IVec3::new(x, y, z))).into_iter().flatten().copied())
+            // Wrapping: a position past the grid's range saturates to its last cell (`cell_of`), whose neighbours
+            // may wrap around; the distance tests decide, so that only adds candidates.
+            (-1..=1).flat_map(move |x| g.get(&c.wrapping_add(IVec3::new(x, y, z))).into_iter().flatten().copied())
         })
     })
 }
@@ -264,6 +266,13 @@ mod tests {
         assert!(cluster_cover(&lights, &visible, camera, &params, &mut c));
         let k = c.cluster_of[3].unwrap() as usize;
         assert_eq!(c.clusters[k].members, vec![3]);
+        // Lights beyond the grid's range (cells past i32) and at infinity: no overflow, each clustered.
+        let mut far = lights.clone();
+        far[0].position = Vec3::splat(1e30);
+        far[1].position = Vec3::splat(1e30) + Vec3::X * 0.1;
+        far[2].position = Vec3::INFINITY;
+        assert!(cluster_cover(&far, &visible, camera, &params, &mut c));
+        assert!((0..3).all(|i| c.cluster_of[i].is_some()));
         // d_init 0: one cluster per light.
         let zero = ClusterParams { d_init: 0.0, ..params };
         assert!(cluster_cover(&lights, &visible, camera, &zero, &mut c));
