@@ -33,25 +33,68 @@ fn cell_of(p: Vec3, cell: f32) -> IVec3 {
     (p / cell).floor().as_ivec3()
 }
 
-/// A uniform grid of `cell`-sized cells over the indices of `points`.
-fn grid(points: &[Vec3], cell: f32) -> HashMap<IVec3, Vec<u32>> {
-    let mut g: HashMap<IVec3, Vec<u32>> = HashMap::new();
-    for (i, &p) in points.iter().enumerate() {
-        g.entry(cell_of(p, cell)).or_default().push(i as u32);
+/// A multiply-and-rotate hash for cell coordinates (SipHash, the standard map's default, made the grid's 27
+/// lookups per light most of the covering's time with 64k lights).
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl std::hash::Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
     }
-    g
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_i32(&mut self, v: i32) {
+        self.write_u64(v as u32 as u64);
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
 }
 
-/// The indices in the 27 cells around `p`.
-fn around<'a>(g: &'a HashMap<IVec3, Vec<u32>>, p: Vec3, cell: f32) -> impl Iterator<Item = u32> + 'a {
-    let c = cell_of(p, cell);
-    (-1..=1).flat_map(move |z| {
-        (-1..=1).flat_map(move |y| {
-            // Wrapping: a position past the grid's range saturates to its last cell (`cell_of`), whose neighbours
-            // may wrap around; the distance tests decide, so that only adds candidates.
-            (-1..=1).flat_map(move |x| g.get(&c.wrapping_add(IVec3::new(x, y, z))).into_iter().flatten().copied())
+type CellMap<V> = HashMap<IVec3, V, std::hash::BuildHasherDefault<CellHasher>>;
+
+/// A uniform grid of `cell`-sized cells over the indices of `points`: the indices sorted by cell, and per cell
+/// its run of them.
+struct Grid {
+    cell: f32,
+    items: Vec<u32>,
+    runs: CellMap<(u32, u32)>,
+}
+
+impl Grid {
+    fn new(points: &[Vec3], cell: f32) -> Grid {
+        let mut keyed: Vec<(IVec3, u32)> =
+            points.iter().enumerate().map(|(i, &p)| (cell_of(p, cell), i as u32)).collect();
+        keyed.sort_unstable_by_key(|&(c, i)| (c.x, c.y, c.z, i));
+        let mut runs = CellMap::default();
+        let mut start = 0;
+        for k in 1..=keyed.len() {
+            if k == keyed.len() || keyed[k].0 != keyed[start].0 {
+                runs.insert(keyed[start].0, (start as u32, k as u32));
+                start = k;
+            }
+        }
+        Grid { cell, items: keyed.into_iter().map(|(_, i)| i).collect(), runs }
+    }
+
+    /// The indices in the 27 cells around `p`.
+    fn around(&self, p: Vec3) -> impl Iterator<Item = u32> + '_ {
+        let c = cell_of(p, self.cell);
+        (-1..=1).flat_map(move |z| {
+            (-1..=1).flat_map(move |y| {
+                // Wrapping: a position past the grid's range saturates to its last cell (`cell_of`), whose
+                // neighbours may wrap around; the distance tests decide, so that only adds candidates.
+                (-1..=1).flat_map(move |x| {
+                    let run = self.runs.get(&c.wrapping_add(IVec3::new(x, y, z))).copied().unwrap_or((0, 0));
+                    self.items[run.0 as usize..run.1 as usize].iter().copied()
+                })
+            })
         })
-    })
+    }
 }
 
 /// Cluster the `visible` lights (indices into `lights`, as the renderer's culling lists them) with centers
@@ -78,10 +121,10 @@ pub fn cluster_cover(
     let mut covered_by_me: Vec<u32> = Vec::new();
     starts.push(0u32);
     if d_init > 0.0 && d_init.is_finite() {
-        let g = grid(&pos, d_init);
+        let g = Grid::new(&pos, d_init);
         for i in 0..n {
             if d_min[i] > 0.0 {
-                for j in around(&g, pos[i], d_init) {
+                for j in g.around(pos[i]) {
                     if j as usize != i && pos[i].distance(pos[j as usize]) <= d_min[i] {
                         covered_by_me.push(j);
                     }
@@ -135,13 +178,13 @@ pub fn cluster_cover(
     }
     if d_init > 0.0 && d_init.is_finite() {
         let center_pos: Vec<Vec3> = centers.iter().map(|&c| pos[c]).collect();
-        let g = grid(&center_pos, d_init);
+        let g = Grid::new(&center_pos, d_init);
         for i in 0..n {
             if cluster[i] != u32::MAX {
                 continue;
             }
             let mut best = (f32::INFINITY, u32::MAX);
-            for k in around(&g, pos[i], d_init) {
+            for k in g.around(pos[i]) {
                 let d = pos[i].distance(center_pos[k as usize]);
                 if d < best.0 || (d == best.0 && k < best.1) {
                     best = (d, k);
