@@ -125,6 +125,36 @@ impl TrySpec {
     }
 }
 
+/// The name of each try in a plot's legend: its [`TrySpec::label`], and where two tries share one, that with the
+/// parameters each holds at one value (`lightcluster centers=cover`), then the try's number if still equal, so
+/// that two tries of one technique get two colours.
+pub fn series_labels(tries: &[TrySpec]) -> Vec<String> {
+    let base: Vec<String> = tries.iter().map(TrySpec::label).collect();
+    let mut labels: Vec<String> = tries
+        .iter()
+        .zip(&base)
+        .map(|(t, b)| {
+            if base.iter().filter(|o| *o == b).count() < 2 {
+                return b.clone();
+            }
+            let fixed: Vec<String> =
+                t.params.iter().filter(|(_, v)| v.len() == 1).map(|(k, v)| format!("{k}={}", v[0])).collect();
+            if fixed.is_empty() {
+                b.clone()
+            } else {
+                format!("{b} {}", fixed.join(" "))
+            }
+        })
+        .collect();
+    let named = labels.clone();
+    for (i, l) in labels.iter_mut().enumerate() {
+        if named.iter().filter(|o| *o == l).count() > 1 {
+            *l = format!("{l} (try {})", i + 1);
+        }
+    }
+    labels
+}
+
 /// `technique` or `technique + indirect`.
 pub fn label(technique: &str, indirect: &str) -> String {
     if indirect == "none" {
@@ -324,6 +354,27 @@ mod tests {
 
     fn spec(text: &str) -> TrySpec {
         TrySpec::parse(text, "reference", "none").unwrap()
+    }
+
+    #[test]
+    fn two_tries_of_one_technique_get_two_legend_names() {
+        let tries = [
+            spec("lightcluster d_init=0.1:0.5:0.2 centers=paper"),
+            spec("lightcluster d_init=0.1:0.5:0.2 centers=cover"),
+            spec("insm insm_res=64,128"),
+            spec("unshadowed"),
+            spec("unshadowed"),
+        ];
+        assert_eq!(
+            series_labels(&tries),
+            [
+                "lightcluster centers=paper",
+                "lightcluster centers=cover",
+                "insm",
+                "unshadowed (try 4)",
+                "unshadowed (try 5)"
+            ]
+        );
     }
 
     #[test]

@@ -340,12 +340,13 @@ pub fn run(args: TradeoffArgs) -> Result<()> {
         }
     }
     if let Some(path) = &args.plot {
+        let names = crate::tradeoff::series_labels(&tries);
         let series: Vec<crate::plot::TradeoffPoint> = rows
             .iter()
             .zip(&points)
             .enumerate()
             .map(|(i, (r, p))| crate::plot::TradeoffPoint {
-                series: tries[r.try_index].label(),
+                series: names[r.try_index].clone(),
                 ms: p.ms,
                 error: p.error,
                 // The frame's whole count: the direct technique's and the indirect one's.
