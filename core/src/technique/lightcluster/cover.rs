@@ -193,6 +193,14 @@ pub fn cluster_cover(
             cluster[i] = best.1;
         }
     }
+    // Never a light left out: one no center was found for (not expected: its coverer lies in those cells) is a
+    // center of its own.
+    for i in 0..n {
+        if cluster[i] == u32::MAX {
+            cluster[i] = centers.len() as u32;
+            centers.push(i);
+        }
+    }
     // The output, as the paper's: centers in selection order, each center first among its members, the others
     // in step 2's order; C_att grown by every member.
     out.clusters.clear();
