@@ -195,9 +195,9 @@ pub fn cluster_cover(
     }
     // Never a light left out: one no center was found for (not expected: its coverer lies in those cells) is a
     // center of its own.
-    for i in 0..n {
-        if cluster[i] == u32::MAX {
-            cluster[i] = centers.len() as u32;
+    for (i, k) in cluster.iter_mut().enumerate() {
+        if *k == u32::MAX {
+            *k = centers.len() as u32;
             centers.push(i);
         }
     }
