@@ -6,7 +6,8 @@
 //! long-lived `Clusterer` writing into a reused `Clustering`. "fresh ms" is `cluster_lights`, which allocates
 //! its buffers and every cluster's member list on each call. `CLUSTERING_LIGHTS=2048` runs one light count only.
 //! The issue's goals: 2,048 lights in under 0.05 ms, 100,000 in under 10 ms. Timings are wall-clock medians of
-//! 31 samples, so a busy machine inflates them.
+//! 31 samples, so a busy machine inflates them. "cover" is `centers=cover` (greedy covering, beyond the paper:
+//! `lightcluster::cover`) on the same visible lights: its clusters and median ms.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -15,6 +16,7 @@ use glam::Vec3;
 use shadowlab_core::math::Frustum;
 use shadowlab_core::scene::{Camera, PointLight};
 use shadowlab_core::technique::lightcluster::clustering::{cluster_lights, ClusterParams, Clusterer, Clustering};
+use shadowlab_core::technique::lightcluster::cover::cluster_cover;
 
 const COUNTS: [usize; 7] = [64, 256, 1024, 2048, 4096, 16384, 100_000];
 const D_INITS: [f32; 2] = [0.5, 1.6];
@@ -71,8 +73,11 @@ fn median_ms(mut f: impl FnMut()) -> f64 {
 fn main() {
     let camera = Camera::look_at(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -30.0), 60f32.to_radians(), 0.1, 30.0);
     let frustum = Frustum::from_clip_from_world(&camera.clip_from_world(16.0 / 9.0));
-    println!("| lights | visible | d_init | clusters | grid | median ms | ms per 1000 lights | fresh ms |");
-    println!("|---:|---:|---:|---:|---|---:|---:|---:|");
+    println!(
+        "| lights | visible | d_init | clusters | grid | median ms | ms per 1000 lights | fresh ms | cover clusters | \
+         cover ms |"
+    );
+    println!("|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|");
     // `CLUSTERING_LIGHTS=2048` restricts the run to one light count (for profiling). `cargo test --all-targets`
     // runs this file without `--bench`: then only the smallest count runs, as a smoke test.
     let smoke = !std::env::args().any(|a| a == "--bench");
@@ -91,9 +96,20 @@ fn main() {
             let fresh = median_ms(|| {
                 black_box(cluster_lights(black_box(&lights), camera.position, &frustum, &params));
             });
+            let visible: Vec<usize> = (0..n).filter(|&i| out.cluster_of[i].is_some()).collect();
+            let mut covered = Clustering::default();
+            let cover_ms = median_ms(|| {
+                black_box(cluster_cover(black_box(&lights), &visible, camera.position, &params, &mut covered));
+            });
+            let cover_clusters = if cluster_cover(&lights, &visible, camera.position, &params, &mut covered) {
+                covered.clusters.len().to_string()
+            } else {
+                "fallback".into()
+            };
             let info = clusterer.grid_info();
             println!(
-                "| {n} | {} | {d_init} | {} | {:?}, {} levels, {:.2}..{:.2} m | {ms:.4} | {:.4} | {fresh:.4} |",
+                "| {n} | {} | {d_init} | {} | {:?}, {} levels, {:.2}..{:.2} m | {ms:.4} | {:.4} | {fresh:.4} | \
+                 {cover_clusters} | {cover_ms:.4} |",
                 out.visible,
                 out.clusters.len(),
                 info.kind,
