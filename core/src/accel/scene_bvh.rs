@@ -439,6 +439,12 @@ impl SceneBvh {
         entries
     }
 
+    /// Whether a surface lies on `origin + t * dir` (`dir` normalised) for `0 < t < t_max`; cut-out texels are no
+    /// surface (the CPU twin of the tracers' shadow rays).
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        bvh::occluded_cpu_filtered(&self.cpu, origin, dir, t_max, &|tri, u, v| !self.cutouts.cut_out(tri, u, v))
+    }
+
     /// Nearest surface on `origin + t * dir` (`dir` normalised) for `0 < t < t_max`; cut-out texels are no
     /// surface.
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<SurfaceHit> {

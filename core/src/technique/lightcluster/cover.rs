@@ -12,90 +12,22 @@
 //! light joins its nearest center. So every cluster keeps the paper's bound (its members within `d_min` of some
 //! center, its disc light of radius `d_min`), with fewer cube maps where the lights are dense.
 //!
-//! Each light's neighbours within its `d_min` are listed once (a uniform grid of `d_init` cells); the greedy
+//! Each light's neighbours within its `d_min` are listed once (the lights' `d_min` spheres in a
+//! [`SphereGrid`], asked which contain each light); the greedy
 //! picks are lazy (a light's count only falls, so a popped count that is still current is the largest). When
 //! the neighbour lists would hold more than [`MAX_PAIRS`] entries (many lights within `d_init` of each other),
 //! [`cluster_cover`] returns `false` and the caller uses the paper's selection.
 
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
 
-use glam::{IVec3, Vec3};
+use glam::Vec3;
 
 use super::clustering::{Cluster, ClusterParams, Clustering};
+use crate::math::SphereGrid;
 use crate::scene::PointLight;
 
 /// The most (light, covered light) pairs listed before the covering gives up (64 MiB of `u32`s).
 pub const MAX_PAIRS: usize = 16 << 20;
-
-fn cell_of(p: Vec3, cell: f32) -> IVec3 {
-    // A non-finite position lands in cell 0 (`as` saturates, NaN to 0); its distances are NaN, so it neither
-    // covers nor is covered and becomes a center of its own.
-    (p / cell).floor().as_ivec3()
-}
-
-/// A multiply-and-rotate hash for cell coordinates (SipHash, the standard map's default, made the grid's 27
-/// lookups per light most of the covering's time with 64k lights).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl std::hash::Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_i32(&mut self, v: i32) {
-        self.write_u64(v as u32 as u64);
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type CellMap<V> = HashMap<IVec3, V, std::hash::BuildHasherDefault<CellHasher>>;
-
-/// A uniform grid of `cell`-sized cells over the indices of `points`: the indices sorted by cell, and per cell
-/// its run of them.
-struct Grid {
-    cell: f32,
-    items: Vec<u32>,
-    runs: CellMap<(u32, u32)>,
-}
-
-impl Grid {
-    fn new(points: &[Vec3], cell: f32) -> Grid {
-        let mut keyed: Vec<(IVec3, u32)> =
-            points.iter().enumerate().map(|(i, &p)| (cell_of(p, cell), i as u32)).collect();
-        keyed.sort_unstable_by_key(|&(c, i)| (c.x, c.y, c.z, i));
-        let mut runs = CellMap::default();
-        let mut start = 0;
-        for k in 1..=keyed.len() {
-            if k == keyed.len() || keyed[k].0 != keyed[start].0 {
-                runs.insert(keyed[start].0, (start as u32, k as u32));
-                start = k;
-            }
-        }
-        Grid { cell, items: keyed.into_iter().map(|(_, i)| i).collect(), runs }
-    }
-
-    /// The indices in the 27 cells around `p`.
-    fn around(&self, p: Vec3) -> impl Iterator<Item = u32> + '_ {
-        let c = cell_of(p, self.cell);
-        (-1..=1).flat_map(move |z| {
-            (-1..=1).flat_map(move |y| {
-                // Wrapping: a position past the grid's range saturates to its last cell (`cell_of`), whose
-                // neighbours may wrap around; the distance tests decide, so that only adds candidates.
-                (-1..=1).flat_map(move |x| {
-                    let run = self.runs.get(&c.wrapping_add(IVec3::new(x, y, z))).copied().unwrap_or((0, 0));
-                    self.items[run.0 as usize..run.1 as usize].iter().copied()
-                })
-            })
-        })
-    }
-}
 
 /// Cluster the `visible` lights (indices into `lights`, as the renderer's culling lists them) with centers
 /// chosen by greedy covering (the module docs), into `out`. `false` (and `out` untouched) when the lights are
@@ -116,27 +48,38 @@ pub fn cluster_cover(
     let pos: Vec<Vec3> = order.iter().map(|&i| lights[i].position).collect();
     let d_min: Vec<f32> = pos.iter().map(|&p| params.d_min_at(p, camera_position)).collect();
     let d_init = params.effective_d_init();
-    // Who covers whom: per light (sorted order), the other lights within its d_min.
-    let mut starts = Vec::with_capacity(n + 1);
-    let mut covered_by_me: Vec<u32> = Vec::new();
-    starts.push(0u32);
-    if d_init > 0.0 && d_init.is_finite() {
-        let g = Grid::new(&pos, d_init);
-        for i in 0..n {
-            if d_min[i] > 0.0 {
-                for j in g.around(pos[i]) {
-                    if j as usize != i && pos[i].distance(pos[j as usize]) <= d_min[i] {
-                        covered_by_me.push(j);
-                    }
-                }
-                if covered_by_me.len() > MAX_PAIRS {
-                    return false;
-                }
-            }
-            starts.push(covered_by_me.len() as u32);
+    // Who covers whom: per light (sorted order), the other lights within its d_min. The spheres that contain each
+    // light are its coverers (a non-finite position or d_min 0 covers nothing; a non-finite light is in no
+    // sphere), turned round by a counting pass into each light's covered list.
+    let spheres: Vec<(Vec3, f32)> =
+        pos.iter().zip(&d_min).map(|(&p, &r)| (p, if r > 0.0 { r } else { -1.0 })).collect();
+    let grid = SphereGrid::new(&spheres);
+    let (grid, pos_of, reach_of) = (&grid, &pos, &d_min);
+    let covered_by = |j: usize| {
+        grid.candidates(pos_of[j])
+            .filter(move |&i| i as usize != j && pos_of[i as usize].distance(pos_of[j]) <= reach_of[i as usize])
+    };
+    let mut starts = vec![0u32; n + 1];
+    let mut pairs = 0usize;
+    for j in 0..n {
+        for i in covered_by(j) {
+            starts[i as usize + 1] += 1;
+            pairs += 1;
         }
-    } else {
-        starts.resize(n + 1, 0);
+        if pairs > MAX_PAIRS {
+            return false;
+        }
+    }
+    for i in 0..n {
+        starts[i + 1] += starts[i];
+    }
+    let mut fill = starts.clone();
+    let mut covered_by_me = vec![0u32; pairs];
+    for j in 0..n {
+        for i in covered_by(j) {
+            covered_by_me[fill[i as usize] as usize] = j as u32;
+            fill[i as usize] += 1;
+        }
     }
     let covers = |i: usize| &covered_by_me[starts[i] as usize..starts[i + 1] as usize];
     // Lazy greedy: (uncovered lights a pick would cover, then the earlier light in step 2's order).
@@ -170,28 +113,28 @@ pub fn cluster_cover(
         }
     }
     // Step 4: every other light joins its nearest center (ties to the center chosen first). It is covered by a
-    // center within d_min <= d_init, so the nearest lies in the 27 cells around it; a light no center covers
-    // (a non-finite position) is a center already.
+    // center within d_min <= d_init, so the nearest is within d_init too; a light no center covers (a non-finite
+    // position) is a center already.
     let mut cluster = vec![u32::MAX; n];
     for (k, &c) in centers.iter().enumerate() {
         cluster[c] = k as u32;
     }
-    if d_init > 0.0 && d_init.is_finite() {
-        let center_pos: Vec<Vec3> = centers.iter().map(|&c| pos[c]).collect();
-        let g = Grid::new(&center_pos, d_init);
-        for i in 0..n {
-            if cluster[i] != u32::MAX {
-                continue;
-            }
-            let mut best = (f32::INFINITY, u32::MAX);
-            for k in g.around(pos[i]) {
-                let d = pos[i].distance(center_pos[k as usize]);
-                if d < best.0 || (d == best.0 && k < best.1) {
-                    best = (d, k);
-                }
-            }
-            cluster[i] = best.1;
+    // Every center within d_init of a light (spheres of radius d_init about the centers) holds its nearest.
+    let center_pos: Vec<Vec3> = centers.iter().map(|&c| pos[c]).collect();
+    let reach: Vec<(Vec3, f32)> = center_pos.iter().map(|&c| (c, d_init)).collect();
+    let near = SphereGrid::new(&reach);
+    for i in 0..n {
+        if cluster[i] != u32::MAX {
+            continue;
         }
+        let mut best = (f32::INFINITY, u32::MAX);
+        for k in near.candidates(pos[i]) {
+            let d = pos[i].distance(center_pos[k as usize]);
+            if d < best.0 || (d == best.0 && k < best.1) {
+                best = (d, k);
+            }
+        }
+        cluster[i] = best.1;
     }
     // Never a light left out: one no center was found for (not expected: its coverer lies in those cells) is a
     // center of its own.
@@ -324,6 +267,12 @@ mod tests {
         far[2].position = Vec3::INFINITY;
         assert!(cluster_cover(&far, &visible, camera, &params, &mut c));
         assert!((0..3).all(|i| c.cluster_of[i].is_some()));
+        // An infinite d_init (f32::MAX, `effective_d_init`) without view-adaptive scaling: every light covers every
+        // other, one cluster.
+        let huge = ClusterParams { d_init: f32::INFINITY, z_far: 30.0, adaptive: false };
+        let few: Vec<PointLight> = sponza_circles().into_iter().take(8).collect();
+        assert!(cluster_cover(&few, &(0..8).collect::<Vec<_>>(), camera, &huge, &mut c));
+        assert_eq!(c.clusters.len(), 1);
         // d_init 0: one cluster per light.
         let zero = ClusterParams { d_init: 0.0, ..params };
         assert!(cluster_cover(&lights, &visible, camera, &zero, &mut c));

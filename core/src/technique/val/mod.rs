@@ -270,11 +270,7 @@ impl VirtualAreaLights {
             let Some(bvh) = bvh else { return false };
             let d = b - a;
             let len = d.length();
-            len.is_finite()
-                && len > 2.0 * eps
-                && crate::accel::bvh::occluded_cpu_filtered(&bvh.cpu, a, d / len, len - eps, &|t, u, v| {
-                    !bvh.cutouts.cut_out(t, u, v)
-                })
+            len.is_finite() && len > 2.0 * eps && bvh.occluded(a, d / len, len - eps)
         };
         let sight = split::Sight { occluded: &occluded, offset: self.scene_size * MAP_OFFSET };
         split::split(vpls, &self.kmeans_params(), &sp, bvh.map(|_| &sight), &base)
