@@ -315,11 +315,24 @@ fn difference_view_measures_the_technique_against_the_reference() {
     assert!(h.query_all_by_label_contains("(SHADOWLAB_TIMING=").count() >= 1, "the clock is named");
     h.get_by_label_contains("speedup = the reference frame");
     h.get_by_label("work counts (hardware-independent)");
+    // Maps at two resolutions are named, and "match" gives the reference the technique's.
+    let app = h.state_mut();
+    app.session.params.entry("lightcluster".into()).or_default().insert("shadow_res".into(), ParamValue::Int(64));
+    app.session.params.entry("reference".into()).or_default().insert("shadow_res".into(), ParamValue::Int(128));
+    h.run_steps(2);
+    h.get_by_label_contains("maps not at one resolution: lightcluster 64², reference 128²");
+    h.get_by_label("match").scroll_to_me();
+    h.run_steps(3);
+    h.get_by_label("match").click_accesskit();
+    h.run_steps(2);
+    assert_eq!(h.state().session.params["reference"]["shadow_res"], ParamValue::Int(64));
+    assert_eq!(h.query_all_by_label_contains("maps not at one resolution").count(), 0);
     // Against the ray-traced ground truth instead: the reference itself differs a little.
     let app = h.state_mut();
     app.session.technique = "reference".into();
     app.session.view.compare_against = "raytraced".into();
     h.run_steps(4);
+    assert_eq!(h.query_all_by_label_contains("maps not at one resolution").count(), 0, "the ray tracer has no maps");
     let m = &h.state().views.difference.as_ref().unwrap().metrics;
     assert!(m.rmse > 0.0 && m.share_over_threshold < 0.05, "reference vs ray traced: {m:?}");
     assert!(h.state().views.session_times.entries().any(|e| e.key == "raytraced"));

@@ -1047,3 +1047,56 @@ fn suns_from_the_command_line_light_the_scene_directly_and_through_vpls() {
     let five: Vec<&str> = (0..5).flat_map(|_| ["--sun", "0,45,1"]).collect();
     assert_fails_with(&[&["render", "--out", "x.png"][..], &five].concat(), "at most 4");
 }
+
+#[test]
+fn a_sweep_names_each_sides_map_resolution_and_says_when_they_differ() {
+    // The techniques' default map resolutions differ (the reference 1024², INSM 512²): a comparison at two
+    // resolutions is named as such, on the terminal and in the CSV, and one `--shadow-res` sets both.
+    let dir = out_dir("sweep-resolutions");
+    let csv = dir.join("r.csv");
+    let base = [
+        "sweep",
+        "--scene",
+        "cornell",
+        "--lights",
+        "random:2:1.5:1",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--warmup",
+        "0",
+        "--no-flip",
+        "--technique",
+        "lightcluster",
+        "--param",
+        "d_init=0.4",
+        "--against",
+        "reference",
+    ];
+    let column = |text: &str, name: &str| -> String {
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let i = header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name} in {header:?}"));
+        text.lines().nth(1).unwrap().split(',').nth(i).unwrap().to_string()
+    };
+    let args = [
+        &base[..],
+        &["--param", "shadow_res=32", "--against-param", "shadow_res=64", "--out"],
+        &[csv.to_str().unwrap()],
+    ]
+    .concat();
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("not at one resolution: maps lightcluster 32², reference 64²"), "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!((column(&text, "maps_res"), column(&text, "against_maps_res")), ("32".into(), "64".into()));
+    assert_eq!(column(&text, "indirect_maps_res"), "");
+    let args = [&base[..], &["--shadow-res", "32", "--out"], &[csv.to_str().unwrap()]].concat();
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("not at one resolution"), "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!((column(&text, "maps_res"), column(&text, "against_maps_res")), ("32".into(), "32".into()));
+}

@@ -1,6 +1,7 @@
 //! ShadowLab's app crate: the command line (`cli`) and the interactive egui app (`gui`).
 
 pub mod cli;
+pub mod equal_terms;
 pub mod figure;
 pub mod files;
 pub mod gui;

@@ -72,6 +72,8 @@ struct CompareReport<'a> {
     vpls: Option<usize>,
     technique_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
     against_report_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
+    /// Set when the two sides' maps are not at one resolution (both named).
+    resolution_note: Option<&'a str>,
 }
 
 pub fn run(args: CompareArgs) -> Result<()> {
@@ -140,9 +142,27 @@ pub fn run(args: CompareArgs) -> Result<()> {
     )?;
     let speedup = crate::measure::Speedup::of(&tech.timing, &target.timing);
     let clock = speedup.clock;
+    let resolution_note = crate::equal_terms::resolution_note(
+        &indirect.name_with(&args.target.technique),
+        &tech.parameters,
+        &against_indirect.name_with(&args.target.against),
+        &target.parameters,
+    );
     if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
         use crate::figure::{compose, metrics_caption, FigurePane};
         let metrics_lines = metrics_caption(&metrics);
+        // Unequal map resolutions are named under each pane (the defaults differ between techniques).
+        let maps_caption = |p: &std::collections::BTreeMap<String, String>| -> String {
+            if resolution_note.is_none() {
+                return String::new();
+            }
+            let [direct, indirect] = crate::equal_terms::resolutions(p);
+            [(direct, "maps"), (indirect, "indirect maps")]
+                .iter()
+                .filter(|(r, _)| !r.is_empty())
+                .map(|(r, what)| format!(" · {what} {r}²"))
+                .collect()
+        };
         let component = if f.component == "total" { String::new() } else { format!(" · {} light", f.component) };
         let title = format!(
             "{} · {} lights · {}x{}{component} · {}",
@@ -159,7 +179,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
                     image: tech_image,
                     caption: vec![
                         indirect.name_with(&args.target.technique),
-                        indirect.params_caption(&args.params),
+                        indirect.params_caption(&args.params) + &maps_caption(&tech.parameters),
                         format!(
                             "{:.1} ms (median of {}, {}), ×{:.2}",
                             tech.timing.median_in(clock),
@@ -173,7 +193,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
                     image: target_image,
                     caption: vec![
                         against_indirect.name_with(&args.target.against),
-                        against_indirect.params_caption(&args.target.against_params),
+                        against_indirect.params_caption(&args.target.against_params)
+                            + &maps_caption(&target.parameters),
                         format!("{:.1} ms (median of {})", target.timing.median_in(clock), target.timing.frames),
                     ],
                 },
@@ -209,6 +230,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
         );
         if let Some(reason) = tech.timing.clock_reason.as_ref().or(target.timing.clock_reason.as_ref()) {
             eprintln!("timing: {reason}");
+        }
+        if let Some(note) = &resolution_note {
+            eprintln!("note: {note}");
         }
         eprintln!(
             "time (median of {}, {}): {} {:.2} ms, {} {:.2} ms, speedup {}",
@@ -246,6 +270,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
             vpls: tech.report.indirect.as_ref().map(|i| i.vpls),
             technique_indirect: tech.report.indirect.as_ref(),
             against_report_indirect: target.report.indirect.as_ref(),
+            resolution_note: resolution_note.as_deref(),
         };
         write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
     }

@@ -174,6 +174,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
             "wall_min_ms",
             "against_wall_min_ms",
             "wall_speedup",
+            "maps_res",
+            "against_maps_res",
+            "indirect_maps_res",
+            "against_indirect_maps_res",
         ]
         .map(String::from),
     );
@@ -188,6 +192,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     progress.update(0, settings.len());
     let mut plotted_counts: Vec<usize> = Vec::new();
     let mut told_clock = false;
+    let mut told_resolution = false;
     // The timings behind `plot_rows`: the plot shows all of them in one clock, chosen once every row is in.
     let mut plot_timings: Vec<crate::measure::TimingSummary> = Vec::new();
     for (i, setting) in settings.iter().enumerate() {
@@ -281,6 +286,20 @@ pub fn run(args: SweepArgs) -> Result<()> {
             // Of the fastest frames: on a shared machine the least disturbed ones.
             format!("{:.2}", target.timing.wall_min_ms / r.timing.wall_min_ms.max(1e-9)),
         ]);
+        // Each side's map resolutions as rendered (the techniques' defaults differ), and a note when unequal.
+        let [res, indirect_res] = crate::equal_terms::resolutions(&r.parameters);
+        let [against_res, against_indirect_res] = crate::equal_terms::resolutions(&target.parameters);
+        row.extend([res, against_res, indirect_res, against_indirect_res]);
+        if !told_resolution && !quiet {
+            let technique_name = f.indirect_choice().name_with(&args.target.technique);
+            let against_name = target_indirect.name_with(&args.target.against);
+            if let Some(note) =
+                crate::equal_terms::resolution_note(&technique_name, &r.parameters, &against_name, &target.parameters)
+            {
+                eprintln!("note: {note}");
+                told_resolution = true;
+            }
+        }
         rows.push(row);
         let mut figures: std::collections::BTreeMap<String, f64> =
             c.figures.iter().map(|(k, v)| (format!("figure.{k}"), *v)).collect();

@@ -8,7 +8,7 @@ use crate::gui::document::ViewMode;
 use crate::gui::session::{Animation, Session};
 use crate::gui::views::Views;
 
-pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
+pub fn render_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) {
     ui.heading("Render");
     ui.add(egui::Slider::new(&mut session.view.resolution_scale, 0.1..=2.0).text("resolution scale"));
     ui.horizontal(|ui| {
@@ -74,6 +74,9 @@ pub fn render_ui(session: &mut Session, views: &Views, ui: &mut egui::Ui) {
         }
     });
     target_indirect_ui(session, ui);
+    if session.view.mode != ViewMode::Single {
+        map_resolution_ui(session, views, ui);
+    }
     if session.view.mode == ViewMode::Difference {
         ui.horizontal(|ui| {
             ui.checkbox(&mut session.view.diff_signed, "signed");
@@ -187,5 +190,32 @@ fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
              the view's own compares the direct techniques under the same indirect light; a reference or ground \
              truth compares the indirect technique itself",
             );
+    });
+}
+
+/// Says when the technique and its comparison target draw their maps at different resolutions (each technique
+/// has its own default), with a button that gives the target the technique's.
+fn map_resolution_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) {
+    let Some((technique, target)) = views.unequal_map_resolutions(session) else { return };
+    ui.horizontal_wrapped(|ui| {
+        ui.label(
+            egui::RichText::new(format!(
+                "maps not at one resolution: {} {technique}², {} {target}²",
+                session.technique, session.view.compare_against
+            ))
+            .color(ui.visuals().warn_fg_color),
+        );
+        if ui
+            .button("match")
+            .on_hover_text("Give the comparison target the technique's map resolution (its shadow_res parameter)")
+            .clicked()
+        {
+            let against = session.view.compare_against.clone();
+            session
+                .params
+                .entry(against)
+                .or_default()
+                .insert("shadow_res".into(), shadowlab_core::technique::ParamValue::Int(technique));
+        }
     });
 }

@@ -292,6 +292,24 @@ impl Views {
         gpu.main.technique(&session.technique).ok()?.light_details(index)
     }
 
+    /// The per-light map resolutions of the technique and its comparison target when both have maps and they
+    /// differ (each technique has its own default): (technique's, target's). The user's value where set, else
+    /// the technique's own.
+    pub fn unequal_map_resolutions(&mut self, session: &Session) -> Option<(i64, i64)> {
+        let gpu = self.gpu.as_mut()?;
+        let resolution = |view: &mut View, key: &str| -> Option<i64> {
+            let user = session.params.get(key).and_then(|p| p.get("shadow_res")).cloned();
+            let own = view.technique(key).ok()?.params().into_iter().find(|p| p.key == "shadow_res")?.value;
+            match user.unwrap_or(own) {
+                ParamValue::Int(r) => Some(r),
+                _ => None,
+            }
+        };
+        let technique = resolution(&mut gpu.main, &session.technique)?;
+        let target = resolution(&mut gpu.reference, &session.view.compare_against)?;
+        (technique != target).then_some((technique, target))
+    }
+
     /// Names of the overlay layers the current technique offers, with their state.
     pub fn overlay_layers(&mut self, session: &Session) -> Vec<(String, bool)> {
         let Some(gpu) = &mut self.gpu else { return Vec::new() };
