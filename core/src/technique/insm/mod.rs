@@ -140,8 +140,10 @@ struct TriangulateUniform {
     merge_epsilon: f32,
     drop_covered: u32,
     dilate: u32,
+    step_epsilon: f32,
+    _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<TriangulateUniform>() == 32);
+const _: () = assert!(std::mem::size_of::<TriangulateUniform>() == 48);
 
 /// Mirrors `View` in `insm/triangulate.wgsl`.
 #[repr(C)]
@@ -151,7 +153,10 @@ struct GpuView {
     clip_from_world: [[f32; 4]; 4],
     near: f32,
     far: f32,
-    _pad: [f32; 2],
+    /// The relative change of view depth from one sample to the next above which an edge is steep
+    /// ([`triangulate::steep_slope`]).
+    steep: f32,
+    _pad: f32,
 }
 const _: () = assert!(std::mem::size_of::<GpuView>() == 144);
 
@@ -289,6 +294,8 @@ impl Insm {
                 merge_epsilon: 0.0,
                 drop_covered: 0,
                 dilate: 0,
+                step_epsilon: 0.0,
+                _pad: [0; 3],
             }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
@@ -333,12 +340,7 @@ impl Insm {
     /// How the meshes are built, for the CPU twin.
     pub fn mesh_settings(&self) -> MeshSettings {
         let res = self.mesh.as_ref().map_or(self.params.insm_resolution, |m| m.resolution);
-        MeshSettings {
-            epsilon: self.params.epsilon_at(res),
-            adaptive: self.params.adaptive,
-            merge_epsilon: self.params.merge_epsilon,
-            drop_covered: self.params.drop_covered,
-        }
+        self.params.mesh_settings(res)
     }
 
     /// The per-light maps' parameters with the lookup's bias for `views` at `resolution`
@@ -349,12 +351,13 @@ impl Insm {
 
     /// The cameras of the last frame's intermediate maps, for the CPU twin.
     pub fn map_views(&self) -> Vec<MapView> {
+        let res = self.mesh.as_ref().map_or(self.params.insm_resolution, |m| m.resolution);
         self.views
             .iter()
             .zip(&self.view_matrices)
             .map(|(v, m)| {
                 let (near, far) = v.depth_range(&self.bounds);
-                MapView { clip_from_world: *m, near, far }
+                MapView { clip_from_world: *m, near, far, steep: self.params.steep_slope(v.fov_y_deg, res) }
             })
             .collect()
     }
@@ -470,7 +473,8 @@ impl Technique for Insm {
                     clip_from_world: m.to_cols_array_2d(),
                     near,
                     far,
-                    _pad: [0.0; 2],
+                    steep: self.params.steep_slope(v.fov_y_deg, res),
+                    _pad: 0.0,
                 }
             })
             .collect();
@@ -510,6 +514,8 @@ impl Technique for Insm {
             merge_epsilon: self.params.merge_epsilon,
             drop_covered: u32::from(self.params.drop_covered),
             dilate: u32::from(self.params.dilate),
+            step_epsilon: self.params.step_epsilon_at(res),
+            _pad: [0; 3],
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
 

@@ -229,7 +229,7 @@ impl MeshSnapshot {
         // Dropped edges: the depth discontinuities, in red.
         let mut dropped: Vec<Overlay> = Vec::new();
         for img in &images {
-            for e in img.dropped_edges(snap.settings.epsilon) {
+            for e in img.dropped_edges(snap.settings.connectivity()) {
                 if dropped.len() >= MAX_DROPPED_EDGES {
                     break;
                 }

@@ -25,6 +25,22 @@ pub const DEFAULT_EPSILON: f32 = 0.02;
 /// other way (the tori 2.81 -> 3.12 %, the Dragon 0.59 -> 0.71 % at 0.03).
 pub const DEFAULT_EPSILON_INSIDE: f32 = 0.04;
 
+/// The tolerance for a steep edge (beyond the paper, `triangulate::SampledImage::edge_connected`): an edge
+/// across which the surface is seen at more than [`DEFAULT_STEEP_ANGLE`] from face-on is cut above this
+/// (instead of ε), at 128² and scaled as ε is; it matters only below ε, i.e. for the inside placements, whose
+/// larger ε keeps curved surfaces (chairs, curtains) whole but also joined the arcade's columns, seen down its
+/// hall, to one another and to the walls behind them: a curtain that closed its arches under the scene's own
+/// 80 lights (shadow error against the ray tracer 20.3 % with ε 0.04, 6.7 % with 0.02, 6.5 % with this;
+/// docs/techniques/insm.md). The box placement's ε: steep edges are held to what the box views hold them to.
+pub const DEFAULT_STEP_EPSILON: f32 = DEFAULT_EPSILON;
+
+/// How far from face-on a surface is seen (degrees) before its edges are steep ([`DEFAULT_STEP_EPSILON`]).
+/// Measured at 60 / 70 / 75 / 79 / 82 / 84.5° (160x90, 128², against the ray tracer): the arcade with its own
+/// lights 6.6 / 6.5 / 6.5 / 6.5 / 16.7 / 20.3 %, the conference room (1,024 lights) 6.03 / 5.80 / 5.72 / 5.67 /
+/// 5.66 / 5.65 % (5.74 % without the rule), Sponza 6.31 / 6.33 / 6.24 / 6.24 / 6.23 / 6.22 % (6.23 %): the
+/// joins the arcade needed cut lie beyond 79°; 75° keeps a margin below that and costs the others nothing.
+pub const DEFAULT_STEEP_ANGLE: f32 = 75.0;
+
 /// The smallest ε the resolution scaling gives (a smaller `epsilon` is used as it is).
 pub const EPSILON_FLOOR: f32 = 0.01;
 
@@ -51,6 +67,10 @@ pub struct InsmParams {
     pub epsilon: f32,
     /// The same for the `inside` and `walls` placements.
     pub epsilon_inside: f32,
+    /// The tolerance for a steep edge ([`DEFAULT_STEP_EPSILON`]), at 128².
+    pub step_epsilon: f32,
+    /// The angle from face-on beyond which an edge is steep, degrees (90: none is).
+    pub steep_angle: f32,
     /// Merge planar 8x8 tiles into a few triangles (the adaptive mesh, beyond the paper).
     pub adaptive: bool,
     /// Relative tolerance of the merge test (planes pass it to rounding; it bounds how far a merged tile
@@ -85,6 +105,8 @@ impl Default for InsmParams {
             insm_resolution: 128,
             epsilon: DEFAULT_EPSILON,
             epsilon_inside: DEFAULT_EPSILON_INSIDE,
+            step_epsilon: DEFAULT_STEP_EPSILON,
+            steep_angle: DEFAULT_STEEP_ANGLE,
             adaptive: true,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
@@ -134,6 +156,23 @@ impl InsmParams {
                        across the room",
                 kind: ParamKind::Float { min: 0.0, max: 10.0 },
                 value: ParamValue::Float(self.epsilon_inside),
+            },
+            Param {
+                key: "step_epsilon",
+                label: "Steep-edge ε",
+                help: "The discontinuity ε of a steep edge (a surface seen at more than the steep angle from \
+                       face-on), at 128² samples, scaled as ε; it matters only below ε (beyond the paper; the inside \
+                       placements: curved surfaces keep their larger ε)",
+                kind: ParamKind::Float { min: 0.0, max: 10.0 },
+                value: ParamValue::Float(self.step_epsilon),
+            },
+            Param {
+                key: "steep_angle",
+                label: "Steep angle (°)",
+                help: "How far from face-on (degrees) the surface across an edge is seen before the edge is steep \
+                       and held to the steep-edge ε (90: no edge is)",
+                kind: ParamKind::Float { min: 0.0, max: 90.0 },
+                value: ParamValue::Float(self.steep_angle),
             },
             Param {
                 key: "adaptive",
@@ -249,6 +288,8 @@ impl InsmParams {
             ("insm_res", ParamValue::Int(v)) => self.insm_resolution = *v as u32,
             ("epsilon", ParamValue::Float(v)) => self.epsilon = *v,
             ("epsilon_inside", ParamValue::Float(v)) => self.epsilon_inside = *v,
+            ("step_epsilon", ParamValue::Float(v)) => self.step_epsilon = *v,
+            ("steep_angle", ParamValue::Float(v)) => self.steep_angle = *v,
             ("adaptive", ParamValue::Bool(v)) => self.adaptive = *v,
             ("merge_epsilon", ParamValue::Float(v)) => self.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.drop_covered = *v,
@@ -303,9 +344,37 @@ impl InsmParams {
             Placement::Inside | Placement::Walls => self.epsilon_inside,
             Placement::Box | Placement::Custom => self.epsilon,
         };
-        let scaled = e * EPSILON_RESOLUTION as f32 / resolution.max(1) as f32;
-        scaled.max(e.min(EPSILON_FLOOR))
+        scaled_epsilon(e, resolution)
     }
+
+    /// The step tolerance for `resolution`² maps: `step_epsilon` scaled as [`Self::epsilon_at`] scales ε, and
+    /// never above it (0.02 at 128², 0.01 from 256² up).
+    pub fn step_epsilon_at(&self, resolution: u32) -> f32 {
+        scaled_epsilon(self.step_epsilon, resolution).min(self.epsilon_at(resolution))
+    }
+
+    /// The steepness of a map of `fov_y_deg` and `resolution`² ([`triangulate::steep_slope`] at `steep_angle`).
+    pub fn steep_slope(&self, fov_y_deg: f32, resolution: u32) -> f32 {
+        super::triangulate::steep_slope(self.steep_angle, fov_y_deg, resolution)
+    }
+
+    /// The connectivity test's tolerances and the mesh's other settings for `resolution`² maps.
+    pub fn mesh_settings(&self, resolution: u32) -> MeshSettings {
+        MeshSettings {
+            epsilon: self.epsilon_at(resolution),
+            step_epsilon: self.step_epsilon_at(resolution),
+            adaptive: self.adaptive,
+            merge_epsilon: self.merge_epsilon,
+            drop_covered: self.drop_covered,
+        }
+    }
+}
+
+/// A tolerance `e` given at 128² for `resolution`² maps: scaled as 128 / resolution, down to `EPSILON_FLOOR`
+/// (a smaller `e` as it is).
+fn scaled_epsilon(e: f32, resolution: u32) -> f32 {
+    let scaled = e * EPSILON_RESOLUTION as f32 / resolution.max(1) as f32;
+    scaled.max(e.min(EPSILON_FLOOR))
 }
 
 #[cfg(test)]
@@ -335,6 +404,25 @@ mod tests {
         assert!((InsmParams { epsilon: 0.004, ..p.clone() }.epsilon_at(512) - 0.004).abs() < 1e-9);
         assert_eq!(InsmParams { epsilon: 0.0, ..p.clone() }.epsilon_at(256), 0.0);
         assert!(p.epsilon_at(0).is_finite());
+    }
+
+    #[test]
+    fn the_step_tolerance_scales_as_epsilon_and_never_exceeds_it() {
+        let p = InsmParams { epsilon: 0.02, epsilon_inside: 0.04, step_epsilon: 0.02, ..InsmParams::default() };
+        // The box placement: the step tolerance is its ε at every resolution (no change to its meshes).
+        for r in [64, 128, 256, 512] {
+            assert_eq!(p.step_epsilon_at(r), p.epsilon_at(r), "{r}");
+        }
+        // The inside placements: half their ε at 128², the floor from 256² up, as ε is at 512².
+        let q = InsmParams { placement: Placement::Inside, ..p.clone() };
+        assert_eq!((q.epsilon_at(128), q.step_epsilon_at(128)), (0.04, 0.02));
+        assert!((q.step_epsilon_at(64) - 0.04).abs() < 1e-7);
+        assert!((q.step_epsilon_at(256) - 0.01).abs() < 1e-7 && (q.step_epsilon_at(512) - 0.01).abs() < 1e-7);
+        // Above ε it is ε (the paper's test alone); the settings carry both.
+        let loose = InsmParams { step_epsilon: 1.0, ..q.clone() };
+        assert_eq!(loose.step_epsilon_at(128), loose.epsilon_at(128));
+        let m = q.mesh_settings(128);
+        assert_eq!((m.epsilon, m.step_epsilon, m.connectivity().step), (0.04, 0.02, 0.02));
     }
 
     #[test]

@@ -36,6 +36,8 @@ pub fn tiles_per_side(resolution: u32) -> u32 {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeshSettings {
     pub epsilon: f32,
+    /// The tolerance for a step ([`Connectivity::step`]); at or above `epsilon` it changes nothing.
+    pub step_epsilon: f32,
     /// Merge planar tiles (the adaptive mesh).
     pub adaptive: bool,
     /// Relative tolerance of the merge test ([`SampledImage::tile_merged`]).
@@ -47,7 +49,38 @@ pub struct MeshSettings {
 /// Algorithm 2 exactly.
 impl Default for MeshSettings {
     fn default() -> Self {
-        MeshSettings { epsilon: 0.01, adaptive: false, merge_epsilon: 0.002, drop_covered: false }
+        MeshSettings { epsilon: 0.01, step_epsilon: 0.01, adaptive: false, merge_epsilon: 0.002, drop_covered: false }
+    }
+}
+
+impl MeshSettings {
+    /// The connectivity test's tolerances.
+    pub fn connectivity(&self) -> Connectivity {
+        Connectivity { epsilon: self.epsilon, step: self.step_epsilon, steep: 0.0 }
+    }
+}
+
+/// The connectivity test's tolerances (relative second differences of inverse depth): `epsilon`, the paper's,
+/// and `step`, a tighter one for a steep edge (beyond the paper, [`SampledImage::edge_connected`]), one whose
+/// relative change of inverse depth per sample exceeds `steep` (the map's [`MapView::steep`]; 0: none is). A
+/// bare `f32` is the paper's test alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Connectivity {
+    pub epsilon: f32,
+    pub step: f32,
+    pub steep: f32,
+}
+
+impl From<f32> for Connectivity {
+    fn from(epsilon: f32) -> Connectivity {
+        Connectivity { epsilon, step: epsilon, steep: 0.0 }
+    }
+}
+
+impl Connectivity {
+    /// These tolerances for the map seen through `view` (its steepness).
+    pub fn for_view(self, view: &MapView) -> Connectivity {
+        Connectivity { steep: view.steep, ..self }
     }
 }
 
@@ -58,12 +91,31 @@ pub struct MapView {
     pub clip_from_world: Mat4,
     pub near: f32,
     pub far: f32,
+    /// The relative change of inverse depth per sample above which an edge of this map is steep
+    /// ([`steep_slope`] of its field of view and resolution; 0: none is).
+    pub steep: f32,
 }
 
 /// tan 60°: the steepest surface (against the image plane) whose samples [`SampledImage::dilated`] moves; a
 /// steeper one is at a curved silhouette, where the tangent would leave the surface by up to half a sample and
 /// shadow it. Keep in sync with `GRAZING_SLOPE` in `insm/triangulate.wgsl`.
 const GRAZING_SLOPE: f32 = 1.732_050_8;
+
+/// The relative change of view depth between neighbouring samples (`|z_a - z_b| / max(z_a, z_b)` of inverse
+/// depths) above which the surface between them is seen at more than `angle_deg` from face-on: `tan(angle)`
+/// times a sample's angular width `2 tan(fov / 2) / resolution` (at the image's centre). 0 (no edge is steep)
+/// from 90° up or for a bad value.
+pub fn steep_slope(angle_deg: f32, fov_y_deg: f32, resolution: u32) -> f32 {
+    if !(angle_deg > 0.0 && angle_deg < 90.0) {
+        return 0.0;
+    }
+    let slope = angle_deg.to_radians().tan() * 2.0 * (0.5 * fov_y_deg.to_radians()).tan() / resolution.max(1) as f32;
+    if slope.is_finite() {
+        slope.max(0.0)
+    } else {
+        0.0
+    }
+}
 
 impl MapView {
     /// The world point that sample `(x, y)` of a `resolution`² map saw at inverse view depth `inv_depth`: the
@@ -91,7 +143,14 @@ fn quad_area(p00: Vec3, p10: Vec3, p01: Vec3, p11: Vec3) -> f32 {
 /// `w` projects into a neighbourhood of `i` that keeps both triangles, lies on its triangle there (inverse
 /// depth within `epsilon`, relative), and that neighbourhood is smaller (or, within [`FINER_SLACK`], `i` is
 /// the lower-numbered map, `lower`). The twin of `reconstructs_better` in the shader.
-fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f32, lower: bool, epsilon: f32) -> bool {
+fn reconstructs_better(
+    image: &SampledImage,
+    view: &MapView,
+    w: Vec3,
+    area_j: f32,
+    lower: bool,
+    epsilon: Connectivity,
+) -> bool {
     let c = view.clip_from_world * w.extend(1.0);
     if c.w <= 0.0 {
         return false;
@@ -108,7 +167,7 @@ fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f3
         return false;
     }
     let (x, y) = (n.x as u32, n.y as u32);
-    if !image.neighbourhood(x, y, epsilon).iter().all(Option::is_some) {
+    if !image.neighbourhood(x, y, epsilon.for_view(view)).iter().all(Option::is_some) {
         return false;
     }
     let ri = image.resolution;
@@ -124,7 +183,7 @@ fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f3
     };
     let zp = (view.far - ndc.z * (view.far - view.near)) / (view.near * view.far);
     // Written so that NaN fails.
-    let on_surface = (zp - fit).abs() < epsilon * zp;
+    let on_surface = (zp - fit).abs() < epsilon.epsilon * zp;
     if !on_surface {
         return false;
     }
@@ -135,7 +194,13 @@ fn reconstructs_better(image: &SampledImage, view: &MapView, w: Vec3, area_j: f3
 /// For every sample of map `j` (row-major), whether another map reconstructs it more finely (beyond the paper,
 /// see `insm/mod.rs`). A sample's own footprint is the area of the neighbourhood it is the top-left corner of
 /// (the last one of its row or column at the image's edge); one with a background corner is unbounded.
-pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, epsilon: f32) -> Vec<bool> {
+pub fn covered_samples(
+    images: &[SampledImage],
+    views: &[MapView],
+    j: usize,
+    epsilon: impl Into<Connectivity>,
+) -> Vec<bool> {
+    let epsilon = epsilon.into();
     let img = &images[j];
     let r = img.resolution;
     let world_from_clip = views[j].clip_from_world.inverse();
@@ -166,8 +231,8 @@ pub fn covered_samples(images: &[SampledImage], views: &[MapView], j: usize, eps
 pub fn meshes(images: &[SampledImage], views: &[MapView], settings: &MeshSettings) -> Vec<Vec<[u32; 3]>> {
     (0..images.len())
         .map(|j| {
-            let covered = settings.drop_covered.then(|| covered_samples(images, views, j, settings.epsilon));
-            images[j].mesh_with(settings, covered.as_deref())
+            let covered = settings.drop_covered.then(|| covered_samples(images, views, j, settings.connectivity()));
+            images[j].mesh_with(settings, settings.connectivity().for_view(&views[j]), covered.as_deref())
         })
         .collect()
 }
@@ -203,9 +268,11 @@ impl SampledImage<'_> {
     /// step between them: one known below `epsilon` (relative), or neither known and one outside the image or
     /// the first difference below `epsilon`.
     /// The twin of `edge_connected` in the shader, which says why this deviates from the paper's "both below".
-    pub fn edge_connected(&self, a: (i64, i64), b: (i64, i64), epsilon: f32) -> bool {
+    pub fn edge_connected(&self, a: (i64, i64), b: (i64, i64), epsilon: impl Into<Connectivity>) -> bool {
+        let epsilon: Connectivity = epsilon.into();
         let za = self.z(a.0, a.1);
         let zb = self.z(b.0, b.1);
+        let Connectivity { epsilon, step, steep } = epsilon;
         // epsilon 0 connects nothing (as the paper's test does): the way to switch the reconstruction off.
         if za <= 0.0 || zb <= 0.0 || epsilon <= 0.0 {
             return false;
@@ -214,8 +281,12 @@ impl SampledImage<'_> {
         let (z_before, z_after) = (self.z(a.0 - d.0, a.1 - d.1), self.z(b.0 + d.0, b.1 + d.1));
         let (known_a, known_b) = (z_before > 0.0, z_after > 0.0);
         let (s_a, s_b) = (z_before + zb - 2.0 * za, za + z_after - 2.0 * zb);
-        let ok_a = known_a && s_a.abs() < epsilon * za;
-        let ok_b = known_b && s_b.abs() < epsilon * zb;
+        // A steep edge is held to `step` (beyond the paper; see the shader).
+        let diagonal = if d.0 != 0 && d.1 != 0 { std::f32::consts::SQRT_2 } else { 1.0 };
+        let is_steep = steep > 0.0 && (za - zb).abs() > steep * diagonal * za.max(zb);
+        let tolerance = if is_steep { step } else { epsilon };
+        let ok_a = known_a && s_a.abs() < tolerance * za;
+        let ok_b = known_b && s_b.abs() < tolerance * zb;
         if ok_a || ok_b {
             return true;
         }
@@ -225,7 +296,7 @@ impl SampledImage<'_> {
 
     /// Half the step from the sample behind `s` (at `s - d`) to `s`, when the edge from `s` to `s + d` is cut
     /// and the one from `s - d` to `s` is kept (both neighbours in the image): how far `s` moves across the cut.
-    fn half_step_across(&self, s: (i64, i64), d: (i64, i64), epsilon: f32) -> Vec3 {
+    fn half_step_across(&self, s: (i64, i64), d: (i64, i64), epsilon: Connectivity) -> Vec3 {
         let r = self.resolution as i64;
         let (n, behind) = ((s.0 + d.0, s.1 + d.1), (s.0 - d.0, s.1 - d.1));
         let inside = |p: (i64, i64)| p.0 >= 0 && p.1 >= 0 && p.0 < r && p.1 < r;
@@ -255,7 +326,8 @@ impl SampledImage<'_> {
     /// depth changing faster than tan 60° times its lateral spacing: at a curved silhouette the tangent leaves
     /// the surface and would shadow it). Inverse depths are unchanged, so the connectivity tests see the samples
     /// as rendered. The twin of `dilated_position` in the shader (which writes these as the vertices).
-    pub fn dilated(&self, epsilon: f32) -> Vec<Vec4> {
+    pub fn dilated(&self, epsilon: impl Into<Connectivity>) -> Vec<Vec4> {
+        let epsilon: Connectivity = epsilon.into();
         let r = self.resolution as i64;
         (0..r * r)
             .map(|i| {
@@ -272,7 +344,8 @@ impl SampledImage<'_> {
     }
 
     /// The kept triangles of neighbourhood `(u, v)` (Algorithm 2, lines 2-5), as sample indices.
-    pub fn neighbourhood(&self, u: u32, v: u32, epsilon: f32) -> [Option<[u32; 3]>; 2] {
+    pub fn neighbourhood(&self, u: u32, v: u32, epsilon: impl Into<Connectivity>) -> [Option<[u32; 3]>; 2] {
+        let epsilon: Connectivity = epsilon.into();
         let (x, y) = (u as i64, v as i64);
         let r = self.resolution;
         let i00 = v * r + u;
@@ -292,7 +365,8 @@ impl SampledImage<'_> {
     /// affine function through the tile's corners `z(0,0)`, `z(TILE,0)`, `z(0,TILE)`: on a plane inverse depth
     /// is affine in image coordinates, so this is the second-difference test taken across the whole tile, with a
     /// tolerance that planes pass to rounding and that bounds how far a merged tile strays from its samples.
-    pub fn tile_merged(&self, tx: u32, ty: u32, epsilon: f32, merge_epsilon: f32) -> bool {
+    pub fn tile_merged(&self, tx: u32, ty: u32, epsilon: impl Into<Connectivity>, merge_epsilon: f32) -> bool {
+        let epsilon: Connectivity = epsilon.into();
         let (u0, v0) = (tx * TILE, ty * TILE);
         if u0 + TILE >= self.resolution || v0 + TILE >= self.resolution {
             return false;
@@ -325,10 +399,11 @@ impl SampledImage<'_> {
         &self,
         tx: u32,
         ty: u32,
-        epsilon: f32,
+        epsilon: impl Into<Connectivity>,
         merged: &[bool],
         covered: Option<&[bool]>,
     ) -> Vec<[u32; 3]> {
+        let epsilon: Connectivity = epsilon.into();
         let r = self.resolution;
         let tps = tiles_per_side(r);
         let (u0, v0) = (tx * TILE, ty * TILE);
@@ -381,29 +456,37 @@ impl SampledImage<'_> {
     }
 
     /// The merge flag of every tile, row-major.
-    pub fn merged_tiles(&self, epsilon: f32, merge_epsilon: f32) -> Vec<bool> {
+    pub fn merged_tiles(&self, epsilon: impl Into<Connectivity>, merge_epsilon: f32) -> Vec<bool> {
+        let epsilon: Connectivity = epsilon.into();
         let tps = tiles_per_side(self.resolution);
         (0..tps * tps).map(|t| self.tile_merged(t % tps, t / tps, epsilon, merge_epsilon)).collect()
     }
 
     /// This map's reconstructed mesh on its own (`drop_covered` needs the other maps: [`meshes`]): the adaptive
     /// one when `adaptive`, else Algorithm 2's ([`SampledImage::triangles`]).
+    /// (Without a view, no edge is steep.)
     pub fn mesh(&self, settings: &MeshSettings) -> Vec<[u32; 3]> {
-        self.mesh_with(settings, None)
+        self.mesh_with(settings, settings.connectivity(), None)
     }
 
-    fn mesh_with(&self, settings: &MeshSettings, covered: Option<&[bool]>) -> Vec<[u32; 3]> {
+    fn mesh_with(
+        &self,
+        settings: &MeshSettings,
+        connectivity: Connectivity,
+        covered: Option<&[bool]>,
+    ) -> Vec<[u32; 3]> {
         let tps = tiles_per_side(self.resolution);
         let merged = if settings.adaptive {
-            self.merged_tiles(settings.epsilon, settings.merge_epsilon)
+            self.merged_tiles(connectivity, settings.merge_epsilon)
         } else {
             vec![false; (tps * tps) as usize]
         };
-        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, settings.epsilon, &merged, covered)).collect()
+        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, connectivity, &merged, covered)).collect()
     }
 
     /// Every kept triangle, neighbourhood by neighbourhood.
-    pub fn triangles(&self, epsilon: f32) -> Vec<[u32; 3]> {
+    pub fn triangles(&self, epsilon: impl Into<Connectivity>) -> Vec<[u32; 3]> {
+        let epsilon: Connectivity = epsilon.into();
         let r = self.resolution;
         let mut out = Vec::new();
         for v in 0..r.saturating_sub(1) {
@@ -416,7 +499,8 @@ impl SampledImage<'_> {
 
     /// Grid edges (horizontal, vertical, diagonal) between two valid samples that fail the test: the depth
     /// discontinuities the reconstruction did not bridge.
-    pub fn dropped_edges(&self, epsilon: f32) -> Vec<DroppedEdge> {
+    pub fn dropped_edges(&self, epsilon: impl Into<Connectivity>) -> Vec<DroppedEdge> {
+        let epsilon: Connectivity = epsilon.into();
         let r = self.resolution as i64;
         let mut out = Vec::new();
         for y in 0..r {
@@ -448,12 +532,43 @@ mod tests {
     use super::*;
 
     fn adaptive_mesh(epsilon: f32) -> MeshSettings {
-        MeshSettings { epsilon, adaptive: true, ..MeshSettings::default() }
+        MeshSettings { epsilon, step_epsilon: epsilon, adaptive: true, ..MeshSettings::default() }
     }
 
     /// A `r x r` image of inverse depths from `f(x, y)` (positions on a fake grid).
     fn image(r: u32, f: impl Fn(u32, u32) -> f32) -> Vec<Vec4> {
         (0..r * r).map(|i| Vec4::new((i % r) as f32, (i / r) as f32, 0.0, f(i % r, i / r))).collect()
+    }
+
+    #[test]
+    fn a_steep_edge_is_held_to_the_tighter_tolerance_and_only_a_steep_one() {
+        // Rows of inverse depth bending by about 3 % a sample: between the step tolerance (2 %) and ε (4 %).
+        let tolerances = |steep: f32| Connectivity { epsilon: 0.04, step: 0.02, steep };
+        let steep_row = [0.100, 0.103, 0.109, 0.118];
+        let s = image(4, |x, _| steep_row[x as usize]);
+        let img = SampledImage { resolution: 4, samples: &s };
+        // Edge (1, 2) changes inverse depth by 5.5 % (relative): steep above a slope of 0.03, not below 0.1.
+        assert!(img.edge_connected((1, 0), (2, 0), tolerances(0.0)), "no edge is steep: ε holds");
+        assert!(img.edge_connected((1, 0), (2, 0), tolerances(0.1)), "not steep for this map: ε holds");
+        assert!(!img.edge_connected((1, 0), (2, 0), tolerances(0.03)), "steep: the 2 % tolerance cuts it");
+        // A diagonal edge's change is over √2 samples: steep only above √2 times the slope.
+        let d = image(4, |x, y| steep_row[x.max(y) as usize]);
+        let diag = SampledImage { resolution: 4, samples: &d };
+        assert!(diag.edge_connected((1, 1), (2, 2), tolerances(0.05)), "5.5 % over √2 samples is under 0.05");
+        assert!(!diag.edge_connected((1, 1), (2, 2), tolerances(0.03)));
+        // A row that bends as much but changes little (1.5 % a sample) is not steep: ε keeps it.
+        let zigzag = [0.100, 0.1015, 0.100, 0.1015];
+        let z = image(4, |x, _| zigzag[x as usize]);
+        let flat = SampledImage { resolution: 4, samples: &z };
+        assert!(flat.edge_connected((1, 0), (2, 0), tolerances(0.03)));
+        assert!(!flat.edge_connected((1, 0), (2, 0), Connectivity::from(0.02)), "the step tolerance alone cuts it");
+        // The steepness of a map: tan(angle) sample widths; none at 90° or for a bad angle.
+        let slope = steep_slope(75.0, 100.0, 128);
+        assert!((slope - 75f32.to_radians().tan() * 2.0 * 50f32.to_radians().tan() / 128.0).abs() < 1e-6);
+        assert!((steep_slope(75.0, 100.0, 256) - 0.5 * slope).abs() < 1e-6, "finer maps, finer samples");
+        for bad in [90.0, 120.0, 0.0, -5.0, f32::NAN] {
+            assert_eq!(steep_slope(bad, 100.0, 128), 0.0, "{bad}");
+        }
     }
 
     #[test]
@@ -645,7 +760,13 @@ mod tests {
         let s = image(r, |x, y| 0.6 + 0.001 * x as f32 + bump(x, y));
         let img = SampledImage { resolution: r, samples: &s };
         // The crack test, at a merge tolerance as loose as epsilon so that the bump's neighbours merge.
-        let settings = MeshSettings { epsilon: 0.01, adaptive: true, merge_epsilon: 0.01, drop_covered: false };
+        let settings = MeshSettings {
+            epsilon: 0.01,
+            step_epsilon: 0.01,
+            adaptive: true,
+            merge_epsilon: 0.01,
+            drop_covered: false,
+        };
         let merged = img.merged_tiles(0.01, settings.merge_epsilon);
         let tps = tiles_per_side(r) as usize;
         assert!(!merged[tps + 1], "the bump's tile must not merge");
@@ -670,7 +791,7 @@ mod tests {
         let (near, far) = (0.01, 20.0);
         let clip_from_world = crate::math::perspective_rh(60f32.to_radians(), 1.0, near, far)
             * crate::math::look_to_rh(eye, -Vec3::Y, Vec3::NEG_Z);
-        MapView { clip_from_world, near, far }
+        MapView { clip_from_world, near, far, steep: 0.0 }
     }
 
     /// The `r x r` samples of `view` seeing the plane y = `height` (world position, inverse view depth), as
