@@ -183,7 +183,7 @@ fn insm_shadows_match_the_reference_and_improve_with_resolution() {
 }
 
 #[test]
-fn the_papers_box_placement_stays_close_to_the_reference_on_cornell() {
+fn the_papers_box_placement_stays_close_to_the_reference_on_cornell_and_auto_goes_inside() {
     let scene = Scene::builtin("cornell").unwrap();
     let lights = scene.lights.clone();
     let mut r = renderer(&scene, linear_settings(W, H));
@@ -192,10 +192,27 @@ fn the_papers_box_placement_stays_close_to_the_reference_on_cornell() {
     let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = r.create_technique("insm").unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
+    insm.set_param("placement", &ParamValue::Choice("box".into())).unwrap();
     let (actual, report) = frame(&mut r, insm.as_mut(), &scene.camera, &lights);
-    let share = share_over(&actual, &expected, 0.05);
-    assert!(share < 0.15, "{:.2}% of pixels differ by more than 5%", share * 100.0);
+    let boxed = share_over(&actual, &expected, 0.05);
+    assert!(boxed < 0.15, "{:.2}% of pixels differ by more than 5%", boxed * 100.0);
     assert!(report.counts.technique.insm_mesh_triangles.unwrap() > 10_000);
+    assert_eq!(report.counts.technique.figures["placement_inside"], 0.0);
+    // The default, `auto`: the Cornell box is an interior, so its cameras go inside, and INSM comes closer.
+    insm.set_param("placement", &ParamValue::Choice("auto".into())).unwrap();
+    let (actual, report) = frame(&mut r, insm.as_mut(), &scene.camera, &lights);
+    assert_eq!(report.counts.technique.figures["placement_inside"], 1.0);
+    let auto = share_over(&actual, &expected, 0.05);
+    assert!(auto < boxed, "auto {:.2}% against box {:.2}% of pixels off by more than 5%", auto * 100.0, boxed * 100.0);
+    // An object on a floor (the plane and its plate) is no interior: `auto` keeps the paper's box.
+    let outside = plane_and_occluder();
+    let mut r = renderer(&outside, linear_settings(64, 48));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
+    insm.set_param("shadow_res", &ParamValue::Int(64)).unwrap();
+    let (_, report) = frame(&mut r, &mut insm, &outside.camera, &lights_above());
+    assert_eq!(report.counts.technique.figures["placement_inside"], 0.0);
+    assert_eq!(insm.placement_used(), shadowlab_core::technique::insm::viewpoints::Placement::Box);
 }
 
 #[test]

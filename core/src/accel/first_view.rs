@@ -53,13 +53,69 @@ pub fn probe(bvh: &Bvh, point: Vec3, t_max: f32) -> (f32, f32) {
     (low_hits as f32 / low.max(1) as f32, nearest)
 }
 
-/// Whether the model in `bounds` encloses its middle (an interior to be seen from inside).
-pub fn is_interior(bvh: &Bvh, bounds: &Aabb) -> bool {
-    if !(bounds.min.is_finite() && bounds.max.is_finite()) || bvh.triangles.is_empty() {
-        return false;
+/// The share of the probe rays from `point` that hit the back of a triangle first: near 1 inside a closed
+/// solid (a model whose body fills the middle of its bounds), near 0 in the open.
+pub fn back_face_share(bvh: &Bvh, point: Vec3, t_max: f32) -> f32 {
+    let (mut hits, mut back) = (0, 0);
+    for dir in directions() {
+        if let Some(hit) = closest_hit_cpu(bvh, point, dir, t_max) {
+            let t = &bvh.triangles[hit.triangle as usize];
+            let normal = Vec3::from_slice(&t.e1[..3]).cross(Vec3::from_slice(&t.e2[..3]));
+            hits += 1;
+            back += usize::from(normal.dot(dir) > 0.0);
+        }
     }
+    back as f32 / hits.max(1) as f32
+}
+
+/// The point the enclosure is probed from: the middle of `bounds`, or, when that lies inside a solid (the
+/// Dragon's body on its floor), the first of a few points above and around it that does not. When every one
+/// seems to (a room modelled with its faces turned outwards), the middle. None without triangles or bounds.
+pub fn open_middle(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
+    if !(bounds.min.is_finite() && bounds.max.is_finite()) || bvh.triangles.is_empty() {
+        return None;
+    }
+    let (c, size) = (bounds.center(), bounds.size());
+    let diagonal = size.length().max(1e-6);
+    let candidates = [
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.25, 0.0),
+        Vec3::new(0.0, 0.4, 0.0),
+        Vec3::new(0.3, 0.0, 0.0),
+        Vec3::new(-0.3, 0.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.3),
+        Vec3::new(0.0, 0.0, -0.3),
+    ];
+    let open = candidates.iter().map(|o| c + *o * size).find(|&p| back_face_share(bvh, p, diagonal) <= 0.5);
+    Some(open.unwrap_or(c))
+}
+
+/// Whether the model in `bounds` encloses its middle (an interior to be seen from inside): probed from
+/// [`open_middle`], so that a model whose body fills the middle of its bounds is not taken for a room.
+pub fn is_interior(bvh: &Bvh, bounds: &Aabb) -> bool {
+    let Some(point) = open_middle(bvh, bounds) else { return false };
     let diagonal = bounds.size().length().max(1e-6);
-    probe(bvh, bounds.center(), diagonal).0 >= ENCLOSED_SHARE
+    probe(bvh, point, diagonal).0 >= ENCLOSED_SHARE
+}
+
+/// The share of all the probe directions from [`open_middle`] that must hit the model for [`is_enclosed`]: the
+/// Cornell box (closed above, open at the front) 0.84, an object on a floor 0.44-0.66.
+pub const CLOSED_SHARE: f32 = 0.8;
+
+/// Whether cameras around the bounds would see mostly the outside of the model's walls: an interior
+/// ([`is_interior`]) or a room closed above and open on one side ([`CLOSED_SHARE`] of all directions, the
+/// Cornell box). INSM's `auto` placement puts its cameras inside such a model.
+pub fn is_enclosed(bvh: &Bvh, bounds: &Aabb) -> bool {
+    let Some(point) = open_middle(bvh, bounds) else { return false };
+    let diagonal = bounds.size().length().max(1e-6);
+    probe(bvh, point, diagonal).0 >= ENCLOSED_SHARE || enclosed_share(bvh, point, diagonal) >= CLOSED_SHARE
+}
+
+/// The share of all the probe directions (up as well as down) in which a ray from `point` hits the model
+/// within `t_max`: a room closed above and open on one side (a Cornell box) is enclosed by most of them.
+pub fn enclosed_share(bvh: &Bvh, point: Vec3, t_max: f32) -> f32 {
+    let hits = directions().filter(|&d| closest_hit_cpu(bvh, point, d, t_max).is_some()).count();
+    hits as f32 / PROBE_DIRECTIONS as f32
 }
 
 /// A camera inside the interior in `bounds`, or None when the model is not one (keep the outside view).
@@ -141,5 +197,50 @@ mod tests {
         let object = Aabb { min: Vec3::new(-10.0, 0.0, -10.0), max: Vec3::new(10.0, 3.0, 10.0) };
         assert!(interior_view(&Bvh::build(&floor), &object, 0.9).is_none());
         assert!(interior_view(&Bvh::build(&[]), &object, 0.9).is_none(), "no triangles: keep the framing");
+    }
+
+    /// `room` with every triangle turned the other way.
+    fn flipped(triangles: Vec<[Vec3; 3]>) -> Vec<[Vec3; 3]> {
+        triangles.into_iter().map(|[a, b, c]| [a, c, b]).collect()
+    }
+
+    /// `triangles` each turned to face away from `centre` (a solid's faces, seen from outside).
+    fn outwards(triangles: Vec<[Vec3; 3]>, centre: Vec3) -> Vec<[Vec3; 3]> {
+        let facing_out = |[a, b, c]: [Vec3; 3]| (b - a).cross(c - a).dot((a + b + c) / 3.0 - centre) > 0.0;
+        triangles.into_iter().map(|t| if facing_out(t) { t } else { [t[0], t[2], t[1]] }).collect()
+    }
+
+    #[test]
+    fn a_solid_in_the_middle_of_its_bounds_is_probed_from_the_open_and_a_room_open_at_the_front_is_enclosed() {
+        // A solid block filling the middle of a floor's bounds (the Dragon's body): its middle lies inside the
+        // block, where every ray hits a back face; the probe moves above it, and the model is an object.
+        let (min, max) = (Vec3::new(-10.0, 0.0, -10.0), Vec3::new(10.0, 8.0, 10.0));
+        let mut model = room(Vec3::new(-10.0, -0.01, -10.0), Vec3::new(10.0, 0.0, 10.0), true);
+        // The block's faces turned outwards (a solid): from its middle every ray hits a back face.
+        model.extend(outwards(room(Vec3::new(-3.0, 0.0, -3.0), Vec3::new(3.0, 5.0, 3.0), true), Vec3::Y * 2.5));
+        let bvh = Bvh::build(&model);
+        let bounds = Aabb { min, max };
+        assert!(back_face_share(&bvh, bounds.center(), 50.0) > 0.9);
+        let p = open_middle(&bvh, &bounds).unwrap();
+        assert!(p.y > 5.0, "probed from above the block: {p}");
+        assert!(back_face_share(&bvh, p, 50.0) <= 0.5);
+        assert!(!is_interior(&bvh, &bounds) && !is_enclosed(&bvh, &bounds));
+        // A room closed above and open at the front (a Cornell box): not an interior to frame from inside,
+        // but enclosed (most directions hit it), whichever way its faces turn.
+        let (rmin, rmax) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
+        let open_front: Vec<[Vec3; 3]> =
+            room(rmin, rmax, true).into_iter().filter(|t| t.iter().any(|v| v.z < 0.999)).collect();
+        let rbounds = Aabb { min: rmin, max: rmax };
+        let inwards = flipped(outwards(open_front, Vec3::Y));
+        for tris in [inwards.clone(), flipped(inwards)] {
+            let bvh = Bvh::build(&tris);
+            assert!(is_enclosed(&bvh, &rbounds));
+        }
+        // A closed room whose faces turn outwards (every probe point sees back faces) is still an interior, as
+        // is one whose faces turn inwards.
+        let out = outwards(room(min, max, true), bounds.center());
+        assert!(back_face_share(&Bvh::build(&out), bounds.center(), 50.0) > 0.9);
+        assert!(is_interior(&Bvh::build(&out), &bounds));
+        assert!(is_interior(&Bvh::build(&flipped(out)), &bounds));
     }
 }

@@ -216,6 +216,10 @@ pub struct Insm {
     pub params: InsmParams,
     /// The viewpoints of `placement = custom` (edited in the app, saved in scene files).
     pub custom_viewpoints: Vec<Viewpoint>,
+    /// `auto` resolved for the scene of these bounds.
+    auto_placement: Option<(Aabb, viewpoints::Placement)>,
+    /// The placement the last frame used.
+    placement_used: viewpoints::Placement,
     images: CubeShadowRenderer,
     shadows: PerLightShadows,
     triangulate_pipeline: wgpu::ComputePipeline,
@@ -315,6 +319,8 @@ impl Insm {
         Insm {
             params: InsmParams::default(),
             custom_viewpoints: Vec::new(),
+            auto_placement: None,
+            placement_used: viewpoints::Placement::Box,
             images: CubeShadowRenderer::new(gpu),
             shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_pushed_vertices(gpu)),
             triangulate_pipeline,
@@ -347,7 +353,17 @@ impl Insm {
     /// How the meshes are built, for the CPU twin.
     pub fn mesh_settings(&self) -> MeshSettings {
         let res = self.mesh.as_ref().map_or(self.params.insm_resolution, |m| m.resolution);
-        self.params.mesh_settings(res)
+        self.placed().mesh_settings(res)
+    }
+
+    /// The parameters with `auto` resolved to the placement the last frame used (whose ε it is).
+    fn placed(&self) -> InsmParams {
+        InsmParams { placement: self.placement_used, ..self.params.clone() }
+    }
+
+    /// The placement the last frame used (`auto` resolved for its scene).
+    pub fn placement_used(&self) -> viewpoints::Placement {
+        self.placement_used
     }
 
     /// The per-light maps' parameters with the lookup's bias for `views` at `resolution`
@@ -441,13 +457,29 @@ impl Technique for Insm {
         self.tiles_ready = false;
         let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let bounds = scene_bounds(&ctx.scene.chunks);
-        // `walls` finds the walls through the scene's BVH (built once per scene, shared with the tracers).
-        let bvh = (self.params.placement == viewpoints::Placement::Walls).then(|| ctx.scene.bvh(ctx.gpu).0);
+        // `auto` asks the scene whether it is an interior (once per scene: its bounds) and `walls` finds the walls,
+        // both through the scene's BVH (built once per scene, shared with the tracers).
+        use viewpoints::Placement;
+        let placement = match self.params.placement {
+            Placement::Auto => match self.auto_placement {
+                Some((b, p)) if b == bounds => p,
+                _ => {
+                    let bvh = ctx.scene.bvh(ctx.gpu).0;
+                    let interior = crate::accel::first_view::is_enclosed(&bvh.cpu, &bounds);
+                    let p = if interior { Placement::Inside } else { Placement::Box };
+                    self.auto_placement = Some((bounds, p));
+                    p
+                }
+            },
+            p => p,
+        };
+        self.placement_used = placement;
+        let bvh = (placement == Placement::Walls).then(|| ctx.scene.bvh(ctx.gpu).0);
         let hit = |o: Vec3, d: Vec3, t: f32| {
             bvh.as_ref().and_then(|b| crate::accel::bvh::closest_hit_cpu(&b.cpu, o, d, t)).map(|h| h.t)
         };
         let views = viewpoints::select(
-            self.params.placement,
+            placement,
             &bounds,
             &self.custom_viewpoints,
             self.params.viewpoints as usize,
@@ -458,6 +490,9 @@ impl Technique for Insm {
         self.push_per_depth = self.params.push_per_depth(&views, res);
         let batches = self.shadows.prepare(ctx, &self.lookup);
         self.counts = TechniqueCounts { lights_visible: self.shadows.visible_lights(), ..Default::default() };
+        // Which placement `auto` (or the user) chose: 1 for the cameras inside the scene, 0 around it (or custom).
+        let inside = matches!(placement, Placement::Inside | Placement::Walls);
+        self.counts.figures.insert("placement_inside".into(), f64::from(u8::from(inside)));
         if batches == 0 {
             return Ok(0);
         }
@@ -515,13 +550,13 @@ impl Technique for Insm {
         let uniform = TriangulateUniform {
             resolution: res,
             tiles_per_side: triangulate::tiles_per_side(res),
-            epsilon: self.params.epsilon_at(res),
+            epsilon: self.placed().epsilon_at(res),
             atlas_tiles_per_row,
             adaptive: u32::from(self.params.adaptive),
             merge_epsilon: self.params.merge_epsilon,
             drop_covered: u32::from(self.params.drop_covered),
             dilate: u32::from(self.params.dilate),
-            step_epsilon: self.params.step_epsilon_at(res),
+            step_epsilon: self.placed().step_epsilon_at(res),
             _pad: [0; 3],
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));

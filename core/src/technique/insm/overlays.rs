@@ -9,7 +9,8 @@ impl Insm {
         vec![
             ExplainStep {
                 title: "1. Viewpoints",
-                text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom).",
+                text: "k reference viewpoints around (box) or inside (inside) the scene, or your own (custom); auto \
+                       (the default) takes inside for an enclosed interior and box for an object.",
                 layers: &["INSM viewpoints"],
                 shows_shadow_maps: false,
                 ..Default::default()
@@ -26,7 +27,8 @@ impl Insm {
             ExplainStep {
                 title: "3. Their meshes",
                 text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge dropped \
-                       only where the second differences of depth show a step across it (ε). Red: dropped edges. Beyond the paper, \
+                       only where the second differences of depth show a step across it (ε; a tighter one where \
+                       the surface is seen nearly edge-on). Red: dropped edges. Beyond the paper, \
                        planar tiles are merged (adaptive) and a map leaves out what another map reconstructs more \
                        finely (drop_covered).",
                 layers: &["INSM mesh (wireframe)", "INSM dropped edges"],

@@ -113,7 +113,7 @@ impl Default for InsmParams {
             simplify: 1.0,
             simplify_error: 0.0005,
             dilate: true,
-            placement: Placement::Box,
+            placement: Placement::Auto,
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
             bias_samples: DEFAULT_BIAS_SAMPLES,
             push_samples: DEFAULT_PUSH_SAMPLES,
@@ -230,9 +230,10 @@ impl InsmParams {
             Param {
                 key: "placement",
                 label: "Viewpoints",
-                help: "box: the paper's bounding-box placement; inside: a ring inside the scene (rooms); walls: \
-                       inside, with the cameras that stand behind a wall moved in front of it (rooms that do not \
-                       fill their box: aisles, galleries); custom: the viewpoints you placed",
+                help: "auto: inside for an enclosed interior, box for an object (the scene decides); box: the \
+                       paper's bounding-box placement; inside: a ring inside the scene (rooms); walls: inside, with \
+                       the cameras that stand behind a wall moved in front of it (rooms that do not fill their box: \
+                       aisles, galleries); custom: the viewpoints you placed",
                 kind: ParamKind::Choice(Placement::NAMES),
                 value: ParamValue::Choice(self.placement.name().to_string()),
             },
@@ -340,9 +341,10 @@ impl InsmParams {
     /// `EPSILON_FLOOR` (0.02 at 128², 0.04 at 64², 0.01 from 256² up; inside 0.04, 0.08, 0.02 at 256², 0.01
     /// at 512²).
     pub fn epsilon_at(&self, resolution: u32) -> f32 {
+        // `Auto` is resolved before the meshes are built (`Insm::prepare`); unresolved it is the box placement.
         let e = match self.placement {
             Placement::Inside | Placement::Walls => self.epsilon_inside,
-            Placement::Box | Placement::Custom => self.epsilon,
+            Placement::Box | Placement::Custom | Placement::Auto => self.epsilon,
         };
         scaled_epsilon(e, resolution)
     }
@@ -383,8 +385,9 @@ mod tests {
 
     #[test]
     fn epsilon_is_given_at_128_per_placement_and_scales_with_the_sample_width_down_to_a_floor() {
-        let p = InsmParams { epsilon: 0.02, epsilon_inside: 0.04, ..InsmParams::default() };
-        assert_eq!(p.placement, Placement::Box);
+        let p = InsmParams { epsilon: 0.02, epsilon_inside: 0.04, placement: Placement::Box, ..InsmParams::default() };
+        assert_eq!(InsmParams::default().placement, Placement::Auto, "the scene decides by default");
+        assert_eq!(InsmParams { placement: Placement::Auto, ..p.clone() }.epsilon_at(128), 0.02, "unresolved: box");
         assert_eq!(p.epsilon_at(EPSILON_RESOLUTION), 0.02);
         assert!((p.epsilon_at(64) - 0.04).abs() < 1e-7);
         assert!((p.epsilon_at(32) - 0.08).abs() < 1e-7);
@@ -408,7 +411,13 @@ mod tests {
 
     #[test]
     fn the_step_tolerance_scales_as_epsilon_and_never_exceeds_it() {
-        let p = InsmParams { epsilon: 0.02, epsilon_inside: 0.04, step_epsilon: 0.02, ..InsmParams::default() };
+        let p = InsmParams {
+            epsilon: 0.02,
+            epsilon_inside: 0.04,
+            step_epsilon: 0.02,
+            placement: Placement::Box,
+            ..InsmParams::default()
+        };
         // The box placement: the step tolerance is its ε at every resolution (no change to its meshes).
         for r in [64, 128, 256, 512] {
             assert_eq!(p.step_epsilon_at(r), p.epsilon_at(r), "{r}");

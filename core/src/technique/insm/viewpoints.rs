@@ -236,10 +236,15 @@ pub enum Placement {
     Custom,
     /// `Inside` with the cameras behind walls moved in front of them ([`fit_inside`], beyond the paper).
     Walls,
+    /// `Inside` for an enclosed model, `Box` for an object (beyond the paper, the default): rays from the middle
+    /// of the bounds hit the model all around at and below the horizon, or in most directions
+    /// ([`crate::accel::first_view::is_enclosed`]: the built-ins, Sponza and the conference room are enclosed,
+    /// the Dragon on its floor is not). The paper places its cameras by hand for Sponza.
+    Auto,
 }
 
 impl Placement {
-    pub const NAMES: &'static [&'static str] = &["box", "inside", "walls", "custom"];
+    pub const NAMES: &'static [&'static str] = &["auto", "box", "inside", "walls", "custom"];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -247,6 +252,7 @@ impl Placement {
             Placement::Inside => "inside",
             Placement::Walls => "walls",
             Placement::Custom => "custom",
+            Placement::Auto => "auto",
         }
     }
 
@@ -256,6 +262,7 @@ impl Placement {
             "inside" => Some(Placement::Inside),
             "walls" => Some(Placement::Walls),
             "custom" => Some(Placement::Custom),
+            "auto" => Some(Placement::Auto),
             _ => None,
         }
     }
@@ -277,6 +284,8 @@ pub fn select(
         (Placement::Inside, _) | (Placement::Walls, None) => inside_viewpoints(bounds),
         (Placement::Walls, Some(hit)) => fit_inside(inside_viewpoints(bounds), bounds, hit),
         (Placement::Custom, _) => custom.to_vec(),
+        // Resolved by the caller, who has the scene ([`Placement::Auto`]); without it, the paper's.
+        (Placement::Auto, _) => box_viewpoints(bounds, box_distance),
     };
     all.into_iter().filter(Viewpoint::is_valid).take(k).collect()
 }
