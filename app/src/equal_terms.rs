@@ -32,9 +32,10 @@ pub fn resolution_note(
         .collect();
     (!differing.is_empty()).then(|| {
         format!(
-            "not at one resolution: {} (each technique's default; --shadow-res N, --param shadow_res=N or \
-             --against-param shadow_res=N sets them)",
-            differing.join("; ")
+            "not at one resolution: {} (techniques have their own defaults: --shadow-res N sets both direct \
+             sides, --param/--against-param shadow_res=N one, --indirect-param/--against-indirect-param \
+             shadow_res=N the indirect ones)",
+            differing.join(", and ")
         )
     })
 }
@@ -60,7 +61,17 @@ mod tests {
         let val = params(&[("indirect.shadow_res", "128")]);
         let per_vpl = params(&[("indirect.shadow_res", "256")]);
         let note = resolution_note("val", &val, "vpl-shadowmaps", &per_vpl).expect("128 against 256");
-        assert!(note.contains("indirect maps val 128²") && !note.contains("; "), "{note}");
+        assert!(note.contains("indirect maps val 128², vpl-shadowmaps 256²"), "{note}");
+        assert_eq!(note.matches('²').count(), 2, "only the indirect maps differ: {note}");
+        // Both kinds differing are both named.
+        let both = resolution_note(
+            "a",
+            &params(&[("shadow_res", "512"), ("indirect.shadow_res", "128")]),
+            "b",
+            &params(&[("shadow_res", "1024"), ("indirect.shadow_res", "256")]),
+        )
+        .unwrap();
+        assert!(both.contains("maps a 512², b 1024², and indirect maps a 128², b 256²"), "{both}");
         assert_eq!(resolutions(&insm), ["512".to_string(), String::new()]);
         assert_eq!(resolutions(&val), [String::new(), "128".to_string()]);
     }
