@@ -464,8 +464,14 @@ impl Technique for Insm {
             Placement::Auto => match self.auto_placement {
                 Some((b, p)) if b == bounds => p,
                 _ => {
-                    let bvh = ctx.scene.bvh(ctx.gpu).0;
+                    let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
+                    if let Some(ms) = build_ms {
+                        self.cpu_times.push(PassTime { name: "bvh build".into(), ms, count: 1 });
+                    }
+                    let start = std::time::Instant::now();
                     let interior = crate::accel::first_view::is_enclosed(&bvh.cpu, &bounds);
+                    let ms = start.elapsed().as_secs_f64() * 1e3;
+                    self.cpu_times.push(PassTime { name: "placement test".into(), ms, count: 1 });
                     let p = if interior { Placement::Inside } else { Placement::Box };
                     self.auto_placement = Some((bounds, p));
                     p
