@@ -364,7 +364,20 @@ impl Technique for VirtualAreaLights {
         let offset = self.scene_size * MAP_OFFSET;
         let far = self.scene_size * 1.01;
         self.casters.clear();
-        let centres: Vec<Vec3> = self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect();
+        // Each VAL's map centre: the paper's (its mean, moved off its surface along its normal) or, with `centre =
+        // member`, its member VPL nearest the mean, moved off its own surface ([`split::member_centre`]).
+        let centres: Vec<Vec3> = if self.params.centre_member {
+            let mut members = vec![Vec::new(); self.clustering.vals.len()];
+            for (i, &k) in self.clustering.assignment.iter().enumerate() {
+                if let Some(m) = members.get_mut(k as usize) {
+                    m.push(i);
+                }
+            }
+            let vals = self.clustering.vals.iter().zip(&members);
+            vals.map(|(v, m)| split::member_centre(vpls, m, v.position, v.normal, offset)).collect()
+        } else {
+            self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect()
+        };
         // Each VAL's bounding sphere about its map's centre: a receiver whose tangent plane has the whole sphere
         // behind it gets no light from any of the VAL's VPLs (`vpl_term` is 0 for cos_x <= 0), so its visibility
         // is not computed (`val_visibility`). Widened by a millionth of the scene for rounding.

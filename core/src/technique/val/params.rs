@@ -51,6 +51,9 @@ pub struct ValParams {
     /// [`super::split`]: ranked by flux, a VAL's flux-weighted error counts `1 + hidden_weight * h` times, `h` the
     /// share of its VPLs' luminance its map's centre does not see (a ray each, the scene's BVH; 0: off).
     pub hidden_weight: f32,
+    /// Where a VAL's map stands: false, its mean moved off its surface (the paper's); true (`centre = member`),
+    /// the member VPL nearest the mean, moved off its own surface ([`super::split::member_centre`]).
+    pub centre_member: bool,
     /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
@@ -103,6 +106,7 @@ impl Default for ValParams {
             // conference room's rises 2-5 % at M = 30-96 and 224, falls at 128-192 and 256; the Cornell box's is
             // unchanged.
             hidden_weight: 2.0,
+            centre_member: false,
             max_cone_degrees: 40.0,
             max_depth: 0.1,
             proxy: 1.0,
@@ -203,6 +207,14 @@ impl ValParams {
                        its map's centre cannot see (a ray per VPL); 0: the flux rank alone",
                 kind: ParamKind::Float { min: 0.0, max: 100.0 },
                 value: ParamValue::Float(p.hidden_weight),
+            },
+            Param {
+                key: "centre",
+                label: "Map centre",
+                help: "mean: each VAL's map at its VPLs' mean, off its surface (the paper's); member: at the VPL \
+                       nearest the mean, off its own surface (never in the open space across an arch)",
+                kind: ParamKind::Choice(&["mean", "member"]),
+                value: ParamValue::Choice(if p.centre_member { "member" } else { "mean" }.to_string()),
             },
             Param {
                 key: "max_cone",
@@ -356,6 +368,7 @@ impl ValParams {
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
             ("gain_until", ParamValue::Int(v)) => p.gain_until = *v as u32,
             ("hidden_weight", ParamValue::Float(v)) => p.hidden_weight = *v,
+            ("centre", ParamValue::Choice(v)) => p.centre_member = v == "member",
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             ("proxy", ParamValue::Float(v)) => p.proxy = *v,

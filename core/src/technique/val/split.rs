@@ -145,10 +145,14 @@ const SIGHT_SAMPLES: usize = 256;
 /// The share of `g`'s members' luminance whose VPL its map's centre does not see (estimated from
 /// [`SIGHT_SAMPLES`] evenly strided members of a larger VAL).
 fn hidden_share(vpls: &[Vpl], g: &Group, sight: &Sight) -> f32 {
-    let eye = g.position + g.normal * sight.offset;
+    hidden_from(vpls, &g.members, g.position + g.normal * sight.offset, sight)
+}
+
+/// The share of the luminance of `members` whose VPL `eye` does not see ([`SIGHT_SAMPLES`] strided members).
+fn hidden_from(vpls: &[Vpl], members: &[usize], eye: Vec3, sight: &Sight) -> f32 {
     let (mut hidden, mut total) = (0.0f32, 0.0f32);
-    let stride = g.members.len().div_ceil(SIGHT_SAMPLES).max(1);
-    for &i in g.members.iter().step_by(stride) {
+    let stride = members.len().div_ceil(SIGHT_SAMPLES).max(1);
+    for &i in members.iter().step_by(stride) {
         let y = luminance(vpls[i].flux);
         total += y;
         if (sight.occluded)(eye, vpls[i].position) {
@@ -159,6 +163,20 @@ fn hidden_share(vpls: &[Vpl], g: &Group, sight: &Sight) -> f32 {
         (hidden / total).clamp(0.0, 1.0)
     } else {
         0.0
+    }
+}
+
+/// Where a VAL's map stands with `centre = member` (beyond the paper): the member VPL nearest the VAL's mean,
+/// moved `offset` along its own normal: a point just off a surface the VAL lies on, never inside a column or in
+/// the free space across an arch that the mean of VPLs on both sides falls into (the paper's Fig. 7 fault).
+/// The mean moved along the VAL's normal (the paper's centre) when there are no members.
+pub fn member_centre(vpls: &[Vpl], members: &[usize], position: Vec3, normal: Vec3, offset: f32) -> Vec3 {
+    let nearest = members.iter().copied().min_by(|&a, &b| {
+        vpls[a].position.distance_squared(position).total_cmp(&vpls[b].position.distance_squared(position))
+    });
+    match nearest.map(|i| vpls[i].position + vpls[i].normal * offset) {
+        Some(eye) if eye.is_finite() => eye,
+        _ => position + normal * offset,
     }
 }
 
@@ -522,6 +540,43 @@ mod tests {
         let h = hidden_share(&v, &g, &Sight { occluded: &wall, offset: 0.01 });
         assert!(rays.get() <= SIGHT_SAMPLES, "{} rays", rays.get());
         assert!((h - 0.3).abs() < 0.02, "hidden share {h}");
+    }
+
+    #[test]
+    fn a_member_centre_is_the_vpl_nearest_the_mean_just_off_its_own_surface() {
+        // VPLs on a floor (x 0-2.9, facing up) and on a wall (x = 3.2, facing -x): their mean floats above the
+        // floor at x ~ 1.3, in the open; the member centre is the floor VPL below it, moved off the floor.
+        let floor = (0..30).map(|i| Vpl {
+            position: Vec3::new(0.1 * i as f32, 0.0, 0.0),
+            normal: Vec3::Y,
+            flux: Vec3::ONE,
+            light: 0,
+            from: Vec3::ZERO,
+        });
+        let wall = (0..10).map(|i| Vpl {
+            position: Vec3::new(3.2, 0.1 * i as f32, 0.0),
+            normal: Vec3::NEG_X,
+            flux: Vec3::ONE,
+            light: 0,
+            from: Vec3::ZERO,
+        });
+        let v: Vec<Vpl> = floor.chain(wall).collect();
+        let members: Vec<usize> = (0..v.len()).collect();
+        let (position, normal) = mean(&v, &members);
+        assert!(position.y > 0.05, "the mean floats: {position}");
+        let eye = member_centre(&v, &members, position, normal, 0.01);
+        let nearest = members
+            .iter()
+            .copied()
+            .min_by(|&a, &b| v[a].position.distance(position).total_cmp(&v[b].position.distance(position)))
+            .unwrap();
+        assert_eq!(v[nearest].normal, Vec3::Y);
+        assert!((eye - (v[nearest].position + Vec3::Y * 0.01)).length() < 1e-6, "{eye}");
+        // No members, or a broken one: the paper's centre.
+        assert_eq!(member_centre(&v, &[], position, normal, 0.01), position + normal * 0.01);
+        let mut broken = v.clone();
+        broken[nearest].normal = Vec3::NAN;
+        assert_eq!(member_centre(&broken, &[nearest], position, normal, 0.01), position + normal * 0.01);
     }
 
     /// The sum of `Y d^2` over the VALs of `c`.
