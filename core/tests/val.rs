@@ -275,20 +275,28 @@ fn a_hidden_weight_changes_which_vals_a_wall_splits() {
 }
 
 #[test]
-fn maps_at_a_member_vpl_move_the_vals_maps_and_stay_close_to_exact_visibility() {
+fn maps_at_a_member_vpl_move_the_vals_maps_and_stay_close_to_exact_visibility_and_auto_chooses_by_size() {
     // `centre = member`: each VAL's map at its VPL nearest the mean, off that VPL's surface. In the room's corner
     // the VALs' means float off the walls, so the maps move and the image changes; it stays about as close to
     // exact VPL visibility as the paper's centres.
     let scene = room();
     let (truth, _) = Shot::indirect(&scene, &lights(), settings(256), "vpl-raytraced").render();
-    let shot = |centre: &str| {
-        let params = [("vals", ParamValue::Int(16)), ("centre", ParamValue::Choice(centre.into()))];
+    let shot = |centre: &str, share: f32| {
+        let params = [
+            ("vals", ParamValue::Int(16)),
+            ("centre", ParamValue::Choice(centre.into())),
+            ("member_share", ParamValue::Float(share)),
+        ];
         let (img, _) = Shot::indirect(&scene, &lights(), settings(256), "val").params(&params).render();
         assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())), "{centre}");
         img
     };
-    let (mean, member) = (shot("mean"), shot("member"));
+    let (mean, member) = (shot("mean", 0.5), shot("member", 0.0));
     assert!(rel_rmse(&member, &mean) > 1e-3, "the maps did not move");
     let (e_mean, e_member) = (rel_rmse(&mean, &truth), rel_rmse(&member, &truth));
     assert!(e_member < 1.5 * e_mean + 0.01, "member centres {e_member:.4} against the mean's {e_mean:.4}");
+    // `auto` (the default) is the member's for VALs of at most `member_share` of the VPLs: all of them at 1, none
+    // at 0.
+    assert_eq!(rel_rmse(&shot("auto", 1.0), &member), 0.0);
+    assert_eq!(rel_rmse(&shot("auto", 0.0), &mean), 0.0);
 }

@@ -63,7 +63,7 @@ mod overlays;
 mod params;
 pub mod split;
 
-pub use params::ValParams;
+pub use params::{Centre, ValParams};
 
 use std::sync::Arc;
 
@@ -364,9 +364,15 @@ impl Technique for VirtualAreaLights {
         let offset = self.scene_size * MAP_OFFSET;
         let far = self.scene_size * 1.01;
         self.casters.clear();
-        // Each VAL's map centre: the paper's (its mean, moved off its surface along its normal) or, with `centre =
-        // member`, its member VPL nearest the mean, moved off its own surface ([`split::member_centre`]).
-        let centres: Vec<Vec3> = if self.params.centre_member {
+        // Each VAL's map centre: the paper's (its mean, moved off its surface along its normal) or its member VPL
+        // nearest the mean, moved off its own surface ([`split::member_centre`]), by `centre`.
+        // A VAL of at most `member_share` of the VPLs (`centre = auto`, every VAL with `member`) stands at a member.
+        let max_members = match self.params.centre {
+            Centre::Mean => 0,
+            Centre::Member => usize::MAX,
+            Centre::Auto => (self.params.member_share.max(0.0) as f64 * vpls.len() as f64).floor() as usize,
+        };
+        let centres: Vec<Vec3> = if max_members > 0 {
             let mut members = vec![Vec::new(); self.clustering.vals.len()];
             for (i, &k) in self.clustering.assignment.iter().enumerate() {
                 if let Some(m) = members.get_mut(k as usize) {
@@ -374,7 +380,14 @@ impl Technique for VirtualAreaLights {
                 }
             }
             let vals = self.clustering.vals.iter().zip(&members);
-            vals.map(|(v, m)| split::member_centre(vpls, m, v.position, v.normal, offset)).collect()
+            vals.map(|(v, m)| {
+                if m.len() <= max_members {
+                    split::member_centre(vpls, m, v.position, v.normal, offset)
+                } else {
+                    v.position + v.normal * offset
+                }
+            })
+            .collect()
         } else {
             self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect()
         };

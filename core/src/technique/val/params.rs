@@ -3,6 +3,48 @@
 use super::MAX_VALS;
 use crate::technique::{Param, ParamKind, ParamValue};
 
+/// Where a VAL's map stands (`centre`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Centre {
+    /// The VAL's mean, moved off its surface along its normal (the paper's).
+    Mean,
+    /// The member VPL nearest the mean, moved off its own surface (beyond the paper,
+    /// [`super::split::member_centre`]).
+    Member,
+    /// `Member` for a VAL of at most `member_share` of the VPLs, `Mean` for a larger one (the default).
+    Auto,
+}
+
+impl Centre {
+    pub const NAMES: &'static [&'static str] = &["auto", "mean", "member"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Centre::Mean => "mean",
+            Centre::Member => "member",
+            Centre::Auto => "auto",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Centre> {
+        match name {
+            "mean" => Some(Centre::Mean),
+            "member" => Some(Centre::Member),
+            "auto" => Some(Centre::Auto),
+            _ => None,
+        }
+    }
+}
+
+/// `centre = auto`'s limit: a VAL of at most 1/32 of the frame's VPLs (32 of 1,024) has its map at a member VPL.
+/// A small VAL (a patch, the VPLs around a column's foot or on both sides of an arch) is best seen from a point
+/// on a surface it lies on: its mean floats in the open or sits in the column. A large one (several surfaces, a
+/// large share of the light: the first bisections) is better seen from its mean in the open. Measured
+/// (docs/techniques/val.md, FLIP against per-VPL maps at M = 2...256): every VAL at a member made Sponza's and the
+/// conference room's error rise from M = 2 to 8 and fall lower from M = 30-96 up; with 16 VPLs Sponza fell at
+/// every M and the conference room stayed flat from 2 to 4; with 32 both fall at every M.
+pub const DEFAULT_MEMBER_SHARE: f32 = 1.0 / 32.0;
+
 /// The technique's parameters; their keys, ranges and help are in [`ValParams::describe`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct ValParams {
@@ -51,9 +93,10 @@ pub struct ValParams {
     /// [`super::split`]: ranked by flux, a VAL's flux-weighted error counts `1 + hidden_weight * h` times, `h` the
     /// share of its VPLs' luminance its map's centre does not see (a ray each, the scene's BVH; 0: off).
     pub hidden_weight: f32,
-    /// Where a VAL's map stands: false, its mean moved off its surface (the paper's); true (`centre = member`),
-    /// the member VPL nearest the mean, moved off its own surface ([`super::split::member_centre`]).
-    pub centre_member: bool,
+    /// Where a VAL's map stands ([`Centre`]).
+    pub centre: Centre,
+    /// With `centre = auto`: a VAL of at most this share of the frame's VPLs stands at a member.
+    pub member_share: f32,
     /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
@@ -106,7 +149,8 @@ impl Default for ValParams {
             // conference room's rises 2-5 % at M = 30-96 and 224, falls at 128-192 and 256; the Cornell box's is
             // unchanged.
             hidden_weight: 2.0,
-            centre_member: false,
+            centre: Centre::Auto,
+            member_share: DEFAULT_MEMBER_SHARE,
             max_cone_degrees: 40.0,
             max_depth: 0.1,
             proxy: 1.0,
@@ -212,9 +256,17 @@ impl ValParams {
                 key: "centre",
                 label: "Map centre",
                 help: "mean: each VAL's map at its VPLs' mean, off its surface (the paper's); member: at the VPL \
-                       nearest the mean, off its own surface (never in the open space across an arch)",
-                kind: ParamKind::Choice(&["mean", "member"]),
-                value: ParamValue::Choice(if p.centre_member { "member" } else { "mean" }.to_string()),
+                       nearest the mean, off its own surface (never in the open space across an arch); auto: member \
+                       for a VAL of at most member_share of the VPLs, mean for a larger one",
+                kind: ParamKind::Choice(Centre::NAMES),
+                value: ParamValue::Choice(p.centre.name().to_string()),
+            },
+            Param {
+                key: "member_share",
+                label: "Member centre up to",
+                help: "centre = auto: a VAL of at most this share of the frame's VPLs has its map at a member VPL",
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                value: ParamValue::Float(p.member_share),
             },
             Param {
                 key: "max_cone",
@@ -368,7 +420,8 @@ impl ValParams {
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
             ("gain_until", ParamValue::Int(v)) => p.gain_until = *v as u32,
             ("hidden_weight", ParamValue::Float(v)) => p.hidden_weight = *v,
-            ("centre", ParamValue::Choice(v)) => p.centre_member = v == "member",
+            ("centre", ParamValue::Choice(v)) => p.centre = Centre::from_name(v).unwrap_or(Centre::Auto),
+            ("member_share", ParamValue::Float(v)) => p.member_share = *v,
             ("max_cone", ParamValue::Float(v)) => p.max_cone_degrees = *v,
             ("max_depth", ParamValue::Float(v)) => p.max_depth = *v,
             ("proxy", ParamValue::Float(v)) => p.proxy = *v,
