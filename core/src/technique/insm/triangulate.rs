@@ -104,14 +104,14 @@ const GRAZING_SLOPE: f32 = 1.732_050_8;
 /// The relative change of view depth between neighbouring samples (`|z_a - z_b| / max(z_a, z_b)` of inverse
 /// depths) above which the surface between them is seen at more than `angle_deg` from face-on: `tan(angle)`
 /// times a sample's angular width `2 tan(fov / 2) / resolution` (at the image's centre). 0 (no edge is steep)
-/// from 90° up or for a bad value.
+/// from 90° up or for a bad value; at 0° every edge whose depth changes at all is steep.
 pub fn steep_slope(angle_deg: f32, fov_y_deg: f32, resolution: u32) -> f32 {
-    if !(angle_deg > 0.0 && angle_deg < 90.0) {
+    if !(angle_deg >= 0.0 && angle_deg < 90.0) {
         return 0.0;
     }
     let slope = angle_deg.to_radians().tan() * 2.0 * (0.5 * fov_y_deg.to_radians()).tan() / resolution.max(1) as f32;
     if slope.is_finite() {
-        slope.max(0.0)
+        slope.max(f32::MIN_POSITIVE)
     } else {
         0.0
     }
@@ -566,9 +566,12 @@ mod tests {
         let slope = steep_slope(75.0, 100.0, 128);
         assert!((slope - 75f32.to_radians().tan() * 2.0 * 50f32.to_radians().tan() / 128.0).abs() < 1e-6);
         assert!((steep_slope(75.0, 100.0, 256) - 0.5 * slope).abs() < 1e-6, "finer maps, finer samples");
-        for bad in [90.0, 120.0, 0.0, -5.0, f32::NAN] {
+        for bad in [90.0, 120.0, -5.0, f32::NAN] {
             assert_eq!(steep_slope(bad, 100.0, 128), 0.0, "{bad}");
         }
+        // At 0° every edge whose depth changes is steep (the tighter tolerance everywhere but on flat rows).
+        assert!(steep_slope(0.0, 100.0, 128) > 0.0);
+        assert!(!img.edge_connected((1, 0), (2, 0), tolerances(steep_slope(0.0, 100.0, 128))));
     }
 
     #[test]
