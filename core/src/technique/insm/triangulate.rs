@@ -106,7 +106,7 @@ const GRAZING_SLOPE: f32 = 1.732_050_8;
 /// times a sample's angular width `2 tan(fov / 2) / resolution` (at the image's centre). 0 (no edge is steep)
 /// from 90° up or for a bad value; at 0° every edge whose depth changes at all is steep.
 pub fn steep_slope(angle_deg: f32, fov_y_deg: f32, resolution: u32) -> f32 {
-    if !(angle_deg >= 0.0 && angle_deg < 90.0) {
+    if !(0.0..90.0).contains(&angle_deg) {
         return 0.0;
     }
     let slope = angle_deg.to_radians().tan() * 2.0 * (0.5 * fov_y_deg.to_radians()).tan() / resolution.max(1) as f32;
