@@ -39,9 +39,11 @@ impl VirtualAreaLights {
                      its long edges cut since a paraboloid draws edges straight."
                 } else {
                     "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps); the scene's long \
-                     edges are cut first, since a paraboloid draws edges straight ('Longest edge')."
+                     edges are cut first, since a paraboloid draws edges straight ('Longest edge'). A map stands \
+                     off its VAL's mean, or, for a small VAL, off its VPL nearest the mean ('Map centre'; white \
+                     dots)."
                 },
-                layers: &["val centres", "val normals"],
+                layers: &["val centres", "val map centres", "val normals"],
                 shows_shadow_maps: true,
                 ..Default::default()
             },
@@ -68,6 +70,11 @@ impl VirtualAreaLights {
             }
             "val normals" => vec![LegendEntry::new(Glyph::Line, palette, "a VAL's mean normal")],
             "val centres" => vec![LegendEntry::new(Glyph::Dot, palette, "a VAL's centre: its VPLs' mean position")],
+            "val map centres" => vec![LegendEntry::new(
+                Glyph::Line,
+                palette,
+                "where a VAL's map stands: off its mean, or (a small VAL, centre = auto) off its VPL nearest the mean",
+            )],
             "vpl -> val" => vec![LegendEntry::new(Glyph::Line, palette, "a VPL joined to its VAL's centre")],
             _ => crate::technique::light_layer_legend(layer).unwrap_or_default(),
         };
@@ -92,6 +99,11 @@ impl VirtualAreaLights {
             .collect()
     }
 
+    /// Where VAL `k`'s map stood in the last frame (None before one, or when the VALs changed since: the preview's).
+    fn map_centre(&self, k: usize) -> Option<glam::Vec3> {
+        (self.casters.len() == self.clustering.vals.len()).then(|| self.casters.get(k).map(|c| c.centre)).flatten()
+    }
+
     pub(super) fn hover_text(&self, layer: &str, index: usize) -> Vec<String> {
         let c = &self.clustering;
         match layer {
@@ -110,6 +122,13 @@ impl VirtualAreaLights {
                         None => format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
                     },
                     format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
+                    match self.map_centre(index) {
+                        Some(m) if m.distance(v.position) > self.scene_size * 0.01 => {
+                            format!("map at a member VPL, {:.3} from the mean", m.distance(v.position))
+                        }
+                        Some(_) => "map at the mean".to_string(),
+                        None => "map: not rendered yet".to_string(),
+                    },
                 ]
             }
             "vpls by val" => {
@@ -156,6 +175,17 @@ impl VirtualAreaLights {
         let centres: Vec<Overlay> = live()
             .map(|(k, v)| Overlay::Point { position: v.position, color: index_color(k), radius_px: 5.0 })
             .collect();
+        // From each VAL's mean to where its map stands (the last frame's maps; none while the preview moves).
+        let map_centres: Vec<Overlay> = live()
+            .filter_map(|(k, v)| {
+                let m = self.map_centre(k)?;
+                Some(Overlay::Line { from: v.position, to: m, color: index_color(k) })
+            })
+            .chain(live().filter_map(|(k, _)| {
+                let m = self.map_centre(k)?;
+                Some(Overlay::Point { position: m, color: [1.0, 1.0, 1.0, 1.0], radius_px: 3.0 })
+            }))
+            .collect();
         let lines: Vec<Overlay> = vpls
             .iter()
             .zip(&c.assignment)
@@ -170,6 +200,7 @@ impl VirtualAreaLights {
             OverlayLayer { name: "val rectangles", visible_by_default: true, primitives: rects },
             OverlayLayer { name: "val normals", visible_by_default: true, primitives: normals },
             OverlayLayer { name: "val centres", visible_by_default: true, primitives: centres },
+            OverlayLayer { name: "val map centres", visible_by_default: false, primitives: map_centres },
             OverlayLayer { name: "vpl -> val", visible_by_default: false, primitives: lines },
         ]
     }
