@@ -457,41 +457,9 @@ impl Technique for Insm {
         self.tiles_ready = false;
         let res = self.params.insm_resolution.min(ctx.gpu.device.limits().max_texture_dimension_2d);
         let bounds = scene_bounds(&ctx.scene.chunks);
-        // `auto` asks the scene whether it is an interior (once per scene: its bounds) and `walls` finds the walls,
-        // both through the scene's BVH (built once per scene, shared with the tracers).
+        let views = self.place_viewpoints(ctx, &bounds);
+        let placement = self.placement_used;
         use viewpoints::Placement;
-        let placement = match self.params.placement {
-            Placement::Auto => match self.auto_placement {
-                Some((b, p)) if b == bounds => p,
-                _ => {
-                    let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
-                    if let Some(ms) = build_ms {
-                        self.cpu_times.push(PassTime { name: "bvh build".into(), ms, count: 1 });
-                    }
-                    let start = std::time::Instant::now();
-                    let interior = crate::accel::first_view::is_enclosed(&bvh.cpu, &bounds);
-                    let ms = start.elapsed().as_secs_f64() * 1e3;
-                    self.cpu_times.push(PassTime { name: "placement test".into(), ms, count: 1 });
-                    let p = if interior { Placement::Inside } else { Placement::Box };
-                    self.auto_placement = Some((bounds, p));
-                    p
-                }
-            },
-            p => p,
-        };
-        self.placement_used = placement;
-        let bvh = (placement == Placement::Walls).then(|| ctx.scene.bvh(ctx.gpu).0);
-        let hit = |o: Vec3, d: Vec3, t: f32| {
-            bvh.as_ref().and_then(|b| crate::accel::bvh::closest_hit_cpu(&b.cpu, o, d, t)).map(|h| h.t)
-        };
-        let views = viewpoints::select(
-            placement,
-            &bounds,
-            &self.custom_viewpoints,
-            self.params.viewpoints as usize,
-            self.params.box_distance,
-            bvh.as_ref().map(|_| &hit as &dyn Fn(Vec3, Vec3, f32) -> Option<f32>),
-        );
         self.lookup = self.params.lookup_params(&views, &bounds, res);
         self.push_per_depth = self.params.push_per_depth(&views, res);
         let batches = self.shadows.prepare(ctx, &self.lookup);

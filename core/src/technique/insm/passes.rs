@@ -4,6 +4,46 @@
 use super::*;
 
 impl Insm {
+    /// Steps 1-2's viewpoints for the scene in `bounds`: `auto` asks the scene whether it is enclosed (once per
+    /// scene: its bounds; `first_view::is_enclosed`) and `walls` finds the walls, both through the scene's BVH
+    /// (built once per scene, shared with the tracers; its build and the test are CPU stages of the frame that
+    /// pays them). Sets `placement_used`.
+    pub(super) fn place_viewpoints(&mut self, ctx: &FrameContext, bounds: &Aabb) -> Vec<Viewpoint> {
+        use viewpoints::Placement;
+        let placement = match self.params.placement {
+            Placement::Auto => match self.auto_placement {
+                Some((b, p)) if b == *bounds => p,
+                _ => {
+                    let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
+                    if let Some(ms) = build_ms {
+                        self.cpu_times.push(PassTime { name: "bvh build".into(), ms, count: 1 });
+                    }
+                    let start = std::time::Instant::now();
+                    let enclosed = crate::accel::first_view::is_enclosed(&bvh.cpu, bounds);
+                    let ms = start.elapsed().as_secs_f64() * 1e3;
+                    self.cpu_times.push(PassTime { name: "placement test".into(), ms, count: 1 });
+                    let p = if enclosed { Placement::Inside } else { Placement::Box };
+                    self.auto_placement = Some((*bounds, p));
+                    p
+                }
+            },
+            p => p,
+        };
+        self.placement_used = placement;
+        let bvh = (placement == Placement::Walls).then(|| ctx.scene.bvh(ctx.gpu).0);
+        let hit = |o: Vec3, d: Vec3, t: f32| {
+            bvh.as_ref().and_then(|b| crate::accel::bvh::closest_hit_cpu(&b.cpu, o, d, t)).map(|h| h.t)
+        };
+        viewpoints::select(
+            placement,
+            bounds,
+            &self.custom_viewpoints,
+            self.params.viewpoints as usize,
+            self.params.box_distance,
+            bvh.as_ref().map(|_| &hit as &dyn Fn(Vec3, Vec3, f32) -> Option<f32>),
+        )
+    }
+
     pub(super) fn ensure_mesh(&mut self, gpu: &GpuContext, k: u32, resolution: u32) {
         if self.mesh.as_ref().is_some_and(|m| m.k == k && m.resolution == resolution) {
             return;
