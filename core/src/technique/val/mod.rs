@@ -46,7 +46,7 @@
 //!   3 % with `slope_bias = 1`.
 //! - A VAL of at most `member_share` (1/32) of the frame's VPLs has its map at its member VPL nearest the mean,
 //!   moved off that VPL's own surface (`centre = auto`, the default; `mean` is the paper's, `member` every VAL's;
-//!   [`split::member_centre`]): the mean of VPLs on both sides of an arch floats in the open or sits in a column.
+//!   [`split::map_centres`]): the mean of VPLs on both sides of an arch floats in the open or sits in a column.
 //!   With it the error against per-VPL maps falls at every M on the three scenes measured and Sponza's is lower
 //!   from M = 8 up (docs/techniques/val.md).
 //! - VAL maps ignore geometry closer than a tenth of the VAL's size to its centre (the paper's Fig. 7: a
@@ -370,32 +370,14 @@ impl Technique for VirtualAreaLights {
         let far = self.scene_size * 1.01;
         self.casters.clear();
         // Each VAL's map centre: the paper's (its mean, moved off its surface along its normal) or its member VPL
-        // nearest the mean, moved off its own surface ([`split::member_centre`]), by `centre`.
+        // nearest the mean, moved off its own surface ([`split::map_centres`]), by `centre`.
         // A VAL of at most `member_share` of the VPLs (`centre = auto`, every VAL with `member`) stands at a member.
         let max_members = match self.params.centre {
             Centre::Mean => 0,
             Centre::Member => usize::MAX,
             Centre::Auto => (self.params.member_share.max(0.0) as f64 * vpls.len() as f64).floor() as usize,
         };
-        let centres: Vec<Vec3> = if max_members > 0 {
-            let mut members = vec![Vec::new(); self.clustering.vals.len()];
-            for (i, &k) in self.clustering.assignment.iter().enumerate() {
-                if let Some(m) = members.get_mut(k as usize) {
-                    m.push(i);
-                }
-            }
-            let vals = self.clustering.vals.iter().zip(&members);
-            vals.map(|(v, m)| {
-                if m.len() <= max_members {
-                    split::member_centre(vpls, m, v.position, v.normal, offset)
-                } else {
-                    v.position + v.normal * offset
-                }
-            })
-            .collect()
-        } else {
-            self.clustering.vals.iter().map(|v| v.position + v.normal * offset).collect()
-        };
+        let centres = split::map_centres(vpls, &self.clustering.assignment, &self.clustering.vals, max_members, offset);
         // Each VAL's bounding sphere about its map's centre: a receiver whose tangent plane has the whole sphere
         // behind it gets no light from any of the VAL's VPLs (`vpl_term` is 0 for cos_x <= 0), so its visibility
         // is not computed (`val_visibility`). Widened by a millionth of the scene for rounding.

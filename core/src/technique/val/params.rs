@@ -9,7 +9,7 @@ pub enum Centre {
     /// The VAL's mean, moved off its surface along its normal (the paper's).
     Mean,
     /// The member VPL nearest the mean, moved off its own surface (beyond the paper,
-    /// [`super::split::member_centre`]).
+    /// [`super::split::map_centres`]).
     Member,
     /// `Member` for a VAL of at most `member_share` of the VPLs, `Mean` for a larger one (the default).
     Auto,

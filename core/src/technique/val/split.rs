@@ -145,14 +145,10 @@ const SIGHT_SAMPLES: usize = 256;
 /// The share of `g`'s members' luminance whose VPL its map's centre does not see (estimated from
 /// [`SIGHT_SAMPLES`] evenly strided members of a larger VAL).
 fn hidden_share(vpls: &[Vpl], g: &Group, sight: &Sight) -> f32 {
-    hidden_from(vpls, &g.members, g.position + g.normal * sight.offset, sight)
-}
-
-/// The share of the luminance of `members` whose VPL `eye` does not see ([`SIGHT_SAMPLES`] strided members).
-fn hidden_from(vpls: &[Vpl], members: &[usize], eye: Vec3, sight: &Sight) -> f32 {
+    let eye = g.position + g.normal * sight.offset;
     let (mut hidden, mut total) = (0.0f32, 0.0f32);
-    let stride = members.len().div_ceil(SIGHT_SAMPLES).max(1);
-    for &i in members.iter().step_by(stride) {
+    let stride = g.members.len().div_ceil(SIGHT_SAMPLES).max(1);
+    for &i in g.members.iter().step_by(stride) {
         let y = luminance(vpls[i].flux);
         total += y;
         if (sight.occluded)(eye, vpls[i].position) {
@@ -166,18 +162,32 @@ fn hidden_from(vpls: &[Vpl], members: &[usize], eye: Vec3, sight: &Sight) -> f32
     }
 }
 
-/// Where a VAL's map stands with `centre = member` (beyond the paper): the member VPL nearest the VAL's mean,
-/// moved `offset` along its own normal: a point just off a surface the VAL lies on, never inside a column or in
-/// the free space across an arch that the mean of VPLs on both sides falls into (the paper's Fig. 7 fault).
-/// The mean moved along the VAL's normal (the paper's centre) when there are no members.
-pub fn member_centre(vpls: &[Vpl], members: &[usize], position: Vec3, normal: Vec3, offset: f32) -> Vec3 {
-    let nearest = members.iter().copied().min_by(|&a, &b| {
-        vpls[a].position.distance_squared(position).total_cmp(&vpls[b].position.distance_squared(position))
-    });
-    match nearest.map(|i| vpls[i].position + vpls[i].normal * offset) {
-        Some(eye) if eye.is_finite() => eye,
-        _ => position + normal * offset,
+/// Where each VAL's map stands (beyond the paper, `centre`): for a VAL of at most `max_members` VPLs, its member
+/// VPL nearest its mean moved `offset` along that VPL's own normal (a point just off a surface the VAL lies on,
+/// never inside a column or in the open space across an arch, where the mean of VPLs on both sides falls: the
+/// paper's Fig. 7 fault); for a larger VAL, an empty one or a broken member, the mean moved along the VAL's
+/// normal (the paper's centre). One pass over the VPLs (`assignment[i]` is VPL `i`'s VAL).
+pub fn map_centres(vpls: &[Vpl], assignment: &[u32], vals: &[Val], max_members: usize, offset: f32) -> Vec<Vec3> {
+    let mut nearest: Vec<Option<(f32, usize)>> = vec![None; vals.len()];
+    if max_members > 0 {
+        for (i, (x, &k)) in vpls.iter().zip(assignment).enumerate() {
+            let Some((slot, val)) = nearest.get_mut(k as usize).zip(vals.get(k as usize)) else { continue };
+            let d = x.position.distance_squared(val.position);
+            if slot.is_none_or(|(best, _)| d < best) {
+                *slot = Some((d, i));
+            }
+        }
     }
+    vals.iter()
+        .zip(&nearest)
+        .map(|(v, n)| {
+            let member = n
+                .filter(|_| v.count as usize <= max_members)
+                .map(|(_, i)| vpls[i].position + vpls[i].normal * offset)
+                .filter(|eye| eye.is_finite());
+            member.unwrap_or(v.position + v.normal * offset)
+        })
+        .collect()
 }
 
 fn group(vpls: &[Vpl], km: &KMeansParams, members: Vec<usize>) -> Group {
@@ -543,9 +553,9 @@ mod tests {
     }
 
     #[test]
-    fn a_member_centre_is_the_vpl_nearest_the_mean_just_off_its_own_surface() {
-        // VPLs on a floor (x 0-2.9, facing up) and on a wall (x = 3.2, facing -x): their mean floats above the
-        // floor at x ~ 1.3, in the open; the member centre is the floor VPL below it, moved off the floor.
+    fn a_small_vals_map_stands_at_its_vpl_nearest_the_mean_just_off_its_own_surface() {
+        // VPLs on a floor (x 0-2.9, facing up) and on a wall (x = 3.2, facing -x), one VAL: their mean floats above
+        // the floor, in the open; the member centre is the floor VPL below it, moved off the floor.
         let floor = (0..30).map(|i| Vpl {
             position: Vec3::new(0.1 * i as f32, 0.0, 0.0),
             normal: Vec3::Y,
@@ -564,19 +574,39 @@ mod tests {
         let members: Vec<usize> = (0..v.len()).collect();
         let (position, normal) = mean(&v, &members);
         assert!(position.y > 0.05, "the mean floats: {position}");
-        let eye = member_centre(&v, &members, position, normal, 0.01);
+        let val = Val {
+            position,
+            normal,
+            axis_u: Vec3::X,
+            axis_v: Vec3::Z,
+            half_u: 1.0,
+            half_v: 1.0,
+            offset_u: 0.0,
+            offset_v: 0.0,
+            count: v.len() as u32,
+            flux: Vec3::ONE,
+        };
+        // A second VAL with no VPLs keeps its mean.
+        let empty = Val { position: Vec3::splat(9.0), count: 0, ..val };
+        let assignment = vec![0u32; v.len()];
         let nearest = members
             .iter()
             .copied()
             .min_by(|&a, &b| v[a].position.distance(position).total_cmp(&v[b].position.distance(position)))
             .unwrap();
         assert_eq!(v[nearest].normal, Vec3::Y);
-        assert!((eye - (v[nearest].position + Vec3::Y * 0.01)).length() < 1e-6, "{eye}");
-        // No members, or a broken one: the paper's centre.
-        assert_eq!(member_centre(&v, &[], position, normal, 0.01), position + normal * 0.01);
+        let on_member = v[nearest].position + Vec3::Y * 0.01;
+        let at_mean = position + normal * 0.01;
+        let eyes = map_centres(&v, &assignment, &[val, empty], v.len(), 0.01);
+        assert!((eyes[0] - on_member).length() < 1e-6, "{:?}", eyes[0]);
+        assert_eq!(eyes[1], Vec3::splat(9.0) + normal * 0.01);
+        // A VAL larger than the limit, or no member allowed at all: the paper's centre.
+        assert_eq!(map_centres(&v, &assignment, &[val], v.len() - 1, 0.01)[0], at_mean);
+        assert_eq!(map_centres(&v, &assignment, &[val], 0, 0.01)[0], at_mean);
+        // A broken nearest member: the paper's centre.
         let mut broken = v.clone();
         broken[nearest].normal = Vec3::NAN;
-        assert_eq!(member_centre(&broken, &[nearest], position, normal, 0.01), position + normal * 0.01);
+        assert_eq!(map_centres(&broken, &assignment, &[val], v.len(), 0.01)[0], at_mean);
     }
 
     /// The sum of `Y d^2` over the VALs of `c`.
