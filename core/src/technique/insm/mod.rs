@@ -521,16 +521,18 @@ impl Technique for Insm {
             let group = self.bind_group_for(ctx.gpu, &mesh.vertices, &mesh.indices, &mesh.tiles);
             self.mesh.as_mut().expect("ensured").bind_group = group;
         }
+        // The same settings the CPU twin builds with (`mesh_settings`).
+        let mesh = self.placed().mesh_settings(res);
         let uniform = TriangulateUniform {
             resolution: res,
             tiles_per_side: triangulate::tiles_per_side(res),
-            epsilon: self.placed().epsilon_at(res),
+            epsilon: mesh.epsilon,
             atlas_tiles_per_row,
-            adaptive: u32::from(self.params.adaptive),
-            merge_epsilon: self.params.merge_epsilon,
-            drop_covered: u32::from(self.params.drop_covered),
+            adaptive: u32::from(mesh.adaptive),
+            merge_epsilon: mesh.merge_epsilon,
+            drop_covered: u32::from(mesh.drop_covered),
             dilate: u32::from(self.params.dilate),
-            step_epsilon: self.placed().step_epsilon_at(res),
+            step_epsilon: mesh.step_epsilon,
             _pad: [0; 3],
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
