@@ -260,7 +260,11 @@ impl VirtualAreaLights {
         let m = (self.params.vals as usize).min(MAX_VALS);
         let sp = split::SplitParams {
             vals: m,
-            rank: if self.params.rank == "rule" { split::Rank::Rule } else { split::Rank::Flux },
+            rank: match self.params.rank.as_str() {
+                "rule" => split::Rank::Rule,
+                "flux" => split::Rank::Flux,
+                _ => split::Rank::Light,
+            },
             gain_until: self.params.gain_until as usize,
             max_cone: self.params.max_cone_degrees.to_radians(),
             max_depth: self.params.max_depth * self.scene_size * self.params.length_fraction,

@@ -84,13 +84,13 @@ pub struct ValParams {
     pub split: bool,
     /// [`super::split`]: the share of `M` the k-means clusters into before bisection fills up to `M`.
     pub kmeans_share: f32,
-    /// [`super::split`]: which VAL is bisected next, `flux` (largest flux-weighted error) or `rule` (rule
-    /// breakers first).
+    /// [`super::split`]: which VAL is bisected next, `light` (largest light-weighted distance), `flux`
+    /// (largest flux-weighted error, the default before) or `rule` (rule breakers first).
     pub rank: String,
     /// [`super::split`]: while there are fewer VALs than this, the next bisection is the one that lowers the
     /// flux-weighted error most (then `rank` decides).
     pub gain_until: u32,
-    /// [`super::split`]: ranked by flux, a VAL's flux-weighted error counts `1 + hidden_weight * h` times, `h` the
+    /// [`super::split`]: ranked by light or flux, a VAL's key counts `1 + hidden_weight * h` times, `h` the
     /// share of its VPLs' luminance its map's centre does not see (a ray each, the scene's BVH; 0: off).
     pub hidden_weight: f32,
     /// Where a VAL's map stands ([`Centre`]).
@@ -140,7 +140,9 @@ impl Default for ValParams {
             // walls; 30-35 also split the curved chairs' VALs by normal (a step up at M = 16-30 on the
             // conference room), 45 left Sponza 0.03 higher at M = 128-160, 180 (off) leaves the Cornell box's
             // corner VALs cut across by depth (not monotone at M = 4-16).
-            rank: "flux".into(),
+            // Measured (docs/techniques/val.md, twenty-second session): `light` lowers the error at nearly every M
+            // from 30 up on Sponza and the conference room (and on two other views of each) and keeps it falling.
+            rank: "light".into(),
             // Measured (docs/techniques/val.md): 16 makes Sponza's error fall at every M and leaves every M from
             // 64 up as `flux` alone has it on the three scenes; 32 moves M = 64.
             gain_until: 16,
@@ -163,7 +165,7 @@ impl Default for ValParams {
 const VISIBILITY_CHOICES: &[&str] = &["pcss", "cssm", "hard"];
 const SIZE_CHOICES: &[&str] = &["bounds", "spread"];
 const CLUSTERING_CHOICES: &[&str] = &["gpu", "cpu"];
-const RANK_CHOICES: &[&str] = &["flux", "rule"];
+const RANK_CHOICES: &[&str] = &["light", "flux", "rule"];
 
 impl ValParams {
     /// The parameters as the UI and the CLI see them.
@@ -231,8 +233,9 @@ impl ValParams {
             Param {
                 key: "rank",
                 label: "Bisect first",
-                help: "split: flux: the VAL of largest flux-weighted error is bisected next; rule: every VAL breaking \
-                       the cone or depth rule first (the first version)",
+                help: "split: light: the VAL of largest sum of its VPLs' luminance times their distance to its centre \
+                       is bisected next; flux: the same with the distance squared (the default before); rule: every \
+                       VAL breaking the cone or depth rule first (the first version)",
                 kind: ParamKind::Choice(RANK_CHOICES),
                 value: ParamValue::Choice(p.rank.clone()),
             },
@@ -247,8 +250,8 @@ impl ValParams {
             Param {
                 key: "hidden_weight",
                 label: "Hidden VPL weight",
-                help: "split, rank flux: a VAL's flux-weighted error counts 1 + this x the share of its VPLs' light \
-                       its map's centre cannot see (a ray per VPL); 0: the flux rank alone",
+                help: "split, rank light or flux: a VAL's key counts 1 + this x the share of its VPLs' light its \
+                       map's centre cannot see (a ray per VPL); 0: the rank alone",
                 kind: ParamKind::Float { min: 0.0, max: 100.0 },
                 value: ParamValue::Float(p.hidden_weight),
             },
