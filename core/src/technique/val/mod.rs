@@ -32,8 +32,8 @@
 //!   contact shadows leak: measured on the plane-and-wall test scene, relative RMSE against exact visibility
 //!   0.047 for CSSM against 0.053 for none at all, which is why `pcss` (explicit depth tests, `2 grid^2`
 //!   texel reads per pixel and VAL) stays the default.
-//! - Step 2 is refined ([`split`], issue 23): VALs are bisected, the one of largest flux-weighted error next
-//!   (by normal when its normal cone exceeds `max_cone`, by depth when its VPLs spread along its normal by
+//! - Step 2 is refined ([`split`], issue 23): VALs are bisected, the one of largest light times distance
+//!   `sum Y d` next (`rank = light`; `flux`, `sum Y d^2`, the key before) (by normal when its normal cone exceeds `max_cone`, by depth when its VPLs spread along its normal by
 //!   more than `max_depth` L), until there are M, starting from one VAL by default (`kmeans_share = 0`;
 //!   the VALs for M + 1 are then those for M with one bisected, which is what makes the error fall with M
 //!   on the real scenes, measured in docs/techniques/val.md). VALs across corners and layers were the leaks of
@@ -49,6 +49,11 @@
 //!   [`split::map_centres`]): the mean of VPLs on both sides of an arch floats in the open or sits in a column.
 //!   With it the error against per-VPL maps falls at every M on the three scenes measured and Sponza's is lower
 //!   from M = 8 up (docs/techniques/val.md).
+//! - Δ in the penumbra estimate is the side of the square with the VPLs' flux-weighted second moment (`size =
+//!   spread`, the default since the twenty-second session; [`kmeans::spread_sizes`]), not the diagonal of their
+//!   bounding rectangle (`bounds`, the paper's, section 6): a faint VPL far off widens the rectangle as much as a
+//!   bright one, and PCSS's penumbra is that of a square light of side Δ, not of its diagonal. Lower error at
+//!   nearly every M on every scene measured, against per-VPL maps and exact VPL visibility alike.
 //! - VAL maps ignore geometry closer than a tenth of the VAL's size to its centre (the paper's Fig. 7: a
 //!   cluster centre can lie inside geometry; "geometry located near the cluster center has to be ignored").
 //!   The paper gives no amount; on Sponza with 30 VALs FLIP against per-VPL maps was 0.28 at a tenth, 0.37 at
