@@ -125,6 +125,10 @@ fn ranked_by_light_a_bright_compact_val_goes_before_a_dim_spread_one_of_larger_s
         assert!(c.vals.len() <= m.max(2));
         assert_eq!(c.vals.iter().map(|x| x.count).sum::<u32>() as usize, v.len());
     }
+    // NaN flux does not panic the light rank either.
+    let mut bad = v.clone();
+    bad[3].flux = Vec3::NAN;
+    assert_eq!(split(&bad, &km(3), &SplitParams { rank: Rank::Light, ..sp(3) }, None, &base).vals.len(), 3);
 }
 
 #[test]
