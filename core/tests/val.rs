@@ -300,3 +300,28 @@ fn maps_at_a_member_vpl_move_the_vals_maps_and_stay_close_to_exact_visibility_an
     assert_eq!(rel_rmse(&shot("auto", 1.0), &member), 0.0);
     assert_eq!(rel_rmse(&shot("auto", 0.0), &mean), 0.0);
 }
+
+#[test]
+fn vals_carrying_little_of_a_pixels_light_get_one_depth_test_with_far_fewer_taps_and_about_the_same_image() {
+    // `soft_share`: a VAL with less than that share of a pixel's unshadowed indirect light gets one depth test
+    // there. 0 is every VAL soft (the paper); the default reads a fraction of the taps for about the same image;
+    // 1 makes nearly every VAL hard, as `visibility = hard` is.
+    let scene = room();
+    let shot = |extra: &[(&str, ParamValue)]| {
+        let mut params = vec![("vals", ParamValue::Int(24))];
+        params.extend(extra.iter().cloned());
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(256), "val").params(&params).render();
+        assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        let taps = report.indirect.unwrap().work.get("filter_taps").copied().unwrap_or(f64::NAN);
+        (img, taps)
+    };
+    let (soft, soft_taps) = shot(&[("soft_share", ParamValue::Float(0.0))]);
+    // 24 VALs: about 4 % of a pixel's light each.
+    let (some, some_taps) = shot(&[("soft_share", ParamValue::Float(0.05))]);
+    let (most, _) = shot(&[("soft_share", ParamValue::Float(1.0))]);
+    let (hard, _) = shot(&[("visibility", ParamValue::Choice("hard".into()))]);
+    assert!(some_taps < 0.8 * soft_taps, "taps {some_taps} with the share against {soft_taps} without");
+    let e = rel_rmse(&some, &soft);
+    assert!(e > 0.0 && e < 0.05, "the share moved the image by {e:.4} (relative RMSE)");
+    assert!(rel_rmse(&most, &hard) < rel_rmse(&soft, &hard), "share 1 is not closer to hard visibility");
+}

@@ -47,7 +47,9 @@ struct ValParams {
     // step of 4 terms at half phase rises over about 1/4 of the range, so a receiver at its own depth would be
     // half lit)
     cssm_offset: f32,
-    _pad0: u32,
+    // Without interleaving, a VAL carrying less than this share of the pixel's unshadowed indirect light gets
+    // one depth test instead of soft visibility (0: every VAL soft)
+    soft_share: f32,
 }
 
 @group(1) @binding(0) var val_atlas: texture_2d<f32>;
@@ -180,7 +182,7 @@ fn receiver_depth(r: ReceiverPlane, t: vec2<f32>, offset: f32) -> f32 {
     return r.receiver - curvature;
 }
 
-fn val_visibility(s: Surface, m: u32) -> f32 {
+fn val_visibility(s: Surface, m: u32, soft: bool) -> f32 {
     let val = vals[m];
     if val.normal.w < 0.5 {
         return 1.0;
@@ -218,7 +220,7 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     let far = val.depth.y;
     let receiver = d - val_params.bias;
     val_lookups += 1u;
-    if val_params.mode == 0u {
+    if val_params.mode == 0u || !soft {
         return select(0.0, 1.0, receiver <= val_occluder(m, t, near, far));
     }
     // Blocker search over the VAL's angular size seen from the receiver, as a width in texels (alpha / pi).
@@ -273,15 +275,16 @@ fn val_visibility(s: Surface, m: u32) -> f32 {
     return lit / f32(grid * grid);
 }
 
-// Without interleaving every VAL is tested once per pixel, VAL by VAL, so that neighbouring pixels test the
-// same VAL together (those wholly behind the pixel's tangent plane return at once, `val_visibility`), then all
-// VPLs are summed. With interleaving (the paper's: "when shading from VPL i we use the VAL at index C(i)") a
-// pixel's 1/64 share holds at most 16 VPLs, so a VAL is tested only at the first of its VPLs that lights the
-// pixel. Measured on lavapipe (Sponza, M = 128, 160x90, visibility pass, two builds alternated): with
-// interleaving 306 / 411 ms testing every VAL against 58 / 65 ms testing at the first VPL; without it, finding
-// the VALs that light the pixel first (a second pass over the VPLs) took 571 / 599 ms against 378 / 525, and
-// testing at the first VPL about 715 (the lanes then ran the tests one by one). The two loops below share their
-// first lines on purpose: one loop choosing per VPL between both ways ran both cases at the slower time.
+// Without interleaving a pixel sums each VAL's unshadowed light over the VPLs first, then tests each VAL that
+// lights it once, VAL by VAL, so that neighbouring pixels test the same VAL together (those wholly behind the
+// pixel's tangent plane return at once, `val_visibility`); a VAL of less than `soft_share` of the pixel's light
+// gets one depth test (twenty-second session; the same image as testing every VAL before the sum at 0). With
+// interleaving (the paper's: "when shading from VPL i we use the VAL at index C(i)") a pixel's 1/64 share holds
+// at most 16 VPLs, so a VAL is tested only at the first of its VPLs that lights the pixel. Measured on lavapipe
+// (Sponza, M = 128, 160x90, visibility pass, two builds alternated): with interleaving 306 / 411 ms testing
+// every VAL against 58 / 65 ms testing at the first VPL; without it, finding the VALs that light the pixel first
+// (a second pass over the VPLs) took 571 / 599 ms against 378 / 525, and testing at the first VPL about 715 (the
+// lanes then ran the tests one by one).
 struct VplSum {
     sum: vec3<f32>,
     evaluations: u32,
@@ -295,13 +298,19 @@ fn in_solo(i: u32) -> bool {
     return val_params.solo < 0 || vpl_val[i] == u32(val_params.solo);
 }
 
-fn sum_testing_every_val(s: Surface, range: GatherRange) -> VplSum {
-    var visibility: array<f32, MAX_VALS>;
+fn luminance_of(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
+    // Each VAL's unshadowed light at the pixel, then each VAL's visibility once, VAL by VAL: the sum is
+    // sum_m V_m sum_{C(i) = m} L_i, the same as sum_i V_C(i) L_i, and a VAL that lights nothing here is not
+    // tested. A VAL of less than `soft_share` of the pixel's light gets one depth test (its soft edge is worth
+    // less than its taps).
+    var light: array<vec3<f32>, MAX_VALS>;
     let m_count = min(val_params.val_count, MAX_VALS);
-    for (var m = 0u; m < m_count; m++) {
-        visibility[m] = val_visibility(s, m);
-    }
     var out = VplSum(vec3<f32>(0.0), 0u);
+    var total = 0.0;
     for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let i = gather.first_vpl + k;
         if !in_solo(i) {
@@ -310,7 +319,16 @@ fn sum_testing_every_val(s: Surface, range: GatherRange) -> VplSum {
         let term = vpl_term(s, vpls[i]);
         out.evaluations += 1u;
         if lights_pixel(term) {
-            out.sum += term * visibility[min(vpl_val[i], MAX_VALS - 1u)];
+            let m = min(vpl_val[i], MAX_VALS - 1u);
+            light[m] += term;
+            total += luminance_of(term);
+        }
+    }
+    let cut = val_params.soft_share * total;
+    for (var m = 0u; m < m_count; m++) {
+        let l = light[m];
+        if lights_pixel(l) {
+            out.sum += l * val_visibility(s, m, luminance_of(l) >= cut);
         }
     }
     return out;
@@ -332,7 +350,7 @@ fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
             let bit = 1u << (m % 32u);
             if (tested[m / 32u] & bit) == 0u {
                 tested[m / 32u] |= bit;
-                visibility[m] = val_visibility(s, m);
+                visibility[m] = val_visibility(s, m, true);
             }
             out.sum += term * visibility[m];
         }
@@ -356,7 +374,7 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if range.stride > 1u {
         lit = sum_testing_at_first_vpl(s, range);
     } else {
-        lit = sum_testing_every_val(s, range);
+        lit = sum_by_val(s, range);
     }
     let sum = lit.sum;
     let evaluations = lit.evaluations;

@@ -140,7 +140,7 @@ struct ValParamsUniform {
     solo: i32,
     levels: u32,
     cssm_offset: f32,
-    _pad: u32,
+    soft_share: f32,
 }
 const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 48);
 
@@ -483,7 +483,7 @@ impl Technique for VirtualAreaLights {
             solo: self.params.solo,
             levels: self.cssm.levels(),
             cssm_offset: self.params.cssm_offset,
-            _pad: 0,
+            soft_share: self.params.soft_share.max(0.0),
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let views = self.cssm.views(self.params.visibility == "cssm");

@@ -79,6 +79,9 @@ pub struct ValParams {
     pub clustering: String,
     /// CSSM: the receiver's normalised depth is moved toward the VAL by this share of the map's depth range.
     pub cssm_offset: f32,
+    /// Without interleaving, a VAL carrying less than this share of a pixel's unshadowed indirect light gets one
+    /// depth test there instead of soft visibility (beyond the paper; 0: every VAL soft).
+    pub soft_share: f32,
     /// Refine the k-means result by bisecting VALs across surfaces ([`super::split`]); off: the paper's k-means
     /// alone.
     pub split: bool,
@@ -138,6 +141,10 @@ impl Default for ValParams {
             clustering: "gpu".into(),
             solo: -1,
             cssm_offset: 0.12,
+            // Measured (docs/techniques/val.md, twenty-second session): 0.02 lowers FLIP against per-VPL maps at
+            // nearly every M on the three scenes (and against exact VPL visibility on the real ones) with a fifth
+            // of the filter taps; 0.05 about the same.
+            soft_share: 0.02,
             split: true,
             kmeans_share: 0.0,
             // Measured with `rank = flux` (docs/techniques/val.md): 40 degrees splits a room corner into its
@@ -368,6 +375,15 @@ impl ValParams {
                 value: ParamValue::Float(p.cssm_offset),
             },
             Param {
+                key: "soft_share",
+                label: "Soft above share",
+                help: "pcss/cssm without interleaving: a VAL carrying less than this share of a pixel's \
+                       unshadowed indirect light gets one depth test there instead of soft visibility (its \
+                       penumbra is worth less than its taps); 0: every VAL soft (the paper)",
+                kind: ParamKind::Float { min: 0.0, max: 1.0 },
+                value: ParamValue::Float(p.soft_share),
+            },
+            Param {
                 key: "interleave",
                 label: "Interleaved sampling",
                 help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (section 6)",
@@ -422,6 +438,7 @@ impl ValParams {
             ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
             ("solo", ParamValue::Int(v)) => p.solo = *v as i32,
             ("cssm_offset", ParamValue::Float(v)) => p.cssm_offset = *v,
+            ("soft_share", ParamValue::Float(v)) => p.soft_share = *v,
             ("split", ParamValue::Bool(v)) => p.split = *v,
             ("kmeans_share", ParamValue::Float(v)) => p.kmeans_share = *v,
             ("rank", ParamValue::Choice(v)) => p.rank = v.clone(),
