@@ -33,8 +33,9 @@
 //!   0.047 for CSSM against 0.053 for none at all, which is why `pcss` (explicit depth tests, `2 grid^2`
 //!   texel reads per pixel and VAL) stays the default.
 //! - Step 2 is refined ([`split`], issue 23): VALs are bisected, the one of largest light times distance
-//!   `sum Y d` next (`rank = light`; `flux`, `sum Y d^2`, the key before) (by normal when its normal cone exceeds `max_cone`, by depth when its VPLs spread along its normal by
-//!   more than `max_depth` L), until there are M, starting from one VAL by default (`kmeans_share = 0`;
+//!   `sum Y d` next (`rank = light`; `flux`, `sum Y d^2`, the key before), by normal when its normal cone
+//!   exceeds `max_cone`, by depth when its VPLs spread along its normal by more than `max_depth` L, until
+//!   there are M, starting from one VAL by default (`kmeans_share = 0`;
 //!   the VALs for M + 1 are then those for M with one bisected, which is what makes the error fall with M
 //!   on the real scenes, measured in docs/techniques/val.md). VALs across corners and layers were the leaks of
 //!   the paper's Fig. 7. `split = off` is the paper's k-means alone.
