@@ -18,11 +18,11 @@ impl VirtualAreaLights {
                 title: "2. Clustering into VALs",
                 text: if self.params.split {
                     "From k-means over position and normal (d = w_x dx / L + w_a da; by default one VAL), the VAL \
-                     carrying the most light times its spread (weighted up by the share of its light whose VPLs \
+                     carrying the most light times its VPLs' distance d (weighted up by the share of its light whose VPLs \
                      its map's centre cannot see: 'Hidden VPL weight') is cut in two until there are M: by normal \
                      across a corner, by depth across a column and the wall behind it, else in the paper's metric \
                      (our addition; 'split' off gives the paper's k-means alone). Each VAL gets its VPLs' mean \
-                     position and normal and their bounding rectangle."
+                     position and normal, their bounding rectangle and a size Δ (by default from how their light spreads)."
                 } else {
                     "k-means over position and normal (d = w_x dx / L + w_a da), restarted every frame from VAL k = \
                      VPL kN/M; each VAL gets its VPLs' mean position and normal and their bounding rectangle."
@@ -49,10 +49,10 @@ impl VirtualAreaLights {
             },
             ExplainStep {
                 title: "4-5. Soft visibility and shading",
-                text:
-                    "Each pixel computes the soft visibility of every VAL that can light it once (CSSM, PCSS or hard) \
-                       and sums all VPLs (interleaved: its 1/64 share, and only their VALs), each with its VAL's \
-                       visibility; set 'Show one VAL' to see one VAL's contribution alone.",
+                text: "Each pixel sums all VPLs' light per VAL (interleaved: its 1/64 share), then computes the \
+                       visibility of every VAL that lights it once (CSSM, PCSS or hard; a VAL under 'Soft above \
+                       share' of the pixel's light, one depth test) and weighs that VAL's light by it; set 'Show \
+                       one VAL' to see one VAL's contribution alone.",
                 layers: &[],
                 shows_shadow_maps: false,
                 ..Default::default()
