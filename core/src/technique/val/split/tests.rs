@@ -54,17 +54,32 @@ fn a_split_keeps_every_vpl_in_exactly_one_val_and_never_exceeds_m() {
     }
 }
 
+/// `n` VPLs of `flux` facing up, spread evenly (Halton) over a `side` square on the floor from `origin`.
+fn patch(n: usize, origin: Vec3, side: f32, flux: f32) -> impl Iterator<Item = Vpl> {
+    (0..n).map(move |i| {
+        let u = crate::vpl::halton::radical_inverse(0, i as u64 + 1);
+        let v = crate::vpl::halton::radical_inverse(1, i as u64 + 1);
+        let position = origin + Vec3::new(u * side, 0.0, v * side);
+        Vpl { position, normal: Vec3::Y, flux: Vec3::splat(flux), light: 0, from: Vec3::ZERO }
+    })
+}
+
+/// How many of `c`'s VALs hold the VPLs `patch` (one of two patches laid one after the other), asserting that no
+/// VAL holds VPLs both in and out of it.
+fn vals_holding(c: &Clustering, patch: std::ops::Range<usize>) -> usize {
+    (0..c.vals.len())
+        .filter(|&k| {
+            let ids: Vec<usize> = (0..c.assignment.len()).filter(|&i| c.assignment[i] as usize == k).collect();
+            let inside = ids.iter().filter(|i| patch.contains(i)).count();
+            assert!(inside == 0 || inside == ids.len(), "VAL {k} mixes the patches");
+            inside > 0
+        })
+        .count()
+}
+
 /// Two patches on one floor, far apart: `dim` VPLs of flux 0.01 over 4 m and `bright` VPLs of flux 10 over
 /// 2 m. The unweighted error is the dim patch's; the light, and so the image's error, is the bright one's.
 fn two_patches(dim: usize, bright: usize) -> Vec<Vpl> {
-    let patch = |n: usize, origin: Vec3, side: f32, flux: f32| {
-        (0..n).map(move |i| {
-            let u = crate::vpl::halton::radical_inverse(0, i as u64 + 1);
-            let v = crate::vpl::halton::radical_inverse(1, i as u64 + 1);
-            let position = origin + Vec3::new(u * side, 0.0, v * side);
-            Vpl { position, normal: Vec3::Y, flux: Vec3::splat(flux), light: 0, from: Vec3::ZERO }
-        })
-    };
     patch(dim, Vec3::ZERO, 4.0, 0.01).chain(patch(bright, Vec3::new(20.0, 0.0, 0.0), 2.0, 10.0)).collect()
 }
 
@@ -74,12 +89,7 @@ fn the_val_carrying_the_most_light_is_bisected_first() {
     let v = two_patches(dim, bright);
     let base = kmeans::cluster(&v, &km(2), None);
     // k-means keeps the patches apart: every VAL holds one patch only.
-    let patch_of = |c: &Clustering, k: usize| {
-        let ids: Vec<usize> = (0..v.len()).filter(|&i| c.assignment[i] as usize == k).collect();
-        assert!(ids.iter().all(|&i| i < dim) || ids.iter().all(|&i| i >= dim), "VAL {k} mixes the patches");
-        ids.first().map(|&i| i >= dim)
-    };
-    let vals_on_bright = |c: &Clustering| (0..c.vals.len()).filter(|&k| patch_of(c, k) == Some(true)).count();
+    let vals_on_bright = |c: &Clustering| vals_holding(c, dim..v.len());
     assert_eq!(vals_on_bright(&base), 1);
     let by = |rank: Rank| split(&v, &km(3), &SplitParams { rank, ..sp(3) }, None, &base);
     // Ranked by flux the bright patch is bisected; ranked by the unweighted error the dim one is.
@@ -96,25 +106,9 @@ fn ranked_by_light_a_bright_compact_val_goes_before_a_dim_spread_one_of_larger_s
     // A: 20 VPLs of flux 20 over 1 m (luminance 400); B: 100 VPLs of flux 1 over 3 m (luminance 100), far
     // apart on one floor. sum Y d: A's is 4/3 of B's (4 times the light, a third of the spread); sum Y d^2: B's
     // is 9/4 of A's. The light rank bisects A, the flux rank B.
-    let patch = |n: usize, origin: Vec3, side: f32, flux: f32| {
-        (0..n).map(move |i| {
-            let u = crate::vpl::halton::radical_inverse(0, i as u64 + 1);
-            let v = crate::vpl::halton::radical_inverse(1, i as u64 + 1);
-            let position = origin + Vec3::new(u * side, 0.0, v * side);
-            Vpl { position, normal: Vec3::Y, flux: Vec3::splat(flux), light: 0, from: Vec3::ZERO }
-        })
-    };
     let v: Vec<Vpl> = patch(20, Vec3::ZERO, 1.0, 20.0).chain(patch(100, Vec3::new(20.0, 0.0, 0.0), 3.0, 1.0)).collect();
     let base = kmeans::cluster(&v, &km(2), None);
-    let on_a = |c: &Clustering| {
-        (0..c.vals.len())
-            .filter(|&k| {
-                let ids: Vec<usize> = (0..v.len()).filter(|&i| c.assignment[i] as usize == k).collect();
-                assert!(ids.iter().all(|&i| i < 20) || ids.iter().all(|&i| i >= 20), "VAL {k} mixes the patches");
-                ids.first().is_some_and(|&i| i < 20)
-            })
-            .count()
-    };
+    let on_a = |c: &Clustering| vals_holding(c, 0..20);
     assert_eq!(on_a(&base), 1);
     let by = |rank: Rank| split(&v, &km(3), &SplitParams { rank, ..sp(3) }, None, &base);
     assert_eq!(on_a(&by(Rank::Light)), 2, "the light rank bisects the bright patch");
@@ -136,23 +130,10 @@ fn a_val_whose_map_centre_cannot_see_its_vpls_is_bisected_first_with_a_hidden_we
     // Two patches on one floor, far apart, with the same flux: A (x 0-4) spread a little wider than B (x 20-23.6),
     // so the flux rank bisects A; a wall across B's middle (the plane x = 21.85, just off its centre) hides
     // half of B's VPLs from B's map centre, so with a hidden weight B goes first.
-    let patch = |origin: Vec3, side: f32| {
-        (0..200).map(move |i| {
-            let u = crate::vpl::halton::radical_inverse(0, i as u64 + 1);
-            let v = crate::vpl::halton::radical_inverse(1, i as u64 + 1);
-            let position = origin + Vec3::new(u * side, 0.0, v * side);
-            Vpl { position, normal: Vec3::Y, flux: Vec3::ONE, light: 0, from: Vec3::ZERO }
-        })
-    };
-    let v: Vec<Vpl> = patch(Vec3::ZERO, 4.0).chain(patch(Vec3::new(20.0, 0.0, 0.0), 3.6)).collect();
+    let v: Vec<Vpl> = patch(200, Vec3::ZERO, 4.0, 1.0).chain(patch(200, Vec3::new(20.0, 0.0, 0.0), 3.6, 1.0)).collect();
     let base = kmeans::cluster(&v, &km(2), None);
     // How many VALs B's VPLs are in.
-    let on_b = |c: &Clustering| {
-        let mut ks = c.assignment[200..].to_vec();
-        ks.sort_unstable();
-        ks.dedup();
-        ks.len()
-    };
+    let on_b = |c: &Clustering| vals_holding(c, 200..400);
     assert_eq!(on_b(&base), 1, "k-means keeps the patches apart");
     let rays = std::cell::Cell::new(0usize);
     let wall = |a: Vec3, b: Vec3| {
