@@ -125,6 +125,11 @@ fn load_surface(pixel: vec2<i32>) -> Surface {
     return s;
 }
 
+// Rec. 709 luminance of a linear RGB colour (`math::luminance` on the CPU).
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
 // Windowed inverse square, exactly zero at `range`. Keep in sync with `scene::attenuation`.
 fn attenuation(distance: f32, range: f32) -> f32 {
     if distance >= range {

@@ -44,10 +44,10 @@ fn meter_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invoc
         let pixel = vec2<i32>(id.xy);
         if textureLoad(gbuffer_depth, pixel, 0).r < 1.0 {
             let c = displayed_radiance(pixel);
-            let luminance = dot(max(c, vec3<f32>(0.0)), vec3<f32>(0.2126, 0.7152, 0.0722));
+            let y = luminance(max(c, vec3<f32>(0.0)));
             // A NaN or infinite pixel (a technique's bug) is not metered.
-            if luminance == luminance && luminance < 3.0e38 {
-                value = vec2<f32>(log(DELTA + luminance), 1.0);
+            if y == y && y < 3.0e38 {
+                value = vec2<f32>(log(DELTA + y), 1.0);
             }
         }
     }

@@ -1,8 +1,14 @@
-//! Geometry used on the CPU side: view frustum planes, sphere and box culling, the six cube-map faces.
+//! Geometry used on the CPU side: view frustum planes, sphere and box culling, the six cube-map faces; and
+//! Rec. 709 luminance.
 
 use glam::{Mat4, Vec3, Vec4};
 
 use serde::{Deserialize, Serialize};
+
+/// Rec. 709 luminance of a linear RGB colour (the shaders' `luminance` in `shaders/common.wgsl`).
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
 
 /// Right-handed view matrix looking along `dir` (view space: X right, Y up, -Z forward).
 pub fn look_to_rh(eye: Vec3, dir: Vec3, up: Vec3) -> Mat4 {

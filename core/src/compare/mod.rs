@@ -149,7 +149,7 @@ pub enum CompareError {
 
 /// Rec. 709 luminance of linear RGB (alpha ignored).
 pub fn luminance(p: [f32; 4]) -> f32 {
-    0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
+    crate::math::luminance(glam::Vec3::new(p[0], p[1], p[2]))
 }
 
 fn is_finite_rgb(p: [f32; 4]) -> bool {

@@ -269,10 +269,9 @@ impl SampledImage<'_> {
     /// the first difference below `epsilon`.
     /// The twin of `edge_connected` in the shader, which says why this deviates from the paper's "both below".
     pub fn edge_connected(&self, a: (i64, i64), b: (i64, i64), epsilon: impl Into<Connectivity>) -> bool {
-        let epsilon: Connectivity = epsilon.into();
+        let Connectivity { epsilon, step, steep } = epsilon.into();
         let za = self.z(a.0, a.1);
         let zb = self.z(b.0, b.1);
-        let Connectivity { epsilon, step, steep } = epsilon;
         // epsilon 0 connects nothing (as the paper's test does): the way to switch the reconstruction off.
         if za <= 0.0 || zb <= 0.0 || epsilon <= 0.0 {
             return false;

@@ -187,8 +187,7 @@ impl Restir {
                     .iter()
                     .map(|&i| {
                         let l = &ctx.lights[i];
-                        let c = l.color * l.intensity;
-                        (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) as f64
+                        crate::math::luminance(l.color * l.intensity) as f64
                     })
                     .collect();
                 // No power at all: nothing to draw, and nothing would light the pixels.

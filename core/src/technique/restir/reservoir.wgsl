@@ -96,17 +96,13 @@ fn restir_random() -> f32 {
 
 // ---- the target function ----
 
-fn restir_luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
-}
-
 // p̂_q(x): the luminance of light x's unshadowed contribution at surface s, the shading every direct technique
 // uses (common.wgsl's shade_light: BRDF, falloff, cosine, spot cone). 0 for RESTIR_NONE.
 fn restir_target(s: Surface, light: u32) -> f32 {
     if light >= restir.light_count {
         return 0.0;
     }
-    return restir_luminance(shade_light(s, lights[light]));
+    return luminance(shade_light(s, lights[light]));
 }
 
 // W from a reservoir's w_sum, its normalisation (M or Z) and p̂(y); 0 where either is 0.

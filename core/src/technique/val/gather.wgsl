@@ -298,10 +298,6 @@ fn in_solo(i: u32) -> bool {
     return val_params.solo < 0 || vpl_val[i] == u32(val_params.solo);
 }
 
-fn luminance_of(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
-}
-
 fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
     // Each VAL's unshadowed light at the pixel, then each VAL's visibility once, VAL by VAL: the sum is
     // sum_m V_m sum_{C(i) = m} L_i, the same as sum_i V_C(i) L_i, and a VAL that lights nothing here is not
@@ -321,14 +317,14 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
         if lights_pixel(term) {
             let m = min(vpl_val[i], MAX_VALS - 1u);
             light[m] += term;
-            total += luminance_of(term);
+            total += luminance(term);
         }
     }
     let cut = val_params.soft_share * total;
     for (var m = 0u; m < m_count; m++) {
         let l = light[m];
         if lights_pixel(l) {
-            out.sum += l * val_visibility(s, m, luminance_of(l) >= cut);
+            out.sum += l * val_visibility(s, m, luminance(l) >= cut);
         }
     }
     return out;

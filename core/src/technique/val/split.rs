@@ -136,7 +136,7 @@ fn mean(vpls: &[Vpl], members: &[usize]) -> (Vec3, Vec3) {
 
 /// Rec. 709 luminance of a linear RGB flux (negative components, which a VPL never has, count as none).
 fn luminance(c: Vec3) -> f32 {
-    c.max(Vec3::ZERO).dot(Vec3::new(0.2126, 0.7152, 0.0722))
+    crate::math::luminance(c.max(Vec3::ZERO))
 }
 
 /// The bisection order of `g` under `rank`: a larger key goes first (the rule is the class a VAL is in; ranked
