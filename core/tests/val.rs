@@ -325,3 +325,35 @@ fn vals_carrying_little_of_a_pixels_light_get_one_depth_test_with_far_fewer_taps
     assert!(e > 0.0 && e < 0.05, "the share moved the image by {e:.4} (relative RMSE)");
     assert!(rel_rmse(&most, &hard) < rel_rmse(&soft, &hard), "share 1 is not closer to hard visibility");
 }
+
+#[test]
+fn skipping_vals_that_cannot_light_a_pixel_keeps_the_image_with_fewer_vpl_evaluations() {
+    // `skip_unlit` (val/cull.rs): the pixel walks the VALs' member lists and skips a VAL whose VPLs all lie
+    // behind its tangent plane or face away from it. The room's VPLs lie on its floor and walls, so a floor
+    // pixel skips the floor's VALs and a wall's the VALs behind it; the sum is the same.
+    let scene = room();
+    let shot = |skip: bool, step: i64| {
+        let params = [
+            ("vals", ParamValue::Int(32)),
+            ("skip_unlit", ParamValue::Bool(skip)),
+            ("vpls_per_step", ParamValue::Int(step)),
+        ];
+        let (img, report) = Shot::indirect(&scene, &lights(), settings(256), "val").params(&params).render();
+        let evaluations = report.indirect.unwrap().work.get("vpl_pixel_evaluations").copied().unwrap_or(f64::NAN);
+        (img, evaluations)
+    };
+    let (all, all_evaluations) = shot(false, 1024);
+    let (skipped, skipped_evaluations) = shot(true, 1024);
+    assert!(
+        skipped_evaluations < 0.8 * all_evaluations,
+        "{skipped_evaluations} VPL evaluations skipping VALs against {all_evaluations} without"
+    );
+    let e = rel_rmse(&skipped, &all);
+    assert!(e < 1e-4, "skipping VALs moved the image by {e:.6} (relative RMSE)");
+    assert!(all.iter().map(|p| p[1]).sum::<f32>() > 0.0, "no indirect light to compare");
+    // In batches (each batch's members listed apart; `soft_share` then weighs a VAL against the batch's light):
+    // the same image with and without skipping.
+    let (batched, _) = shot(true, 100);
+    let e = rel_rmse(&batched, &shot(false, 100).0);
+    assert!(e < 1e-4, "skipping VALs in batches of 100 VPLs moved the image by {e:.6}");
+}

@@ -22,6 +22,9 @@ struct GpuVal {
     normal: vec4<f32>,
     // x: near, y: far of its map, z: the radius of its VPLs' bounding sphere about `centre`
     depth: vec4<f32>,
+    // The VPLs' normal cone about `normal` (val/cull.rs): x cos(theta), y sin(theta), z the furthest a VPL lies
+    // behind `centre` along `normal`; w 1 when the emitter-side test applies (theta below 90 degrees)
+    cone: vec4<f32>,
 }
 
 struct ValParams {
@@ -50,6 +53,13 @@ struct ValParams {
     // Without interleaving, a VAL carrying less than this share of the pixel's unshadowed indirect light gets
     // one depth test instead of soft visibility (0: every VAL soft)
     soft_share: f32,
+    // VPLs per batch (the member lists are per batch and VAL)
+    batch_size: u32,
+    // 1: walk the VALs' member lists and skip VALs that cannot light the pixel
+    skip_unlit: u32,
+    // where the VPL indices start in `val_lists`, in words
+    members_offset: u32,
+    _pad: u32,
 }
 
 @group(1) @binding(0) var val_atlas: texture_2d<f32>;
@@ -62,6 +72,12 @@ struct ValParams {
 @group(1) @binding(6) var cssm_za: texture_2d<f32>;
 @group(1) @binding(7) var cssm_zb: texture_2d<f32>;
 @group(1) @binding(8) var cssm_sampler: sampler;
+// The VPLs by batch and VAL (val/cull.rs): `[start, count]` of batch b's members of VAL m at word 2 (b M + m),
+// then the VPL indices from `members_offset` on.
+@group(1) @binding(9) var<storage, read> val_lists: array<u32>;
+
+// A VAL whose every VPL meets the pixel at a cosine at most this is skipped (`CULL_COSINE` in val/cull.rs).
+const CULL_COSINE: f32 = 1e-3;
 
 // The four basis textures filtered over 2^lod texels around texel t of VAL m's tile (kept inside the tile).
 struct CssmSample {
@@ -298,26 +314,67 @@ fn in_solo(i: u32) -> bool {
     return val_params.solo < 0 || vpl_val[i] == u32(val_params.solo);
 }
 
+// Whether any VPL of VAL m can light the pixel (val/cull.rs, `may_light`, its CPU twin and the bound's
+// derivation): its VPLs' bounding sphere wholly behind the pixel's tangent plane, or every VPL facing away from
+// the pixel (at a cosine at most CULL_COSINE), bounded by the sphere and the VPLs' normal cone.
+fn may_light(s: Surface, m: u32) -> bool {
+    let val = vals[m];
+    let to_centre = val.centre.xyz - s.position;
+    let r = val.depth.z;
+    if dot(s.normal, to_centre) + r <= 0.0 {
+        return false;
+    }
+    let cone = val.cone;
+    if cone.w > 0.5 {
+        let x = dot(val.normal.xyz, -to_centre) + cone.z;
+        let distance = length(to_centre);
+        let b = select(x * cone.x, x, x >= 0.0) + cone.y * (distance + r);
+        if b <= CULL_COSINE * (distance - r) {
+            return false;
+        }
+    }
+    return true;
+}
+
 fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
     // Each VAL's unshadowed light at the pixel, then each VAL's visibility once, VAL by VAL: the sum is
     // sum_m V_m sum_{C(i) = m} L_i, the same as sum_i V_C(i) L_i, and a VAL that lights nothing here is not
     // tested. A VAL of less than `soft_share` of the pixel's light gets one depth test (its soft edge is worth
-    // less than its taps).
+    // less than its taps). With `skip_unlit` the VALs' member lists are walked and a VAL that cannot light the
+    // pixel is skipped whole (`may_light`); off, every VPL is evaluated in the frame's order, as the paper.
     var light: array<vec3<f32>, MAX_VALS>;
     let m_count = min(val_params.val_count, MAX_VALS);
     var out = VplSum(vec3<f32>(0.0), 0u);
     var total = 0.0;
-    for (var k = range.start; k < gather.vpl_count; k += range.stride) {
-        let i = gather.first_vpl + k;
-        if !in_solo(i) {
-            continue;
+    if val_params.skip_unlit != 0u {
+        let base = (gather.first_vpl / max(val_params.batch_size, 1u)) * val_params.val_count;
+        for (var m = 0u; m < m_count; m++) {
+            let start = val_lists[2u * (base + m)];
+            let count = val_lists[2u * (base + m) + 1u];
+            if count == 0u || !(val_params.solo < 0 || m == u32(val_params.solo)) || !may_light(s, m) {
+                continue;
+            }
+            var l = vec3<f32>(0.0);
+            for (var j = start; j < start + count; j++) {
+                l += vpl_term(s, vpls[val_lists[val_params.members_offset + j]]);
+            }
+            out.evaluations += count;
+            light[m] = l;
+            total += luminance(l);
         }
-        let term = vpl_term(s, vpls[i]);
-        out.evaluations += 1u;
-        if lights_pixel(term) {
-            let m = min(vpl_val[i], MAX_VALS - 1u);
-            light[m] += term;
-            total += luminance(term);
+    } else {
+        for (var k = range.start; k < gather.vpl_count; k += range.stride) {
+            let i = gather.first_vpl + k;
+            if !in_solo(i) {
+                continue;
+            }
+            let term = vpl_term(s, vpls[i]);
+            out.evaluations += 1u;
+            if lights_pixel(term) {
+                let m = min(vpl_val[i], MAX_VALS - 1u);
+                light[m] += term;
+                total += luminance(term);
+            }
         }
     }
     let cut = val_params.soft_share * total;

@@ -68,6 +68,7 @@
 //!   visibility approximations" to future work, so it is off by default.
 
 pub mod cssm;
+pub mod cull;
 pub mod gpu_kmeans;
 pub mod kmeans;
 mod overlays;
@@ -123,8 +124,9 @@ struct GpuVal {
     centre: [f32; 4],
     normal: [f32; 4],
     depth: [f32; 4],
+    cone: [f32; 4],
 }
-const _: () = assert!(std::mem::size_of::<GpuVal>() == 48);
+const _: () = assert!(std::mem::size_of::<GpuVal>() == 64);
 
 /// Mirrors `ValParams` in `val/gather.wgsl`.
 #[repr(C)]
@@ -142,8 +144,12 @@ struct ValParamsUniform {
     levels: u32,
     cssm_offset: f32,
     soft_share: f32,
+    batch_size: u32,
+    skip_unlit: u32,
+    members_offset: u32,
+    _pad: u32,
 }
-const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 48);
+const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 64);
 
 pub struct VirtualAreaLights {
     pub params: ValParams,
@@ -157,6 +163,10 @@ pub struct VirtualAreaLights {
     gpu_map: bool,
     vals_buffer: GrowableBuffer,
     map_buffer: GrowableBuffer,
+    /// [`cull::MemberLists`] in one buffer: the ranges (two words each), then the VPL indices.
+    lists_buffer: GrowableBuffer,
+    /// Where the VPL indices start in `lists_buffer`, in words.
+    members_offset: u32,
     uniform: wgpu::Buffer,
     vpls: Arc<VplSet>,
     clustering: Clustering,
@@ -196,6 +206,7 @@ impl VirtualAreaLights {
                     ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                     count: None,
                 },
+                storage_entry(9),
             ],
         });
         let pass = VplGatherPass::with_entry(gpu, layouts, "val_gather", GATHER.source, "val_gather_main", &layout);
@@ -214,8 +225,10 @@ impl VirtualAreaLights {
             gpu_kmeans: gpu_kmeans::GpuKMeans::new(gpu),
             cssm: cssm::Cssm::new(gpu),
             gpu_map: false,
-            vals_buffer: GrowableBuffer::new(device, "vals", 48 * 64),
+            vals_buffer: GrowableBuffer::new(device, "vals", 64 * 64),
             map_buffer: GrowableBuffer::new(device, "vpl to val", 4 * 1024),
+            lists_buffer: GrowableBuffer::new(device, "vpls by val", 4 * 1024),
+            members_offset: 0,
             uniform,
             vpls: Arc::default(),
             clustering: Clustering::default(),
@@ -399,6 +412,13 @@ impl Technique for VirtualAreaLights {
         }
         // Delta of the penumbra estimate (the near plane stays a share of the rectangle's size).
         let sizes = self.sizes(vpls);
+        // Each VAL's normal cone about its axis, for skipping VALs that cannot light a pixel ([`cull`]).
+        let mut members: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); centres.len()];
+        for (v, &k) in vpls.iter().zip(&self.clustering.assignment) {
+            if let Some(list) = members.get_mut(k as usize) {
+                list.push((v.position, v.normal));
+            }
+        }
         let gpu_vals: Vec<GpuVal> = self
             .clustering
             .vals
@@ -406,13 +426,15 @@ impl Technique for VirtualAreaLights {
             .zip(&centres)
             .zip(&radius)
             .zip(&sizes)
-            .map(|(((v, &centre), &r), &size)| {
+            .zip(&members)
+            .map(|((((v, &centre), &r), &size), list)| {
                 let near = (NEAR_FRACTION * v.size()).max(self.scene_size * 1e-5);
                 self.casters.push(ParaboloidCaster { centre, normal: v.normal, near, far });
                 GpuVal {
                     centre: centre.extend(size).to_array(),
                     normal: v.normal.extend(v.count as f32).to_array(),
                     depth: [near, far, r + self.scene_size * 1e-6, 0.0],
+                    cone: cull::cone_bound(list.iter().copied(), centre, v.normal),
                 }
             })
             .collect();
@@ -435,6 +457,11 @@ impl Technique for VirtualAreaLights {
         // most of a step's cost, so small batches would multiply the work instead of splitting it.
         self.batch_size = (self.params.vpls_per_step as usize).max(1);
         self.batches = n.div_ceil(self.batch_size);
+        // Step 5 VAL by VAL: each batch's VPLs listed by VAL, the ranges first.
+        let lists = cull::member_lists(&self.clustering.assignment, m, self.batch_size);
+        self.members_offset = (lists.ranges.len() * 2) as u32;
+        let words: Vec<u32> = lists.ranges.iter().flatten().chain(&lists.order).copied().collect();
+        self.lists_buffer.write(ctx.gpu, &words);
         self.counts.batches = self.batches;
         Ok(if self.params.interleave { self.batches + 1 } else { self.batches })
     }
@@ -485,6 +512,10 @@ impl Technique for VirtualAreaLights {
             levels: self.cssm.levels(),
             cssm_offset: self.params.cssm_offset,
             soft_share: self.params.soft_share.max(0.0),
+            batch_size: self.batch_size as u32,
+            skip_unlit: self.params.skip_unlit as u32,
+            members_offset: self.members_offset,
+            _pad: 0,
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
         let views = self.cssm.views(self.params.visibility == "cssm");
@@ -507,6 +538,7 @@ impl Technique for VirtualAreaLights {
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&views[2]) },
                 wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(&views[3]) },
                 wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::Sampler(&self.cssm.sampler) },
+                wgpu::BindGroupEntry { binding: 9, resource: self.lists_buffer.buffer.as_entire_binding() },
             ],
         });
         // Steps 4-5.

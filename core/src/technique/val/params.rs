@@ -82,6 +82,10 @@ pub struct ValParams {
     /// Without interleaving, a VAL carrying less than this share of a pixel's unshadowed indirect light gets one
     /// depth test there instead of soft visibility (beyond the paper; 0: every VAL soft).
     pub soft_share: f32,
+    /// Without interleaving, walk the VALs and their member lists and skip a VAL none of whose VPLs can light
+    /// the pixel ([`super::cull`], beyond the paper; the same sum, fewer VPL evaluations); off: every pixel
+    /// evaluates every VPL, as the paper's shading does.
+    pub skip_unlit: bool,
     /// Refine the k-means result by bisecting VALs across surfaces ([`super::split`]); off: the paper's k-means
     /// alone.
     pub split: bool,
@@ -145,6 +149,7 @@ impl Default for ValParams {
             // nearly every M on the three scenes (and against exact VPL visibility on the real ones) with a fifth
             // of the filter taps; 0.05 about the same.
             soft_share: 0.02,
+            skip_unlit: true,
             split: true,
             kmeans_share: 0.0,
             // Measured with `rank = flux` (docs/techniques/val.md): 40 degrees splits a room corner into its
@@ -384,6 +389,15 @@ impl ValParams {
                 value: ParamValue::Float(p.soft_share),
             },
             Param {
+                key: "skip_unlit",
+                label: "Skip VALs that cannot light",
+                help: "Without interleaving: a pixel walks the VALs and skips one whose VPLs all lie behind its \
+                       tangent plane or face away from it (bounds of the VAL's sphere and normal cone), never \
+                       evaluating their VPLs; off: every VPL at every pixel, as the paper (the image does not change)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.skip_unlit),
+            },
+            Param {
                 key: "interleave",
                 label: "Interleaved sampling",
                 help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (section 6)",
@@ -433,6 +447,7 @@ impl ValParams {
             ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("slope_bias", ParamValue::Float(v)) => p.slope_bias = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
+            ("skip_unlit", ParamValue::Bool(v)) => p.skip_unlit = *v,
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
             ("vpls_per_step", ParamValue::Int(v)) => p.vpls_per_step = *v as u32,
             ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),
