@@ -10,6 +10,8 @@
 //   alpha / pi of the map (section 4.2), then percentage-closer filtering over a grid of `grid^2` texels (not
 //   run again when the kernel is the search region: the search's own comparisons give it).
 // Receivers in a VAL's negative half-space take full visibility (section 5.1).
+// Without interleaving a pixel walks the VALs' member lists (`val_lists`) and skips a VAL none of whose VPLs can
+// light it (`may_light`, val/cull.rs; beyond the paper, which evaluates every VPL: the same sum).
 // Composed after common.wgsl, vpl_common.wgsl and vpl_basis.wgsl. `GpuVal` and `ValParams` mirror
 // core/src/technique/val/mod.rs.
 
