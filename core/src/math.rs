@@ -279,6 +279,31 @@ impl Aabb {
     }
 }
 
+/// A small deterministic generator (xorshift) for the property tests.
+#[cfg(test)]
+pub(crate) struct TestRng(pub u64);
+
+#[cfg(test)]
+impl TestRng {
+    /// The next value in [0, 1).
+    pub fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// A random unit vector (uniform in direction).
+    pub fn unit(&mut self) -> Vec3 {
+        loop {
+            let v = Vec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
+            if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+                return v.normalize();
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -315,13 +340,8 @@ mod tests {
 
     #[test]
     fn sphere_grid_finds_what_brute_force_finds() {
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = TestRng(12345);
+        let mut next = || rng.next();
         let spheres: Vec<(Vec3, f32)> = (0..300)
             .map(|i| {
                 let c = Vec3::new(next(), next(), next()) * 20.0;

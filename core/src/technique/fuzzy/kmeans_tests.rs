@@ -3,16 +3,7 @@
 
 use super::*;
 
-/// A small deterministic generator (xorshift), for the property tests.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
+use crate::math::TestRng as Rng;
 
 /// The inside of the cube [-1, 1]^3 with a thin pillar, as a camera inside it sees it (`w x h` pixels, 100
 /// degrees across): neighbouring pixels on the same wall, creases and a pillar a few pixels wide.

@@ -101,25 +101,7 @@ pub fn may_light(centre: Vec3, radius: f32, axis: Vec3, cone: [f32; 4], p: Vec3,
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A small deterministic generator (xorshift) for the property tests.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn unit(&mut self) -> Vec3 {
-            loop {
-                let v = Vec3::new(self.next(), self.next(), self.next()) * 2.0 - 1.0;
-                if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
-                    return v.normalize();
-                }
-            }
-        }
-    }
+    use crate::math::TestRng as Rng;
 
     #[test]
     fn member_lists_hold_every_vpl_once_in_its_batch_and_val() {
