@@ -72,7 +72,7 @@ pub fn cone_bound(members: impl Iterator<Item = (Vec3, Vec3)>, centre: Vec3, axi
         sin_theta = sin_theta.max((normal - along * axis).length());
         h = h.max(axis.dot(centre - position));
     }
-    if !(cos_theta > 0.0) || !h.is_finite() || !sin_theta.is_finite() {
+    if cos_theta.is_nan() || cos_theta <= 0.0 || !h.is_finite() || !sin_theta.is_finite() {
         return [0.0; 4];
     }
     // Rounded outward: a bound a hair too loose skips a little less, never a VPL that lights the pixel.
