@@ -1,5 +1,6 @@
 // Reference technique, shading of one batch of lights: every light has its own cube shadow map in the batch's atlas
-// and binary (hard) visibility. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl.
+// and binary (hard) visibility. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl, before
+// per_light_main.wgsl (the shading loop).
 // `Batch` mirrors `PerLightBatchUniform` in core/src/renderer/per_light_shadows.rs.
 
 struct Batch {
@@ -20,7 +21,7 @@ struct Batch {
 @group(1) @binding(1) var<uniform> batch: Batch;
 @group(1) @binding(2) var shadow_atlas: texture_2d<f32>;
 
-fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
+fn light_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
     let d = distance(s.position, light.position);
     // Normal offset grows with the texel footprint (2 d / resolution) so acne stays away at every distance.
     let texel_world = 2.0 * d / batch.resolution;
@@ -32,31 +33,4 @@ fn reference_visibility(s: Surface, light: Light, cube_index: u32) -> f32 {
     }
     let occluder = cube_depth_to_distance(depth, light.shadow_near, light.range);
     return select(0.0, 1.0, look.axis_distance - batch.bias_world <= occluder);
-}
-
-@fragment
-fn fs_main(in: FullscreenOut) -> @location(0) vec4<f32> {
-    let pixel = vec2<i32>(in.position.xy);
-    let s = load_surface(pixel);
-    if !s.is_geometry {
-        discard;
-    }
-    var sum = vec3<f32>(0.0);
-    var lookups = 0u;
-    // The batch's lights that reach this pixel's tile (light_tiles.wgsl), in batch order.
-    let span = tile_span(pixel, batch.first_light, batch.light_count);
-    for (var j = span.start; j < span.end; j++) {
-        let index = tile_item(span, j);
-        let light = lights[index];
-        let unshadowed = shade_light(s, light);
-        if any(unshadowed > vec3<f32>(0.0)) {
-            sum += unshadowed * reference_visibility(s, light, index - batch.first_light);
-            lookups += 1u;
-        }
-    }
-    count_work(pixel, WORK_LIGHT_EVALUATIONS, span.end - span.start);
-    // One texel per lookup (binary visibility).
-    count_work(pixel, WORK_SHADOW_LOOKUPS, lookups);
-    count_work(pixel, WORK_FILTER_TAPS, lookups);
-    return vec4<f32>(sum, 0.0);
 }

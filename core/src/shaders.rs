@@ -70,7 +70,13 @@ pub const VPL_GATHER_PARABOLOID: WgslModule = crate::wgsl!(
 );
 pub const PER_LIGHT_SHADE: WgslModule = crate::wgsl!(
     "per_light_shade",
-    ["shaders/common.wgsl", "shaders/light_tiles.wgsl", "shaders/cube_shadow.wgsl", "shaders/per_light_shade.wgsl"]
+    [
+        "shaders/common.wgsl",
+        "shaders/light_tiles.wgsl",
+        "shaders/cube_shadow.wgsl",
+        "shaders/per_light_shade.wgsl",
+        "shaders/per_light_main.wgsl"
+    ]
 );
 pub const VPL_BLUR: WgslModule = crate::wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_blur.wgsl"]);
 

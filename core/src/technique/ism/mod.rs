@@ -82,7 +82,8 @@ const SHADE: WgslModule = crate::wgsl!(
         "shaders/light_tiles.wgsl",
         "shaders/vpl_basis.wgsl",
         "core/src/technique/ism/paraboloid.wgsl",
-        "core/src/technique/ism/shade.wgsl"
+        "core/src/technique/ism/shade.wgsl",
+        "shaders/per_light_main.wgsl"
     ]
 );
 const VPL_GATHER: WgslModule = crate::wgsl!(
