@@ -170,6 +170,8 @@ pub struct VirtualAreaLights {
     lists_buffer: GrowableBuffer,
     /// Where the VPL indices start in `lists_buffer`, in words.
     members_offset: u32,
+    /// Whether this frame's member lists fit one storage binding (else every VPL is evaluated).
+    lists_fit: bool,
     uniform: wgpu::Buffer,
     vpls: Arc<VplSet>,
     clustering: Clustering,
@@ -232,6 +234,7 @@ impl VirtualAreaLights {
             map_buffer: GrowableBuffer::new(device, "vpl to val", 4 * 1024),
             lists_buffer: GrowableBuffer::new(device, "vpls by val", 4 * 1024),
             members_offset: 0,
+            lists_fit: false,
             uniform,
             vpls: Arc::default(),
             clustering: Clustering::default(),
@@ -460,11 +463,22 @@ impl Technique for VirtualAreaLights {
         // most of a step's cost, so small batches would multiply the work instead of splitting it.
         self.batch_size = (self.params.vpls_per_step as usize).max(1);
         self.batches = n.div_ceil(self.batch_size);
-        // Step 5 VAL by VAL: each batch's VPLs listed by VAL, the ranges first.
-        let lists = cull::member_lists(&self.clustering.assignment, m, self.batch_size);
-        self.members_offset = (lists.ranges.len() * 2) as u32;
-        let words: Vec<u32> = lists.ranges.iter().flatten().chain(&lists.order).copied().collect();
-        self.lists_buffer.write(ctx.gpu, &words);
+        // Step 5 VAL by VAL: each batch's VPLs listed by VAL, the ranges first. Two words per batch and VAL: with
+        // tiny batches of many VPLs (`vpls_per_step = 1`, 65,536 VPLs) more than a storage binding holds, so
+        // this frame evaluates every VPL instead (the same image).
+        let words_needed = (self.batches * m * 2 + n) as u64;
+        // (The buffer grows to the next power of two of bytes: half the largest buffer at most.)
+        let limits = ctx.gpu.device.limits();
+        let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size / 2) / 4;
+        self.lists_fit = words_needed <= limit;
+        if self.lists_fit {
+            let lists = cull::member_lists(&self.clustering.assignment, m, self.batch_size);
+            self.members_offset = (lists.ranges.len() * 2) as u32;
+            let words: Vec<u32> = lists.ranges.iter().flatten().chain(&lists.order).copied().collect();
+            self.lists_buffer.write(ctx.gpu, &words);
+        } else if self.params.skip_unlit {
+            log::info!("val: {words_needed} words of member lists exceed a storage binding; every VPL evaluated");
+        }
         self.counts.batches = self.batches;
         Ok(if self.params.interleave { self.batches + 1 } else { self.batches })
     }
@@ -516,7 +530,7 @@ impl Technique for VirtualAreaLights {
             cssm_offset: self.params.cssm_offset,
             soft_share: self.params.soft_share.max(0.0),
             batch_size: self.batch_size as u32,
-            skip_unlit: self.params.skip_unlit as u32,
+            skip_unlit: (self.params.skip_unlit && self.lists_fit) as u32,
             members_offset: self.members_offset,
             _pad: 0,
         };
