@@ -469,7 +469,7 @@ impl Technique for VirtualAreaLights {
         let words_needed = (self.batches * m * 2 + n) as u64;
         // (The buffer grows to the next power of two of bytes: half the largest buffer at most.)
         let limits = ctx.gpu.device.limits();
-        let limit = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size / 2) / 4;
+        let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size / 2) / 4;
         self.lists_fit = words_needed <= limit;
         if self.lists_fit {
             let lists = cull::member_lists(&self.clustering.assignment, m, self.batch_size);
