@@ -19,6 +19,8 @@
 
 use glam::Vec3;
 
+use crate::vpl::Vpl;
+
 /// A VAL whose every VPL meets the pixel at a cosine at most this is skipped (its light there is at most this
 /// share of the same VPLs' head-on light); the image changes by less than rounding (measured in the test of
 /// `core/tests/val.rs` and in docs/techniques/val.md).
@@ -79,6 +81,26 @@ pub fn cone_bound(members: impl Iterator<Item = (Vec3, Vec3)>, centre: Vec3, axi
     [(cos_theta - 1e-6).max(0.0), (sin_theta + 1e-6).min(1.0), h + 1e-6 * (1.0 + h.abs()), 1.0]
 }
 
+/// Each VAL's bounds for [`may_light`]: the radius of its VPLs' sphere about its map's centre, widened by `pad`
+/// for rounding, and its normal cone about `axes[k]` ([`cone_bound`]). `assignment[i]` is VPL `i`'s VAL.
+pub fn val_bounds(vpls: &[Vpl], assignment: &[u32], centres: &[Vec3], axes: &[Vec3], pad: f32) -> Vec<(f32, [f32; 4])> {
+    let mut members: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); centres.len()];
+    for (v, &k) in vpls.iter().zip(assignment) {
+        if let Some(list) = members.get_mut(k as usize) {
+            list.push((v.position, v.normal));
+        }
+    }
+    members
+        .iter()
+        .zip(centres)
+        .zip(axes)
+        .map(|((list, &centre), &axis)| {
+            let radius = list.iter().map(|(p, _)| p.distance(centre)).fold(0.0f32, f32::max);
+            (radius + pad, cone_bound(list.iter().copied(), centre, axis))
+        })
+        .collect()
+}
+
 /// Whether any VPL of a VAL (map centre `centre`, members within `radius`, emitter bound `cone` from
 /// [`cone_bound`], axis `axis`) can light receiver `p` with normal `n_p`: the CPU twin of `may_light` in
 /// `val/gather.wgsl`.
@@ -123,6 +145,26 @@ mod tests {
         // Past the last VAL: listed under the last one, as the gather clamps it.
         let lists = member_lists(&[0, 5, 1], 2, 8);
         assert_eq!(lists.ranges, vec![[0, 1], [1, 2]]);
+    }
+
+    #[test]
+    fn val_bounds_hold_each_vals_members_and_ignore_an_unknown_val() {
+        let vpl = |x: f32, n: Vec3| Vpl {
+            position: Vec3::new(x, 0.0, 0.0),
+            normal: n,
+            flux: Vec3::ONE,
+            light: 0,
+            from: Vec3::ZERO,
+        };
+        let vpls = [vpl(0.0, Vec3::Y), vpl(2.0, Vec3::Y), vpl(5.0, Vec3::X), vpl(9.0, Vec3::Z)];
+        // VPL 3 names a VAL that does not exist: it bounds nothing.
+        let bounds =
+            val_bounds(&vpls, &[0, 0, 1, 7], &[Vec3::ZERO, Vec3::new(5.0, 0.0, 0.0)], &[Vec3::Y, Vec3::X], 0.5);
+        assert_eq!(bounds.len(), 2);
+        assert_eq!(bounds[0].0, 2.5, "the radius reaches the farthest member, plus the pad");
+        assert_eq!(bounds[1].0, 0.5);
+        assert_eq!(bounds[0].1[3], 1.0, "normals along the axis: a cone");
+        assert!(bounds[0].1[0] > 0.999 && bounds[0].1[1] < 1e-5);
     }
 
     #[test]

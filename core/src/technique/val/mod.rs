@@ -407,40 +407,28 @@ impl Technique for VirtualAreaLights {
             Centre::Auto => (self.params.member_share.max(0.0) as f64 * vpls.len() as f64).floor() as usize,
         };
         let centres = split::map_centres(vpls, &self.clustering.assignment, &self.clustering.vals, max_members, offset);
-        // Each VAL's bounding sphere about its map's centre: a receiver whose tangent plane has the whole sphere
-        // behind it gets no light from any of the VAL's VPLs (`vpl_term` is 0 for cos_x <= 0), so its visibility
-        // is not computed (`val_visibility`). Widened by a millionth of the scene for rounding.
-        let mut radius = vec![0.0f32; centres.len()];
-        for (v, &k) in vpls.iter().zip(&self.clustering.assignment) {
-            if let (Some(r), Some(c)) = (radius.get_mut(k as usize), centres.get(k as usize)) {
-                *r = r.max(v.position.distance(*c));
-            }
-        }
         // Delta of the penumbra estimate (the near plane stays a share of the rectangle's size).
         let sizes = self.sizes(vpls);
-        // Each VAL's normal cone about its axis, for skipping VALs that cannot light a pixel ([`cull`]).
-        let mut members: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); centres.len()];
-        for (v, &k) in vpls.iter().zip(&self.clustering.assignment) {
-            if let Some(list) = members.get_mut(k as usize) {
-                list.push((v.position, v.normal));
-            }
-        }
+        // Each VAL's bounding sphere about its map's centre and its VPLs' normal cone ([`cull`]): a receiver that
+        // none of its VPLs can light skips its VPLs (`may_light`) and its visibility (`val_visibility`). The
+        // radius is widened by a millionth of the scene for rounding.
+        let axes: Vec<Vec3> = self.clustering.vals.iter().map(|v| v.normal).collect();
+        let bounds = cull::val_bounds(vpls, &self.clustering.assignment, &centres, &axes, self.scene_size * 1e-6);
         let gpu_vals: Vec<GpuVal> = self
             .clustering
             .vals
             .iter()
             .zip(&centres)
-            .zip(&radius)
+            .zip(&bounds)
             .zip(&sizes)
-            .zip(&members)
-            .map(|((((v, &centre), &r), &size), list)| {
+            .map(|(((v, &centre), &(radius, cone)), &size)| {
                 let near = (NEAR_FRACTION * v.size()).max(self.scene_size * 1e-5);
                 self.casters.push(ParaboloidCaster { centre, normal: v.normal, near, far });
                 GpuVal {
                     centre: centre.extend(size).to_array(),
                     normal: v.normal.extend(v.count as f32).to_array(),
-                    depth: [near, far, r + self.scene_size * 1e-6, 0.0],
-                    cone: cull::cone_bound(list.iter().copied(), centre, v.normal),
+                    depth: [near, far, radius, 0.0],
+                    cone,
                 }
             })
             .collect();
