@@ -87,17 +87,16 @@
 //!   pruning by a relative `1e-4`, far more than `f32` distance rounding, so no candidate is ever missed: the
 //!   result is exactly that of the brute-force `O(lights * centers)` algorithm (the tests compare the two).
 //!
-//! Step 1 is branch-free (four frustum planes per SIMD lane group) and copies each visible light's position and
+//! Step 1 is branch-free (four frustum planes per SIMD lane group; it and step 2's sort live in `cull_sort.rs`) and copies each visible light's position and
 //! range into a compact array, which steps 2 and 3 read in sorted order instead of the whole lights. The sort is
 //! a stable LSD radix sort on the range's bits for many lights. [`Clusterer`] keeps every buffer
 //! between calls and reuses the output's clusters (and their member vectors) through
 //! [`Clusterer::cluster_into`], so a frame allocates nothing once buffers have grown. [`cluster_lights`] is the
 //! allocating convenience wrapper.
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
-#[cfg(test)]
-use super::grid::cover_limit;
+use super::cull_sort::{is_visible, sort_by_range, FrustumLanes, RADIX_BUCKETS};
 use super::grid::{Grid, NONE};
 pub use super::grid::{GridInfo, GridKind};
 use crate::math::Frustum;
@@ -107,11 +106,6 @@ use crate::scene::PointLight;
 const MAX_LIGHTS: usize = 1 << 30;
 /// From this many lights left for step 4 on, they are visited in grid order (better cache use).
 const SPATIAL_ORDER_MIN: usize = 2048;
-/// Below this many visible lights the comparison sort beats the radix sort.
-const RADIX_MIN: usize = 4096;
-/// The radix sort's digit: 11 bits, so three passes cover the 32 bits of a range.
-const RADIX_BITS: usize = 11;
-const RADIX_BUCKETS: usize = 1 << RADIX_BITS;
 
 /// Parameters of the clustering.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -668,112 +662,5 @@ impl Clusterer {
             }
         }
         best
-    }
-}
-
-/// The six frustum planes as two groups of four lanes (normal x, y, z and distance per lane; the second group
-/// repeats its last plane), so that step 1 tests a sphere against four planes at once.
-struct FrustumLanes {
-    x: [Vec4; 2],
-    y: [Vec4; 2],
-    z: [Vec4; 2],
-    w: [Vec4; 2],
-}
-
-impl FrustumLanes {
-    fn new(frustum: &Frustum) -> Self {
-        let p = &frustum.planes;
-        let lanes = |f: fn(&Vec4) -> f32| {
-            [Vec4::new(f(&p[0]), f(&p[1]), f(&p[2]), f(&p[3])), Vec4::new(f(&p[4]), f(&p[5]), f(&p[5]), f(&p[5]))]
-        };
-        FrustumLanes { x: lanes(|v| v.x), y: lanes(|v| v.y), z: lanes(|v| v.z), w: lanes(|v| v.w) }
-    }
-}
-
-/// Step 1's test, `light.is_valid() && frustum.intersects_sphere(light.position, light.range)` with the same
-/// arithmetic per plane (`normal.dot(center) + distance >= -range`, evaluated in the same order, lane by lane),
-/// but without branches, so the compiler keeps it in registers.
-#[inline(always)]
-fn is_visible(light: &PointLight, planes: &FrustumLanes) -> bool {
-    let (p, c, r) = (light.position, light.color, light.range);
-    let finite = p.is_finite() & c.is_finite() & light.intensity.is_finite() & r.is_finite();
-    let usable = (r > 0.0) & (light.intensity >= 0.0) & (c.x >= 0.0) & (c.y >= 0.0) & (c.z >= 0.0);
-    let (x, y, z, neg_r) = (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z), Vec4::splat(-r));
-    let mut inside = true;
-    for g in 0..2 {
-        let d = planes.x[g] * x + planes.y[g] * y + planes.z[g] * z + planes.w[g];
-        inside &= d.cmpge(neg_r).all();
-    }
-    finite & usable & inside & light.spot.is_none_or(|s| s.is_valid())
-}
-
-/// Step 2: sort the keys made by step 1 ascending, i.e. by `L_att` descending, then by input index. Large inputs
-/// use a stable LSD radix sort over the 32 range bits in three 11-bit digits (skipping digits all keys share),
-/// small ones `sort_unstable`, which gives the same order because keys are unique.
-fn sort_by_range(keys: &mut Vec<u64>, tmp: &mut Vec<u64>, hist: &mut Vec<[u32; RADIX_BUCKETS]>) {
-    let n = keys.len();
-    if n < RADIX_MIN {
-        keys.sort_unstable();
-        return;
-    }
-    hist.clear();
-    hist.resize(3, [0; RADIX_BUCKETS]);
-    for &key in keys.iter() {
-        let hi = (key >> 32) as usize;
-        for (digit, h) in hist.iter_mut().enumerate() {
-            h[(hi >> (RADIX_BITS * digit)) & (RADIX_BUCKETS - 1)] += 1;
-        }
-    }
-    tmp.clear();
-    tmp.resize(n, 0);
-    for (digit, h) in hist.iter_mut().enumerate() {
-        if h.iter().any(|&c| c as usize == n) {
-            continue; // every key has the same digit here
-        }
-        let mut sum = 0u32;
-        for c in h.iter_mut() {
-            let count = *c;
-            *c = sum;
-            sum += count;
-        }
-        let shift = 32 + RADIX_BITS * digit;
-        for &key in keys.iter() {
-            let b = &mut h[(key >> shift) as usize & (RADIX_BUCKETS - 1)];
-            tmp[*b as usize] = key;
-            *b += 1;
-        }
-        std::mem::swap(keys, tmp);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::cover_limit;
-
-    /// `cover_limit(d)` is the largest `d2` with `d2.sqrt() <= d`, over every binade (subnormals included).
-    #[test]
-    fn cover_limit_is_the_largest_square_covered() {
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut values = vec![f32::from_bits(1), f32::MIN_POSITIVE, 1e-20, 0.5, 1.0, 1.6, 3.0, 1e19, 1e30, f32::MAX];
-        for _ in 0..200_000 {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let d = f32::from_bits((state >> 33) as u32 % 0x7F80_0000); // every positive finite f32 but 0
-            if d > 0.0 {
-                values.push(d);
-            }
-        }
-        for d in values {
-            let t = cover_limit(d);
-            assert!(t >= 0.0 && t.sqrt() <= d, "d {d:e}: limit {t:e} has root {:e}", t.sqrt());
-            if t < f32::MAX {
-                let above = t.next_up();
-                assert!(above.sqrt() > d, "d {d:e}: {above:e} above the limit {t:e} is still covered");
-            }
-        }
-        assert_eq!(cover_limit(0.0), -1.0);
-        assert_eq!(cover_limit(-1.0), -1.0);
-        assert_eq!(cover_limit(f32::NAN), -1.0);
     }
 }

@@ -524,3 +524,35 @@ impl Grid {
         self.entry_k[e] = k;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::cover_limit;
+
+    /// `cover_limit(d)` is the largest `d2` with `d2.sqrt() <= d`, over every binade (subnormals included).
+    #[test]
+    fn cover_limit_is_the_largest_square_covered() {
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut values = vec![f32::from_bits(1), f32::MIN_POSITIVE, 1e-20, 0.5, 1.0, 1.6, 3.0, 1e19, 1e30, f32::MAX];
+        for _ in 0..200_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let d = f32::from_bits((state >> 33) as u32 % 0x7F80_0000); // every positive finite f32 but 0
+            if d > 0.0 {
+                values.push(d);
+            }
+        }
+        for d in values {
+            let t = cover_limit(d);
+            assert!(t >= 0.0 && t.sqrt() <= d, "d {d:e}: limit {t:e} has root {:e}", t.sqrt());
+            if t < f32::MAX {
+                let above = t.next_up();
+                assert!(above.sqrt() > d, "d {d:e}: {above:e} above the limit {t:e} is still covered");
+            }
+        }
+        assert_eq!(cover_limit(0.0), -1.0);
+        assert_eq!(cover_limit(-1.0), -1.0);
+        assert_eq!(cover_limit(f32::NAN), -1.0);
+    }
+}

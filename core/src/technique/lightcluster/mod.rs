@@ -41,6 +41,7 @@
 
 pub mod clustering;
 pub mod cover;
+mod cull_sort;
 pub mod grid;
 mod overlays;
 mod params;
