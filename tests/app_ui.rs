@@ -1153,6 +1153,8 @@ fn vals_vpls_and_fuzzy_clusters_under_the_pointer_have_tooltips() {
     assert!(lines[0].starts_with(&format!("VAL {k} (")) && lines[1].contains("VPLs"), "{lines:?}");
     // ... and where its map stands (its mean, or a member VPL for a small VAL).
     assert!(lines.last().unwrap().starts_with("map at "), "{lines:?}");
+    // ... and how far its VPLs' normals spread (the cone a pixel's skip test uses).
+    assert!(lines.iter().any(|l| l.starts_with("normal (") && l.contains("VPL normals")), "{lines:?}");
     // With the centres hidden, a VPL: its light and its VAL; with its layer hidden too, nothing.
     h.state_mut().session.view.overlays.insert("val centres".into(), false);
     let (at, i) = indirect_point_on_screen(&mut h, "val", "vpls by val");

@@ -122,7 +122,22 @@ impl VirtualAreaLights {
                         ),
                         None => format!("rectangle {:.3} x {:.3} (Δ {:.3})", 2.0 * v.half_u, 2.0 * v.half_v, v.size()),
                     },
-                    format!("normal ({:.2}, {:.2}, {:.2})", v.normal.x, v.normal.y, v.normal.z),
+                    {
+                        // The cone a pixel's skip test uses (val/cull.rs): VPLs all facing away skip the VAL.
+                        let members = self
+                            .vpls
+                            .vpls
+                            .iter()
+                            .zip(&c.assignment)
+                            .filter(|(_, &k)| k as usize == index)
+                            .map(|(p, _)| (p.position, p.normal));
+                        let cone = super::cull::cone_bound(members, v.position, v.normal);
+                        let spread = match cone[3] > 0.5 {
+                            true => format!("VPL normals within {:.0}°", cone[0].clamp(-1.0, 1.0).acos().to_degrees()),
+                            false => "VPL normals 90° or more apart".to_string(),
+                        };
+                        format!("normal ({:.2}, {:.2}, {:.2}), {spread}", v.normal.x, v.normal.y, v.normal.z)
+                    },
                     match self.map_centre(index) {
                         Some(m) if m.distance(v.position) > self.scene_size * 0.01 => {
                             format!("map at a member VPL, {:.3} from the mean", m.distance(v.position))
