@@ -200,47 +200,90 @@ fn receiver_depth(r: ReceiverPlane, t: vec2<f32>, offset: f32) -> f32 {
     return r.receiver - curvature;
 }
 
-fn val_visibility(s: Surface, m: u32, soft: bool) -> f32 {
+// Where a receiver meets VAL m's map: its texel, distance and direction in the map's frame, its biased depth.
+// `valid` false: the VAL cannot shadow the receiver (no VPLs, all behind the receiver's tangent plane, or the
+// receiver in the VAL's negative half-space), so its visibility is 1.
+struct ValLookup {
+    valid: bool,
+    t: vec2<f32>,
+    d: f32,
+    dir: vec3<f32>,
+    local: vec3<f32>,
+    basis: mat3x3<f32>,
+    receiver: f32,
+}
+
+fn val_lookup(s: Surface, m: u32) -> ValLookup {
+    var out: ValLookup;
+    out.valid = false;
     let val = vals[m];
     if val.normal.w < 0.5 {
-        return 1.0;
+        return out;
     }
     let n = val.normal.xyz;
     let centre = val.centre.xyz;
     // Every VPL of the VAL behind the receiver's tangent plane: none lights it (`vpl_term` is 0), so its
     // visibility is never used; skipped (exact: the image does not change).
     if dot(s.normal, centre - s.position) + val.depth.z <= 0.0 {
-        return 1.0;
+        return out;
     }
     let rel0 = s.position - centre;
     if dot(rel0, n) <= 0.0 {
-        return 1.0;
+        return out;
     }
     let res = f32(val_params.resolution);
     let d0 = length(rel0);
     let cos0 = dot(rel0, n) / max(d0, 1e-20);
     let footprint = d0 * 2.0 / res * (1.0 + max(cos0, 0.0));
     let p = s.position + s.normal * (val_params.normal_offset * footprint);
-    let basis = vpl_basis(n);
+    out.basis = vpl_basis(n);
     let rel = p - centre;
-    let local = vec3<f32>(dot(rel, basis[0]), dot(rel, basis[1]), dot(rel, basis[2]));
-    let d = length(local);
-    if !(d > 0.0) {
+    out.local = vec3<f32>(dot(rel, out.basis[0]), dot(rel, out.basis[1]), dot(rel, out.basis[2]));
+    out.d = length(out.local);
+    if !(out.d > 0.0) {
+        return out;
+    }
+    out.dir = out.local / out.d;
+    if out.dir.z <= 0.0 {
+        return out;
+    }
+    let uv = out.dir.xy / (1.0 + out.dir.z);
+    out.t = vec2<f32>(uv.x * 0.5 + 0.5, 0.5 - uv.y * 0.5) * res;
+    out.receiver = out.d - val_params.bias;
+    out.valid = true;
+    return out;
+}
+
+// One depth test (`hard`, or a VAL under `soft_share` of the pixel's light).
+fn val_hard(m: u32, lk: ValLookup) -> f32 {
+    let val = vals[m];
+    return select(0.0, 1.0, lk.receiver <= val_occluder(m, lk.t, val.depth.x, val.depth.y));
+}
+
+fn val_visibility(s: Surface, m: u32, soft: bool) -> f32 {
+    let lk = val_lookup(s, m);
+    if !lk.valid {
         return 1.0;
     }
-    let dir = local / d;
-    if dir.z <= 0.0 {
-        return 1.0;
-    }
-    let uv = dir.xy / (1.0 + dir.z);
-    let t = vec2<f32>(uv.x * 0.5 + 0.5, 0.5 - uv.y * 0.5) * res;
-    let near = val.depth.x;
-    let far = val.depth.y;
-    let receiver = d - val_params.bias;
     val_lookups += 1u;
     if val_params.mode == 0u || !soft {
-        return select(0.0, 1.0, receiver <= val_occluder(m, t, near, far));
+        return val_hard(m, lk);
     }
+    return val_soft(s, m, lk);
+}
+
+// Soft visibility of VAL m (`cssm` or `pcss`) at a valid lookup.
+fn val_soft(s: Surface, m: u32, lk: ValLookup) -> f32 {
+    let val = vals[m];
+    let res = f32(val_params.resolution);
+    let t = lk.t;
+    let d = lk.d;
+    let dir = lk.dir;
+    let local = lk.local;
+    let basis = lk.basis;
+    let receiver = lk.receiver;
+    let near = val.depth.x;
+    let far = val.depth.y;
     // Blocker search over the VAL's angular size seen from the receiver, as a width in texels (alpha / pi).
     let delta = val.centre.w;
     if val_params.mode == 2u {
@@ -379,12 +422,30 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
             }
         }
     }
+    // Hard tests at once, the soft VALs listed and tested after: a software rasterizer runs a branch's code for a
+    // group of pixels whenever any of them takes it, so the soft test stays out of the loop over every VAL.
     let cut = val_params.soft_share * total;
+    var soft_list: array<u32, MAX_VALS>;
+    var soft_count = 0u;
     for (var m = 0u; m < m_count; m++) {
         let l = light[m];
         if lights_pixel(l) {
-            out.sum += l * val_visibility(s, m, luminance(l) >= cut);
+            let lk = val_lookup(s, m);
+            if !lk.valid {
+                out.sum += l;
+            } else if val_params.mode != 0u && luminance(l) >= cut {
+                soft_list[soft_count] = m;
+                soft_count += 1u;
+            } else {
+                val_lookups += 1u;
+                out.sum += l * val_hard(m, lk);
+            }
         }
+    }
+    for (var k = 0u; k < soft_count; k++) {
+        let m = soft_list[k];
+        val_lookups += 1u;
+        out.sum += light[m] * val_soft(s, m, val_lookup(s, m));
     }
     return out;
 }
