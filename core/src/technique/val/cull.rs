@@ -61,44 +61,65 @@ pub fn member_lists(assignment: &[u32], vals: usize, batch_size: usize) -> Membe
     MemberLists { order, ranges }
 }
 
+/// One VAL's bounds, gathered VPL by VPL: the radius of its VPLs' sphere about the map's centre, and their
+/// normal cone about the axis with how far they lie behind the centre along it.
+#[derive(Clone, Copy, Debug)]
+struct Reach {
+    centre: Vec3,
+    axis: Vec3,
+    radius: f32,
+    cos_theta: f32,
+    sin_theta: f32,
+    h: f32,
+}
+
+impl Reach {
+    fn new(centre: Vec3, axis: Vec3) -> Reach {
+        Reach { centre, axis, radius: 0.0, cos_theta: f32::INFINITY, sin_theta: 0.0, h: f32::NEG_INFINITY }
+    }
+
+    fn add(&mut self, position: Vec3, normal: Vec3) {
+        let along = normal.dot(self.axis);
+        self.radius = self.radius.max(position.distance(self.centre));
+        self.cos_theta = self.cos_theta.min(along);
+        // The normal's part across the axis, measured (not sqrt(1 - cos^2), whose rounding alone is 1e-3).
+        self.sin_theta = self.sin_theta.max((normal - along * self.axis).length());
+        self.h = self.h.max(self.axis.dot(self.centre - position));
+    }
+
+    /// `[cos(theta), sin(theta), h, 1]`, or all zero (no emitter test) when the normals spread 90 degrees or
+    /// more from the axis or there are no members.
+    fn cone(&self) -> [f32; 4] {
+        let (c, s, h) = (self.cos_theta, self.sin_theta, self.h);
+        if c.is_nan() || c <= 0.0 || !h.is_finite() || !s.is_finite() {
+            return [0.0; 4];
+        }
+        // Rounded outward: a bound a hair too loose skips a little less, never a VPL that lights the pixel.
+        [(c - 1e-6).max(0.0), (s + 1e-6).min(1.0), h + 1e-6 * (1.0 + h.abs()), 1.0]
+    }
+}
+
 /// One VAL's emitter-side bound: `[cos(theta), sin(theta), h, 1]`, or all zero (no emitter test) when its
 /// normals spread 90 degrees or more from the axis or it has no members.
 pub fn cone_bound(members: impl Iterator<Item = (Vec3, Vec3)>, centre: Vec3, axis: Vec3) -> [f32; 4] {
-    let mut cos_theta = f32::INFINITY;
-    let mut sin_theta = 0.0f32;
-    let mut h = f32::NEG_INFINITY;
+    let mut reach = Reach::new(centre, axis);
     for (position, normal) in members {
-        let along = normal.dot(axis);
-        cos_theta = cos_theta.min(along);
-        // The normal's part across the axis, measured (not sqrt(1 - cos^2), whose rounding alone is 1e-3).
-        sin_theta = sin_theta.max((normal - along * axis).length());
-        h = h.max(axis.dot(centre - position));
+        reach.add(position, normal);
     }
-    if cos_theta.is_nan() || cos_theta <= 0.0 || !h.is_finite() || !sin_theta.is_finite() {
-        return [0.0; 4];
-    }
-    // Rounded outward: a bound a hair too loose skips a little less, never a VPL that lights the pixel.
-    [(cos_theta - 1e-6).max(0.0), (sin_theta + 1e-6).min(1.0), h + 1e-6 * (1.0 + h.abs()), 1.0]
+    reach.cone()
 }
 
-/// Each VAL's bounds for [`may_light`]: the radius of its VPLs' sphere about its map's centre, widened by `pad`
-/// for rounding, and its normal cone about `axes[k]` ([`cone_bound`]). `assignment[i]` is VPL `i`'s VAL.
+/// Each VAL's bounds for [`may_light`], in one pass over the VPLs: the radius of its VPLs' sphere about its
+/// map's centre, widened by `pad` for rounding, and its normal cone about `axes[k]` ([`cone_bound`]).
+/// `assignment[i]` is VPL `i`'s VAL; one past the VALs bounds nothing.
 pub fn val_bounds(vpls: &[Vpl], assignment: &[u32], centres: &[Vec3], axes: &[Vec3], pad: f32) -> Vec<(f32, [f32; 4])> {
-    let mut members: Vec<Vec<(Vec3, Vec3)>> = vec![Vec::new(); centres.len()];
+    let mut reach: Vec<Reach> = centres.iter().zip(axes).map(|(&c, &a)| Reach::new(c, a)).collect();
     for (v, &k) in vpls.iter().zip(assignment) {
-        if let Some(list) = members.get_mut(k as usize) {
-            list.push((v.position, v.normal));
+        if let Some(r) = reach.get_mut(k as usize) {
+            r.add(v.position, v.normal);
         }
     }
-    members
-        .iter()
-        .zip(centres)
-        .zip(axes)
-        .map(|((list, &centre), &axis)| {
-            let radius = list.iter().map(|(p, _)| p.distance(centre)).fold(0.0f32, f32::max);
-            (radius + pad, cone_bound(list.iter().copied(), centre, axis))
-        })
-        .collect()
+    reach.iter().map(|r| (r.radius + pad, r.cone())).collect()
 }
 
 /// Whether any VPL of a VAL (map centre `centre`, members within `radius`, emitter bound `cone` from

@@ -348,6 +348,8 @@ fn val_soft(s: Surface, m: u32, lk: ValLookup) -> f32 {
 // lanes then ran the tests one by one). Twenty-third session: the hard tests run in the loop over the VALs and
 // the soft ones from a list after it (lavapipe runs a branch's code for its 8-pixel group whenever any pixel
 // takes it, and PCSS's code is long): Sponza, M = 144, 320x180, 625 / 683 -> 432 / 471 ms, the same image.
+// The frame-order loop of `sum_by_val` and `sum_testing_at_first_vpl` share their first lines on purpose: one
+// loop choosing per VPL between both ways ran both cases at the slower time.
 struct VplSum {
     sum: vec3<f32>,
     evaluations: u32,
@@ -357,8 +359,13 @@ fn lights_pixel(term: vec3<f32>) -> bool {
     return max(term.x, max(term.y, term.z)) > 0.0;
 }
 
+// Whether VAL m's light is shown (`solo`: one VAL alone, else all).
+fn val_shown(m: u32) -> bool {
+    return val_params.solo < 0 || m == u32(val_params.solo);
+}
+
 fn in_solo(i: u32) -> bool {
-    return val_params.solo < 0 || vpl_val[i] == u32(val_params.solo);
+    return val_shown(vpl_val[i]);
 }
 
 // Whether any VPL of VAL m can light the pixel (val/cull.rs, `may_light`, its CPU twin and the bound's
@@ -398,7 +405,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
         for (var m = 0u; m < m_count; m++) {
             let start = val_lists[2u * (base + m)];
             let count = val_lists[2u * (base + m) + 1u];
-            if count == 0u || !(val_params.solo < 0 || m == u32(val_params.solo)) || !may_light(s, m) {
+            if count == 0u || !val_shown(m) || !may_light(s, m) {
                 continue;
             }
             var l = vec3<f32>(0.0);
@@ -444,6 +451,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
             }
         }
     }
+    // The lookup again rather than kept: a list of lookups would hold far more per pixel than the VAL indices.
     for (var k = 0u; k < soft_count; k++) {
         let m = soft_list[k];
         val_lookups += 1u;
