@@ -47,9 +47,11 @@
 //!   3 % with `slope_bias = 1`.
 //! - A VAL of at most `member_share` (1/32) of the frame's VPLs has its map at its member VPL nearest the mean,
 //!   moved off that VPL's own surface (`centre = auto`, the default; `mean` is the paper's, `member` every VAL's;
-//!   [`split::map_centres`]): the mean of VPLs on both sides of an arch floats in the open or sits in a column.
+//!   [`centre::map_centres`]): the mean of VPLs on both sides of an arch floats in the open or sits in a column.
 //!   With it the error against per-VPL maps falls at every M on the three scenes measured and Sponza's is lower
-//!   from M = 8 up (docs/techniques/val.md).
+//!   from M = 8 up (docs/techniques/val.md). A member with geometry right beside it (which its map would
+//!   draw warped) gives way to the least crowded member nearby (`clearance`, the default; [`centre`]): the
+//!   Cornell box with water's one rise in M.
 //! - Δ in the penumbra estimate is the side of the square with the VPLs' flux-weighted second moment (`size =
 //!   spread`, the default since the twenty-second session; [`kmeans::spread_sizes`]), not the diagonal of their
 //!   bounding rectangle (`bounds`, the paper's, section 6): a faint VPL far off widens the rectangle as much as a
@@ -70,6 +72,7 @@
 //!   ([`crate::scene::proxy`]): the paper's conclusion leaves "geometric simplifications ... on top of the
 //!   visibility approximations" to future work, so it is off by default.
 
+pub mod centre;
 pub mod cssm;
 pub mod cull;
 pub mod gpu_kmeans;
@@ -95,7 +98,7 @@ use crate::gpu::GpuContext;
 use crate::renderer::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster};
 use crate::renderer::layouts::SharedLayouts;
 use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
-use crate::scene::proxy::ProxyParams;
+use crate::scene::proxy::{ProxyParams, DEFAULT_MAX_EDGE};
 use crate::scene::PointLight;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -116,6 +119,15 @@ const NEAR_FRACTION: f32 = 0.1;
 
 /// A VAL map's centre lies this share of the scene's diagonal in front of the VAL (off its surfaces).
 const MAP_OFFSET: f32 = 2e-3;
+
+/// Whether geometry lies between `a` and `b`: a segment stopped a ten-thousandth of the scene short of `b`'s
+/// surface, against the scene's BVH (cut-outs let it through, as in every tracer).
+fn segment_occluded(bvh: &crate::accel::scene_bvh::SceneBvh, a: Vec3, b: Vec3, scene_size: f32) -> bool {
+    let eps = scene_size * 1e-4;
+    let d = b - a;
+    let len = d.length();
+    len.is_finite() && len > 2.0 * eps && bvh.occluded(a, d / len, len - eps)
+}
 
 /// Most VALs per frame (the per-pixel visibility array of `val/gather.wgsl`).
 pub const MAX_VALS: usize = 256;
@@ -299,13 +311,7 @@ impl VirtualAreaLights {
         // Whether a VAL's map centre sees a VPL: a segment between them, stopped a ten-thousandth of the scene
         // short of the VPL's surface, against the scene's BVH (cut-outs let it through, as in every tracer).
         let bvh = self.bvh.as_ref().filter(|(_, bounds)| *bounds == scene_bounds).map(|(b, _)| b);
-        let eps = self.scene_size * 1e-4;
-        let occluded = |a: Vec3, b: Vec3| {
-            let Some(bvh) = bvh else { return false };
-            let d = b - a;
-            let len = d.length();
-            len.is_finite() && len > 2.0 * eps && bvh.occluded(a, d / len, len - eps)
-        };
+        let occluded = |a: Vec3, b: Vec3| bvh.is_some_and(|bvh| segment_occluded(bvh, a, b, self.scene_size));
         let sight = split::Sight { occluded: &occluded, offset: self.scene_size * MAP_OFFSET };
         split::split(vpls, &self.kmeans_params(), &sp, bvh.map(|_| &sight), &base)
     }
@@ -351,7 +357,10 @@ impl Technique for VirtualAreaLights {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
         self.bvh_build_ms = None;
-        if self.params.split && self.params.hidden_weight > 0.0 {
+        // The BVH serves the hidden members' weight and the member centres' clearance.
+        if (self.params.split && self.params.hidden_weight > 0.0)
+            || (self.params.clearance && self.params.centre != Centre::Mean)
+        {
             let (bvh, build_ms) = ctx.scene.bvh(ctx.gpu);
             self.bvh = Some((bvh, ctx.scene.bounds));
             self.bvh_build_ms = build_ms;
@@ -399,14 +408,27 @@ impl Technique for VirtualAreaLights {
         let far = self.scene_size * 1.01;
         self.casters.clear();
         // Each VAL's map centre: the paper's (its mean, moved off its surface along its normal) or its member VPL
-        // nearest the mean, moved off its own surface ([`split::map_centres`]), by `centre`.
+        // nearest the mean, moved off its own surface ([`centre::map_centres`]), by `centre`.
         // A VAL of at most `member_share` of the VPLs (`centre = auto`, every VAL with `member`) stands at a member.
         let max_members = match self.params.centre {
             Centre::Mean => 0,
             Centre::Member => usize::MAX,
             Centre::Auto => (self.params.member_share.max(0.0) as f64 * vpls.len() as f64).floor() as usize,
         };
-        let centres = split::map_centres(vpls, &self.clustering.assignment, &self.clustering.vals, max_members, offset);
+        // With the scene's BVH, a small VAL whose nearest member is crowded by nearby geometry (which its map
+        // would draw warped) stands at a clearer member ([`centre`]); probes reach the maps' longest edge.
+        let bvh = self.bvh.as_ref().filter(|(_, b)| *b == bounds).map(|(b, _)| b.clone());
+        let occluded = |a: Vec3, b: Vec3| bvh.as_ref().is_some_and(|bvh| segment_occluded(bvh, a, b, self.scene_size));
+        let max_edge = if self.params.max_edge > 0.0 { self.params.max_edge } else { DEFAULT_MAX_EDGE };
+        let clearance = centre::Clearance { occluded: &occluded, reach: centre::REACH * max_edge * self.scene_size };
+        let centres = centre::map_centres(
+            vpls,
+            &self.clustering.assignment,
+            &self.clustering.vals,
+            max_members,
+            offset,
+            bvh.as_ref().filter(|_| self.params.clearance).map(|_| &clearance),
+        );
         // Delta of the penumbra estimate (the near plane stays a share of the rectangle's size).
         let sizes = self.sizes(vpls);
         // Each VAL's bounding sphere about its map's centre and its VPLs' normal cone ([`cull`]): a receiver that

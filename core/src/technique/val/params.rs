@@ -9,7 +9,7 @@ pub enum Centre {
     /// The VAL's mean, moved off its surface along its normal (the paper's).
     Mean,
     /// The member VPL nearest the mean, moved off its own surface (beyond the paper,
-    /// [`super::split::map_centres`]).
+    /// [`super::centre::map_centres`]).
     Member,
     /// `Member` for a VAL of at most `member_share` of the VPLs, `Mean` for a larger one (the default).
     Auto,
@@ -104,6 +104,9 @@ pub struct ValParams {
     pub centre: Centre,
     /// With `centre = auto`: a VAL of at most this share of the frame's VPLs stands at a member.
     pub member_share: f32,
+    /// A member centre with geometry right beside it moves to a clearer member nearby ([`super::centre`],
+    /// beyond the paper; rays against the scene's BVH); off: always the member nearest the mean.
+    pub clearance: bool,
     /// [`super::split`]: a VAL whose normal cone is wider than this (degrees) is bisected by normal.
     pub max_cone_degrees: f32,
     /// [`super::split`]: the largest spread of a VAL's VPLs along its normal, as a share of its size.
@@ -168,6 +171,7 @@ impl Default for ValParams {
             // unchanged.
             hidden_weight: 2.0,
             centre: Centre::Auto,
+            clearance: true,
             member_share: DEFAULT_MEMBER_SHARE,
             max_cone_degrees: 40.0,
             max_depth: 0.1,
@@ -286,6 +290,15 @@ impl ValParams {
                 help: "centre = auto: a VAL of at most this share of the frame's VPLs has its map at a member VPL",
                 kind: ParamKind::Float { min: 0.0, max: 1.0 },
                 value: ParamValue::Float(p.member_share),
+            },
+            Param {
+                key: "clearance",
+                label: "Clear member centre",
+                help: "A VAL's map standing at a member with geometry right beside it (nearer than a tenth of the \
+                       maps' longest edge, which its map would draw warped) moves to the least crowded member \
+                       nearby; off: always the member nearest the mean",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(p.clearance),
             },
             Param {
                 key: "max_cone",
@@ -448,6 +461,7 @@ impl ValParams {
             ("slope_bias", ParamValue::Float(v)) => p.slope_bias = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
             ("skip_unlit", ParamValue::Bool(v)) => p.skip_unlit = *v,
+            ("clearance", ParamValue::Bool(v)) => p.clearance = *v,
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
             ("vpls_per_step", ParamValue::Int(v)) => p.vpls_per_step = *v as u32,
             ("clustering", ParamValue::Choice(v)) => p.clustering = v.clone(),

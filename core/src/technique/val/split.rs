@@ -175,34 +175,6 @@ fn hidden_share(vpls: &[Vpl], g: &Group, sight: &Sight) -> f32 {
     }
 }
 
-/// Where each VAL's map stands (beyond the paper, `centre`): for a VAL of at most `max_members` VPLs, its member
-/// VPL nearest its mean moved `offset` along that VPL's own normal (a point just off a surface the VAL lies on,
-/// never inside a column or in the open space across an arch, where the mean of VPLs on both sides falls: the
-/// paper's Fig. 7 fault); for a larger VAL, an empty one or a broken member, the mean moved along the VAL's
-/// normal (the paper's centre). One pass over the VPLs (`assignment[i]` is VPL `i`'s VAL).
-pub fn map_centres(vpls: &[Vpl], assignment: &[u32], vals: &[Val], max_members: usize, offset: f32) -> Vec<Vec3> {
-    let mut nearest: Vec<Option<(f32, usize)>> = vec![None; vals.len()];
-    if max_members > 0 {
-        for (i, (x, &k)) in vpls.iter().zip(assignment).enumerate() {
-            let Some((slot, val)) = nearest.get_mut(k as usize).zip(vals.get(k as usize)) else { continue };
-            let d = x.position.distance_squared(val.position);
-            if slot.is_none_or(|(best, _)| d < best) {
-                *slot = Some((d, i));
-            }
-        }
-    }
-    vals.iter()
-        .zip(&nearest)
-        .map(|(v, n)| {
-            let member = n
-                .filter(|_| v.count as usize <= max_members)
-                .map(|(_, i)| vpls[i].position + vpls[i].normal * offset)
-                .filter(|eye| eye.is_finite());
-            member.unwrap_or(v.position + v.normal * offset)
-        })
-        .collect()
-}
-
 fn group(vpls: &[Vpl], km: &KMeansParams, members: Vec<usize>) -> Group {
     let (position, normal) = mean(vpls, &members);
     let (u, v) = normal.any_orthonormal_pair();

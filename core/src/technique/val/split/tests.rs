@@ -179,63 +179,6 @@ fn a_large_vals_hidden_share_is_estimated_from_a_bounded_sample() {
     assert!((h - 0.3).abs() < 0.02, "hidden share {h}");
 }
 
-#[test]
-fn a_small_vals_map_stands_at_its_vpl_nearest_the_mean_just_off_its_own_surface() {
-    // VPLs on a floor (x 0-2.9, facing up) and on a wall (x = 3.2, facing -x), one VAL: their mean floats above
-    // the floor, in the open; the member centre is the floor VPL below it, moved off the floor.
-    let floor = (0..30).map(|i| Vpl {
-        position: Vec3::new(0.1 * i as f32, 0.0, 0.0),
-        normal: Vec3::Y,
-        flux: Vec3::ONE,
-        light: 0,
-        from: Vec3::ZERO,
-    });
-    let wall = (0..10).map(|i| Vpl {
-        position: Vec3::new(3.2, 0.1 * i as f32, 0.0),
-        normal: Vec3::NEG_X,
-        flux: Vec3::ONE,
-        light: 0,
-        from: Vec3::ZERO,
-    });
-    let v: Vec<Vpl> = floor.chain(wall).collect();
-    let members: Vec<usize> = (0..v.len()).collect();
-    let (position, normal) = mean(&v, &members);
-    assert!(position.y > 0.05, "the mean floats: {position}");
-    let val = Val {
-        position,
-        normal,
-        axis_u: Vec3::X,
-        axis_v: Vec3::Z,
-        half_u: 1.0,
-        half_v: 1.0,
-        offset_u: 0.0,
-        offset_v: 0.0,
-        count: v.len() as u32,
-        flux: Vec3::ONE,
-    };
-    // A second VAL with no VPLs keeps its mean.
-    let empty = Val { position: Vec3::splat(9.0), count: 0, ..val };
-    let assignment = vec![0u32; v.len()];
-    let nearest = members
-        .iter()
-        .copied()
-        .min_by(|&a, &b| v[a].position.distance(position).total_cmp(&v[b].position.distance(position)))
-        .unwrap();
-    assert_eq!(v[nearest].normal, Vec3::Y);
-    let on_member = v[nearest].position + Vec3::Y * 0.01;
-    let at_mean = position + normal * 0.01;
-    let eyes = map_centres(&v, &assignment, &[val, empty], v.len(), 0.01);
-    assert!((eyes[0] - on_member).length() < 1e-6, "{:?}", eyes[0]);
-    assert_eq!(eyes[1], Vec3::splat(9.0) + normal * 0.01);
-    // A VAL larger than the limit, or no member allowed at all: the paper's centre.
-    assert_eq!(map_centres(&v, &assignment, &[val], v.len() - 1, 0.01)[0], at_mean);
-    assert_eq!(map_centres(&v, &assignment, &[val], 0, 0.01)[0], at_mean);
-    // A broken nearest member: the paper's centre.
-    let mut broken = v.clone();
-    broken[nearest].normal = Vec3::NAN;
-    assert_eq!(map_centres(&broken, &assignment, &[val], v.len(), 0.01)[0], at_mean);
-}
-
 /// The sum of `Y d^2` over the VALs of `c`.
 fn flux_error(v: &[Vpl], km: &KMeansParams, c: &Clustering) -> f32 {
     let mut lists: Vec<Vec<usize>> = vec![Vec::new(); c.vals.len()];
