@@ -40,8 +40,9 @@ impl VirtualAreaLights {
                 } else {
                     "One shadow map per VAL, facing its normal, all in one atlas (see Shadow maps); the scene's long \
                      edges are cut first, since a paraboloid draws edges straight ('Longest edge'). A map stands \
-                     off its VAL's mean, or, for a small VAL, off its VPL nearest the mean ('Map centre'; white \
-                     dots)."
+                     off its VAL's mean, or, for a small VAL, off its VPL nearest the mean, or off a member nearby \
+                     with clearer space when geometry lies right beside that one ('Map centre', 'Clear member \
+                     centre'; white dots)."
                 },
                 layers: &["val centres", "val map centres", "val normals"],
                 shows_shadow_maps: true,
@@ -74,7 +75,8 @@ impl VirtualAreaLights {
             "val map centres" => vec![LegendEntry::new(
                 Glyph::Line,
                 palette,
-                "where a VAL's map stands: off its mean, or (a small VAL, centre = auto) off its VPL nearest the mean",
+                "where a VAL's map stands: off its mean, or (a small VAL, centre = auto) off its VPL nearest the mean \
+                 or a clearer one nearby",
             )],
             "vpl -> val" => vec![LegendEntry::new(Glyph::Line, palette, "a VPL joined to its VAL's centre")],
             _ => crate::technique::light_layer_legend(layer).unwrap_or_default(),
