@@ -310,7 +310,7 @@ mod tests {
 
     #[test]
     fn frustum_culls_sphere_behind_camera() {
-        let cam = crate::Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, 1.0, 0.1, 100.0);
+        let cam = crate::scene::Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, 1.0, 0.1, 100.0);
         let f = Frustum::from_clip_from_world(&cam.clip_from_world(1.0));
         assert!(f.intersects_sphere(Vec3::new(0.0, 0.0, -10.0), 1.0));
         assert!(!f.intersects_sphere(Vec3::new(0.0, 0.0, 10.0), 1.0));

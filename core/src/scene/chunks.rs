@@ -173,7 +173,7 @@ mod tests {
             textures: vec![],
             lights: vec![],
             directional: vec![],
-            camera: crate::Camera::look_at(Vec3::ONE, Vec3::ZERO, 1.0, 0.1, 100.0),
+            camera: crate::scene::Camera::look_at(Vec3::ONE, Vec3::ZERO, 1.0, 0.1, 100.0),
             bounds: Aabb::EMPTY,
             warnings: vec![],
         };

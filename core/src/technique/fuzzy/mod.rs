@@ -76,14 +76,16 @@ use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[POINTS, VISIBILITY, SHADE, KMEANS];
 const POINTS: WgslModule =
-    crate::wgsl!("fuzzy_points", ["shaders/common.wgsl", "core/src/technique/fuzzy/points.wgsl"]);
-const VISIBILITY: WgslModule =
-    crate::wgsl!("fuzzy_visibility", ["shaders/raytrace_bvh.wgsl", "core/src/technique/fuzzy/visibility.wgsl"]);
-const SHADE: WgslModule = crate::wgsl!(
+    crate::shaders::wgsl!("fuzzy_points", ["shaders/common.wgsl", "core/src/technique/fuzzy/points.wgsl"]);
+const VISIBILITY: WgslModule = crate::shaders::wgsl!(
+    "fuzzy_visibility",
+    ["shaders/raytrace_bvh.wgsl", "core/src/technique/fuzzy/visibility.wgsl"]
+);
+const SHADE: WgslModule = crate::shaders::wgsl!(
     "fuzzy_shade",
     ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
 );
-const KMEANS: WgslModule = crate::wgsl!(
+const KMEANS: WgslModule = crate::shaders::wgsl!(
     "fuzzy_kmeans",
     [
         "core/src/technique/fuzzy/kmeans.wgsl",

@@ -121,7 +121,7 @@ use viewpoints::Viewpoint;
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[TRIANGULATE];
-const TRIANGULATE: WgslModule = crate::wgsl!("insm_triangulate", ["core/src/technique/insm/triangulate.wgsl"]);
+const TRIANGULATE: WgslModule = crate::shaders::wgsl!("insm_triangulate", ["core/src/technique/insm/triangulate.wgsl"]);
 
 /// Most intermediate shadow maps (the paper uses 6 to 14).
 pub const MAX_VIEWPOINTS: usize = 16;

@@ -67,15 +67,15 @@ use pull_push::usable_levels;
 
 /// This technique's own WGSL modules; its registry entries list them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[SPLAT, PULL_PUSH, SHADE, VPL_GATHER];
-const SPLAT: WgslModule = crate::wgsl!(
+const SPLAT: WgslModule = crate::shaders::wgsl!(
     "ism_splat",
     ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/splat.wgsl"]
 );
-const PULL_PUSH: WgslModule = crate::wgsl!(
+const PULL_PUSH: WgslModule = crate::shaders::wgsl!(
     "ism_pull_push",
     ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/pull_push.wgsl"]
 );
-const SHADE: WgslModule = crate::wgsl!(
+const SHADE: WgslModule = crate::shaders::wgsl!(
     "ism_shade",
     [
         "shaders/common.wgsl",
@@ -86,7 +86,7 @@ const SHADE: WgslModule = crate::wgsl!(
         "shaders/per_light_main.wgsl"
     ]
 );
-const VPL_GATHER: WgslModule = crate::wgsl!(
+const VPL_GATHER: WgslModule = crate::shaders::wgsl!(
     "ism_vpl_gather",
     [
         "shaders/common.wgsl",

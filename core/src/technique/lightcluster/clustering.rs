@@ -113,7 +113,7 @@ pub struct ClusterParams {
     /// The paper's `d_init`: the largest minimum distance between cluster centers, in world units.
     /// 0 gives one cluster per visible light.
     pub d_init: f32,
-    /// The paper's `z_far`: the view distance at which `d_min` reaches 0 (normally [`crate::Camera::z_far`]).
+    /// The paper's `z_far`: the view distance at which `d_min` reaches 0 (normally [`crate::scene::Camera::z_far`]).
     pub z_far: f32,
     /// Scale `d_min` by the center's distance to the camera (the paper's method). Off: `d_min = d_init` for
     /// every center, which avoids clusters changing while the camera moves.

@@ -69,7 +69,7 @@ use clustering::{ClusterParams, Clusterer, Clustering};
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[SHADE];
-const SHADE: WgslModule = crate::wgsl!(
+const SHADE: WgslModule = crate::shaders::wgsl!(
     "lightcluster_shade",
     [
         "shaders/common.wgsl",

@@ -38,7 +38,7 @@ use crate::timing::PassTime;
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[PATHTRACE];
-const PATHTRACE: WgslModule = crate::wgsl!(
+const PATHTRACE: WgslModule = crate::shaders::wgsl!(
     "pathtrace",
     [
         "shaders/common.wgsl",

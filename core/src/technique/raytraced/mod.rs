@@ -36,7 +36,7 @@ use crate::timing::PassTime;
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[SHADOW];
-const SHADOW: WgslModule = crate::wgsl!(
+const SHADOW: WgslModule = crate::shaders::wgsl!(
     "raytrace_shadow",
     [
         "shaders/common.wgsl",

@@ -79,7 +79,7 @@ use passes::{Groups, Reservoirs};
 
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[CANDIDATES, TEMPORAL, SPATIAL, SHADE, OUTPUT];
-const CANDIDATES: WgslModule = crate::wgsl!(
+const CANDIDATES: WgslModule = crate::shaders::wgsl!(
     "restir_candidates",
     [
         "shaders/common.wgsl",
@@ -90,7 +90,7 @@ const CANDIDATES: WgslModule = crate::wgsl!(
         "core/src/technique/restir/candidates.wgsl"
     ]
 );
-const TEMPORAL: WgslModule = crate::wgsl!(
+const TEMPORAL: WgslModule = crate::shaders::wgsl!(
     "restir_temporal",
     [
         "shaders/common.wgsl",
@@ -100,7 +100,7 @@ const TEMPORAL: WgslModule = crate::wgsl!(
         "core/src/technique/restir/temporal.wgsl"
     ]
 );
-const SPATIAL: WgslModule = crate::wgsl!(
+const SPATIAL: WgslModule = crate::shaders::wgsl!(
     "restir_spatial",
     [
         "shaders/common.wgsl",
@@ -110,7 +110,7 @@ const SPATIAL: WgslModule = crate::wgsl!(
         "core/src/technique/restir/spatial.wgsl"
     ]
 );
-const SHADE: WgslModule = crate::wgsl!(
+const SHADE: WgslModule = crate::shaders::wgsl!(
     "restir_shade",
     [
         "shaders/common.wgsl",
@@ -121,7 +121,7 @@ const SHADE: WgslModule = crate::wgsl!(
     ]
 );
 const OUTPUT: WgslModule =
-    crate::wgsl!("restir_output", ["shaders/common.wgsl", "core/src/technique/restir/output.wgsl"]);
+    crate::shaders::wgsl!("restir_output", ["shaders/common.wgsl", "core/src/technique/restir/output.wgsl"]);
 
 /// A reservoir as the shaders store it. Mirrors `Reservoir` in `restir/reservoir.wgsl`.
 #[repr(C)]

@@ -17,7 +17,7 @@ use crate::scene::PointLight;
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[SHADE];
-const SHADE: WgslModule = crate::wgsl!(
+const SHADE: WgslModule = crate::shaders::wgsl!(
     "unshadowed_shade",
     ["shaders/common.wgsl", "shaders/light_tiles.wgsl", "core/src/technique/unshadowed/shade.wgsl"]
 );

@@ -107,12 +107,13 @@ use kmeans::{Clustering, KMeansParams};
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[GATHER, CSSM, KMEANS];
-const GATHER: WgslModule = crate::wgsl!(
+const GATHER: WgslModule = crate::shaders::wgsl!(
     "val_gather",
     ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_basis.wgsl", "core/src/technique/val/gather.wgsl"]
 );
-const CSSM: WgslModule = crate::wgsl!("val_cssm", ["core/src/technique/val/cssm.wgsl"]);
-const KMEANS: WgslModule = crate::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl", "core/src/technique/val/kmeans.wgsl"]);
+const CSSM: WgslModule = crate::shaders::wgsl!("val_cssm", ["core/src/technique/val/cssm.wgsl"]);
+const KMEANS: WgslModule =
+    crate::shaders::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl", "core/src/technique/val/kmeans.wgsl"]);
 
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
 const NEAR_FRACTION: f32 = 0.1;
