@@ -1,6 +1,6 @@
 // Shared by every full-screen shading pass: the frame uniform, the G-buffer, position reconstruction,
 // the light falloff and the BRDF. Composed in front of a pass's own WGSL (see core/src/shaders.rs).
-// Keep `Frame` in sync with `FrameUniform` in core/src/renderer/gpu_data.rs.
+// Keep `Frame` in sync with `FrameUniform` in core/src/services/gpu_data.rs.
 
 struct Frame {
     clip_from_world: mat4x4<f32>,
@@ -19,7 +19,7 @@ struct Frame {
     indirect: vec4<f32>,
 }
 
-// A point light as the shaders see it. Keep in sync with `GpuLight` in core/src/renderer/gpu_data.rs.
+// A point light as the shaders see it. Keep in sync with `GpuLight` in core/src/services/gpu_data.rs.
 struct Light {
     position: vec3<f32>,
     // the papers' L_att: the light contributes nothing beyond it
@@ -48,7 +48,7 @@ fn spot_factor(light: Light, dir: vec3<f32>) -> f32 {
 @group(0) @binding(3) var gbuffer_emissive: texture_2d<f32>;
 @group(0) @binding(4) var gbuffer_depth: texture_2d<f32>;
 
-// Hardware-independent work counters, read by core/src/renderer/work_counters.rs: keep the slots in sync with
+// Hardware-independent work counters, read by core/src/services/work_counters.rs: keep the slots in sync with
 // `slot` there (a test checks). A counter is 64 bits (low, high word) in one of WORK_BUCKETS buckets chosen by
 // the pixel's 16x16 tile, so the atomics of a pass spread over many addresses.
 const WORK_SHADED_PIXELS: u32 = 0u;

@@ -1,7 +1,7 @@
-// Directional lights (renderer/directional.rs): every geometry pixel adds each light's unshadowed radiance,
+// Directional lights (services/directional.rs): every geometry pixel adds each light's unshadowed radiance,
 // the surface's BRDF times its irradiance along the light's direction, times `directional_visibility` (from
 // directional_shadowmap.wgsl or directional_traced.wgsl, composed before this file). Composed after
-// common.wgsl. `Directionals` mirrors `DirectionalUniform` in core/src/renderer/directional.rs.
+// common.wgsl. `Directionals` mirrors `DirectionalUniform` in core/src/services/directional.rs.
 
 struct DirectionalOne {
     // the orthographic map's clip-from-world (x, y in -1..1, depth 0..1 from the light)

@@ -1,4 +1,4 @@
-// A directional light's visibility from its orthographic shadow map (renderer/directional.rs): 3x3 PCF of depth
+// A directional light's visibility from its orthographic shadow map (services/directional.rs): 3x3 PCF of depth
 // comparisons around the receiver's texel, the receiver pushed along its normal by the light's normal offset
 // and its depth lowered by the bias; 1 outside the map and for mode 0 (the unshadowed preview). Composed
 // before directional_light.wgsl (which declares `Directionals`).

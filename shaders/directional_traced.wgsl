@@ -1,5 +1,5 @@
 // A directional light's visibility by one shadow ray through the scene BVH (raytrace_bvh.wgsl): exact, for the
-// ground truths and the ray-traced techniques (renderer/directional.rs). Composed after raytrace_bvh.wgsl and
+// ground truths and the ray-traced techniques (services/directional.rs). Composed after raytrace_bvh.wgsl and
 // before directional_light.wgsl.
 
 fn directional_visibility(s: Surface, d: DirectionalOne) -> f32 {

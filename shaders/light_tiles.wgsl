@@ -1,4 +1,4 @@
-// The read side of the tiled light lists (core/src/renderer/light_tiles.rs), composed after common.wgsl into
+// The read side of the tiled light lists (core/src/services/light_tiles.rs), composed after common.wgsl into
 // every shading pass that loops over lights (or clusters). A pixel's tile holds, in order, the indices of the
 // spheres that may reach it; `tile_span` intersects that list with a batch's range [first, first + count) by
 // binary search, and `tile_item` turns a position of the span into an index. Without a list (tiles off, or a

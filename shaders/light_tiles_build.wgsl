@@ -1,4 +1,4 @@
-// Tiled light lists (a renderer service, core/src/renderer/light_tiles.rs): one workgroup per 16x16-pixel
+// Tiled light lists (a renderer service, core/src/services/light_tiles.rs): one workgroup per 16x16-pixel
 // screen tile. Composed after common.wgsl (frame uniform, G-buffer depth, position reconstruction).
 // 1. Every invocation reconstructs its four pixels' world positions from the G-buffer depth; the tile's geometry
 //    pixels are bounded by a world-space box (each invocation reduces four pixels in registers, then
@@ -10,7 +10,7 @@
 // 3. A tile whose list does not fit `capacity` is marked TILE_OVERFLOW: its pixels loop over every sphere.
 // The box test is conservative (a margin for the rounding of the two position reconstructions), so a list
 // holds every sphere that reaches one of the tile's pixels. `TileBuild` mirrors `TileBuildUniform` in
-// core/src/renderer/light_tiles.rs.
+// core/src/services/light_tiles.rs.
 
 struct TileBuild {
     tiles_x: u32,

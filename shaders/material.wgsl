@@ -1,5 +1,5 @@
 // A material (group 1 of the G-buffer pass and of the alpha-tested depth passes): `Material` mirrors
-// `MaterialUniform` in core/src/renderer/gpu_data.rs; the layout is `GpuScene::material_layout` (bindings 3 and
+// `MaterialUniform` in core/src/services/gpu_data.rs; the layout is `GpuScene::material_layout` (bindings 3 and
 // 4, the emissive and occlusion textures, are declared by gbuffer.wgsl, the only pass that reads them).
 
 struct Material {

@@ -1,7 +1,7 @@
 // Overlays drawn over the tone-mapped 3D view: lines (light ranges, cluster links, frusta) as screen-space quads
 // of `style.x` pixels, and screen-sized dots (lights, centers). Depth-tested against the G-buffer depth, with
 // the occluded parts drawn again faded (`style.y` of their alpha); or all drawn on top in x-ray mode.
-// `View` mirrors `OverlayUniform` in core/src/renderer/overlay.rs.
+// `View` mirrors `OverlayUniform` in core/src/services/overlay.rs.
 
 struct View {
     clip_from_world: mat4x4<f32>,

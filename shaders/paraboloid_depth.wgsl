@@ -1,7 +1,7 @@
 // Depth-only rendering of one paraboloid shadow map (a VPL's hemisphere, Brabec et al. 2002). The view comes
 // per tile through a dynamic offset; composed after vpl_basis.wgsl (the lookup uses the same basis). Clip space is
 // (dir.x, dir.y, depth * w, w) with w = 1 + dir.z, so x/w, y/w = dir.xy / (1 + dir.z) and clipping against
-// |x|, |y| <= w cuts most of the back hemisphere; the fragment stage cuts the rest. Keep `ParaboloidView` in sync with core/src/renderer/cube_shadows.rs.
+// |x|, |y| <= w cuts most of the back hemisphere; the fragment stage cuts the rest. Keep `ParaboloidView` in sync with core/src/services/cube_shadows.rs.
 
 struct ParaboloidView {
     // xyz: centre, w: near

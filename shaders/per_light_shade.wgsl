@@ -1,7 +1,7 @@
 // Reference technique, shading of one batch of lights: every light has its own cube shadow map in the batch's atlas
 // and binary (hard) visibility. Composed after common.wgsl, light_tiles.wgsl and cube_shadow.wgsl, before
 // per_light_main.wgsl (the shading loop).
-// `Batch` mirrors `PerLightBatchUniform` in core/src/renderer/per_light_shadows.rs.
+// `Batch` mirrors `PerLightBatchUniform` in core/src/services/per_light_shadows.rs.
 
 struct Batch {
     first_light: u32,

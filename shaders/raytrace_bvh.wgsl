@@ -20,7 +20,7 @@ struct BvhTriangle {
 @group(1) @binding(0) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(1) @binding(1) var<storage, read> bvh_triangles: array<BvhTriangle>;
 
-// Cut-out casters (core/src/renderer/scene_bvh.rs, `BvhCutouts` and `CutoutTextures`): per BVH triangle 0
+// Cut-out casters (core/src/accel/scene_bvh.rs, `BvhCutouts` and `CutoutTextures`): per BVH triangle 0
 // (opaque) or 1 + its record; records as two texels (uv0, uv1), (uv2, mask layer, cutoff); the masks (alpha,
 // factor times texture) one layer per cut-out material. Textures, not storage buffers: downlevel devices allow
 // four of those per stage and the tracers already bind up to four.

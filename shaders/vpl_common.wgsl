@@ -1,7 +1,7 @@
 // What every VPL gather shares: the VPL layout, the batch uniform, the indirect output and the radiance one VPL
 // sends to a receiver. Composed after common.wgsl (and the visibility's own files), before vpl_gather.wgsl.
 // `Vpl` mirrors `GpuVpl` in core/src/vpl/mod.rs; `GatherBatch` mirrors `GatherBatchUniform` in
-// core/src/renderer/vpl_gather.rs.
+// core/src/services/vpl_gather.rs.
 
 struct Vpl {
     // xyz: position

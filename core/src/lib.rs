@@ -2,8 +2,11 @@
 
 pub mod accel;
 pub mod compare;
+pub mod contract;
 pub mod error;
+pub mod fingerprint;
 pub mod scene;
+pub mod services;
 
 pub use error::{GpuError, LayoutError, LoadError};
 pub use scene::{Aabb, Camera, Material, Mesh, PointLight, Scene, SceneSource, TextureImage};

@@ -78,7 +78,7 @@ pub const PER_LIGHT_SHADE: WgslModule = wgsl!(
 pub const VPL_BLUR: WgslModule = wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_blur.wgsl"]);
 
 /// Every shared composed module (the renderer services' passes and the VPL gathers several techniques use).
-/// The directional-light service (`renderer/directional.rs`): visibility by its orthographic map, or by rays.
+/// The directional-light service (`services/directional.rs`): visibility by its orthographic map, or by rays.
 pub const DIRECTIONAL_SHADOWMAP: WgslModule = wgsl!(
     "directional_shadowmap",
     ["shaders/common.wgsl", "shaders/directional_shadowmap.wgsl", "shaders/directional_light.wgsl"]

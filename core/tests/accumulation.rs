@@ -5,9 +5,9 @@
 mod common;
 
 use common::*;
-use shadowlab_core::renderer::layouts::SharedLayouts;
 use shadowlab_core::scene::layout::{generate, parse};
 use shadowlab_core::scene::Scene;
+use shadowlab_core::services::layouts::SharedLayouts;
 use shadowlab_core::technique::ParamValue;
 
 #[test]

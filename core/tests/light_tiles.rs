@@ -1,4 +1,4 @@
-//! Tiled light lists (`core/src/renderer/light_tiles.rs`): the built-in scenes render the same image with and
+//! Tiled light lists (`core/src/services/light_tiles.rs`): the built-in scenes render the same image with and
 //! without tiles for every technique that reads them, whatever the batching; and every light that reaches a
 //! pixel is in its tile's list, in order.
 

@@ -175,7 +175,7 @@ impl ShadowLabApp {
         };
         let view_points = self.views.last_viewport_rect.map_or(1.0, |r| r.width().max(1.0));
         let render_pixels_per_point = renderer.settings().width as f32 / view_points;
-        renderer.set_overlay_style(shadowlab_core::renderer::overlay::OverlayStyle {
+        renderer.set_overlay_style(shadowlab_core::services::overlay::OverlayStyle {
             line_width_px: (2.0 * render_pixels_per_point).max(1.0),
             occluded_alpha: 0.25,
         });

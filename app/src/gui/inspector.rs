@@ -13,7 +13,7 @@
 
 use eframe::egui;
 use glam::Vec3;
-use shadowlab_core::renderer::cube_shadows::{CubeAtlas, TileProjection};
+use shadowlab_core::services::cube_shadows::{CubeAtlas, TileProjection};
 use shadowlab_core::GpuContext;
 
 /// Which maps are shown: the direct or the indirect technique's, its shadow maps (`set` 0) or its depth
@@ -167,7 +167,7 @@ impl Shown {
     fn distance_at(
         &self,
         i: usize,
-        reader: Option<&shadowlab_core::renderer::cube_shadows::DistanceReader>,
+        reader: Option<&shadowlab_core::services::cube_shadows::DistanceReader>,
     ) -> Option<f32> {
         let (x, y) = (i as u32 % self.width, i as u32 / self.width);
         reader?.distance(x % self.resolution, y % self.resolution, self.depths[i])

@@ -151,7 +151,7 @@ impl SessionTimes {
 /// The view `report` measured on `scene` (see the module doc).
 pub fn view_of(scene: &str, report: &FrameReport) -> u64 {
     let indirect = report.indirect.as_ref().map(|i| (&i.technique, &i.parameters));
-    shadowlab_core::renderer::report::fingerprint(&(scene, report.view_fingerprint, indirect))
+    shadowlab_core::fingerprint::fingerprint(&(scene, report.view_fingerprint, indirect))
 }
 
 fn describe(params: &BTreeMap<String, String>) -> String {

@@ -38,7 +38,7 @@ pub struct SweepJob {
     pub gpu: GpuContext,
     /// The main view's scene on the GPU (shared, not uploaded again) and the layouts it was made with.
     pub scene: std::sync::Arc<shadowlab_core::accel::gpu_scene::GpuScene>,
-    pub layouts: std::sync::Arc<shadowlab_core::renderer::layouts::SharedLayouts>,
+    pub layouts: std::sync::Arc<shadowlab_core::services::layouts::SharedLayouts>,
     pub lights: Vec<PointLight>,
     /// The session's directional lights.
     pub suns: Vec<shadowlab_core::scene::DirectionalLight>,

@@ -66,7 +66,7 @@ pub enum TradeoffMessage {
 pub struct TradeoffJob {
     pub gpu: GpuContext,
     pub scene: Arc<shadowlab_core::accel::gpu_scene::GpuScene>,
-    pub layouts: Arc<shadowlab_core::renderer::layouts::SharedLayouts>,
+    pub layouts: Arc<shadowlab_core::services::layouts::SharedLayouts>,
     pub lights: Vec<PointLight>,
     /// The session's directional lights.
     pub suns: Vec<shadowlab_core::scene::DirectionalLight>,

@@ -7,13 +7,13 @@
 
 use wgpu::util::DeviceExt;
 
-use super::layouts::compute_pipeline;
-use super::layouts::SharedLayouts;
 use super::targets::FrameTargets;
 use crate::error::GpuError;
 use crate::gpu::bind::storage_entry;
 use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::GpuContext;
+use crate::services::layouts::compute_pipeline;
+use crate::services::layouts::SharedLayouts;
 
 pub struct ExposureMeter {
     layout: wgpu::BindGroupLayout,

@@ -324,9 +324,9 @@ impl Renderer {
         Ok(FrameReport {
             technique: technique.key().to_string(),
             parameters: parameters(technique),
-            view_fingerprint: report::fingerprint(&(
+            view_fingerprint: crate::fingerprint::fingerprint(&(
                 &job.camera,
-                report::lights_fingerprint(&job.lights),
+                crate::fingerprint::lights_fingerprint(&job.lights),
                 self.directional.lights(),
                 self.settings.work_fingerprint(),
                 self.scene.triangle_count,

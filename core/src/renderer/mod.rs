@@ -1,4 +1,6 @@
-//! The deferred renderer shared by all techniques.
+//! The deferred renderer shared by all techniques: the [`Renderer`] that owns the scene on the GPU, the
+//! direct and indirect techniques (made by [`crate::technique::registry`]) and the frame, above the techniques
+//! and the services they use ([`crate::services`]).
 //!
 //! A frame: (1) G-buffer pass (depth, normal, albedo, emission; chunks culled against the view frustum),
 //! (2) ambient pass that starts the HDR target with ambient + emission, (3) the technique's steps, each adding
@@ -7,29 +9,14 @@
 //! advanced a few steps at a time ([`Renderer::begin_frame`], [`Renderer::advance`], [`Renderer::finish_frame`])
 //! so an interactive app stays responsive while a slow technique accumulates.
 
-pub mod cube_atlas;
-mod cube_draws;
-pub mod cube_geometry;
-pub mod cube_params;
-pub mod cube_shadows;
-pub mod directional;
 mod display;
 pub mod exposure;
 mod frame;
-pub mod gpu_data;
-pub mod layouts;
-pub mod light_tiles;
-pub mod lights;
-pub mod overlay;
-pub mod per_light_shadows;
 mod read;
 pub mod report;
 pub mod settings;
 mod setup;
-pub mod shade_pass;
 pub mod targets;
-pub mod vpl_gather;
-pub mod work_counters;
 
 use std::time::Instant;
 
@@ -39,12 +26,13 @@ use crate::gpu::GpuContext;
 use crate::math::Frustum;
 use crate::scene::chunks::merge_draw_ranges;
 use crate::scene::{Camera, PointLight, Scene};
+use crate::services::gpu_data::{FrameUniform, MatrixUniform};
+use crate::services::layouts::SharedLayouts;
+use crate::services::{cube_shadows, directional, light_tiles, lights, overlay, work_counters};
 use crate::shaders;
 use crate::technique::{FrameContext, Technique};
 use crate::timing::{PassTime, PassTimer};
 use crate::vpl::{GpuVpl, VplFrame, VplSet};
-use gpu_data::{FrameUniform, MatrixUniform};
-use layouts::SharedLayouts;
 use targets::FrameTargets;
 
 pub use report::{FrameCounts, FrameJob, FrameReport, IndirectReport};

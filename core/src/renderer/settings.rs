@@ -48,7 +48,7 @@ pub struct RenderSettings {
     /// Tiled light lists ([`light_tiles`]): shading passes visit only the lights (clusters) that reach their
     /// pixel's 16x16 tile. The image is the same either way; off loops over every light of a batch.
     pub light_tiles: bool,
-    /// Receiver-aware caster culling in the cube shadow maps ([`crate::renderer::cube_shadows::receiver_bounds`]):
+    /// Receiver-aware caster culling in the cube shadow maps ([`crate::services::cube_shadows::receiver_bounds`]):
     /// a chunk that cannot lie between a light and the view's surfaces in its range is not drawn. The image is
     /// the same either way; off is for measuring what it saves.
     pub receiver_culling: bool,
@@ -59,7 +59,7 @@ impl RenderSettings {
     /// measured configurations apart; the display-only ones (exposure and its metering, tone map, ambient and
     /// background colours, indirect gain) are left out, so the app's two views compare.
     pub fn work_fingerprint(&self) -> u64 {
-        super::report::fingerprint(&(
+        crate::fingerprint::fingerprint(&(
             self.width,
             self.height,
             self.specular,

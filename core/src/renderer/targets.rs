@@ -1,7 +1,7 @@
 //! Screen-sized render targets: the G-buffer, the HDR accumulation target and the tone-mapped output.
 
-use super::layouts::SharedLayouts;
 use crate::gpu::GpuContext;
+use crate::services::layouts::SharedLayouts;
 
 pub struct FrameTargets {
     pub width: u32,

@@ -330,7 +330,7 @@ pub struct Scene {
     pub textures: Vec<TextureImage>,
     pub lights: Vec<PointLight>,
     /// Lights at infinity (a glTF sun): shaded by the renderer's directional-light service for every direct
-    /// technique (`renderer/directional.rs`, a layer above the scene), at most [`MAX_DIRECTIONAL_LIGHTS`].
+    /// technique (`services/directional.rs`, a layer above the scene), at most [`MAX_DIRECTIONAL_LIGHTS`].
     pub directional: Vec<DirectionalLight>,
     pub camera: Camera,
     pub bounds: Aabb,

@@ -10,12 +10,12 @@
 //! The renderer owns what all techniques share: the G-buffer, the HDR accumulation target (already holding
 //! ambient and emission when steps run), tone mapping and timing.
 //!
-//! Layers: [`params`] and [`overlay`] are plain data, below the renderer services (which draw overlays and
-//! describe parameters); this file holds the trait and the [`FrameContext`], above the services whose outputs
-//! the context carries; the technique folders sit above it, and [`registry`], which names them, on top.
+//! Layers: [`params`], [`overlay`] and [`work`] are plain data ([`crate::contract`]), below the renderer's
+//! services (which draw overlays and describe parameters); the [`FrameContext`] lives with the services
+//! ([`crate::services::context`]), since the services that run a technique's passes take it; this file holds the
+//! trait, above them; the technique folders sit above it, [`registry`], which names them, above those, and the
+//! `Renderer` that drives a frame (`renderer/`) on top.
 
-pub mod overlay;
-pub mod params;
 pub mod registry;
 
 pub mod fuzzy;
@@ -29,7 +29,9 @@ pub mod restir;
 pub mod unshadowed;
 pub mod val;
 pub mod vpl_gather;
-pub mod work;
+
+pub use crate::contract::{overlay, params, work};
+pub use crate::services::context::{accumulate_pass, DirectionalVisibility, FrameContext, MAX_LIGHT_WORK_PER_PASS};
 
 pub use overlay::{
     index_color, light_layer_legend, light_overlay_color, light_overlays, sun_overlays, ExplainStep, Glyph, HoverPoint,
@@ -45,71 +47,11 @@ pub use work::WorkCounts;
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::accel::gpu_scene::GpuScene;
 use crate::error::GpuError;
-use crate::gpu::GpuContext;
 use crate::math::Frustum;
-use crate::renderer::cube_shadows::{CubeAtlas, CubeStats};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::light_tiles::TileLists;
-use crate::renderer::lights::VisibleLights;
 use crate::scene::{Camera, PointLight};
-use crate::timing::{PassTime, PassTimer};
-use crate::vpl::{VplFrame, VplSettings};
-
-/// How a technique's frame sees the directional lights (drawn by the renderer's `directional.rs`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DirectionalVisibility {
-    /// The orthographic shadow map (the default: the reference and the shadow-map techniques).
-    #[default]
-    ShadowMap,
-    /// One shadow ray per pixel and light (the ground truths and the ray-traced techniques).
-    Traced,
-    /// No visibility (the unshadowed preview).
-    None,
-}
-
-/// Everything a technique may read during a frame.
-pub struct FrameContext<'a> {
-    pub gpu: &'a GpuContext,
-    pub scene: &'a GpuScene,
-    pub layouts: &'a SharedLayouts,
-    /// Group 0 of every full-screen pass: the frame uniform and the G-buffer (see `common.wgsl`).
-    pub screen_bind_group: &'a wgpu::BindGroup,
-    /// HDR radiance target (`SharedLayouts::hdr_format`); techniques add their lights' radiance into it.
-    pub hdr_view: &'a wgpu::TextureView,
-    pub camera: &'a Camera,
-    pub aspect: f32,
-    pub frustum: Frustum,
-    pub lights: &'a [PointLight],
-    /// The suns (at most [`crate::scene::MAX_DIRECTIONAL_LIGHTS`]). The renderer shades their direct light for
-    /// every technique ([`crate::renderer::directional`]) and makes VPLs of them; a technique reads them only
-    /// for light it computes itself (the path tracer's bounce).
-    pub directional_lights: &'a [crate::scene::DirectionalLight],
-    pub timer: &'a PassTimer,
-    /// Upper bound on the lights (or clusters, cube maps) one step may handle, so an interactive caller can keep
-    /// each step short; `usize::MAX` when unlimited. Never changes the image, only how the work is split.
-    pub max_lights_per_step: usize,
-    /// Render target size in pixels.
-    pub size: (u32, u32),
-    /// Indirect radiance per pixel (`array<vec4<f32>>`, row-major), cleared at the start of every frame;
-    /// indirect techniques add into it. A placeholder without an indirect technique.
-    pub indirect_buffer: &'a wgpu::Buffer,
-    /// The frame's VPLs (empty unless the indirect technique [`Technique::uses_vpls`]).
-    pub vpls: &'a VplFrame,
-    pub vpl_settings: &'a VplSettings,
-    /// The lights whose range touches the view frustum, uploaded once for every technique.
-    pub visible_lights: &'a VisibleLights,
-    /// Per 16x16-pixel tile, the visible lights that reach it (group 2 of a shading pass, `light_tiles.wgsl`),
-    /// built after `prepare` when the technique [`Technique::uses_light_tiles`]; encode steps read it.
-    pub light_tiles: &'a TileLists,
-    /// [`crate::renderer::RenderSettings::light_tiles`]: techniques that bin their own spheres follow it too.
-    pub light_tiles_enabled: bool,
-    /// The bounds of the surfaces this frame shades (the view frustum within the scene's box), for receiver-aware
-    /// caster culling in shadow maps ([`crate::renderer::cube_shadows::CubeGeometry::receivers`]); None when
-    /// the render setting is off.
-    pub receivers: Option<crate::scene::Aabb>,
-}
+use crate::services::cube_shadows::{CubeAtlas, CubeStats};
+use crate::timing::PassTime;
 
 /// What a technique did in a frame, for the frame report.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -264,7 +206,7 @@ pub trait Technique {
         OverlayUpdate::Stale
     }
     /// How this technique's frames see the scene's directional lights (the renderer's service shades them for
-    /// every technique, [`crate::renderer::directional`]): by the orthographic shadow map unless overridden.
+    /// every technique, [`crate::services::directional`]): by the orthographic shadow map unless overridden.
     fn directional_visibility(&self) -> DirectionalVisibility {
         DirectionalVisibility::ShadowMap
     }
@@ -346,45 +288,4 @@ pub trait Technique {
     fn depth_images(&self) -> Vec<(&CubeAtlas, &'static str)> {
         Vec::new()
     }
-}
-
-/// Most light evaluations (lights x shadow rays) one full-screen pass may do per pixel: a single pass over
-/// 100,000 lights (or 4,096 lights x 256 rays) can run for seconds and lose a real GPU's device to its
-/// watchdog, so passes are split to stay under this. The image does not change.
-pub const MAX_LIGHT_WORK_PER_PASS: usize = 4096;
-
-/// A full-screen pass that adds `pipeline`'s output into the HDR target: group 0 is the screen bind group,
-/// groups 1.. are `groups` (the technique's, then the tile lists' when it reads them). The shading passes of all techniques go through here.
-pub fn accumulate_pass(
-    ctx: &FrameContext,
-    encoder: &mut wgpu::CommandEncoder,
-    label: &str,
-    pipeline: &wgpu::RenderPipeline,
-    groups: &[&wgpu::BindGroup],
-) {
-    ctx.timer.render_pass(
-        encoder,
-        label,
-        wgpu::RenderPassDescriptor {
-            label: None,
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: ctx.hdr_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        },
-        |pass| {
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, ctx.screen_bind_group, &[]);
-            for (i, group) in groups.iter().enumerate() {
-                pass.set_bind_group(1 + i as u32, *group, &[]);
-            }
-            pass.draw(0..3, 0..1);
-        },
-    );
 }

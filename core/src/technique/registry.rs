@@ -7,7 +7,7 @@ use super::{
     fuzzy, insm, ism, lightcluster, pathtraced, raytraced, reference, restir, unshadowed, val, vpl_gather, Technique,
 };
 use crate::gpu::GpuContext;
-use crate::renderer::layouts::SharedLayouts;
+use crate::services::layouts::SharedLayouts;
 use crate::shaders::WgslModule;
 use crate::vpl::VplSource;
 

@@ -13,7 +13,7 @@ pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, 
     use crate::gui::inspector::{AtlasDepths, MapSource};
     use shadowlab_core::technique::Technique;
     // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
-    fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::services::cube_shadows::CubeAtlas, &'static str)> {
         t.shadow_atlas().into_iter().chain(t.depth_images()).collect()
     }
     fn labelled(t: &dyn Technique, indirect: bool) -> Vec<(MapSource, String)> {

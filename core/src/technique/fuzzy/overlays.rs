@@ -87,7 +87,7 @@ impl FuzzyClustering {
                 LegendEntry::new(Glyph::Line, [0.2, 1.0, 0.3, 0.8], "a shadow ray that reaches its light"),
                 LegendEntry::new(Glyph::Line, [1.0, 0.2, 0.2, 0.8], "a shadow ray that is blocked"),
             ],
-            _ => crate::renderer::vpl_gather::vpl_layer_legend(layer)
+            _ => crate::services::vpl_gather::vpl_layer_legend(layer)
                 .or_else(|| crate::technique::light_layer_legend(layer))
                 .unwrap_or_default(),
         };
@@ -114,7 +114,7 @@ impl FuzzyClustering {
             position: v.position,
             index,
         }));
-        points.extend(crate::renderer::vpl_gather::vpl_hover_points(&self.vpls));
+        points.extend(crate::services::vpl_gather::vpl_hover_points(&self.vpls));
         points
     }
 
@@ -135,8 +135,8 @@ impl FuzzyClustering {
             "shading-point centroids" => cluster("shading-point cluster", &ins.sp_centroids),
             // A pixel's cluster in the per-pixel map: the cluster's representative.
             "shading-point clusters" => cluster("shading-point cluster", &ins.sp_clusters),
-            l if l.starts_with("vpls by cluster") || crate::renderer::vpl_gather::is_vpl_layer(&self.vpls, l) => {
-                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
+            l if l.starts_with("vpls by cluster") || crate::services::vpl_gather::is_vpl_layer(&self.vpls, l) => {
+                let mut lines = crate::services::vpl_gather::vpl_details(&self.vpls, index);
                 if let Some(k) = ins.vpl_assignment.get(index).filter(|k| **k != u32::MAX) {
                     lines.push(format!("in VPL cluster {k}"));
                 }

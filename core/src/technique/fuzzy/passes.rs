@@ -65,7 +65,7 @@ impl FuzzyClustering {
                 layout: &self.points_layout,
                 entries: &[wgpu::BindGroupEntry { binding: 0, resource: points.as_entire_binding() }],
             });
-            let (x, y) = crate::renderer::vpl_gather::pixel_workgroups(ctx.size);
+            let (x, y) = crate::services::vpl_gather::pixel_workgroups(ctx.size);
             ctx.timer.compute_pass(encoder, "fuzzy shading points", |pass| {
                 pass.set_pipeline(&self.points_pipeline);
                 pass.set_bind_group(0, ctx.screen_bind_group, &[]);

@@ -107,12 +107,12 @@ use super::{
 use crate::error::GpuError;
 use crate::gpu::readback::{map_read, read_buffer};
 use crate::gpu::GpuContext;
-use crate::renderer::cube_params::CubeMapParams;
-use crate::renderer::cube_shadows::{CubeGeometry, CubeShadowRenderer};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::per_light_shadows::PerLightShadows;
 use crate::scene::chunks::Chunk;
 use crate::scene::{Aabb, PointLight};
+use crate::services::cube_params::CubeMapParams;
+use crate::services::cube_shadows::{CubeGeometry, CubeShadowRenderer};
+use crate::services::layouts::SharedLayouts;
+use crate::services::per_light_shadows::PerLightShadows;
 use crate::timing::PassTime;
 pub use params::InsmParams;
 use triangulate::{GpuTile, MapView, MeshSettings, SampledImage, MAX_TRIANGLES_PER_TILE};
@@ -605,12 +605,12 @@ impl Technique for Insm {
         true
     }
 
-    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn shadow_atlas(&self) -> Option<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         let what = "cube maps of the last batch, drawn from the meshes, six faces per light (+x -x +y -y +z -z)";
         self.shadows.atlas().map(|a| (a, what))
     }
 
-    fn depth_images(&self) -> Vec<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn depth_images(&self) -> Vec<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect()
     }
 

@@ -4,8 +4,8 @@
 use super::triangulate::MeshSettings;
 use super::viewpoints::{self, Placement, Viewpoint};
 use super::{MAX_INSM_RESOLUTION, MAX_VIEWPOINTS};
-use crate::renderer::cube_params::CubeMapParams;
 use crate::scene::Aabb;
+use crate::services::cube_params::CubeMapParams;
 use crate::technique::{Param, ParamKind, ParamValue};
 
 /// The connectivity test's default ε (relative second difference of inverse depth) at [`EPSILON_RESOLUTION`]²

@@ -52,11 +52,11 @@ use super::{FrameContext, OverlayLayer, Param, ParamError, ParamValue, Technique
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::CubeAtlas;
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::shade_pass::ShadePass;
-use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::scene::PointLight;
+use crate::services::cube_shadows::CubeAtlas;
+use crate::services::layouts::SharedLayouts;
+use crate::services::shade_pass::ShadePass;
+use crate::services::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::shaders::WgslModule;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -562,7 +562,7 @@ impl Technique for VplIsm {
     }
 
     fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
-        let mut layers = crate::renderer::vpl_gather::vpl_overlays(&self.vpls, self.scene_size, 0);
+        let mut layers = crate::services::vpl_gather::vpl_overlays(&self.vpls, self.scene_size, 0);
         let pool = self.maps.pool().map(|p| p.points.clone()).unwrap_or_default();
         let n = self.settings.points_per_map as usize;
         let start = ((self.params.inspect as usize) < self.vpls.vpls.len())
@@ -572,7 +572,7 @@ impl Technique for VplIsm {
     }
 
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        match crate::renderer::vpl_gather::vpl_layer_legend(layer) {
+        match crate::services::vpl_gather::vpl_layer_legend(layer) {
             Some(mut legend) => {
                 legend.extend(layer.summary());
                 legend
@@ -582,11 +582,11 @@ impl Technique for VplIsm {
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {
-        crate::renderer::vpl_gather::vpl_hover_points(&self.vpls)
+        crate::services::vpl_gather::vpl_hover_points(&self.vpls)
     }
 
     fn hover_details(&self, _layer: &str, index: usize) -> Vec<String> {
-        crate::renderer::vpl_gather::vpl_details(&self.vpls, index)
+        crate::services::vpl_gather::vpl_details(&self.vpls, index)
     }
 
     fn explain(&self) -> Vec<super::ExplainStep> {

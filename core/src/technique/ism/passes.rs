@@ -1,7 +1,7 @@
 //! The GPU side the two ISM techniques share ([`IsmMaps`]): the point pool on the GPU, the views of a batch of
 //! maps, the depth pyramid and the atlas, and one function per pass: clear, splat (step 2), pull and push
 //! (step 3), resolve into the atlas. The shading (step 4) is the technique's: `shade.wgsl` through a
-//! [`ShadePass`](crate::renderer::shade_pass::ShadePass) for lights, the shared VPL gather for VPLs.
+//! [`ShadePass`](crate::services::shade_pass::ShadePass) for lights, the shared VPL gather for VPLs.
 
 use std::sync::Arc;
 
@@ -16,7 +16,7 @@ use crate::gpu::bind::{storage_entry, storage_rw_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::pipeline::create_module;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeAtlas, TileProjection};
+use crate::services::cube_shadows::{CubeAtlas, TileProjection};
 use crate::timing::PassTimer;
 
 /// The atlas format: one f32 depth per texel, written by the resolve pass as a storage texture, read by the
@@ -314,7 +314,7 @@ impl IsmMaps {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (tiles_per_row, rows) = crate::renderer::cube_atlas::atlas_grid(device, resolution, tiles);
+        let (tiles_per_row, rows) = crate::services::cube_atlas::atlas_grid(device, resolution, tiles);
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("ism atlas"),
             size: wgpu::Extent3d {

@@ -55,14 +55,14 @@ use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, MapGeometry};
-use crate::renderer::gpu_data::{shadow_near, GpuLight};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::light_tiles::TileLists;
-use crate::renderer::per_light_shadows::PerLightShadows;
-use crate::renderer::shade_pass::ShadePass;
 use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
+use crate::services::cube_shadows::{CubeCaster, CubeGeometry, CubeShadowRenderer, MapGeometry};
+use crate::services::gpu_data::{shadow_near, GpuLight};
+use crate::services::layouts::SharedLayouts;
+use crate::services::light_tiles::TileLists;
+use crate::services::per_light_shadows::PerLightShadows;
+use crate::services::shade_pass::ShadePass;
 use crate::timing::PassTime;
 use clustering::{ClusterParams, Clusterer, Clustering};
 
@@ -422,7 +422,7 @@ impl Technique for LightCluster {
         self.explain_steps()
     }
 
-    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn shadow_atlas(&self) -> Option<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         if self.using_reference {
             return self
                 .fallback

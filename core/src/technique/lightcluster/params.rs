@@ -2,7 +2,7 @@
 //! samples), the Explain panel's one-cluster view, the simplified copy beyond the paper and the cube maps'
 //! shared settings, with their keys, ranges and help texts.
 
-use crate::renderer::cube_params::CubeMapParams;
+use crate::services::cube_params::CubeMapParams;
 use crate::technique::{Param, ParamKind, ParamValue};
 
 /// Soft-shadow filter of a cluster.

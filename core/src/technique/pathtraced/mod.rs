@@ -28,11 +28,11 @@ use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::gpu_data::GpuLight;
-use crate::renderer::layouts::compute_pipeline;
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::vpl_gather::pixel_workgroups;
 use crate::scene::{PointLight, MAX_DIRECTIONAL_LIGHTS};
+use crate::services::gpu_data::GpuLight;
+use crate::services::layouts::compute_pipeline;
+use crate::services::layouts::SharedLayouts;
+use crate::services::vpl_gather::pixel_workgroups;
 use crate::timing::PassTime;
 
 use crate::shaders::WgslModule;

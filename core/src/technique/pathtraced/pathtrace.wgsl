@@ -4,7 +4,7 @@
 // with a shadow ray of its own. With the cosine pdf cos/pi the estimate of the reflected radiance is
 // rho(x) * L(y -> x), and L(y -> x) = rho(y)/pi * (I * attenuation(d) * cos(theta_y) * V / p_light
 // + sum over suns of E * cos(theta_y) * V). Hits reflect their material's mean
-// albedo, carried in the triangle's w components (see core/src/renderer/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
+// albedo, carried in the triangle's w components (see core/src/accel/scene_bvh.rs). Random numbers: a PCG hash of the pixel, the sample
 // index and the seed, so a frame is reproducible. Composed after common.wgsl, raytrace_bvh.wgsl and vpl_basis.wgsl.
 // `PtStep` mirrors `PtStepUniform` in core/src/technique/pathtraced/mod.rs.
 

@@ -28,9 +28,9 @@ use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::shade_pass::ShadePass;
 use crate::scene::PointLight;
+use crate::services::layouts::SharedLayouts;
+use crate::services::shade_pass::ShadePass;
 use crate::timing::PassTime;
 
 use crate::shaders::WgslModule;

@@ -13,11 +13,11 @@
 use super::{check_param, FrameContext, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts};
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_params::CubeMapParams;
-use crate::renderer::cube_shadows::{CubeAtlas, CubeShadowRenderer};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::per_light_shadows::PerLightShadows;
 use crate::scene::PointLight;
+use crate::services::cube_params::CubeMapParams;
+use crate::services::cube_shadows::{CubeAtlas, CubeShadowRenderer};
+use crate::services::layouts::SharedLayouts;
+use crate::services::per_light_shadows::PerLightShadows;
 
 /// The reference's parameters: those of every cube-map technique.
 pub type ReferenceParams = CubeMapParams;

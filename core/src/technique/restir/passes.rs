@@ -9,14 +9,14 @@ use super::{
 };
 use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
+use crate::fingerprint::lights_fingerprint;
 use crate::gpu::bind::{storage_entry, storage_rw_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::gpu_data::GpuLight;
-use crate::renderer::layouts::{compute_pipeline, SharedLayouts};
-use crate::renderer::report::lights_fingerprint;
-use crate::renderer::shade_pass::ShadePass;
-use crate::renderer::vpl_gather::pixel_workgroups;
+use crate::services::gpu_data::GpuLight;
+use crate::services::layouts::{compute_pipeline, SharedLayouts};
+use crate::services::shade_pass::ShadePass;
+use crate::services::vpl_gather::pixel_workgroups;
 use crate::shaders::WgslModule;
 use crate::technique::{FrameContext, TechniqueCounts};
 

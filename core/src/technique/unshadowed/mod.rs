@@ -10,9 +10,9 @@ use super::{check_param, FrameContext, OverlayLayer, Param, ParamError, ParamVal
 use crate::error::GpuError;
 use crate::gpu::bind::{storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::shade_pass::ShadePass;
 use crate::scene::PointLight;
+use crate::services::layouts::SharedLayouts;
+use crate::services::shade_pass::ShadePass;
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.

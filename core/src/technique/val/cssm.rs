@@ -8,7 +8,7 @@
 
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::CubeAtlas;
+use crate::services::cube_shadows::CubeAtlas;
 use crate::timing::PassTimer;
 
 const FORMATS: [wgpu::TextureFormat; 4] = [

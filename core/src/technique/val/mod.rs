@@ -95,11 +95,11 @@ use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::buffer::GrowableBuffer;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::scene::proxy::{ProxyParams, DEFAULT_MAX_EDGE};
 use crate::scene::PointLight;
+use crate::services::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster};
+use crate::services::layouts::SharedLayouts;
+use crate::services::vpl_gather::{GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
 use kmeans::{Clustering, KMeansParams};
@@ -594,7 +594,7 @@ impl Technique for VirtualAreaLights {
         self.legend_of(layer)
     }
 
-    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn shadow_atlas(&self) -> Option<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         self.shadows.atlas().map(|a| (a, "one paraboloid map per VAL, facing its normal"))
     }
 

@@ -150,7 +150,7 @@ impl VirtualAreaLights {
                 ]
             }
             "vpls by val" => {
-                let mut lines = crate::renderer::vpl_gather::vpl_details(&self.vpls, index);
+                let mut lines = crate::services::vpl_gather::vpl_details(&self.vpls, index);
                 if let Some(k) = c.assignment.get(index) {
                     lines.push(format!("in VAL {k}"));
                 }

@@ -28,11 +28,11 @@ use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::gpu::bind::depth_texture_entry;
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster, MAX_CUBES_PER_BATCH};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
+use crate::services::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster, MAX_CUBES_PER_BATCH};
+use crate::services::layouts::SharedLayouts;
+use crate::services::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
 use crate::shaders;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -410,7 +410,7 @@ impl Technique for VplGather {
         }
     }
 
-    fn shadow_atlas(&self) -> Option<(&crate::renderer::cube_shadows::CubeAtlas, &'static str)> {
+    fn shadow_atlas(&self) -> Option<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         self.shadows.as_ref().and_then(|s| s.atlas()).map(|a| (a, "paraboloid maps of the last batch, one per VPL"))
     }
 
@@ -428,15 +428,15 @@ impl Technique for VplGather {
     }
 
     fn hover_points(&self) -> Vec<super::HoverPoint> {
-        crate::renderer::vpl_gather::vpl_hover_points(&self.vpls)
+        crate::services::vpl_gather::vpl_hover_points(&self.vpls)
     }
 
     fn hover_details(&self, _layer: &str, index: usize) -> Vec<String> {
-        crate::renderer::vpl_gather::vpl_details(&self.vpls, index)
+        crate::services::vpl_gather::vpl_details(&self.vpls, index)
     }
 
     fn overlay_legend(&self, layer: &OverlayLayer) -> Vec<super::LegendEntry> {
-        let mut legend = crate::renderer::vpl_gather::vpl_layer_legend(layer)
+        let mut legend = crate::services::vpl_gather::vpl_layer_legend(layer)
             .or_else(|| super::light_layer_legend(layer))
             .unwrap_or_default();
         legend.extend(layer.summary());

@@ -12,11 +12,11 @@
 
 use glam::Vec3;
 
+use super::context::FrameContext;
+use crate::contract::overlay::{index_color, Glyph, HoverPoint, LegendEntry, Overlay, OverlayLayer};
 use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::GpuContext;
-use crate::renderer::layouts::{compute_pipeline, SharedLayouts};
-use crate::technique::overlay::{index_color, Glyph, HoverPoint, LegendEntry, Overlay, OverlayLayer};
-use crate::technique::FrameContext;
+use crate::services::layouts::{compute_pipeline, SharedLayouts};
 use crate::vpl::VplSet;
 
 /// Mirrors `GatherBatch` in `vpl_common.wgsl`.

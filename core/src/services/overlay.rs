@@ -1,4 +1,4 @@
-//! Drawing a technique's overlay primitives ([`crate::technique::Overlay`]) over the tone-mapped output:
+//! Drawing a technique's overlay primitives ([`crate::contract::overlay::Overlay`]) over the tone-mapped output:
 //! lines for segments, wireframe spheres (three great circles) and camera frusta, each segment a screen-space
 //! quad of [`OverlayStyle::line_width_px`]; screen-sized round dots for points. Depth-tested against the G-buffer
 //! depth with the occluded parts drawn faded ([`OverlayStyle::occluded_alpha`]), or drawn on top in x-ray mode.
@@ -7,9 +7,9 @@ use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
 use super::layouts::SharedLayouts;
+use crate::contract::overlay::{index_color, Overlay, MAX_FULL_SPHERES, MAX_SPHERES};
 use crate::gpu::GpuContext;
 use crate::shaders;
-use crate::technique::overlay::{index_color, Overlay, MAX_FULL_SPHERES, MAX_SPHERES};
 
 /// Mirrors `View` in `overlay.wgsl`.
 #[repr(C)]

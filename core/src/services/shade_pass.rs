@@ -6,11 +6,11 @@
 
 use wgpu::util::DeviceExt;
 
+use super::context::{accumulate_pass, FrameContext};
 use crate::gpu::pipeline::create_module;
 use crate::gpu::GpuContext;
-use crate::renderer::layouts::SharedLayouts;
+use crate::services::layouts::SharedLayouts;
 use crate::shaders::WgslModule;
-use crate::technique::{accumulate_pass, FrameContext};
 
 pub struct ShadePass {
     pipeline: wgpu::RenderPipeline,

@@ -29,7 +29,7 @@ const _: () = assert!(std::mem::size_of::<FrameUniform>() == 224);
 pub struct MatrixUniform {
     pub clip_from_world: [[f32; 4]; 4],
     /// A cube face's centre (xyz) and how far a pushed vertex moves away from it per unit of its view depth (w;
-    /// `Face` in `shadow_depth.wgsl`, [`crate::renderer::cube_shadows::CubeGeometry::push_per_depth`]).
+    /// `Face` in `shadow_depth.wgsl`, [`crate::services::cube_shadows::CubeGeometry::push_per_depth`]).
     pub eye_push: [f32; 4],
     pub _pad: [[f32; 4]; 11],
 }

@@ -7,9 +7,9 @@
 //! tile, so the atomics of a pass spread over many addresses; the readback sums the buckets. The cost in the
 //! timed passes: one atomic add per counter a pixel touches per pass.
 
+use crate::contract::work::WorkCounts;
 use crate::error::GpuError;
 use crate::gpu::GpuContext;
-use crate::technique::work::WorkCounts;
 
 /// Keep in sync with the `WORK_*` constants in shaders/common.wgsl (a test checks).
 pub mod slot {

@@ -5,14 +5,14 @@
 
 use glam::Vec3;
 
+use super::context::FrameContext;
 use crate::gpu::bind::{depth_texture_entry, storage_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::cube_params::CubeMapParams;
-use crate::renderer::cube_shadows::{CubeAtlas, CubeCaster, CubeGeometry, CubeShadowRenderer, CubeStats};
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::shade_pass::ShadePass;
+use crate::services::cube_params::CubeMapParams;
+use crate::services::cube_shadows::{CubeAtlas, CubeCaster, CubeGeometry, CubeShadowRenderer, CubeStats};
+use crate::services::layouts::SharedLayouts;
+use crate::services::shade_pass::ShadePass;
 use crate::shaders;
-use crate::technique::FrameContext;
 
 /// Mirrors `Batch` in `per_light_shade.wgsl`.
 #[repr(C)]

@@ -1,9 +1,9 @@
 //! The parameters every cube-shadow-map technique has (the reference, LightCluster, ...), described and set
 //! in one place: a shared parameter block, not a copy in each technique.
 
+use crate::contract::params::{Param, ParamKind, ParamValue};
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::DEFAULT_ATLAS_BUDGET_BYTES;
-use crate::technique::params::{Param, ParamKind, ParamValue};
+use crate::services::cube_shadows::DEFAULT_ATLAS_BUDGET_BYTES;
 
 /// The parameters every cube-shadow-map technique has (the reference, LightCluster, ...), described and set
 /// in one place.

@@ -4,7 +4,7 @@
 use crate::accel::gpu_scene::GpuScene;
 use crate::gpu::pipeline::create_module;
 use crate::gpu::GpuContext;
-use crate::renderer::light_tiles;
+use crate::services::light_tiles;
 
 /// Bind group layouts and formats every technique uses.
 pub struct SharedLayouts {
@@ -65,7 +65,7 @@ impl SharedLayouts {
                 tex(3, unfilterable),
                 // Depth bound as an unfilterable float texture: textureLoad on depth textures has no GLSL form.
                 tex(4, unfilterable),
-                // The work counters (renderer/work_counters.rs), written by shading passes.
+                // The work counters (services/work_counters.rs), written by shading passes.
                 wgpu::BindGroupLayoutEntry {
                     binding: 5,
                     visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,

@@ -13,7 +13,7 @@
 //!
 //! The image does not change: a sphere not in a pixel's list cannot reach the pixel, so the pixel only skips
 //! terms that are exactly zero, and the others are summed in the same order (tested bit for bit in
-//! `core/tests/light_tiles.rs`). [`RenderSettings::light_tiles`](super::RenderSettings) off skips the build and
+//! `core/tests/light_tiles.rs`). `RenderSettings::light_tiles` off skips the build and
 //! makes every span the whole batch.
 
 use wgpu::util::DeviceExt;
@@ -89,7 +89,7 @@ pub struct TileLists {
 }
 
 impl TileLists {
-    /// `read_layout` is [`crate::renderer::layouts::SharedLayouts::light_tiles`].
+    /// `read_layout` is [`crate::services::layouts::SharedLayouts::light_tiles`].
     pub fn new(gpu: &GpuContext, screen_layout: &wgpu::BindGroupLayout, read_layout: &wgpu::BindGroupLayout) -> Self {
         let device = &gpu.device;
         let build_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

@@ -3,7 +3,7 @@
 //! ("directional lights"). The papers' techniques are about many point lights; a scene has at most
 //! [`MAX_DIRECTIONAL_LIGHTS`] suns, so there is nothing to cluster, merge or resample: every technique gets the
 //! same treatment, and only the visibility differs by what the technique is
-//! ([`crate::technique::Technique::directional_visibility`]):
+//! (a technique's `directional_visibility`):
 //!
 //! 1. Fit (CPU, [`fit`]): per light an orthographic view along its direction whose x-y extent covers the part of
 //!    the scene the camera sees (the view frustum's corners, clipped to the scene's bounds, in the light's
@@ -20,7 +20,7 @@
 //!      (`directional_traced.wgsl`): exact, the truth the map is measured against;
 //!    - `None` (the unshadowed preview): no visibility.
 //!
-//! The lights are the scene's (a glTF file's suns) until [`crate::renderer::Renderer::set_directional_lights`] replaces them
+//! The lights are the scene's (a glTF file's suns) until `Renderer::set_directional_lights` replaces them
 //! (the app's Lights panel adds, turns and removes suns; scene files keep them).
 //!
 //! Indirect light: the suns make VPLs too ([`crate::vpl`]: an orthographic RSM or parallel particles), so every
@@ -29,17 +29,17 @@
 use glam::{Mat4, Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
+use super::context::{DirectionalVisibility, FrameContext};
 use crate::accel::gpu_scene::GpuScene;
 use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::gpu::bind::{depth_texture_entry, uniform_entry};
 use crate::gpu::GpuContext;
-use crate::renderer::cube_shadows::CubeShadowRenderer;
-use crate::renderer::layouts::SharedLayouts;
-use crate::renderer::shade_pass::ShadePass;
 use crate::scene::{Aabb, Camera, DirectionalLight, MAX_DIRECTIONAL_LIGHTS};
+use crate::services::cube_shadows::CubeShadowRenderer;
+use crate::services::layouts::SharedLayouts;
+use crate::services::shade_pass::ShadePass;
 use crate::shaders::{DIRECTIONAL_SHADOWMAP as MAPPED, DIRECTIONAL_TRACED as TRACED};
-use crate::technique::{DirectionalVisibility, FrameContext};
 use crate::timing::PassTimer;
 
 /// Texels per side of a directional light's shadow map.
@@ -76,7 +76,7 @@ const _: () = assert!(std::mem::size_of::<DirectionalUniform>() == 16 + 112 * MA
 pub fn fit(direction: Vec3, camera: &Camera, aspect: f32, scene: &Aabb) -> Option<Mat4> {
     // The receivers: the view frustum's box within the scene's (the shadow maps' receiver-aware culling uses
     // the same bound).
-    let receivers = crate::renderer::cube_shadows::receiver_bounds(camera, aspect, scene)?;
+    let receivers = crate::services::cube_shadows::receiver_bounds(camera, aspect, scene)?;
     let (right, up) = direction.any_orthonormal_pair();
     let to_light = |p: Vec3| Vec3::new(p.dot(right), p.dot(up), p.dot(direction));
     let light_box = |b: &Aabb| Aabb::from_points(b.corners().map(to_light));
@@ -111,7 +111,7 @@ pub struct DirectionalLights {
     /// The mode and light count of the frame's uniform (0 lights: nothing to shade).
     mode: DirectionalVisibility,
     count: usize,
-    /// The lights shaded: the scene's, unless [`crate::renderer::Renderer::set_directional_lights`] replaced them.
+    /// The lights shaded: the scene's, unless `Renderer::set_directional_lights` replaced them.
     lights: Vec<DirectionalLight>,
 }
 

@@ -2,7 +2,7 @@
 //!
 //! Counted where the work is decided: on the CPU for what the CPU decides (triangles submitted to depth passes,
 //! shadow-map texels written, k-means distance evaluations), on the GPU for what only the GPU knows (per pixel,
-//! how many lights or VPLs it evaluated, shadow lookups, filter taps and rays; `renderer::work_counters`).
+//! how many lights or VPLs it evaluated, shadow lookups, filter taps and rays; `services::work_counters`).
 //! The per-pixel means divide by the pixels that hold geometry (`shaded_pixels`).
 
 use std::collections::BTreeMap;
