@@ -579,7 +579,8 @@ fn insm_viewpoints_are_edited_with_the_gizmo_and_saved_in_the_scene_file() {
 fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
     use shadowlab::gui::document::ViewMode;
     use shadowlab_core::renderer::Component;
-    use shadowlab_core::technique::{ParamValue, INDIRECT_REGISTRY};
+    use shadowlab_core::technique::registry::INDIRECT_REGISTRY;
+    use shadowlab_core::technique::ParamValue;
     let dir = data_dir("indirect");
     let mut h = start("indirect", "cornell");
     assert!(
@@ -737,12 +738,12 @@ fn every_techniques_parameter_panel_draws_without_a_panic() {
     // refuses (e.g. logarithmic across zero) panics the whole app, so each panel is drawn once here.
     let mut h = start("panels", "cornell");
     h.state_mut().session.indirect.vpl.count = 16;
-    for entry in shadowlab_core::technique::REGISTRY {
+    for entry in shadowlab_core::technique::registry::REGISTRY {
         h.state_mut().session.technique = entry.key.to_string();
         h.run_steps(2);
     }
     h.state_mut().session.technique = "unshadowed".into();
-    for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
+    for entry in shadowlab_core::technique::registry::INDIRECT_REGISTRY {
         h.state_mut().session.indirect.technique = Some(entry.key.to_string());
         h.run_steps(2);
         // The selector names it; its generated panel shows its first parameter.
@@ -1040,14 +1041,14 @@ fn every_explain_step_of_every_technique_draws_without_a_panic() {
             clicked += 1;
         }
     };
-    for entry in shadowlab_core::technique::REGISTRY {
+    for entry in shadowlab_core::technique::registry::REGISTRY {
         h.state_mut().session.technique = entry.key.to_string();
         h.run_steps(1);
         let steps = h.state_mut().views.gpu.as_mut().unwrap().main.technique(entry.key).unwrap().explain();
         click_all(&mut h, steps.iter().map(|s| s.title).collect());
     }
     h.state_mut().session.technique = "unshadowed".into();
-    for entry in shadowlab_core::technique::INDIRECT_REGISTRY {
+    for entry in shadowlab_core::technique::registry::INDIRECT_REGISTRY {
         h.state_mut().session.indirect.technique = Some(entry.key.to_string());
         h.run_steps(1);
         let t = h.state_mut().views.gpu.as_mut().unwrap().main.indirect_technique(entry.key).unwrap();
@@ -1480,7 +1481,7 @@ fn key(h: &mut Harness<'static, ShadowLabApp>, key: egui::Key, modifiers: egui::
 /// last empty (the start, or the last scene loaded).
 fn random_use(seed: u64, events: usize) {
     use shadowlab::gui::document::{ViewMode, HISTORY_LIMIT};
-    use shadowlab_core::technique::{INDIRECT_REGISTRY, REGISTRY};
+    use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
     let mut h = harness(Startup {
         data_dir: Some(data_dir(&format!("random-{seed}"))),
         builtin: Some("cornell".into()),

@@ -269,7 +269,7 @@ pub fn apply_indirect(renderer: &mut Renderer, choice: &IndirectChoice) -> Resul
         anyhow!(
             "unknown indirect technique '{}' (choose none or one of: {})",
             choice.key,
-            shadowlab_core::technique::indirect_keys()
+            shadowlab_core::technique::registry::indirect_keys()
         )
     })?;
     apply_params(t.as_mut(), None, &choice.params)?;
@@ -315,7 +315,7 @@ pub fn render_technique_then(
 ) -> Result<Rendered> {
     apply_indirect(renderer, indirect)?;
     let mut t = renderer.create_technique(technique).ok_or_else(|| {
-        anyhow!("unknown technique '{technique}' (choose one of: {})", shadowlab_core::technique::keys())
+        anyhow!("unknown technique '{technique}' (choose one of: {})", shadowlab_core::technique::registry::keys())
     })?;
     apply_params(t.as_mut(), shadow_res, params)?;
     let mut reports = Vec::new();

@@ -9,7 +9,7 @@
 //! `indirect.K` is a parameter of the indirect technique.
 
 use anyhow::{anyhow, bail, Result};
-use shadowlab_core::technique::{INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
 
 use crate::measure::{sweep_values, IndirectChoice};
 
@@ -72,8 +72,8 @@ impl TrySpec {
         let unknown = |k: &str| {
             anyhow!(
                 "--try '{text}': '{k}' is not a technique (direct: {}; indirect: {})",
-                shadowlab_core::technique::keys(),
-                shadowlab_core::technique::indirect_keys()
+                shadowlab_core::technique::registry::keys(),
+                shadowlab_core::technique::registry::indirect_keys()
             )
         };
         let (technique, indirect_key, plain_is_indirect) = match head.split_once('+') {

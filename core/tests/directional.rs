@@ -8,7 +8,7 @@ use common::*;
 use glam::Vec3;
 use shadowlab_core::scene::gltf_loader::{load_gltf, LUMENS_PER_WATT};
 use shadowlab_core::scene::{DirectionalLight, Scene, MAX_DIRECTIONAL_LIGHTS};
-use shadowlab_core::technique::REGISTRY;
+use shadowlab_core::technique::registry::REGISTRY;
 
 const W: u32 = 96;
 const H: u32 = 72;

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use shadowlab_core::shaders::{WgslModule, MODULES};
-use shadowlab_core::technique::{INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
 
 fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

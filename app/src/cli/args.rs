@@ -120,7 +120,7 @@ pub struct TargetArgs {
     #[arg(long, default_value = "lightcluster", help = super::registry_help("Technique", false))]
     pub technique: String,
     /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
-    #[arg(long, default_value = shadowlab_core::technique::REFERENCE)]
+    #[arg(long, default_value = shadowlab_core::technique::registry::REFERENCE)]
     pub against: String,
     /// A parameter of the comparison target, `key=value`; repeatable.
     #[arg(long = "against-param", value_name = "KEY=VALUE")]
@@ -155,8 +155,8 @@ impl TargetArgs {
 
 /// `none` or a key of the indirect registry.
 pub fn check_indirect(key: &str) -> Result<()> {
-    if key != "none" && technique::INDIRECT_REGISTRY.iter().all(|e| e.key != key) {
-        bail!("unknown indirect technique '{key}' (choose none or one of: {})", technique::indirect_keys());
+    if key != "none" && technique::registry::INDIRECT_REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown indirect technique '{key}' (choose none or one of: {})", technique::registry::indirect_keys());
     }
     Ok(())
 }
@@ -164,7 +164,7 @@ pub fn check_indirect(key: &str) -> Result<()> {
 /// The direct technique of `render`, `animate` and `sequence`: its key and its parameters.
 #[derive(Args, Debug)]
 pub struct TechniqueChoice {
-    #[arg(long, default_value = technique::REFERENCE, help = super::registry_help("Technique", false))]
+    #[arg(long, default_value = technique::registry::REFERENCE, help = super::registry_help("Technique", false))]
     pub technique: String,
     /// A technique parameter, `key=value`; repeatable.
     #[arg(long = "param", value_name = "KEY=VALUE")]
@@ -188,8 +188,8 @@ impl TechniqueChoice {
 }
 
 pub fn check_technique(key: &str) -> Result<()> {
-    if technique::REGISTRY.iter().all(|e| e.key != key) {
-        bail!("unknown technique '{key}' (choose one of: {})", technique::keys());
+    if technique::registry::REGISTRY.iter().all(|e| e.key != key) {
+        bail!("unknown technique '{key}' (choose one of: {})", technique::registry::keys());
     }
     Ok(())
 }

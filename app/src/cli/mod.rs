@@ -89,7 +89,7 @@ pub struct Cli {
 
 /// `what: key, key, ...` with the registry's keys (direct or indirect), for `--help`.
 fn registry_help(what: &str, indirect: bool) -> String {
-    format!("{what}: {}", if indirect { technique::indirect_keys() } else { technique::keys() })
+    format!("{what}: {}", if indirect { technique::registry::indirect_keys() } else { technique::registry::keys() })
 }
 
 /// `--app-against`: the registry's comparison targets.

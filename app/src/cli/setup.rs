@@ -106,7 +106,7 @@ pub fn setup(
         other => bail!("--tonemap '{other}': choose aces, reinhard or linear"),
     };
     let source = match frame.vpl_source.as_str() {
-        "auto" => shadowlab_core::technique::preferred_vpl_source(&frame.indirect).unwrap_or_default(),
+        "auto" => shadowlab_core::technique::registry::preferred_vpl_source(&frame.indirect).unwrap_or_default(),
         other => VplSource::parse(other)
             .ok_or_else(|| anyhow!("--vpl-source '{other}': choose {} or auto", VplSource::NAMES.join(", ")))?,
     };

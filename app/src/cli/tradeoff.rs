@@ -29,12 +29,12 @@ pub struct TradeoffArgs {
     #[arg(long = "try", value_name = "SPEC", required = true)]
     pub tries: Vec<String>,
     /// The direct technique of a try that names only an indirect technique.
-    #[arg(long, default_value = technique::REFERENCE)]
+    #[arg(long, default_value = technique::registry::REFERENCE)]
     pub direct: String,
     /// The comparison target, written like a try with one value per parameter: `reference`, `raytraced`,
     /// `"reference+vpl-shadowmaps"`, `"pathtraced samples=64"`. Its indirect technique is `--indirect`'s unless
     /// it names one (or `--against-indirect` does).
-    #[arg(long, default_value = technique::REFERENCE)]
+    #[arg(long, default_value = technique::registry::REFERENCE)]
     pub against: String,
     /// The comparison target's indirect technique.
     #[arg(long = "against-indirect", value_name = "KEY")]

@@ -50,12 +50,12 @@ impl IndirectSettings {
     /// Check what does not need a device: the technique key is registered, the VPL settings and the gain are in
     /// range. (Parameters are checked against the technique's own ranges by the app, which creates it.)
     pub fn validate(&self) -> Result<()> {
-        let registry = shadowlab_core::technique::INDIRECT_REGISTRY;
+        let registry = shadowlab_core::technique::registry::INDIRECT_REGISTRY;
         for key in self.technique.iter().chain(self.params.keys()) {
             if registry.iter().all(|e| e.key != key.as_str()) {
                 bail!(
                     "unknown indirect technique '{key}' (choose one of: {})",
-                    shadowlab_core::technique::indirect_keys()
+                    shadowlab_core::technique::registry::indirect_keys()
                 );
             }
         }
@@ -128,10 +128,10 @@ impl ViewSettings {
             bail!("view setting compare_against = '{}' must be one of {known}", self.compare_against);
         }
         if let Some(k) = self.against_indirect.as_deref() {
-            if k != "none" && shadowlab_core::technique::INDIRECT_REGISTRY.iter().all(|e| e.key != k) {
+            if k != "none" && shadowlab_core::technique::registry::INDIRECT_REGISTRY.iter().all(|e| e.key != k) {
                 bail!(
                     "view setting against_indirect = '{k}' must be none or one of {}",
-                    shadowlab_core::technique::indirect_keys()
+                    shadowlab_core::technique::registry::indirect_keys()
                 );
             }
         }
@@ -436,7 +436,7 @@ mod tests {
 
     #[test]
     fn indirect_settings_round_trip_and_old_files_load_without_them() {
-        let key = shadowlab_core::technique::INDIRECT_REGISTRY[0].key.to_string();
+        let key = shadowlab_core::technique::registry::INDIRECT_REGISTRY[0].key.to_string();
         let mut f = file();
         f.indirect.technique = Some(key.clone());
         f.indirect.params.insert(key.clone(), BTreeMap::from([("vpls_per_step".to_string(), ParamValue::Int(64))]));

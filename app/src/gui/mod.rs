@@ -335,7 +335,9 @@ impl ShadowLabApp {
             self.session.view.resolution_scale = 0.5;
             // What each technique's registry entry says a software adapter starts with, parsed by the
             // parameter's own kind (a technique of the main view describes its parameters).
-            for entry in shadowlab_core::technique::REGISTRY.iter().filter(|e| !e.software_defaults.is_empty()) {
+            for entry in
+                shadowlab_core::technique::registry::REGISTRY.iter().filter(|e| !e.software_defaults.is_empty())
+            {
                 let Ok(technique) = main.technique(entry.key) else { continue };
                 let params = technique.params();
                 for (key, text) in entry.software_defaults {

@@ -78,7 +78,7 @@ impl ShadowLabApp {
                 Scene::load(&model, *unit_scale).with_context(|| "the scene file's model".to_string())?
             }
         };
-        if shadowlab_core::technique::REGISTRY.iter().all(|e| e.key != file.technique) {
+        if shadowlab_core::technique::registry::REGISTRY.iter().all(|e| e.key != file.technique) {
             return Err(anyhow!("unknown technique '{}'", file.technique));
         }
         // Every saved parameter is checked against its technique's ranges before anything changes, so a bad

@@ -90,7 +90,7 @@ impl Session {
             suns: scene.directional.clone(),
             camera: CameraController::from_camera(&scene.camera, &scene.bounds),
             scene,
-            technique: shadowlab_core::technique::REFERENCE.into(),
+            technique: shadowlab_core::technique::registry::REFERENCE.into(),
             params: BTreeMap::new(),
             indirect: IndirectSettings::default(),
             view: ViewSettings::default(),

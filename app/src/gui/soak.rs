@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use shadowlab_core::technique::REGISTRY;
+use shadowlab_core::technique::registry::REGISTRY;
 
 use super::session::Animation;
 use super::ShadowLabApp;

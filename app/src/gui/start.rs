@@ -5,7 +5,8 @@
 use std::collections::BTreeMap;
 
 use anyhow::{anyhow, bail, Result};
-use shadowlab_core::technique::{ParamValue, INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::ParamValue;
 
 use super::document::ViewMode;
 use super::ShadowLabApp;
@@ -80,13 +81,13 @@ impl ShadowLabApp {
                 Some(e) => self.session.technique = e.key.to_string(),
                 None => report(
                     self,
-                    anyhow!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::keys()),
+                    anyhow!("unknown technique '{t}' (choose one of: {})", shadowlab_core::technique::registry::keys()),
                 ),
             }
         }
         if let Some(k) = &start.indirect {
             if INDIRECT_REGISTRY.iter().any(|e| e.key == k) {
-                if let Some(source) = shadowlab_core::technique::preferred_vpl_source(k) {
+                if let Some(source) = shadowlab_core::technique::registry::preferred_vpl_source(k) {
                     self.session.indirect.vpl.source = source;
                 }
                 self.session.indirect.technique = Some(k.clone());
@@ -95,7 +96,7 @@ impl ShadowLabApp {
                     self,
                     anyhow!(
                         "unknown indirect technique '{k}' (choose one of: {})",
-                        shadowlab_core::technique::indirect_keys()
+                        shadowlab_core::technique::registry::indirect_keys()
                     ),
                 );
             }
@@ -122,7 +123,7 @@ impl ShadowLabApp {
                     self,
                     anyhow!(
                         "--app-against-indirect '{k}': choose none or one of {}",
-                        shadowlab_core::technique::indirect_keys()
+                        shadowlab_core::technique::registry::indirect_keys()
                     ),
                 );
             }

@@ -38,10 +38,6 @@ pub use overlay::{
     LegendEntry, LightDetails, Overlay, OverlayLayer, SUNS_LAYER,
 };
 pub use params::{check_param, CameraPose, Param, ParamError, ParamKind, ParamValue};
-pub use registry::{
-    create, create_indirect, indirect_keys, keys, preferred_vpl_source, Role, TechniqueEntry, INDIRECT_REGISTRY,
-    REFERENCE, REGISTRY,
-};
 pub use work::WorkCounts;
 
 use glam::Vec3;

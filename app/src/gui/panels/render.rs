@@ -154,7 +154,7 @@ pub fn overlays_ui(session: &mut Session, views: &mut Views, ui: &mut egui::Ui) 
 /// sides), none, or one of the indirect registry's references and ground truths, the view's declared target
 /// marked (VALs against one shadow map per VPL, fuzzy clustering against exact VPL visibility).
 fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
-    use shadowlab_core::technique::INDIRECT_REGISTRY;
+    use shadowlab_core::technique::registry::INDIRECT_REGISTRY;
     let own = session.indirect.technique.clone();
     if own.is_none() && session.view.against_indirect.is_none() {
         return;

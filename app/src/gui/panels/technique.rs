@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 
 use eframe::egui;
 use shadowlab_core::renderer::Component;
-use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, Technique, INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
+use shadowlab_core::technique::{CameraPose, ParamKind, ParamValue, Technique};
 use shadowlab_core::vpl::{VplSource, MAX_BOUNCES, MAX_VPLS};
 
 use crate::gui::document::IndirectSettings;
@@ -210,7 +211,7 @@ pub fn indirect_ui(session: &mut Session, views: &mut Views, status: &mut String
     // A change restarts the views' frames: the indirect key is part of what a frame depends on. A technique
     // whose paper uses another VPL source switches to it (the user can switch back below).
     if choice != session.indirect.technique {
-        if let Some(source) = choice.as_deref().and_then(shadowlab_core::technique::preferred_vpl_source) {
+        if let Some(source) = choice.as_deref().and_then(shadowlab_core::technique::registry::preferred_vpl_source) {
             session.indirect.vpl.source = source;
         }
     }

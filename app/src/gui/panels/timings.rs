@@ -216,7 +216,7 @@ fn session_ui(views: &Views, scene: &str, r: &shadowlab_core::FrameReport, ui: &
         return;
     }
     let view = crate::gui::session_times::view_of(scene, r);
-    let reference = shadowlab_core::technique::REFERENCE;
+    let reference = shadowlab_core::technique::registry::REFERENCE;
     let rows = times.rows(view, reference);
     if rows.is_empty() {
         return;

@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 
 use eframe::egui;
 use egui_plot::{Line, MarkerShape, Plot, PlotPoint, PlotPoints, Points, VLine};
-use shadowlab_core::technique::{ParamKind, ParamValue, REGISTRY};
+use shadowlab_core::technique::registry::REGISTRY;
+use shadowlab_core::technique::{ParamKind, ParamValue};
 
 use crate::gui::session::Session;
 use crate::gui::toasts::Toasts;

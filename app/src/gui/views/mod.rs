@@ -8,7 +8,7 @@ pub mod hover;
 pub mod paint;
 pub mod view;
 
-use shadowlab_core::technique::REFERENCE;
+use shadowlab_core::technique::registry::REFERENCE;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Instant;

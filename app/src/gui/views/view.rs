@@ -208,7 +208,7 @@ impl View {
 
     /// The technique instance for `key`, created on first use.
     pub fn technique(&mut self, key: &str) -> Result<&mut Box<dyn Technique>> {
-        let entry = shadowlab_core::technique::REGISTRY
+        let entry = shadowlab_core::technique::registry::REGISTRY
             .iter()
             .find(|e| e.key == key)
             .ok_or_else(|| anyhow!("unknown technique '{key}'"))?;
@@ -246,12 +246,13 @@ impl View {
     /// The indirect technique instance for `key` (an `INDIRECT_REGISTRY` key), created on first use. Its
     /// parameters are the ones the renderer uses when it is installed.
     pub fn indirect_technique(&mut self, key: &str) -> Result<SharedIndirect> {
-        let entry = shadowlab_core::technique::INDIRECT_REGISTRY.iter().find(|e| e.key == key).ok_or_else(|| {
-            anyhow!(
-                "unknown indirect technique '{key}' (choose one of: {})",
-                shadowlab_core::technique::indirect_keys()
-            )
-        })?;
+        let entry =
+            shadowlab_core::technique::registry::INDIRECT_REGISTRY.iter().find(|e| e.key == key).ok_or_else(|| {
+                anyhow!(
+                    "unknown indirect technique '{key}' (choose one of: {})",
+                    shadowlab_core::technique::registry::indirect_keys()
+                )
+            })?;
         if !self.indirect.contains_key(entry.key) {
             let t = self
                 .renderer
