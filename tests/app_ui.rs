@@ -1338,7 +1338,7 @@ fn run_tradeoff(h: &mut Harness<'static, ShadowLabApp>) {
 
 #[test]
 fn the_tradeoff_panel_runs_on_a_worker_and_tunes_the_view_to_its_pick() {
-    use shadowlab::gui::panels::tradeoff::{ParamRange, TryInput};
+    use shadowlab::gui::tradeoff_input::{ParamRange, TryInput};
     use shadowlab_core::technique::ParamValue;
     // A window tall enough for the plot to be scrolled into the Sweep pane.
     let startup = Startup { data_dir: Some(data_dir("tradeoff")), synchronous: true, ..Default::default() };

@@ -22,7 +22,7 @@ pub struct Chrome {
     /// Sweep panel inputs: parameter key, start, end, number of values.
     pub sweep_input: (String, f64, f64, usize),
     /// The Trade-off section's techniques, ranges, metric and budget.
-    pub tradeoff_input: super::panels::tradeoff::TradeoffInput,
+    pub tradeoff_input: super::tradeoff_input::TradeoffInput,
     /// Recently opened or saved scene files and models, newest first (File menu).
     pub recent: Vec<PathBuf>,
     /// Frames of an orbit image sequence (File menu).

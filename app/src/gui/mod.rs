@@ -32,6 +32,7 @@ pub mod start;
 pub mod sweep;
 pub mod tiles;
 pub mod toasts;
+pub mod tradeoff_input;
 pub mod tradeoff_run;
 pub mod views;
 pub mod worker;

@@ -70,7 +70,7 @@ pub struct Views {
     /// The last complete frame's auto-exposure: (scale, log-average luminance), shown in the Render panel.
     pub metered_exposure: Option<(f32, f32)>,
     /// Milliseconds of this UI frame spent in [`Views::render`] (our rendering: the steps submitted and waited
-    /// for, readbacks), for the UI frame's breakdown (`crate::gui::FrameBreakdown`).
+    /// for, readbacks), for the UI frame's breakdown (the app's `FrameBreakdown`, `gui/mod.rs`).
     pub ui_frame_render_ms: f64,
 }
 
