@@ -10,36 +10,11 @@ use glam::Vec3;
 
 use super::camera::{CameraInput, CameraMode};
 use super::document::ViewMode;
-use super::gizmo::{self, Handle, Projection};
+use super::gizmo::{self, Projection};
 use super::legend;
 use super::session::{Animation, DragTarget};
+use super::state::GizmoDrag;
 use super::ShadowLabApp;
-
-/// A drag of the gizmo in progress.
-#[derive(Clone, Debug)]
-struct GizmoDrag {
-    handle: Handle,
-    target: DragTarget,
-    /// Position at the start of the drag (the undo snapshot is taken then).
-    start: Vec3,
-    accumulated: egui::Vec2,
-}
-
-/// The 3D view's input state.
-pub struct Interaction {
-    /// A drag of the gizmo in progress.
-    drag: Option<GizmoDrag>,
-    /// When the camera or the gizmo last moved: the preview renders until a moment after.
-    last_interaction: Option<Instant>,
-    /// Orbit the camera continuously, as a user dragging would (UI frame-rate measurements).
-    orbit_demo: bool,
-}
-
-impl Interaction {
-    pub fn new(orbit_demo: bool) -> Interaction {
-        Interaction { drag: None, last_interaction: None, orbit_demo }
-    }
-}
 
 impl ShadowLabApp {
     /// Camera input from the view's response and the keyboard.

@@ -29,6 +29,7 @@ pub mod session;
 pub mod session_times;
 pub mod soak;
 pub mod start;
+pub mod state;
 pub mod sweep;
 pub mod tiles;
 pub mod toasts;
@@ -50,11 +51,11 @@ use shadowlab_core::GpuContext;
 use camera::CameraMode;
 use chrome::Chrome;
 use gizmo::Projection;
-use interact::Interaction;
-pub use recovery::Recovery;
 pub use session::Animation;
 use session::Session;
-pub use start::StartState;
+use state::Interaction;
+pub use state::Recovery;
+pub use state::StartState;
 use views::view::{StepSizer, View};
 use views::{Gpu, Views};
 
@@ -190,7 +191,7 @@ pub struct ShadowLabApp {
     /// Set once the device was lost: the state was saved and the window says what happens next.
     pub recovery: Option<Recovery>,
     /// A long run in progress (`Startup::soak_secs`).
-    soak: Option<soak::Soak>,
+    soak: Option<state::Soak>,
 }
 
 /// The window's life: where its files go, its clocks, screenshots of it, quitting after a time, GPU errors
@@ -276,7 +277,7 @@ impl ShadowLabApp {
         let mut app = ShadowLabApp {
             session: Session::new(scene),
             views: Views::new(started, !startup.synchronous),
-            chrome: Chrome::new(layout, open::load_recent(&data_dir)),
+            chrome: Chrome::new(layout, state::load_recent(&data_dir)),
             interaction: Interaction::new(startup.orbit_demo),
             lifecycle: Lifecycle {
                 data_dir,
@@ -292,7 +293,7 @@ impl ShadowLabApp {
                 relaunch_on_device_loss: startup.relaunch_on_device_loss,
             },
             recovery: None,
-            soak: startup.soak_secs.map(|_| soak::Soak::new()),
+            soak: startup.soak_secs.map(|_| state::Soak::new()),
         };
         let render_state = cc.wgpu_render_state.clone().ok_or_else(|| anyhow!("ShadowLab needs the wgpu renderer"))?;
         app.init_gpu(render_state)?;
@@ -533,8 +534,8 @@ impl eframe::App for ShadowLabApp {
                 );
             });
         } else {
-            menu::menu_bar(self, ui);
-            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| tiles::tiles_ui(self, ui));
+            self.menu_bar(ui);
+            egui::CentralPanel::default().frame(egui::Frame::NONE).show(ui, |ui| self.tiles_ui(ui));
         }
         self.chrome.layout.save_if_changed(&self.lifecycle.data_dir, &ctx);
         self.chrome.toasts.ui(&ctx);

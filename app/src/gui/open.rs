@@ -8,6 +8,7 @@ use eframe::egui;
 use shadowlab_core::scene::{Scene, SceneSource};
 
 use super::document::SceneFile;
+use super::state::save_recent;
 use super::ShadowLabApp;
 
 impl ShadowLabApp {
@@ -125,23 +126,5 @@ impl ShadowLabApp {
         if let Some(path) = dropped.first() {
             self.open_path(path);
         }
-    }
-}
-
-fn recent_path(dir: &Path) -> PathBuf {
-    dir.join("recent.ron")
-}
-
-pub(super) fn load_recent(dir: &Path) -> Vec<PathBuf> {
-    std::fs::read_to_string(recent_path(dir)).ok().and_then(|t| ron::from_str(&t).ok()).unwrap_or_default()
-}
-
-fn save_recent(dir: &Path, recent: &[PathBuf]) {
-    let write = || -> Result<()> {
-        std::fs::create_dir_all(dir)?;
-        crate::files::write_atomic(&recent_path(dir), ron::to_string(recent)?.as_bytes())
-    };
-    if let Err(e) = write() {
-        log::warn!("cannot save the recent files list: {e:#}");
     }
 }

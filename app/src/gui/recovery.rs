@@ -5,20 +5,8 @@ use std::path::PathBuf;
 
 use eframe::egui;
 
+use super::state::Recovery;
 use super::ShadowLabApp;
-
-/// What the app did when its GPU device was lost.
-#[derive(Clone, Debug)]
-pub struct Recovery {
-    /// Why wgpu says the device was lost.
-    pub reason: String,
-    /// The scene file the current state was saved to (None when saving failed, with the error in `message`).
-    pub file: Option<PathBuf>,
-    /// The command that starts a new ShadowLab on it (program, arguments), when it is relaunched.
-    pub relaunch: Option<(PathBuf, Vec<String>)>,
-    /// What the window says.
-    pub message: String,
-}
 
 /// Set by a recovered process, so a device lost again is not relaunched in a loop.
 const RECOVERED_ENV: &str = "SHADOWLAB_RECOVERED";

@@ -2,8 +2,6 @@
 //! switched through the registry every [`SWITCH_SECS`], and the process's resident memory and the device's GPU
 //! allocations printed at the start, every [`REPORT_SECS`] and at the end, with the growth, so a leak shows.
 
-use std::time::Instant;
-
 use shadowlab_core::technique::registry::REGISTRY;
 
 use super::session::Animation;
@@ -13,30 +11,6 @@ use super::ShadowLabApp;
 pub const SWITCH_SECS: f64 = 20.0;
 /// How often the memory is printed.
 pub const REPORT_SECS: f64 = 60.0;
-
-/// The state of a long run.
-pub struct Soak {
-    started: Instant,
-    next_switch: f64,
-    next_report: f64,
-    switches: usize,
-    /// The first report once every technique ran (after one cycle of switches: before it, creating the
-    /// techniques' pipelines and pools is growth of no concern): (resident MiB, GPU allocated, GPU reserved).
-    first: Option<(f64, f64, f64)>,
-    first_t: f64,
-}
-
-impl Soak {
-    pub fn new() -> Soak {
-        Soak { started: Instant::now(), next_switch: 0.0, next_report: 0.0, switches: 0, first: None, first_t: 0.0 }
-    }
-}
-
-impl Default for Soak {
-    fn default() -> Self {
-        Soak::new()
-    }
-}
 
 /// The process's resident set in MiB (Linux; None elsewhere).
 pub fn resident_mib() -> Option<f64> {

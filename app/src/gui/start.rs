@@ -9,24 +9,8 @@ use shadowlab_core::technique::registry::{INDIRECT_REGISTRY, REGISTRY};
 use shadowlab_core::technique::ParamValue;
 
 use super::document::ViewMode;
+use super::state::StartState;
 use super::ShadowLabApp;
-
-/// What the start options set, beyond the scene: techniques, their parameters, the view, the target.
-#[derive(Clone, Debug, Default)]
-pub struct StartState {
-    pub technique: Option<String>,
-    /// `key=value` of the technique.
-    pub params: Vec<String>,
-    pub indirect: Option<String>,
-    pub indirect_params: Vec<String>,
-    /// single, side, split or difference.
-    pub view: Option<String>,
-    /// The comparison target (a reference or ground truth).
-    pub against: Option<String>,
-    pub against_params: Vec<String>,
-    /// The target's indirect technique (`none`, or a key).
-    pub against_indirect: Option<String>,
-}
 
 /// The view mode a `--app-view` names.
 pub fn parse_view(text: &str) -> Result<ViewMode> {

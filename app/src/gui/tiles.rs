@@ -77,18 +77,22 @@ impl egui_tiles::Behavior<Pane> for Panes<'_> {
 }
 
 /// The tiles with the app's panes in them.
-pub fn tiles_ui(app: &mut ShadowLabApp, ui: &mut egui::Ui) {
-    let mut tree =
-        std::mem::replace(&mut app.chrome.layout.tree, Tree::empty(egui::Id::unique("shadowlab layout (drawing)")));
-    let mut panes = Panes { app, edited: false, hide: None };
-    tree.ui(&mut panes, ui);
-    let (edited, hide) = (panes.edited, panes.hide);
-    if let Some(id) = hide {
-        tree.set_visible(id, false);
+impl ShadowLabApp {
+    pub(super) fn tiles_ui(&mut self, ui: &mut egui::Ui) {
+        let mut tree = std::mem::replace(
+            &mut self.chrome.layout.tree,
+            Tree::empty(egui::Id::unique("shadowlab layout (drawing)")),
+        );
+        let mut panes = Panes { app: self, edited: false, hide: None };
+        tree.ui(&mut panes, ui);
+        let (edited, hide) = (panes.edited, panes.hide);
+        if let Some(id) = hide {
+            tree.set_visible(id, false);
+        }
+        self.chrome.layout.tree = tree;
+        if edited || hide.is_some() {
+            self.chrome.layout.mark_changed();
+        }
+        self.chrome.layout.focus_pending();
     }
-    app.chrome.layout.tree = tree;
-    if edited || hide.is_some() {
-        app.chrome.layout.mark_changed();
-    }
-    app.chrome.layout.focus_pending();
 }
