@@ -1,6 +1,6 @@
 //! glTF's bytes: buffers from files, data URIs or the `.glb` blob, accessor reads (strided, sparse,
 //! normalized integers), image sources, and the URI decoding they need. The loader's structure is in
-//! [`super::gltf_loader`]; this is the part that touches raw bytes, so every bound is checked here.
+//! `gltf_loader.rs`; this is the part that touches raw bytes, so every bound is checked here.
 
 use std::path::{Path, PathBuf};
 
