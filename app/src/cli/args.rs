@@ -70,7 +70,7 @@ pub struct FrameArgs {
     /// No progress output.
     #[arg(long)]
     pub quiet: bool,
-    #[arg(long, default_value = "none", help = super::registry_help("Indirect technique added to the direct one, none or one of", true))]
+    #[arg(long, default_value = "none", help = registry_help("Indirect technique added to the direct one, none or one of", true))]
     pub indirect: String,
     /// A parameter of the indirect technique, `key=value` (in `sweep`: `key=VALUES` like `--param`); repeatable.
     #[arg(long = "indirect-param", value_name = "KEY=VALUE")]
@@ -117,7 +117,7 @@ impl FrameArgs {
 /// The technique and its comparison target, shared by `compare` and `sweep`.
 #[derive(Args, Debug)]
 pub struct TargetArgs {
-    #[arg(long, default_value = "lightcluster", help = super::registry_help("Technique", false))]
+    #[arg(long, default_value = "lightcluster", help = registry_help("Technique", false))]
     pub technique: String,
     /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
     #[arg(long, default_value = shadowlab_core::technique::registry::REFERENCE)]
@@ -164,7 +164,7 @@ pub fn check_indirect(key: &str) -> Result<()> {
 /// The direct technique of `render`, `animate` and `sequence`: its key and its parameters.
 #[derive(Args, Debug)]
 pub struct TechniqueChoice {
-    #[arg(long, default_value = technique::registry::REFERENCE, help = super::registry_help("Technique", false))]
+    #[arg(long, default_value = technique::registry::REFERENCE, help = registry_help("Technique", false))]
     pub technique: String,
     /// A technique parameter, `key=value`; repeatable.
     #[arg(long = "param", value_name = "KEY=VALUE")]
@@ -205,4 +205,9 @@ pub fn parse_step(text: &str) -> Result<Vec3> {
         [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(*x, *y, *z)),
         _ => bail!("--step '{text}': expected three finite numbers DX,DY,DZ"),
     }
+}
+
+/// `what: key, key, ...` with the registry's keys (direct or indirect), for `--help`.
+pub(super) fn registry_help(what: &str, indirect: bool) -> String {
+    format!("{what}: {}", if indirect { technique::registry::indirect_keys() } else { technique::registry::keys() })
 }

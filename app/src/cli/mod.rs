@@ -43,7 +43,7 @@ pub struct Cli {
     pub command: Option<Command>,
     /// Open this scene file (.ron) or model (.obj, .gltf, .glb) in the app.
     pub path: Option<PathBuf>,
-    #[arg(long = "app-technique", value_name = "KEY", help = registry_help("App: start with this technique", false))]
+    #[arg(long = "app-technique", value_name = "KEY", help = args::registry_help("App: start with this technique", false))]
     pub app_technique: Option<String>,
     /// App: a parameter of the start technique, `key=value`; repeatable.
     #[arg(long = "app-param", value_name = "KEY=VALUE")]
@@ -54,7 +54,7 @@ pub struct Cli {
     /// App: start on this built-in scene (cornell, arcade, restaurant).
     #[arg(long = "app-scene", value_name = "NAME")]
     pub app_scene: Option<String>,
-    #[arg(long = "app-indirect", value_name = "KEY", help = registry_help("App: start with this indirect technique", true))]
+    #[arg(long = "app-indirect", value_name = "KEY", help = args::registry_help("App: start with this indirect technique", true))]
     pub app_indirect: Option<String>,
     /// App: a parameter of the start indirect technique, `key=value`; repeatable.
     #[arg(long = "app-indirect-param", value_name = "KEY=VALUE")]
@@ -67,7 +67,7 @@ pub struct Cli {
     #[arg(
         long = "app-against-indirect",
         value_name = "KEY",
-        help = registry_help("App: the comparison target's indirect technique, none or one of", true)
+        help = args::registry_help("App: the comparison target's indirect technique, none or one of", true)
     )]
     pub app_against_indirect: Option<String>,
     /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
@@ -85,11 +85,6 @@ pub struct Cli {
     /// App: orbit the camera continuously (UI frame-rate measurement).
     #[arg(long, hide = true)]
     pub orbit_demo: bool,
-}
-
-/// `what: key, key, ...` with the registry's keys (direct or indirect), for `--help`.
-fn registry_help(what: &str, indirect: bool) -> String {
-    format!("{what}: {}", if indirect { technique::registry::indirect_keys() } else { technique::registry::keys() })
 }
 
 /// `--app-against`: the registry's comparison targets.

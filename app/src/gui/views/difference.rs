@@ -6,23 +6,9 @@ use eframe::egui;
 use shadowlab_core::renderer::Component;
 use shadowlab_core::RenderSettings;
 
+use super::difference_data::{Difference, PendingDifference};
 use super::Views;
 use crate::gui::session::Session;
-
-/// The difference view's image and metrics, for one pair of converged frames.
-pub struct Difference {
-    pub texture: egui::TextureHandle,
-    pub metrics: shadowlab_core::compare::Metrics,
-    /// What it was computed from (both views' frame keys and the diff settings).
-    key: (u64, u64, bool, bool, u32),
-}
-
-/// A difference image and its metrics on their way from a worker thread.
-pub(super) struct PendingDifference {
-    key: (u64, u64, bool, bool, u32),
-    size: (u32, u32),
-    result: std::sync::mpsc::Receiver<Result<(shadowlab_core::compare::Metrics, image::RgbaImage)>>,
-}
 
 impl Views {
     /// Whether the shown difference is of the views' current frames (false while a newer one is computed or

@@ -4,6 +4,7 @@
 //! the parameter sweep run with their settings.
 
 pub mod difference;
+pub mod difference_data;
 pub mod hover;
 pub mod paint;
 pub mod view;
@@ -25,7 +26,7 @@ use shadowlab_core::{AutoExposure, GpuContext, RenderSettings};
 use super::document::ViewMode;
 use super::session::Session;
 use super::sweep;
-use difference::{Difference, PendingDifference};
+use difference_data::{Difference, PendingDifference};
 use view::{preview_technique, FrameInputs, StepSizer, View};
 
 /// GPU state, created from eframe's render state.

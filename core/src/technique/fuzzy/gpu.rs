@@ -26,6 +26,17 @@ use crate::gpu::kernels::Kernels;
 use crate::gpu::GpuContext;
 use crate::timing::PassTimer;
 
+/// Its WGSL module (listed by the technique's `SHADERS`).
+pub const KMEANS: crate::shaders::WgslModule = crate::shaders::wgsl!(
+    "fuzzy_kmeans",
+    [
+        "core/src/technique/fuzzy/kmeans.wgsl",
+        "core/src/technique/fuzzy/kmeans_grid.wgsl",
+        "core/src/technique/fuzzy/kmeans_search.wgsl",
+        "core/src/technique/fuzzy/kmeans_final.wgsl"
+    ]
+);
+
 mod read;
 pub use read::{SearchCounts, SEARCH_KINDS};
 
@@ -241,7 +252,7 @@ fn kernels(gpu: &GpuContext, gpu_schedule: bool, count_work: bool) -> Kernels {
     Kernels::new(
         gpu,
         "fuzzy kmeans",
-        super::KMEANS.source,
+        KMEANS.source,
         ENTRIES,
         std::mem::size_of::<KmParamsUniform>() as u64,
         &[true, false, false, false, false, false, false],

@@ -74,7 +74,7 @@ pub use params::{ClusterMode, FuzzyParams};
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
-pub const SHADERS: &[WgslModule] = &[POINTS, VISIBILITY, SHADE, KMEANS];
+pub const SHADERS: &[WgslModule] = &[POINTS, VISIBILITY, SHADE, gpu::KMEANS];
 const POINTS: WgslModule =
     crate::shaders::wgsl!("fuzzy_points", ["shaders/common.wgsl", "core/src/technique/fuzzy/points.wgsl"]);
 const VISIBILITY: WgslModule = crate::shaders::wgsl!(
@@ -84,15 +84,6 @@ const VISIBILITY: WgslModule = crate::shaders::wgsl!(
 const SHADE: WgslModule = crate::shaders::wgsl!(
     "fuzzy_shade",
     ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
-);
-const KMEANS: WgslModule = crate::shaders::wgsl!(
-    "fuzzy_kmeans",
-    [
-        "core/src/technique/fuzzy/kmeans.wgsl",
-        "core/src/technique/fuzzy/kmeans_grid.wgsl",
-        "core/src/technique/fuzzy/kmeans_search.wgsl",
-        "core/src/technique/fuzzy/kmeans_final.wgsl"
-    ]
 );
 
 /// Mirrors `VisParams` in `fuzzy/visibility.wgsl`.

@@ -369,7 +369,7 @@ impl FuzzyParams {
         ]
     }
 
-    /// Set one parameter [`check_param`](super::check_param) accepted.
+    /// Set one parameter [`check_param`](crate::technique::check_param) accepted.
     pub fn set(&mut self, key: &str, value: &ParamValue) {
         let p = self;
         match (key, value) {

@@ -114,7 +114,7 @@ use crate::services::cube_shadows::{CubeGeometry, CubeShadowRenderer};
 use crate::services::layouts::SharedLayouts;
 use crate::services::per_light_shadows::PerLightShadows;
 use crate::timing::PassTime;
-pub use params::InsmParams;
+pub use params::{InsmParams, MAX_INSM_RESOLUTION, MAX_VIEWPOINTS};
 use triangulate::{GpuTile, MapView, MeshSettings, SampledImage, MAX_TRIANGLES_PER_TILE};
 use viewpoints::Viewpoint;
 
@@ -123,10 +123,6 @@ use crate::shaders::WgslModule;
 pub const SHADERS: &[WgslModule] = &[TRIANGULATE];
 const TRIANGULATE: WgslModule = crate::shaders::wgsl!("insm_triangulate", ["core/src/technique/insm/triangulate.wgsl"]);
 
-/// Most intermediate shadow maps (the paper uses 6 to 14).
-pub const MAX_VIEWPOINTS: usize = 16;
-/// Largest intermediate shadow map side (the paper's Table 2 goes to 512).
-pub const MAX_INSM_RESOLUTION: u32 = 512;
 /// The reconstructed samples are read back for the overlays when they take at most this many bytes
 /// (10 maps of 256² are 10 MiB); beyond, the overlays show the viewpoints only.
 const OVERLAY_READBACK_LIMIT: u64 = 12 << 20;

@@ -3,10 +3,14 @@
 
 use super::triangulate::MeshSettings;
 use super::viewpoints::{self, Placement, Viewpoint};
-use super::{MAX_INSM_RESOLUTION, MAX_VIEWPOINTS};
 use crate::scene::Aabb;
 use crate::services::cube_params::CubeMapParams;
 use crate::technique::{Param, ParamKind, ParamValue};
+
+/// Most intermediate shadow maps (the paper uses 6 to 14).
+pub const MAX_VIEWPOINTS: usize = 16;
+/// Largest intermediate shadow map side (the paper's Table 2 goes to 512).
+pub const MAX_INSM_RESOLUTION: u32 = 512;
 
 /// The connectivity test's default ε (relative second difference of inverse depth) at [`EPSILON_RESOLUTION`]²
 /// samples for the `box` and `custom` placements ([`InsmParams::epsilon_at`] for other resolutions). A step

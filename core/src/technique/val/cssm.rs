@@ -11,6 +11,9 @@ use crate::gpu::GpuContext;
 use crate::services::cube_shadows::CubeAtlas;
 use crate::timing::PassTimer;
 
+/// Its WGSL module (listed by the technique's `SHADERS`).
+pub const CSSM: crate::shaders::WgslModule = crate::shaders::wgsl!("val_cssm", ["core/src/technique/val/cssm.wgsl"]);
+
 const FORMATS: [wgpu::TextureFormat; 4] = [
     wgpu::TextureFormat::Rgba8Unorm,
     wgpu::TextureFormat::Rgba8Unorm,
@@ -90,7 +93,7 @@ impl Cssm {
             label: Some("cssm mip"),
             entries: &mip_entries,
         });
-        let module = crate::gpu::pipeline::create_module(device, "val_cssm", super::CSSM.source);
+        let module = crate::gpu::pipeline::create_module(device, "val_cssm", CSSM.source);
         let pipeline = |layout: &wgpu::BindGroupLayout, entry: &str| {
             let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(entry),

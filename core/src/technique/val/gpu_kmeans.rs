@@ -6,6 +6,10 @@
 use glam::Vec3;
 
 use super::kmeans::{Clustering, KMeansParams, Val};
+
+/// Its WGSL module (listed by the technique's `SHADERS`).
+pub const KMEANS: crate::shaders::WgslModule =
+    crate::shaders::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl", "core/src/technique/val/kmeans.wgsl"]);
 use crate::error::GpuError;
 use crate::gpu::kernels::Kernels;
 use crate::gpu::readback;
@@ -68,15 +72,8 @@ impl GpuKMeans {
         let entries = ["km_init", "km_clear", "km_assign", "km_update", "km_final", "km_finish"];
         let uniform_bytes = std::mem::size_of::<KmParamsUniform>() as u64;
         // Binding 1: the VPLs (read); 2-4: the VALs, the fixed-point sums, the assignment.
-        let kernels = Kernels::new(
-            gpu,
-            "val kmeans",
-            super::KMEANS.source,
-            &entries,
-            uniform_bytes,
-            &[true, false, false, false],
-            &[],
-        );
+        let kernels =
+            Kernels::new(gpu, "val kmeans", KMEANS.source, &entries, uniform_bytes, &[true, false, false, false], &[]);
         GpuKMeans { kernels, vals: None, acc: None, assignment: None }
     }
 

@@ -75,15 +75,14 @@
 pub mod centre;
 pub mod cssm;
 pub mod cull;
-mod passes;
-use passes::ValParamsUniform;
 pub mod gpu_kmeans;
 pub mod kmeans;
 mod overlays;
 mod params;
+mod passes;
 pub mod split;
 
-pub use params::{Centre, ValParams};
+pub use params::{Centre, ValParams, MAX_VALS};
 
 use std::sync::Arc;
 
@@ -108,14 +107,11 @@ use kmeans::{Clustering, KMeansParams};
 
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
-pub const SHADERS: &[WgslModule] = &[GATHER, CSSM, KMEANS];
+pub const SHADERS: &[WgslModule] = &[GATHER, cssm::CSSM, gpu_kmeans::KMEANS];
 const GATHER: WgslModule = crate::shaders::wgsl!(
     "val_gather",
     ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_basis.wgsl", "core/src/technique/val/gather.wgsl"]
 );
-const CSSM: WgslModule = crate::shaders::wgsl!("val_cssm", ["core/src/technique/val/cssm.wgsl"]);
-const KMEANS: WgslModule =
-    crate::shaders::wgsl!("val_kmeans", ["shaders/vpl_basis.wgsl", "core/src/technique/val/kmeans.wgsl"]);
 
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
 const NEAR_FRACTION: f32 = 0.1;
@@ -132,8 +128,28 @@ fn segment_occluded(bvh: &crate::accel::scene_bvh::SceneBvh, a: Vec3, b: Vec3, s
     len.is_finite() && len > 2.0 * eps && bvh.occluded(a, d / len, len - eps)
 }
 
-/// Most VALs per frame (the per-pixel visibility array of `val/gather.wgsl`).
-pub const MAX_VALS: usize = 256;
+/// Mirrors `ValParams` in `val/gather.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct ValParamsUniform {
+    val_count: u32,
+    mode: u32,
+    grid: u32,
+    tiles_per_row: u32,
+    resolution: u32,
+    bias: f32,
+    normal_offset: f32,
+    slope_bias: f32,
+    solo: i32,
+    levels: u32,
+    cssm_offset: f32,
+    soft_share: f32,
+    batch_size: u32,
+    skip_unlit: u32,
+    members_offset: u32,
+    _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 64);
 
 pub struct VirtualAreaLights {
     pub params: ValParams,

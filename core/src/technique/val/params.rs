@@ -1,7 +1,9 @@
 //! VAL's parameters: what they are, their defaults, and how the UI and the CLI see and set them.
 
-use super::MAX_VALS;
 use crate::technique::{Param, ParamKind, ParamValue};
+
+/// Most VALs per frame (the per-pixel visibility array of `val/gather.wgsl`).
+pub const MAX_VALS: usize = 256;
 
 /// Where a VAL's map stands (`centre`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::{centre, cull, segment_occluded, Centre, VirtualAreaLights, MAP_OFFSET, NEAR_FRACTION};
+use super::{centre, cull, segment_occluded, Centre, ValParamsUniform, VirtualAreaLights, MAP_OFFSET, NEAR_FRACTION};
 use crate::error::GpuError;
 use crate::scene::proxy::DEFAULT_MAX_EDGE;
 use crate::services::context::FrameContext;
@@ -21,29 +21,6 @@ pub(super) struct GpuVal {
     cone: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<GpuVal>() == 64);
-
-/// Mirrors `ValParams` in `val/gather.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub(super) struct ValParamsUniform {
-    val_count: u32,
-    mode: u32,
-    grid: u32,
-    tiles_per_row: u32,
-    resolution: u32,
-    bias: f32,
-    normal_offset: f32,
-    slope_bias: f32,
-    solo: i32,
-    levels: u32,
-    cssm_offset: f32,
-    soft_share: f32,
-    batch_size: u32,
-    skip_unlit: u32,
-    members_offset: u32,
-    _pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<ValParamsUniform>() == 64);
 
 impl VirtualAreaLights {
     /// Each VAL's map (its centre, near and far planes, into `casters`) and what the gather reads of it: Δ, the
