@@ -2,7 +2,7 @@
 
 use image::{Rgba, RgbaImage};
 
-use super::{check_len, check_param, check_same_size, in_mask, is_finite_rgb, luminance, CompareError, Image};
+use super::image::{check_len, check_param, check_same_size, in_mask, is_finite_rgb, luminance, CompareError, Image};
 
 /// Pixels outside the mask (background).
 const BACKGROUND: [u8; 3] = [40, 40, 40];
@@ -97,7 +97,7 @@ pub fn difference_image(
     }))
 }
 
-/// The difference image of visibility factors (from [`super::visibility_image`]): per pixel `V_T − V_R`,
+/// The difference image of visibility factors (from [`super::visibility::visibility_image`]): per pixel `V_T − V_R`,
 /// scaled by `gain` and coloured by `mode` as in [`difference_image`] (red = the technique lets more light
 /// through in signed mode). NaN factors are magenta.
 pub fn visibility_difference_image(

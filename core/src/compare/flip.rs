@@ -1,6 +1,6 @@
 //! FLIP (NVIDIA's ꟻLIP, LDR) on tone-mapped versions of the HDR images, through the `nv-flip` crate.
 
-use super::{check_len, check_param, check_same_size, in_mask, is_finite_rgb, CompareError, Image};
+use super::image::{check_len, check_param, check_same_size, in_mask, is_finite_rgb, CompareError, Image};
 
 /// FLIP's default observer: 67 pixels per degree (a 0.7 m wide 4K monitor seen from 0.7 m).
 pub const DEFAULT_PIXELS_PER_DEGREE: f32 = nv_flip::DEFAULT_PIXELS_PER_DEGREE;

@@ -2,12 +2,13 @@
 
 use serde::Serialize;
 
-use super::{check_len, check_param, check_same_size, flip, in_mask, is_finite_rgb, luminance, CompareError, Image};
+use super::flip;
+use super::image::{check_len, check_param, check_same_size, in_mask, is_finite_rgb, luminance, CompareError, Image};
 
 /// Luminance floor of the PSNR peak and of the relative threshold (radiance units).
 const LUMINANCE_FLOOR: f64 = 1e-3;
 
-/// Visibility factors of the technique and of the reference, from [`super::visibility_image`], one per pixel.
+/// Visibility factors of the technique and of the reference, from [`super::visibility::visibility_image`], one per pixel.
 #[derive(Clone, Copy, Debug)]
 pub struct Visibility<'a> {
     pub technique: &'a [f32],
@@ -35,7 +36,7 @@ impl Default for CompareOptions<'_> {
             threshold: 0.05,
             flip: true,
             exposure: 1.0,
-            pixels_per_degree: super::DEFAULT_PIXELS_PER_DEGREE,
+            pixels_per_degree: super::flip::DEFAULT_PIXELS_PER_DEGREE,
             visibility: None,
         }
     }

@@ -1,6 +1,6 @@
 //! Per-pixel visibility (shadow) factors from a shadowed and an unshadowed render.
 
-use super::{check_same_size, is_finite_rgb, luminance, CompareError, Image};
+use super::image::{check_same_size, is_finite_rgb, luminance, CompareError, Image};
 
 /// Unshadowed direct light below this share of the unshadowed luminance counts as none (`V = 1`).
 const RELATIVE_EPSILON: f32 = 1e-2;
@@ -14,7 +14,7 @@ const ABSOLUTE_EPSILON: f32 = 1e-6;
 /// no lights (ambient and emission only); without it the ambient term is taken as 0, which overestimates `V`
 /// in shadows. Where the unshadowed direct light `Y_unshadowed − Y_ambient` is at most
 /// `1% · Y_unshadowed + 1e-6` (no light reaches the pixel, `0/0` included), `V = 1`. A pixel with a non-finite
-/// channel in any input gets `V = NaN`, which [`super::compare`] scores as a visibility error of 1.
+/// channel in any input gets `V = NaN`, which [`super::metrics::compare`] scores as a visibility error of 1.
 pub fn visibility_image(
     shadowed: &Image,
     unshadowed: &Image,

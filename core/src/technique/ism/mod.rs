@@ -66,15 +66,7 @@ use points::subset_offset;
 use pull_push::usable_levels;
 
 /// This technique's own WGSL modules; its registry entries list them and the naga test validates them.
-pub const SHADERS: &[WgslModule] = &[SPLAT, PULL_PUSH, SHADE, VPL_GATHER];
-const SPLAT: WgslModule = crate::shaders::wgsl!(
-    "ism_splat",
-    ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/splat.wgsl"]
-);
-const PULL_PUSH: WgslModule = crate::shaders::wgsl!(
-    "ism_pull_push",
-    ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/pull_push.wgsl"]
-);
+pub const SHADERS: &[WgslModule] = &[passes::SPLAT, passes::PULL_PUSH, SHADE, VPL_GATHER];
 const SHADE: WgslModule = crate::shaders::wgsl!(
     "ism_shade",
     [

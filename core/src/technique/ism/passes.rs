@@ -9,7 +9,6 @@ use glam::Vec3;
 
 use super::points::{pool_size, sample_points};
 use super::pull_push::{level_resolution, usable_levels, MAX_LEVELS};
-use super::{PULL_PUSH, SPLAT};
 use crate::accel::gpu_scene::GpuScene;
 use crate::error::GpuError;
 use crate::gpu::bind::{storage_entry, storage_rw_entry, uniform_entry};
@@ -18,6 +17,16 @@ use crate::gpu::pipeline::create_module;
 use crate::gpu::GpuContext;
 use crate::services::cube_shadows::{CubeAtlas, TileProjection};
 use crate::timing::PassTimer;
+
+/// Its WGSL modules (listed by the technique's `SHADERS`).
+pub const SPLAT: crate::shaders::WgslModule = crate::shaders::wgsl!(
+    "ism_splat",
+    ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/splat.wgsl"]
+);
+pub const PULL_PUSH: crate::shaders::WgslModule = crate::shaders::wgsl!(
+    "ism_pull_push",
+    ["shaders/vpl_basis.wgsl", "core/src/technique/ism/paraboloid.wgsl", "core/src/technique/ism/pull_push.wgsl"]
+);
 
 /// The atlas format: one f32 depth per texel, written by the resolve pass as a storage texture, read by the
 /// lookups with `textureLoad` and by the inspector as any depth atlas (4 bytes, 1.0 empty).
