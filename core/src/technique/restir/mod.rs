@@ -60,10 +60,11 @@ pub mod alias;
 mod overlays;
 pub mod params;
 mod passes;
+mod state;
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
 use super::{FrameContext, OverlayLayer, Param, ParamError, ParamValue, Technique, TechniqueCounts};
 use crate::accel::scene_bvh::SceneBvh;
@@ -75,7 +76,7 @@ use crate::services::shade_pass::ShadePass;
 use crate::shaders::WgslModule;
 use crate::timing::PassTime;
 pub use params::{BiasMode, RestirParams, Source};
-use passes::{Groups, Reservoirs};
+use state::{GpuReservoir, Groups, History, Inspection, Reservoirs};
 
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[CANDIDATES, TEMPORAL, SPATIAL, SHADE, OUTPUT];
@@ -122,47 +123,6 @@ const SHADE: WgslModule = crate::shaders::wgsl!(
 );
 const OUTPUT: WgslModule =
     crate::shaders::wgsl!("restir_output", ["shaders/common.wgsl", "core/src/technique/restir/output.wgsl"]);
-
-/// A reservoir as the shaders store it. Mirrors `Reservoir` in `restir/reservoir.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuReservoir {
-    /// `y`: an index into the frame's lights, `u32::MAX` when none.
-    pub light: u32,
-    pub w_sum: f32,
-    pub m: f32,
-    pub w: f32,
-    pub position: [f32; 3],
-    /// Octahedral normal (2 x 15 bits), bit 30 geometry, bit 31 a non-black BRDF.
-    pub surface: u32,
-}
-const _: () = assert!(std::mem::size_of::<GpuReservoir>() == 32);
-
-impl GpuReservoir {
-    pub fn is_geometry(&self) -> bool {
-        self.surface & (1 << 30) != 0
-    }
-}
-
-/// The camera of the last ReSTIR frame: the next one reprojects onto its reservoirs.
-#[derive(Clone, Copy, Debug)]
-struct History {
-    clip_from_world: Mat4,
-    camera_position: Vec3,
-}
-
-/// What the last frame's final reservoirs were, read back when `inspect` is on (for the per-pixel maps).
-#[derive(Default)]
-struct Inspection {
-    size: (u32, u32),
-    /// Per pixel, the light of its final reservoir (`u32::MAX`: none, or background).
-    lights: Arc<Vec<u32>>,
-    weight_map: Option<Arc<Vec<[u8; 4]>>>,
-    length_map: Option<Arc<Vec<[u8; 4]>>>,
-    /// The W (positive ones) and M spans the heat maps stretch over.
-    weight_range: (f32, f32),
-    length_range: (f32, f32),
-}
 
 pub struct Restir {
     pub params: RestirParams,
@@ -276,7 +236,7 @@ impl Technique for Restir {
             // The step after the last frame: its reservoirs, for the per-pixel maps.
             self.last_step = "restir readback";
             let reservoirs = self.read_reservoirs(ctx.gpu)?;
-            self.inspection = overlays::inspect(&reservoirs, ctx.size, self.params.candidates);
+            self.inspection = state::inspect(&reservoirs, ctx.size, self.params.candidates);
             return Ok(());
         }
         self.last_step = "restir frame";
@@ -335,15 +295,15 @@ impl Technique for Restir {
     }
 
     fn explain(&self) -> Vec<super::ExplainStep> {
-        overlays::explain_steps()
+        Self::explain_steps()
     }
 
     fn pixel_ids(&self, positions: &[Option<Vec3>]) -> Option<(&'static str, Vec<u32>)> {
         if positions.is_empty() {
-            return Some((overlays::LIGHT_MAP, Vec::new()));
+            return Some((state::LIGHT_MAP, Vec::new()));
         }
         let ins = &self.inspection;
-        (ins.lights.len() == positions.len()).then(|| (overlays::LIGHT_MAP, ins.lights.to_vec()))
+        (ins.lights.len() == positions.len()).then(|| (state::LIGHT_MAP, ins.lights.to_vec()))
     }
 
     fn hover_details(&self, layer: &str, index: usize) -> Vec<String> {

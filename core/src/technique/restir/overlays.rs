@@ -3,123 +3,76 @@
 
 use std::sync::Arc;
 
-use super::{GpuReservoir, Inspection, Restir};
+use super::state::{LENGTH_MAP, LIGHT_MAP, WEIGHT_MAP};
+use super::Restir;
 use crate::compare::colormap;
 use crate::scene::PointLight;
 use crate::technique::{ExplainStep, Glyph, LegendEntry, Overlay, OverlayLayer};
 
-/// The per-pixel ID map of the light in each pixel's final reservoir (the app's `pixel_ids` layer).
-pub const LIGHT_MAP: &str = "light per pixel (reservoir sample y)";
-pub const WEIGHT_MAP: &str = "reservoir weight W (log heat map)";
-pub const LENGTH_MAP: &str = "reservoir length M (heat map)";
-
-/// The maps of read-back final reservoirs of a `size` image; `candidates` is the `M` of one frame.
-pub(super) fn inspect(reservoirs: &[GpuReservoir], size: (u32, u32), candidates: u32) -> Inspection {
-    let pixels = size.0 as usize * size.1 as usize;
-    if reservoirs.len() < pixels {
-        return Inspection::default();
-    }
-    let reservoirs = &reservoirs[..pixels];
-    let lights: Vec<u32> =
-        reservoirs.iter().map(|r| if r.is_geometry() && r.light != u32::MAX { r.light } else { u32::MAX }).collect();
-    // W spans orders of magnitude (it is 1/p̂ times a mean weight): a log scale between its 1st and 99th
-    // percentiles; M a linear one from one frame's candidates to the largest.
-    let mut weights: Vec<f32> =
-        reservoirs.iter().filter(|r| r.is_geometry() && r.w > 0.0 && r.w.is_finite()).map(|r| r.w).collect();
-    weights.sort_by(f32::total_cmp);
-    let at = |q: f64| weights.get(((weights.len().max(1) - 1) as f64 * q) as usize).copied().unwrap_or(1.0);
-    let (w_lo, w_hi) = (at(0.01), at(0.99).max(at(0.01) * 1.0001));
-    let m_lo = candidates as f32;
-    let m_hi = reservoirs.iter().filter(|r| r.is_geometry()).map(|r| r.m).fold(m_lo, f32::max);
-    let heat = |t: f32| {
-        let [r, g, b] = colormap(t);
-        [r, g, b, 200]
-    };
-    let weight_map = reservoirs
-        .iter()
-        .map(|r| {
-            if !r.is_geometry() {
-                [0, 0, 0, 0]
-            } else if r.w <= 0.0 || !r.w.is_finite() {
-                [0, 0, 0, 200]
-            } else {
-                heat((r.w / w_lo).ln() / (w_hi / w_lo).ln())
-            }
-        })
-        .collect();
-    let length_map = reservoirs
-        .iter()
-        .map(|r| if r.is_geometry() { heat((r.m - m_lo) / (m_hi - m_lo).max(1e-6)) } else { [0, 0, 0, 0] })
-        .collect();
-    Inspection {
-        size,
-        lights: Arc::new(lights),
-        weight_map: Some(Arc::new(weight_map)),
-        length_map: Some(Arc::new(length_map)),
-        weight_range: (w_lo, w_hi),
-        length_range: (m_lo, m_hi),
-    }
-}
-
-pub(super) fn explain_steps() -> Vec<ExplainStep> {
-    vec![
-        ExplainStep {
-            title: "1. Candidates",
-            text: "Each pixel draws M lights from the source pdf p: every visible light alike, or by power through \
-                   an alias table (one table lookup a draw, whatever the light count). With one candidate and no \
-                   reuse the image is one random light per pixel: noise.",
-            layers: &[LIGHT_MAP],
-            params: &[("candidates", "1"), ("history", "0"), ("spatial", "0"), ("inspect", "on")],
-            ..Default::default()
-        },
-        ExplainStep {
-            title: "2. Resampled importance sampling (Algorithm 3)",
-            text: "Each candidate x is weighted w = p̂(x)/p(x), p̂ its unshadowed contribution; a reservoir keeps one \
-                   of them, y, with probability w/w_sum, streaming (Algorithm 2), and W = w_sum/(M p̂(y)). Pixels \
-                   now sample the lights that light them most.",
-            layers: &[LIGHT_MAP],
-            params: &[("history", "0"), ("spatial", "0"), ("inspect", "on")],
-            ..Default::default()
-        },
-        ExplainStep {
-            title: "3. Visibility reuse",
-            text: "One shadow ray from the pixel to y; W = 0 when it is blocked, before any reuse, so no neighbour \
-                   inherits a sample its source cannot see. Black in the W map: occluded samples.",
-            layers: &[WEIGHT_MAP],
-            params: &[("history", "0"), ("spatial", "0"), ("inspect", "on")],
-            ..Default::default()
-        },
-        ExplainStep {
-            title: "4. Temporal reuse",
-            text: "The pixel's surface is reprojected into the previous frame; where that frame saw the same \
-                   surface (depth and normal alike) its final reservoir is combined with this one (Algorithm 4), \
-                   its M capped at `history` times M. Over 8 frames M grows; it stays low where the history was \
-                   rejected.",
-            layers: &[LENGTH_MAP],
-            params: &[("spatial", "0"), ("frames", "8"), ("inspect", "on")],
-            ..Default::default()
-        },
-        ExplainStep {
-            title: "5. Spatial reuse",
-            text: "k random neighbours within the radius whose surfaces are alike are combined too. Biased: 1/M; \
-                   unbiased: 1/Z, Z the M of the inputs that could have drawn y (a shadow ray from each). Then one \
-                   shadow ray from the pixel to the final y.",
-            layers: &[WEIGHT_MAP],
-            params: &[("inspect", "on")],
-            ..Default::default()
-        },
-        ExplainStep {
-            title: "6. Shading",
-            text: "Each pixel adds f(y) W: the chosen light's unshadowed contribution, its visibility already in W. \
-                   `frames` ReSTIR frames per image are averaged.",
-            layers: &[],
-            params: &[],
-            ..Default::default()
-        },
-    ]
-}
-
 impl Restir {
+    /// The Explain steps of the paper.
+    pub(super) fn explain_steps() -> Vec<ExplainStep> {
+        vec![
+            ExplainStep {
+                title: "1. Candidates",
+                text:
+                    "Each pixel draws M lights from the source pdf p: every visible light alike, or by power through \
+                       an alias table (one table lookup a draw, whatever the light count). With one candidate and no \
+                       reuse the image is one random light per pixel: noise.",
+                layers: &[LIGHT_MAP],
+                params: &[("candidates", "1"), ("history", "0"), ("spatial", "0"), ("inspect", "on")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "2. Resampled importance sampling (Algorithm 3)",
+                text:
+                    "Each candidate x is weighted w = p̂(x)/p(x), p̂ its unshadowed contribution; a reservoir keeps one \
+                       of them, y, with probability w/w_sum, streaming (Algorithm 2), and W = w_sum/(M p̂(y)). Pixels \
+                       now sample the lights that light them most.",
+                layers: &[LIGHT_MAP],
+                params: &[("history", "0"), ("spatial", "0"), ("inspect", "on")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "3. Visibility reuse",
+                text:
+                    "One shadow ray from the pixel to y; W = 0 when it is blocked, before any reuse, so no neighbour \
+                       inherits a sample its source cannot see. Black in the W map: occluded samples.",
+                layers: &[WEIGHT_MAP],
+                params: &[("history", "0"), ("spatial", "0"), ("inspect", "on")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "4. Temporal reuse",
+                text: "The pixel's surface is reprojected into the previous frame; where that frame saw the same \
+                       surface (depth and normal alike) its final reservoir is combined with this one (Algorithm 4), \
+                       its M capped at `history` times M. Over 8 frames M grows; it stays low where the history was \
+                       rejected.",
+                layers: &[LENGTH_MAP],
+                params: &[("spatial", "0"), ("frames", "8"), ("inspect", "on")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "5. Spatial reuse",
+                text: "k random neighbours within the radius whose surfaces are alike are combined too. Biased: 1/M; \
+                       unbiased: 1/Z, Z the M of the inputs that could have drawn y (a shadow ray from each). Then one \
+                       shadow ray from the pixel to the final y.",
+                layers: &[WEIGHT_MAP],
+                params: &[("inspect", "on")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "6. Shading",
+                text:
+                    "Each pixel adds f(y) W: the chosen light's unshadowed contribution, its visibility already in W. \
+                       `frames` ReSTIR frames per image are averaged.",
+                layers: &[],
+                params: &[],
+                ..Default::default()
+            },
+        ]
+    }
+
     pub(super) fn overlay_layers(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
         let ins = &self.inspection;
         let (width, height) = ins.size;

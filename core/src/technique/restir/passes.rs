@@ -3,10 +3,8 @@
 
 use wgpu::util::DeviceExt;
 
-use super::{
-    alias, params, BiasMode, GpuReservoir, History, Inspection, Restir, RestirParams, Source, CANDIDATES, OUTPUT,
-    SHADE, SPATIAL, TEMPORAL,
-};
+use super::state::{GpuReservoir, Groups, History, Inspection, Reservoirs};
+use super::{alias, params, BiasMode, Restir, RestirParams, Source, CANDIDATES, OUTPUT, SHADE, SPATIAL, TEMPORAL};
 use crate::accel::scene_bvh::SceneBvh;
 use crate::error::GpuError;
 use crate::fingerprint::lights_fingerprint;
@@ -46,29 +44,6 @@ pub(super) struct FrameUniform {
     _pad: [u32; 3],
 }
 const _: () = assert!(std::mem::size_of::<FrameUniform>() == 160);
-
-/// The two reservoir buffers of a size: this frame's per pixel (steps 1-3) and the final ones (step 4), which
-/// the shading reads and the next frame's temporal reuse reprojects onto.
-pub(super) struct Reservoirs {
-    pub(super) size: (u32, u32),
-    pub(super) working: wgpu::Buffer,
-    pub(super) last: wgpu::Buffer,
-    /// The mean of the rendered frame's ReSTIR frames, linear RGBA f32 per pixel.
-    pub(super) mean: wgpu::Buffer,
-    /// What the HDR target holds of the mean so far (the running mean of the ReSTIR frames done), and what this
-    /// step's output adds to it.
-    pub(super) shown: wgpu::Buffer,
-    pub(super) delta: wgpu::Buffer,
-}
-
-/// The bind groups of a frame: into `working` (candidates, temporal: reads `last`), into `last` (spatial: reads
-/// `working`), the shading's (reads `last`, into `mean`) and the output's (reads `mean`).
-pub(super) struct Groups {
-    pub(super) to_working: wgpu::BindGroup,
-    pub(super) to_last: wgpu::BindGroup,
-    pub(super) shade: wgpu::BindGroup,
-    pub(super) output: wgpu::BindGroup,
-}
 
 impl Restir {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> Restir {
