@@ -50,7 +50,7 @@ pub const PROBES: usize = 32;
 #[derive(Clone, Copy)]
 pub struct Clearance<'a> {
     pub occluded: &'a dyn Fn(Vec3, Vec3) -> bool,
-    /// The probes' length (the maps' longest triangle edge).
+    /// The probes' length ([`REACH`] of the maps' longest triangle edge).
     pub reach: f32,
 }
 
@@ -70,9 +70,9 @@ fn crowding(eye: Vec3, normal: Vec3, clearance: &Clearance) -> usize {
 }
 
 /// Each VAL's map centre (module comment): for a VAL of at most `max_members` VPLs a member's eye (the nearest
-/// the mean, or with a `clearance` the least crowded of the nearest [`CANDIDATES`]); for a larger VAL, an
-/// empty one or one without a finite member, the mean moved `offset` along the VAL's normal (the paper's).
-/// `assignment[i]` is VPL `i`'s VAL.
+/// the mean, or with a `clearance` the least crowded of at most [`CANDIDATES`] members within [`NEIGHBOURHOOD`]
+/// of its size of that one); for a larger VAL, an empty one or one without a finite member, the mean moved
+/// `offset` along the VAL's normal (the paper's). `assignment[i]` is VPL `i`'s VAL.
 pub fn map_centres(
     vpls: &[Vpl],
     assignment: &[u32],

@@ -179,12 +179,12 @@ pub struct VirtualAreaLights {
     scene_size: f32,
     counts: TechniqueCounts,
     clustering_ms: f64,
-    /// The scene BVH's build time when this frame built it (the first frame with a hidden weight).
+    /// The scene BVH's build time when this frame built it (the first frame with a hidden weight or a clearance).
     bvh_build_ms: Option<f64>,
     /// What the VAL maps draw: the scene with its long edges cut, simplified with `proxy` below 1.
     maps: MapGeometry,
-    /// The scene's BVH and bounds, from the last frame (the hidden members' weight in [`split`]; a preview of
-    /// another scene's VPLs goes without it).
+    /// The scene's BVH and bounds, from the last frame (the hidden members' weight in [`split`], the member
+    /// centres' clearance in [`centre`]; a preview of another scene's VPLs goes without it).
     bvh: Option<(Arc<crate::accel::scene_bvh::SceneBvh>, crate::scene::Aabb)>,
 }
 

@@ -40,7 +40,7 @@ impl VirtualAreaLights {
             Centre::Auto => (self.params.member_share.max(0.0) as f64 * vpls.len() as f64).floor() as usize,
         };
         // With the scene's BVH, a small VAL whose nearest member is crowded by nearby geometry (which its map
-        // would draw warped) stands at a clearer member ([`centre`]); probes reach the maps' longest edge.
+        // would draw warped) stands at a clearer member ([`centre`]); probes reach a tenth of the maps' longest edge.
         let bvh = self.bvh.as_ref().filter(|(_, b)| *b == scene_bounds).map(|(b, _)| b.clone());
         let occluded = |a: Vec3, b: Vec3| bvh.as_ref().is_some_and(|bvh| segment_occluded(bvh, a, b, self.scene_size));
         let max_edge = if self.params.max_edge > 0.0 { self.params.max_edge } else { DEFAULT_MAX_EDGE };
