@@ -1,12 +1,33 @@
 // The geometry-aware blur that completes interleaved sampling (Dong et al. 2009 section 6, after Segovia et
 // al. 2006 and Laine et al. 2007): with interleaving on, the pixel of class (x mod 8, y mod 8) gathered only
 // every 64th VPL (scaled by 64). An 8x8 window holds each class once, so averaging it spreads every VPL over
-// the window again. Only neighbours on the same surface count (normal within ~25 degrees, position within 3 %
-// of the camera distance), and the irradiance (radiance / albedo) is averaged, then multiplied by the pixel's
-// own albedo, so texture detail stays sharp. Composed after common.wgsl.
+// the window again. Only neighbours on the pixel's surface count; the irradiance (radiance / albedo) is
+// averaged, then multiplied by the pixel's own albedo, so texture detail stays sharp.
+//
+// The surface test: a normal within BLUR_NORMAL (the paper's beta = 0.8, after Laine et al.), a position within
+// BLUR_PLANE of the camera distance off the pixel's tangent plane and within BLUR_REACH of it. The paper's
+// alpha is a distance (10 % of the scene's extent); the tangent plane is a deviation: a floor seen at a grazing
+// angle has rows metres apart, which a distance drops, so the blur then ran along the rows alone.
+//
+// Beyond the papers, one sample per class: where a class's pixel in the 8x8 window lies on another surface (a
+// column's edge, the far side of a crease), the same class's pixel one block over (8 pixels across, down, or
+// both) stands in for it, the nearest first; a class none of whose four candidates is on the surface is left
+// out. Averaging the window's accepted pixels alone (the blur before) weighs the classes unevenly wherever
+// neighbours drop out, and each class is a different 64th of the VPLs: stripes along a floor's rows and a
+// pillar's columns. Measured in docs/techniques/vpl-gather.md ("Interleaved sampling's blur").
+// Composed after common.wgsl.
 
 @group(1) @binding(0) var<storage, read> blur_src: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> blur_dst: array<vec4<f32>>;
+
+const BLUR_NORMAL: f32 = 0.8;
+const BLUR_PLANE: f32 = 0.02;
+const BLUR_REACH: f32 = 0.08;
+
+// The nearer of a window offset in [-4, 4) and the same class's offset one block over.
+fn other_block(d: i32) -> i32 {
+    return select(d - 8, d + 8, d < 0);
+}
 
 @compute @workgroup_size(8, 8)
 fn blur_main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -21,22 +42,38 @@ fn blur_main(@builtin(global_invocation_id) id: vec3<u32>) {
         blur_dst[index] = blur_src[index];
         return;
     }
-    let tolerance = 0.03 * length(frame.camera_position.xyz - s.position);
+    let camera_distance = length(frame.camera_position.xyz - s.position);
+    let plane = BLUR_PLANE * camera_distance;
+    let reach = BLUR_REACH * camera_distance;
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     for (var dy = -4; dy < 4; dy++) {
         for (var dx = -4; dx < 4; dx++) {
-            let q = vec2<i32>(id.xy) + vec2<i32>(dx, dy);
-            if q.x < 0 || q.y < 0 || q.x >= i32(width) || q.y >= i32(height) {
-                continue;
+            let near = vec2<i32>(dx, dy);
+            let far = vec2<i32>(other_block(dx), other_block(dy));
+            // The four offsets of this class, nearest first: the window's, one block across or down (the
+            // nearer of the two first), both.
+            var candidates = array<vec2<i32>, 4>(near, vec2<i32>(far.x, dy), vec2<i32>(dx, far.y), far);
+            if dx * dx + far.y * far.y < far.x * far.x + dy * dy {
+                candidates[1] = vec2<i32>(dx, far.y);
+                candidates[2] = vec2<i32>(far.x, dy);
             }
-            let n = load_surface(q);
-            if !n.is_geometry || dot(n.normal, s.normal) < 0.9 || distance(n.position, s.position) > tolerance {
-                continue;
+            for (var k = 0; k < 4; k++) {
+                let q = vec2<i32>(id.xy) + candidates[k];
+                if q.x < 0 || q.y < 0 || q.x >= i32(width) || q.y >= i32(height) {
+                    continue;
+                }
+                let n = load_surface(q);
+                let offset = n.position - s.position;
+                if !n.is_geometry || dot(n.normal, s.normal) < BLUR_NORMAL || abs(dot(offset, s.normal)) > plane
+                    || length(offset) > reach {
+                    continue;
+                }
+                let albedo = max(n.albedo, vec3<f32>(1e-3));
+                sum += blur_src[u32(q.y) * width + u32(q.x)].rgb / albedo;
+                weight += 1.0;
+                break;
             }
-            let albedo = max(n.albedo, vec3<f32>(1e-3));
-            sum += blur_src[u32(q.y) * width + u32(q.x)].rgb / albedo;
-            weight += 1.0;
         }
     }
     // The pixel itself always passes, so weight >= 1.
