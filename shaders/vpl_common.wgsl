@@ -1,16 +1,7 @@
 // What every VPL gather shares: the VPL layout, the batch uniform, the indirect output and the radiance one VPL
 // sends to a receiver. Composed after common.wgsl (and the visibility's own files), before vpl_gather.wgsl.
-// `Vpl` mirrors `GpuVpl` in core/src/vpl/mod.rs; `GatherBatch` mirrors `GatherBatchUniform` in
+// Composed after vpl_term.wgsl (the VPL layout and its radiance). `GatherBatch` mirrors `GatherBatchUniform` in
 // core/src/services/vpl_gather.rs.
-
-struct Vpl {
-    // xyz: position
-    position: vec4<f32>,
-    // xyz: unit normal
-    normal: vec4<f32>,
-    // rgb: reflected flux
-    flux: vec4<f32>,
-}
 
 struct GatherBatch {
     first_vpl: u32,
@@ -30,7 +21,9 @@ struct GatherBatch {
     depth_far: f32,
     // offset of the map's centre from the VPL along its normal, world units
     origin_offset: f32,
-    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64)
+    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64); 2: the same for
+    // the ratio estimator, the output holding the luminance of the shadowed and the unshadowed sums
+    // (`interleave_out`) for vpl_blur.wgsl
     interleave: u32,
 }
 
@@ -61,20 +54,18 @@ fn gather_range(pixel: vec2<u32>) -> GatherRange {
     return r;
 }
 
-// Irradiance-like term of one VPL at a receiver, before visibility and the receiver's rho/pi:
-// Phi/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2). Zero (never NaN) when the receiver lies on the VPL,
-// behind it, or faces away.
+// Irradiance-like term of one VPL at a receiver with the batch's clamp (`vpl_radiance`, vpl_term.wgsl).
 fn vpl_term(s: Surface, v: Vpl) -> vec3<f32> {
-    let to_x = s.position - v.position.xyz;
-    let d2 = dot(to_x, to_x);
-    if !(d2 > 1e-12) {
-        return vec3<f32>(0.0);
+    return vpl_radiance(s, v, gather.clamp_sq);
+}
+
+// What a gather adds into the indirect buffer for a pixel of albedo `albedo`: the shadowed sum `lit` and the
+// unshadowed one `open` of its VPLs, both already scaled by the range's weight. With the ratio estimator
+// (interleave 2) the luminances of both, irradiance-like (over pi, no albedo), which vpl_blur.wgsl turns into a
+// visibility share; otherwise rho/pi times the shadowed sum.
+fn interleave_out(albedo: vec3<f32>, lit: vec3<f32>, open: vec3<f32>) -> vec4<f32> {
+    if gather.interleave == 2u {
+        return vec4<f32>(luminance(lit) / PI, luminance(open) / PI, 0.0, 0.0);
     }
-    let w = to_x * inverseSqrt(d2);
-    let cos_i = dot(v.normal.xyz, w);
-    let cos_x = -dot(s.normal, w);
-    if cos_i <= 0.0 || cos_x <= 0.0 {
-        return vec3<f32>(0.0);
-    }
-    return v.flux.rgb * (cos_i * cos_x / (PI * max(d2, gather.clamp_sq)));
+    return vec4<f32>(albedo / PI * lit, 0.0);
 }

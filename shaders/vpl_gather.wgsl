@@ -16,6 +16,7 @@ fn gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let range = gather_range(id.xy);
     var sum = vec3<f32>(0.0);
+    var open = vec3<f32>(0.0);
     var evaluations = 0u;
     for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let v = vpls[gather.first_vpl + k];
@@ -23,11 +24,11 @@ fn gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
         evaluations += 1u;
         if max(term.x, max(term.y, term.z)) > 0.0 {
             sum += term * vpl_visibility(s, v, k);
+            open += term;
         }
     }
     count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, evaluations);
     count_visibility_work(vec2<i32>(id.xy));
-    sum *= range.scale;
     let index = id.y * width + id.x;
-    indirect_out[index] += vec4<f32>(s.albedo / PI * sum, 0.0);
+    indirect_out[index] += interleave_out(s.albedo, sum * range.scale, open * range.scale);
 }

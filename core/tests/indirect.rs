@@ -526,7 +526,8 @@ fn the_interleaving_blur_keeps_a_floor_seen_at_a_grazing_angle_free_of_row_strip
     let vs = VplSettings { count: 1024, ..Default::default() };
     let s = RenderSettings { width: 128, height: 96, ..settings(Component::Indirect, vs) };
     let (full, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").camera(&camera).render();
-    let on = [("interleave", ParamValue::Bool(true))];
+    // The plain blur (the ratio estimator blurs visibility alone: the next test).
+    let on = [("interleave", ParamValue::Bool(true)), ("ratio", ParamValue::Bool(false))];
     let (inter, _) = Shot::indirect(&scene, &lights, s, "vpl-raytraced").params(&on).camera(&camera).render();
     // Per row of the floor's lower half (the plate and the wall stand above it): the interleaved light over
     // the full gather's.
@@ -544,6 +545,54 @@ fn the_interleaving_blur_keeps_a_floor_seen_at_a_grazing_angle_free_of_row_strip
     // The blur before this one: 0.063 and 56 % of the pixels within 10 %; this one 0.023 and 88 %.
     assert!(stripes < 0.04, "the floor's rows differ from each other by {stripes:.4} (interleaved / full)");
     assert!(close > 0.75, "{:.1} % of the lit pixels within 10 % of the full gather", close * 100.0);
+}
+
+#[test]
+fn the_ratio_estimator_is_exact_without_shadows_and_nearer_the_full_gather_than_the_plain_blur_with_them() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let vs = VplSettings { count: 1024, ..Default::default() };
+    let s = RenderSettings { width: 128, height: 96, ..settings(Component::Indirect, vs) };
+    let interleaved = |ratio: bool| {
+        [
+            ("interleave", ParamValue::Bool(true)),
+            ("ratio", ParamValue::Bool(ratio)),
+            ("vpls_per_step", ParamValue::Int(300)),
+        ]
+    };
+    // Without visibility every window's share is 1: the pixel's own sum over every VPL, to f32 rounding.
+    let (full, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-unshadowed").render();
+    let (ratio, report) =
+        Shot::indirect(&scene, &lights, s.clone(), "vpl-unshadowed").params(&interleaved(true)).render();
+    let mut lit = 0;
+    for (p, q) in full.iter().zip(&ratio) {
+        if p[1] > 1e-3 {
+            lit += 1;
+            assert!((p[1] - q[1]).abs() <= 1e-4 * p[1] + 1e-6, "unshadowed: {} interleaved, {} in full", q[1], p[1]);
+        }
+    }
+    assert!(lit > 5000, "{lit} lit pixels");
+    let n = report.indirect.as_ref().unwrap().vpls as f64;
+    let evaluations = report.indirect.as_ref().unwrap().work["vpl_pixel_evaluations"];
+    assert!(evaluations >= n * lit as f64, "the blur's sum over every VPL is counted: {evaluations} evaluations");
+    // With the plate's shadows: nearer the full gather than the window's light averaged.
+    let (full, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").render();
+    let error = |img: &[[f32; 4]]| {
+        let (mut e, mut r) = (0.0f64, 0.0f64);
+        for (p, q) in full.iter().zip(img) {
+            e += ((p[1] - q[1]) as f64).powi(2);
+            r += (p[1] as f64).powi(2);
+        }
+        (e / r).sqrt()
+    };
+    let (ratio, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").params(&interleaved(true)).render();
+    let (plain, _) = Shot::indirect(&scene, &lights, s, "vpl-raytraced").params(&interleaved(false)).render();
+    let (e_ratio, e_plain) = (error(&ratio), error(&plain));
+    // Measured: 0.010 against 0.260.
+    assert!(
+        e_ratio < 0.05 && e_ratio < 0.2 * e_plain,
+        "relative RMSE against the full gather: ratio {e_ratio:.4}, plain {e_plain:.4}"
+    );
 }
 
 #[test]

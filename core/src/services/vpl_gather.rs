@@ -14,6 +14,7 @@ use glam::Vec3;
 
 use super::context::FrameContext;
 use crate::contract::overlay::{index_color, Glyph, HoverPoint, LegendEntry, Overlay, OverlayLayer};
+use crate::contract::params::{Param, ParamKind, ParamValue};
 use crate::gpu::bind::storage_rw_entry;
 use crate::gpu::GpuContext;
 use crate::services::layouts::{compute_pipeline, SharedLayouts};
@@ -34,10 +35,53 @@ pub struct GatherBatchUniform {
     pub depth_near: f32,
     pub depth_far: f32,
     pub origin_offset: f32,
-    /// 1: interleaved sampling (every 64th VPL per pixel of an 8x8 block, times 64).
+    /// 1: interleaved sampling (every 64th VPL per pixel of an 8x8 block, times 64); 2: the same, writing the
+    /// luminances the blur's ratio estimator needs ([`interleave_mode`]).
     pub interleave: u32,
 }
 const _: () = assert!(std::mem::size_of::<GatherBatchUniform>() == 48);
+
+/// The `interleave` and `ratio` parameters every interleaving gather shows (the values given).
+pub fn interleave_params(interleave: bool, ratio: bool) -> [Param; 2] {
+    [
+        Param {
+            key: "interleave",
+            label: "Interleaved sampling",
+            help: "Each pixel of an 8x8 block gathers every 64th VPL (times 64), then a geometry-aware blur over the \
+                   block completes it (Dong section 6): 64x fewer VPLs and visibility tests per pixel",
+            kind: ParamKind::Bool,
+            value: ParamValue::Bool(interleave),
+        },
+        Param {
+            key: "ratio",
+            label: "Ratio estimator",
+            help: "With interleaving: each pixel's unshadowed light from every VPL times the share of it its 8x8 \
+                   window saw unblocked, so only visibility is blurred (beyond the paper; the unshadowed sum costs \
+                   every VPL per pixel again); off: the window's light averaged, as the paper",
+            kind: ParamKind::Bool,
+            value: ParamValue::Bool(ratio),
+        },
+    ]
+}
+
+/// `GatherBatchUniform::interleave` for a technique's `interleave` and `ratio` parameters.
+pub fn interleave_mode(interleave: bool, ratio: bool) -> u32 {
+    match (interleave, ratio) {
+        (false, _) => 0,
+        (true, false) => 1,
+        (true, true) => 2,
+    }
+}
+
+/// Mirrors `BlurParams` in `vpl_blur.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct BlurUniform {
+    vpl_count: u32,
+    ratio: u32,
+    clamp_sq: f32,
+    pad: u32,
+}
 
 /// A compute pipeline gathering VPLs with one visibility function.
 pub struct VplGatherPass {
@@ -134,10 +178,13 @@ impl VplGatherPass {
 }
 
 /// The geometry-aware 8x8 blur that completes interleaved sampling (`vpl_blur.wgsl`): blurs the indirect
-/// buffer into a scratch buffer and copies it back. Run once per frame, after the last gather.
+/// buffer into a scratch buffer and copies it back. Run once per frame, after the last gather. With the ratio
+/// estimator (the gathers ran with interleave mode 2) it blurs the visibility share alone and multiplies it by
+/// each pixel's unshadowed light from every VPL of the frame.
 pub struct InterleaveBlur {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    uniform: wgpu::Buffer,
     scratch: Option<wgpu::Buffer>,
 }
 
@@ -145,14 +192,26 @@ impl InterleaveBlur {
     pub fn new(gpu: &GpuContext, layouts: &SharedLayouts) -> InterleaveBlur {
         let layout = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl blur"),
-            entries: &[crate::gpu::bind::storage_entry(0), storage_rw_entry(1)],
+            entries: &[
+                crate::gpu::bind::storage_entry(0),
+                storage_rw_entry(1),
+                crate::gpu::bind::storage_entry(2),
+                crate::gpu::bind::uniform_entry(3),
+            ],
         });
         let pipeline =
             compute_pipeline(gpu, layouts, "vpl_blur", crate::shaders::VPL_BLUR.source, "blur_main", &[&layout]);
-        InterleaveBlur { pipeline, layout, scratch: None }
+        let uniform = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("vpl blur"),
+            size: std::mem::size_of::<BlurUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        InterleaveBlur { pipeline, layout, uniform, scratch: None }
     }
 
-    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+    /// `ratio`: the gathers wrote the ratio estimator's luminances (interleave mode 2).
+    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder, ratio: bool) {
         let size = ctx.indirect_buffer.size();
         if self.scratch.as_ref().is_none_or(|b| b.size() != size) {
             self.scratch = Some(ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -162,6 +221,13 @@ impl InterleaveBlur {
                 mapped_at_creation: false,
             }));
         }
+        let params = BlurUniform {
+            vpl_count: ctx.vpls.set.vpls.len() as u32,
+            ratio: ratio as u32,
+            clamp_sq: ctx.vpl_settings.clamp_world * ctx.vpl_settings.clamp_world,
+            pad: 0,
+        };
+        ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&params));
         let scratch = self.scratch.as_ref().expect("made above");
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl blur"),
@@ -169,6 +235,8 @@ impl InterleaveBlur {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: ctx.indirect_buffer.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: scratch.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: ctx.vpls.buffer.buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: self.uniform.as_entire_binding() },
             ],
         });
         let (x, y) = pixel_workgroups(ctx.size);

@@ -82,6 +82,7 @@ const VPL_GATHER: WgslModule = crate::shaders::wgsl!(
     "ism_vpl_gather",
     [
         "shaders/common.wgsl",
+        "shaders/vpl_term.wgsl",
         "shaders/vpl_common.wgsl",
         "shaders/vpl_basis.wgsl",
         "core/src/technique/ism/paraboloid.wgsl",
@@ -497,7 +498,7 @@ impl Technique for VplIsm {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step >= self.batches {
-            self.blur.encode(ctx, encoder);
+            self.blur.encode(ctx, encoder, self.params.ratio);
             return Ok(());
         }
         let first = step * self.batch_size;
@@ -521,7 +522,7 @@ impl Technique for VplIsm {
         let batch = GatherBatchUniform {
             first_vpl: first as u32,
             vpl_count: (last - first) as u32,
-            interleave: self.params.interleave as u32,
+            interleave: crate::services::vpl_gather::interleave_mode(self.params.interleave, self.params.ratio),
             first_tile: 0,
             tiles_per_row: atlas.tiles_per_row,
             resolution: atlas.resolution,

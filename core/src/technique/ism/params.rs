@@ -34,6 +34,8 @@ pub struct IsmParams {
     pub vpls_per_step: u32,
     /// `vpl-ism`: interleaved sampling and the geometry-aware blur (Dong section 6), as the other gathers.
     pub interleave: bool,
+    /// `vpl-ism`: with interleaving, the ratio estimator (`vpl_blur.wgsl`), as the other gathers.
+    pub ratio: bool,
 }
 
 impl Default for IsmParams {
@@ -50,6 +52,7 @@ impl Default for IsmParams {
             inspect: 0,
             vpls_per_step: 256,
             interleave: false,
+            ratio: true,
         }
     }
 }
@@ -148,13 +151,7 @@ impl IsmParams {
                 crate::vpl::MAX_VPLS as i64,
                 self.vpls_per_step,
             ));
-            list.push(Param {
-                key: "interleave",
-                label: "Interleaved sampling",
-                help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (Dong section 6)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(self.interleave),
-            });
+            list.extend(crate::services::vpl_gather::interleave_params(self.interleave, self.ratio));
         } else {
             list.push(int(
                 "inspect",
@@ -184,6 +181,7 @@ impl IsmParams {
             ("inspect", ParamValue::Int(v)) => self.inspect = *v as u32,
             ("vpls_per_step", ParamValue::Int(v)) => self.vpls_per_step = *v as u32,
             ("interleave", ParamValue::Bool(v)) => self.interleave = *v,
+            ("ratio", ParamValue::Bool(v)) => self.ratio = *v,
             _ => unreachable!("check_param accepted an unknown key"),
         }
         Ok(())

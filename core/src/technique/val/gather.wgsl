@@ -353,6 +353,8 @@ fn val_soft(s: Surface, m: u32, lk: ValLookup) -> f32 {
 struct VplSum {
     sum: vec3<f32>,
     evaluations: u32,
+    // the unshadowed sum, for the interleaving's ratio estimator (interleaved sampling only)
+    open: vec3<f32>,
 }
 
 fn lights_pixel(term: vec3<f32>) -> bool {
@@ -398,7 +400,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
     // pixel is skipped whole (`may_light`); off, every VPL is evaluated in the frame's order, as the paper.
     var light: array<vec3<f32>, MAX_VALS>;
     let m_count = min(val_params.val_count, MAX_VALS);
-    var out = VplSum(vec3<f32>(0.0), 0u);
+    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0));
     var total = 0.0;
     if val_params.skip_unlit != 0u {
         let base = (gather.first_vpl / max(val_params.batch_size, 1u)) * val_params.val_count;
@@ -463,7 +465,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
 fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
     var tested: array<u32, MAX_VALS / 32u>;
     var visibility: array<f32, MAX_VALS>;
-    var out = VplSum(vec3<f32>(0.0), 0u);
+    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0));
     for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let i = gather.first_vpl + k;
         if !in_solo(i) {
@@ -479,6 +481,7 @@ fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
                 visibility[m] = val_visibility(s, m, true);
             }
             out.sum += term * visibility[m];
+            out.open += term;
         }
     }
     return out;
@@ -502,11 +505,10 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     } else {
         lit = sum_by_val(s, range);
     }
-    let sum = lit.sum;
     let evaluations = lit.evaluations;
     count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, evaluations);
     count_work(vec2<i32>(id.xy), WORK_INDIRECT_SHADOW_LOOKUPS, val_lookups);
     count_work(vec2<i32>(id.xy), WORK_INDIRECT_FILTER_TAPS, val_taps);
     let index = id.y * width + id.x;
-    indirect_out[index] += vec4<f32>(s.albedo / PI * sum * range.scale, 0.0);
+    indirect_out[index] += interleave_out(s.albedo, lit.sum * range.scale, lit.open * range.scale);
 }

@@ -110,7 +110,13 @@ use crate::shaders::WgslModule;
 pub const SHADERS: &[WgslModule] = &[GATHER, cssm::CSSM, gpu_kmeans::KMEANS];
 const GATHER: WgslModule = crate::shaders::wgsl!(
     "val_gather",
-    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_basis.wgsl", "core/src/technique/val/gather.wgsl"]
+    [
+        "shaders/common.wgsl",
+        "shaders/vpl_term.wgsl",
+        "shaders/vpl_common.wgsl",
+        "shaders/vpl_basis.wgsl",
+        "core/src/technique/val/gather.wgsl"
+    ]
 );
 
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
@@ -250,6 +256,12 @@ impl VirtualAreaLights {
 }
 
 impl VirtualAreaLights {
+    /// The interleaving's ratio estimator for this frame: not with `solo`, whose gather takes one VAL's VPLs
+    /// where the blur's unshadowed sum would take every VPL.
+    fn ratio(&self) -> bool {
+        self.params.ratio && self.params.solo < 0
+    }
+
     /// Each VAL's `Delta` in the penumbra estimate (`size`): its rectangle's diagonal or its VPLs' spread.
     fn sizes(&self, vpls: &[crate::vpl::Vpl]) -> Vec<f32> {
         match self.params.size.as_str() {
@@ -436,7 +448,7 @@ impl Technique for VirtualAreaLights {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            self.blur.encode(ctx, encoder);
+            self.blur.encode(ctx, encoder, self.ratio());
             return Ok(());
         }
         if step == 0 {

@@ -71,6 +71,9 @@ pub struct ValParams {
     /// Bias of a filter sample per texel of its offset, in texel footprints at the receiver.
     pub slope_bias: f32,
     pub interleave: bool,
+    /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
+    /// times its window's visibility share; not with `solo` (the blur's sum takes every VPL).
+    pub ratio: bool,
     /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8). With `split` on,
     /// k-means makes `ceil(kmeans_share * M)` VALs (one by default), so it changes little or nothing then.
     pub warm_start: bool,
@@ -145,6 +148,7 @@ impl Default for ValParams {
             normal_offset_texels: 1.5,
             slope_bias: 1.0,
             interleave: false,
+            ratio: true,
             warm_start: false,
             vpls_per_step: crate::vpl::MAX_VPLS,
             clustering: "gpu".into(),
@@ -193,7 +197,7 @@ impl ValParams {
     /// The parameters as the UI and the CLI see them.
     pub fn describe(&self) -> Vec<Param> {
         let p = self;
-        vec![
+        let mut list = vec![
             Param {
                 key: "vals",
                 label: "VALs (M)",
@@ -413,13 +417,6 @@ impl ValParams {
                 value: ParamValue::Bool(p.skip_unlit),
             },
             Param {
-                key: "interleave",
-                label: "Interleaved sampling",
-                help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (section 6)",
-                kind: ParamKind::Bool,
-                value: ParamValue::Bool(p.interleave),
-            },
-            Param {
                 key: "warm_start",
                 label: "Warm start",
                 help:
@@ -442,7 +439,12 @@ impl ValParams {
                 kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
                 value: ParamValue::Int(p.vpls_per_step as i64),
             },
-        ]
+        ];
+        // Interleaving's two parameters, shared with the other gathers, before the warm start (as the paper's
+        // section 6 before its ablation).
+        let at = list.iter().position(|q| q.key == "warm_start").unwrap_or(list.len());
+        list.splice(at..at, crate::services::vpl_gather::interleave_params(p.interleave, p.ratio));
+        list
     }
 
     /// Set one parameter; `key` and `value` were checked against [`ValParams::describe`].
@@ -462,6 +464,7 @@ impl ValParams {
             ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("slope_bias", ParamValue::Float(v)) => p.slope_bias = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
+            ("ratio", ParamValue::Bool(v)) => p.ratio = *v,
             ("skip_unlit", ParamValue::Bool(v)) => p.skip_unlit = *v,
             ("clearance", ParamValue::Bool(v)) => p.clearance = *v,
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,

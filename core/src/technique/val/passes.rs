@@ -159,7 +159,7 @@ impl VirtualAreaLights {
         let batch = GatherBatchUniform {
             first_vpl: first as u32,
             vpl_count: (last - first) as u32,
-            interleave: self.params.interleave as u32,
+            interleave: crate::services::vpl_gather::interleave_mode(self.params.interleave, self.ratio()),
             ..Default::default()
         };
         self.pass.encode(ctx, encoder, "val soft visibility + indirect", &group, batch);

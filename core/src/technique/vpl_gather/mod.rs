@@ -32,7 +32,9 @@ use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::services::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster, MAX_CUBES_PER_BATCH};
 use crate::services::layouts::SharedLayouts;
-use crate::services::vpl_gather::{vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass};
+use crate::services::vpl_gather::{
+    interleave_mode, interleave_params, vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass,
+};
 use crate::shaders;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -71,6 +73,9 @@ pub struct GatherParams {
     /// Interleaved sampling (Dong section 6): each pixel of an 8x8 block gathers every 64th VPL, then a
     /// geometry-aware blur spreads them over the block. Off for the references.
     pub interleave: bool,
+    /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
+    /// times its window's visibility share.
+    pub ratio: bool,
     /// The light whose VPL paths the "vpl paths" overlay shows.
     pub path_light: u32,
 }
@@ -87,6 +92,7 @@ impl Default for GatherParams {
             cull: true,
             max_edge: crate::scene::proxy::DEFAULT_MAX_EDGE,
             interleave: false,
+            ratio: true,
             path_light: 0,
         }
     }
@@ -197,14 +203,7 @@ impl Technique for VplGather {
             kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
             value: ParamValue::Int(p.vpls_per_step as i64),
         }];
-        list.push(Param {
-            key: "interleave",
-            label: "Interleaved sampling",
-            help: "Each pixel of an 8x8 block gathers every 64th VPL, then a geometry-aware blur (Dong section 6); \
-                   64x fewer visibility tests in the gather",
-            kind: ParamKind::Bool,
-            value: ParamValue::Bool(p.interleave),
-        });
+        list.extend(interleave_params(p.interleave, p.ratio));
         list.push(Param {
             key: "path_light",
             label: "Paths of light",
@@ -284,6 +283,7 @@ impl Technique for VplGather {
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
             ("max_edge", ParamValue::Float(v)) => p.max_edge = *v,
             ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
+            ("ratio", ParamValue::Bool(v)) => p.ratio = *v,
             ("path_light", ParamValue::Int(v)) => p.path_light = *v as u32,
             _ => unreachable!("check_param accepted an unknown key"),
         }
@@ -354,7 +354,7 @@ impl Technique for VplGather {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            self.blur.encode(ctx, encoder);
+            self.blur.encode(ctx, encoder, self.params.ratio);
             return Ok(());
         }
         let first = step * self.batch_size;
@@ -362,7 +362,7 @@ impl Technique for VplGather {
         let mut batch = GatherBatchUniform {
             first_vpl: first as u32,
             vpl_count: (last - first) as u32,
-            interleave: self.params.interleave as u32,
+            interleave: interleave_mode(self.params.interleave, self.params.ratio),
             ..Default::default()
         };
         match self.visibility {
