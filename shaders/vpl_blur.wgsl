@@ -17,26 +17,24 @@
 // pillar's columns. Measured in docs/techniques/vpl-gather.md ("Interleaved sampling's blur").
 //
 // The ratio estimator (`ratio`, beyond the paper; after Heitz et al. 2018's ratio of stochastic shadows): the
-// gather wrote each pixel's shadowed and unshadowed luminance of its 64th of the VPLs; the window's accepted
-// samples give a visibility share sum(shadowed) / sum(unshadowed), and the pixel's own unshadowed light from
-// every VPL (summed here, `vpl_radiance`) times that share is its light. Only the visibility is blurred: the
-// light's falloff, the pixel's normal and the VPLs near it stay per pixel. Where no sample of the window is
-// lit by its VPLs the share is unknown and the pixel gets none (the plain blur's answer there too).
-// Composed after common.wgsl and vpl_term.wgsl.
+// gathers wrote each pixel's unshadowed light from every VPL (in the indirect buffer) and the luminance of its
+// 64th of the VPLs with and without visibility (`ratio_in`); the window's accepted samples give a visibility
+// share sum(shadowed) / sum(unshadowed), and the pixel's light is its own unshadowed light times that share. Only
+// the visibility is blurred: the light's falloff, the pixel's normal and the VPLs near it stay per pixel. Where
+// no sample of the window is lit by its VPLs the share is unknown and the pixel gets none (the plain blur's
+// answer there too). Composed after common.wgsl.
 
 struct BlurParams {
-    // the frame's VPLs (the ratio's unshadowed sum)
-    vpl_count: u32,
-    // 1: the ratio estimator (the gather wrote luminances), 0: the plain blur
+    // 1: the ratio estimator (the gathers ran with interleave 2), 0: the plain blur
     ratio: u32,
-    // d_clamp^2 of the gathers
-    clamp_sq: f32,
-    pad: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(1) @binding(0) var<storage, read> blur_src: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> blur_dst: array<vec4<f32>>;
-@group(1) @binding(2) var<storage, read> blur_vpls: array<Vpl>;
+@group(1) @binding(2) var<storage, read> ratio_in: array<vec2<f32>>;
 @group(1) @binding(3) var<uniform> blur: BlurParams;
 
 const BLUR_NORMAL: f32 = 0.8;
@@ -88,11 +86,11 @@ fn blur_main(@builtin(global_invocation_id) id: vec3<u32>) {
                     || length(offset) > reach {
                     continue;
                 }
-                let value = blur_src[u32(q.y) * width + u32(q.x)];
+                let at = u32(q.y) * width + u32(q.x);
                 if blur.ratio != 0u {
-                    sum += value.xyz;
+                    sum += vec3<f32>(ratio_in[at], 0.0);
                 } else {
-                    sum += value.rgb / max(n.albedo, vec3<f32>(1e-3));
+                    sum += blur_src[at].rgb / max(n.albedo, vec3<f32>(1e-3));
                 }
                 weight += 1.0;
                 break;
@@ -101,16 +99,11 @@ fn blur_main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     if blur.ratio != 0u {
         // sum.x: the window's shadowed luminance, sum.y: its unshadowed one.
-        var light = vec3<f32>(0.0);
+        var share = 0.0;
         if sum.y > 0.0 {
-            var open = vec3<f32>(0.0);
-            for (var i = 0u; i < blur.vpl_count; i++) {
-                open += vpl_radiance(s, blur_vpls[i], blur.clamp_sq);
-            }
-            count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, blur.vpl_count);
-            light = s.albedo / PI * open * clamp(sum.x / sum.y, 0.0, 1.0);
+            share = clamp(sum.x / sum.y, 0.0, 1.0);
         }
-        blur_dst[index] = vec4<f32>(light, 0.0);
+        blur_dst[index] = vec4<f32>(blur_src[index].rgb * share, 0.0);
         return;
     }
     // The pixel itself always passes, so weight >= 1.

@@ -1,7 +1,16 @@
 // What every VPL gather shares: the VPL layout, the batch uniform, the indirect output and the radiance one VPL
 // sends to a receiver. Composed after common.wgsl (and the visibility's own files), before vpl_gather.wgsl.
-// Composed after vpl_term.wgsl (the VPL layout and its radiance). `GatherBatch` mirrors `GatherBatchUniform` in
+// `Vpl` mirrors `GpuVpl` in core/src/vpl/mod.rs; `GatherBatch` mirrors `GatherBatchUniform` in
 // core/src/services/vpl_gather.rs.
+
+struct Vpl {
+    // xyz: position
+    position: vec4<f32>,
+    // xyz: unit normal
+    normal: vec4<f32>,
+    // rgb: reflected flux
+    flux: vec4<f32>,
+}
 
 struct GatherBatch {
     first_vpl: u32,
@@ -21,15 +30,16 @@ struct GatherBatch {
     depth_far: f32,
     // offset of the map's centre from the VPL along its normal, world units
     origin_offset: f32,
-    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64); 2: the same for
-    // the ratio estimator, the output holding the luminance of the shadowed and the unshadowed sums
-    // (`interleave_out`) for vpl_blur.wgsl
+    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64); 2: the same with
+    // the ratio estimator (`gather_out`)
     interleave: u32,
 }
 
 @group(2) @binding(0) var<storage, read> vpls: array<Vpl>;
 @group(2) @binding(1) var<uniform> gather: GatherBatch;
 @group(2) @binding(2) var<storage, read_write> indirect_out: array<vec4<f32>>;
+// Interleave 2 only: per pixel, the luminance of its 64th of the VPLs shadowed (x) and unshadowed (y), over pi.
+@group(2) @binding(3) var<storage, read_write> ratio_out: array<vec2<f32>>;
 
 // Which of the batch's VPLs a pixel gathers: all of them, or with interleaved sampling the pixel of class
 // c = (x mod 8) + 8 (y mod 8) takes those whose frame index is c mod 64, weighted by 64 (vpl_blur.wgsl spreads
@@ -54,18 +64,34 @@ fn gather_range(pixel: vec2<u32>) -> GatherRange {
     return r;
 }
 
-// Irradiance-like term of one VPL at a receiver with the batch's clamp (`vpl_radiance`, vpl_term.wgsl).
+// Irradiance-like term of one VPL at a receiver, before visibility and the receiver's rho/pi:
+// Phi/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2). Zero (never NaN) when the receiver lies on the VPL,
+// behind it, or faces away.
 fn vpl_term(s: Surface, v: Vpl) -> vec3<f32> {
-    return vpl_radiance(s, v, gather.clamp_sq);
+    let to_x = s.position - v.position.xyz;
+    let d2 = dot(to_x, to_x);
+    if !(d2 > 1e-12) {
+        return vec3<f32>(0.0);
+    }
+    let w = to_x * inverseSqrt(d2);
+    let cos_i = dot(v.normal.xyz, w);
+    let cos_x = -dot(s.normal, w);
+    if cos_i <= 0.0 || cos_x <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return v.flux.rgb * (cos_i * cos_x / (PI * max(d2, gather.clamp_sq)));
 }
 
-// What a gather adds into the indirect buffer for a pixel of albedo `albedo`: the shadowed sum `lit` and the
-// unshadowed one `open` of its VPLs, both already scaled by the range's weight. With the ratio estimator
-// (interleave 2) the luminances of both, irradiance-like (over pi, no albedo), which vpl_blur.wgsl turns into a
-// visibility share; otherwise rho/pi times the shadowed sum.
-fn interleave_out(albedo: vec3<f32>, lit: vec3<f32>, open: vec3<f32>) -> vec4<f32> {
+// A pixel's part of a batch, added into the indirect buffer: `lit` and `open` its range's VPLs with and without
+// visibility, `all` every VPL's unshadowed light (the ratio estimator's; zero otherwise). Plain: rho/pi times the
+// shadowed sum, weighted by the range. With the ratio estimator (interleave 2): rho/pi times every VPL's
+// unshadowed light, and in `ratio_out` the weighted luminances of the range's with and without visibility, which
+// vpl_blur.wgsl turns into the window's visibility share.
+fn gather_out(index: u32, albedo: vec3<f32>, range: GatherRange, lit: vec3<f32>, open: vec3<f32>, all: vec3<f32>) {
     if gather.interleave == 2u {
-        return vec4<f32>(luminance(lit) / PI, luminance(open) / PI, 0.0, 0.0);
+        indirect_out[index] += vec4<f32>(albedo / PI * all, 0.0);
+        ratio_out[index] += vec2<f32>(luminance(lit), luminance(open)) * (range.scale / PI);
+        return;
     }
-    return vec4<f32>(albedo / PI * lit, 0.0);
+    indirect_out[index] += vec4<f32>(albedo / PI * lit * range.scale, 0.0);
 }

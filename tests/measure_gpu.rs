@@ -55,7 +55,7 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 14] = [
+const COMPARISONS: [&str; 16] = [
     "LightCluster d_init=0.5 vs reference",
     "LightCluster d_init=0.5, maps from a simplified copy",
     "LightCluster d_init=1.6 vs reference",
@@ -68,12 +68,14 @@ const COMPARISONS: [&str; 14] = [
     "VALs, M = ",
     "VALs, M = ",
     "VALs, M = ",
+    "VALs, M = ",
+    "ray-traced VPL visibility interleaved",
     "fuzzy clustering vs exact VPL visibility",
     "unshadowed vs reference",
 ];
 
 /// The rows that compute FLIP (the others skip it: it costs seconds on the CPU at the papers' sizes).
-const WITH_FLIP: [&str; 1] = ["VALs, M = "];
+const WITH_FLIP: [&str; 2] = ["VALs, M = ", "ray-traced VPL visibility interleaved"];
 
 #[test]
 fn smoke_run_gives_one_row_per_comparison_with_speedup_and_clock() {

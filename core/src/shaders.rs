@@ -43,20 +43,13 @@ pub const PARABOLOID_DEPTH: WgslModule =
     wgsl!("paraboloid_depth", ["shaders/vpl_basis.wgsl", "shaders/material.wgsl", "shaders/paraboloid_depth.wgsl"]);
 pub const VPL_GATHER_UNSHADOWED: WgslModule = wgsl!(
     "vpl_gather_unshadowed",
-    [
-        "shaders/common.wgsl",
-        "shaders/vpl_term.wgsl",
-        "shaders/vpl_common.wgsl",
-        "shaders/vpl_vis_none.wgsl",
-        "shaders/vpl_gather.wgsl"
-    ]
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_vis_none.wgsl", "shaders/vpl_gather.wgsl"]
 );
 pub const VPL_GATHER_RAYTRACED: WgslModule = wgsl!(
     "vpl_gather_raytraced",
     [
         "shaders/common.wgsl",
         "shaders/raytrace_bvh.wgsl",
-        "shaders/vpl_term.wgsl",
         "shaders/vpl_common.wgsl",
         "shaders/vpl_vis_raytraced.wgsl",
         "shaders/vpl_gather.wgsl"
@@ -66,7 +59,6 @@ pub const VPL_GATHER_PARABOLOID: WgslModule = wgsl!(
     "vpl_gather_paraboloid",
     [
         "shaders/common.wgsl",
-        "shaders/vpl_term.wgsl",
         "shaders/vpl_common.wgsl",
         "shaders/vpl_basis.wgsl",
         "shaders/vpl_vis_paraboloid.wgsl",
@@ -83,8 +75,7 @@ pub const PER_LIGHT_SHADE: WgslModule = wgsl!(
         "shaders/per_light_main.wgsl"
     ]
 );
-pub const VPL_BLUR: WgslModule =
-    wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_term.wgsl", "shaders/vpl_blur.wgsl"]);
+pub const VPL_BLUR: WgslModule = wgsl!("vpl_blur", ["shaders/common.wgsl", "shaders/vpl_blur.wgsl"]);
 
 /// Every shared composed module (the renderer services' passes and the VPL gathers several techniques use).
 /// The directional-light service (`services/directional.rs`): visibility by its orthographic map, or by rays.

@@ -77,10 +77,17 @@ pub fn interleave_mode(interleave: bool, ratio: bool) -> u32 {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct BlurUniform {
-    vpl_count: u32,
     ratio: u32,
-    clamp_sq: f32,
-    pad: u32,
+    pad: [u32; 3],
+}
+
+fn ratio_buffer(gpu: &GpuContext, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("vpl gather ratio"),
+        size: size.max(RATIO_BYTES_PER_PIXEL),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }
 
 /// A compute pipeline gathering VPLs with one visibility function.
@@ -88,7 +95,13 @@ pub struct VplGatherPass {
     pipeline: wgpu::ComputePipeline,
     gather_layout: wgpu::BindGroupLayout,
     uniform: wgpu::Buffer,
+    /// The ratio estimator's per-pixel luminances (`ratio_out`, two f32 a pixel), made at the frame's size by
+    /// the first batch that needs it; a placeholder of one pixel otherwise.
+    ratio: wgpu::Buffer,
 }
+
+/// Bytes per pixel of the ratio estimator's buffer (`vec2<f32>`).
+const RATIO_BYTES_PER_PIXEL: u64 = 8;
 
 /// Workgroups of 8x8 covering the image.
 pub fn pixel_workgroups(size: (u32, u32)) -> (u32, u32) {
@@ -120,7 +133,12 @@ impl VplGatherPass {
         let device = &gpu.device;
         let gather_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("vpl gather"),
-            entries: &[crate::gpu::bind::storage_entry(0), crate::gpu::bind::uniform_entry(1), storage_rw_entry(2)],
+            entries: &[
+                crate::gpu::bind::storage_entry(0),
+                crate::gpu::bind::uniform_entry(1),
+                storage_rw_entry(2),
+                storage_rw_entry(3),
+            ],
         });
         let pipeline = compute_pipeline(gpu, layouts, label, source, entry, &[visibility_layout, &gather_layout]);
         let uniform = device.create_buffer(&wgpu::BufferDescriptor {
@@ -129,13 +147,19 @@ impl VplGatherPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        VplGatherPass { pipeline, gather_layout, uniform }
+        let ratio = ratio_buffer(gpu, RATIO_BYTES_PER_PIXEL);
+        VplGatherPass { pipeline, gather_layout, uniform, ratio }
+    }
+
+    /// The ratio estimator's buffer, for [`InterleaveBlur::encode`] after the frame's last batch.
+    pub fn ratio_buffer(&self) -> &wgpu::Buffer {
+        &self.ratio
     }
 
     /// Gather VPLs `batch.first_vpl .. + batch.vpl_count` of the frame into the indirect buffer, in a compute
     /// pass named `label`. One call per step: the batch uniform is written with `queue.write_buffer`.
     pub fn encode(
-        &self,
+        &mut self,
         ctx: &FrameContext,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
@@ -147,7 +171,7 @@ impl VplGatherPass {
 
     /// [`Self::encode`] over another set of lights in the `GpuVpl` layout (e.g. VPL clusters).
     pub fn encode_lights(
-        &self,
+        &mut self,
         ctx: &FrameContext,
         encoder: &mut wgpu::CommandEncoder,
         label: &str,
@@ -157,6 +181,16 @@ impl VplGatherPass {
     ) {
         batch.clamp_sq = ctx.vpl_settings.clamp_world * ctx.vpl_settings.clamp_world;
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&batch));
+        if batch.interleave == 2 {
+            // The frame's first batch starts the sums (the renderer clears the indirect buffer itself).
+            let size = ctx.size.0 as u64 * ctx.size.1 as u64 * RATIO_BYTES_PER_PIXEL;
+            if self.ratio.size() != size.max(RATIO_BYTES_PER_PIXEL) {
+                self.ratio = ratio_buffer(ctx.gpu, size);
+            }
+            if batch.first_vpl == 0 {
+                encoder.clear_buffer(&self.ratio, 0, None);
+            }
+        }
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("vpl gather"),
             layout: &self.gather_layout,
@@ -164,6 +198,7 @@ impl VplGatherPass {
                 wgpu::BindGroupEntry { binding: 0, resource: lights.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: self.uniform.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: ctx.indirect_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: self.ratio.as_entire_binding() },
             ],
         });
         let (x, y) = pixel_workgroups(ctx.size);
@@ -179,8 +214,8 @@ impl VplGatherPass {
 
 /// The geometry-aware 8x8 blur that completes interleaved sampling (`vpl_blur.wgsl`): blurs the indirect
 /// buffer into a scratch buffer and copies it back. Run once per frame, after the last gather. With the ratio
-/// estimator (the gathers ran with interleave mode 2) it blurs the visibility share alone and multiplies it by
-/// each pixel's unshadowed light from every VPL of the frame.
+/// estimator (the gathers ran with interleave mode 2) it blurs the visibility share alone and multiplies each
+/// pixel's unshadowed light from every VPL (what the gathers left in the indirect buffer) by it.
 pub struct InterleaveBlur {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
@@ -210,8 +245,9 @@ impl InterleaveBlur {
         InterleaveBlur { pipeline, layout, uniform, scratch: None }
     }
 
-    /// `ratio`: the gathers wrote the ratio estimator's luminances (interleave mode 2).
-    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder, ratio: bool) {
+    /// `ratio`: the gathers ran with the ratio estimator (interleave mode 2) and this is their
+    /// [`VplGatherPass::ratio_buffer`].
+    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder, ratio: Option<&wgpu::Buffer>) {
         let size = ctx.indirect_buffer.size();
         if self.scratch.as_ref().is_none_or(|b| b.size() != size) {
             self.scratch = Some(ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -221,12 +257,7 @@ impl InterleaveBlur {
                 mapped_at_creation: false,
             }));
         }
-        let params = BlurUniform {
-            vpl_count: ctx.vpls.set.vpls.len() as u32,
-            ratio: ratio as u32,
-            clamp_sq: ctx.vpl_settings.clamp_world * ctx.vpl_settings.clamp_world,
-            pad: 0,
-        };
+        let params = BlurUniform { ratio: ratio.is_some() as u32, pad: [0; 3] };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&params));
         let scratch = self.scratch.as_ref().expect("made above");
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -235,7 +266,8 @@ impl InterleaveBlur {
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: ctx.indirect_buffer.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: scratch.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: ctx.vpls.buffer.buffer.as_entire_binding() },
+                // Without the ratio estimator the blur reads its source there, unused (one binding layout).
+                wgpu::BindGroupEntry { binding: 2, resource: ratio.unwrap_or(ctx.indirect_buffer).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: self.uniform.as_entire_binding() },
             ],
         });

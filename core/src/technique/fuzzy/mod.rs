@@ -83,7 +83,7 @@ const VISIBILITY: WgslModule = crate::shaders::wgsl!(
 );
 const SHADE: WgslModule = crate::shaders::wgsl!(
     "fuzzy_shade",
-    ["shaders/common.wgsl", "shaders/vpl_term.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "core/src/technique/fuzzy/shade.wgsl"]
 );
 
 /// Mirrors `VisParams` in `fuzzy/visibility.wgsl`.

@@ -32,14 +32,6 @@ impl FuzzyClustering {
         }
     }
 
-    /// The buffer holding this frame's lights (`GpuVpl` layout): the VPL clusters or the VPLs.
-    fn lights_buffer<'a>(&'a self, ctx: &'a FrameContext) -> &'a wgpu::Buffer {
-        match self.mode {
-            ClusterMode::ShadingPoints => &ctx.vpls.buffer.buffer,
-            _ => self.vpl_kmeans.clusters.as_ref().expect("prepare clustered the VPLs"),
-        }
-    }
-
     /// Steps 2-4, the frame's first step: the shading points from the G-buffer, both clusterings.
     pub(super) fn cluster_step(
         &mut self,
@@ -216,7 +208,12 @@ impl FuzzyClustering {
         let last = (first + self.lights_per_step).min(self.light_count);
         let mut batch =
             GatherBatchUniform { first_vpl: first as u32, vpl_count: (last - first) as u32, ..Default::default() };
-        let lights = self.lights_buffer(ctx);
+        // The lights gathered: the VPLs themselves, or (VPLs clustered) the clusters (fields, not a method: the
+        // passes below are borrowed mutably beside them).
+        let lights = match self.mode {
+            ClusterMode::ShadingPoints => &ctx.vpls.buffer.buffer,
+            _ => self.vpl_kmeans.clusters.as_ref().expect("prepare clustered the VPLs"),
+        };
         if self.mode == ClusterMode::Vpls {
             batch.bias = self.params.ray_bias;
             let bvh = self.bvh_group.as_ref().expect("prepare bound the BVH");

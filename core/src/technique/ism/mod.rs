@@ -82,7 +82,6 @@ const VPL_GATHER: WgslModule = crate::shaders::wgsl!(
     "ism_vpl_gather",
     [
         "shaders/common.wgsl",
-        "shaders/vpl_term.wgsl",
         "shaders/vpl_common.wgsl",
         "shaders/vpl_basis.wgsl",
         "core/src/technique/ism/paraboloid.wgsl",
@@ -498,7 +497,8 @@ impl Technique for VplIsm {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step >= self.batches {
-            self.blur.encode(ctx, encoder, self.params.ratio);
+            let ratio = self.params.ratio.then(|| self.pass.ratio_buffer());
+            self.blur.encode(ctx, encoder, ratio);
             return Ok(());
         }
         let first = step * self.batch_size;

@@ -353,8 +353,9 @@ fn val_soft(s: Surface, m: u32, lk: ValLookup) -> f32 {
 struct VplSum {
     sum: vec3<f32>,
     evaluations: u32,
-    // the unshadowed sum, for the interleaving's ratio estimator (interleaved sampling only)
+    // interleaved only: the range's unshadowed sum, and every VPL's (the ratio estimator's, `gather_out`)
     open: vec3<f32>,
+    all: vec3<f32>,
 }
 
 fn lights_pixel(term: vec3<f32>) -> bool {
@@ -400,7 +401,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
     // pixel is skipped whole (`may_light`); off, every VPL is evaluated in the frame's order, as the paper.
     var light: array<vec3<f32>, MAX_VALS>;
     let m_count = min(val_params.val_count, MAX_VALS);
-    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0));
+    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     var total = 0.0;
     if val_params.skip_unlit != 0u {
         let base = (gather.first_vpl / max(val_params.batch_size, 1u)) * val_params.val_count;
@@ -465,7 +466,7 @@ fn sum_by_val(s: Surface, range: GatherRange) -> VplSum {
 fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
     var tested: array<u32, MAX_VALS / 32u>;
     var visibility: array<f32, MAX_VALS>;
-    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0));
+    var out = VplSum(vec3<f32>(0.0), 0u, vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = range.start; k < gather.vpl_count; k += range.stride) {
         let i = gather.first_vpl + k;
         if !in_solo(i) {
@@ -483,6 +484,13 @@ fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
             out.sum += term * visibility[m];
             out.open += term;
         }
+    }
+    // The ratio estimator's unshadowed light from every VPL, in a loop of its own (vpl_gather.wgsl says why).
+    if gather.interleave == 2u {
+        for (var k = 0u; k < gather.vpl_count; k++) {
+            out.all += vpl_term(s, vpls[gather.first_vpl + k]);
+        }
+        out.evaluations += gather.vpl_count;
     }
     return out;
 }
@@ -510,5 +518,5 @@ fn val_gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
     count_work(vec2<i32>(id.xy), WORK_INDIRECT_SHADOW_LOOKUPS, val_lookups);
     count_work(vec2<i32>(id.xy), WORK_INDIRECT_FILTER_TAPS, val_taps);
     let index = id.y * width + id.x;
-    indirect_out[index] += interleave_out(s.albedo, lit.sum * range.scale, lit.open * range.scale);
+    gather_out(index, s.albedo, range, lit.sum, lit.open, lit.all);
 }

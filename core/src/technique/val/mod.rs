@@ -110,13 +110,7 @@ use crate::shaders::WgslModule;
 pub const SHADERS: &[WgslModule] = &[GATHER, cssm::CSSM, gpu_kmeans::KMEANS];
 const GATHER: WgslModule = crate::shaders::wgsl!(
     "val_gather",
-    [
-        "shaders/common.wgsl",
-        "shaders/vpl_term.wgsl",
-        "shaders/vpl_common.wgsl",
-        "shaders/vpl_basis.wgsl",
-        "core/src/technique/val/gather.wgsl"
-    ]
+    ["shaders/common.wgsl", "shaders/vpl_common.wgsl", "shaders/vpl_basis.wgsl", "core/src/technique/val/gather.wgsl"]
 );
 
 /// VAL maps ignore geometry closer to the centre than this fraction of the VAL's size (paper, Fig. 7).
@@ -448,7 +442,8 @@ impl Technique for VirtualAreaLights {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            self.blur.encode(ctx, encoder, self.ratio());
+            let ratio = self.ratio().then(|| self.pass.ratio_buffer());
+            self.blur.encode(ctx, encoder, ratio);
             return Ok(());
         }
         if step == 0 {

@@ -354,7 +354,8 @@ impl Technique for VplGather {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            self.blur.encode(ctx, encoder, self.params.ratio);
+            let ratio = self.params.ratio.then(|| self.pass.ratio_buffer());
+            self.blur.encode(ctx, encoder, ratio);
             return Ok(());
         }
         let first = step * self.batch_size;
