@@ -251,7 +251,7 @@ impl VirtualAreaLights {
 
 impl VirtualAreaLights {
     /// The interleaving's ratio estimator for this frame: not with `solo`, whose gather takes one VAL's VPLs
-    /// where the blur's unshadowed sum would take every VPL.
+    /// where the ratio's unshadowed sum takes every VPL.
     fn ratio(&self) -> bool {
         self.params.ratio && self.params.solo < 0
     }

@@ -72,7 +72,7 @@ pub struct ValParams {
     pub slope_bias: f32,
     pub interleave: bool,
     /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
-    /// times its window's visibility share; not with `solo` (the blur's sum takes every VPL).
+    /// times its window's visibility share; not with `solo` (the ratio's sum takes every VPL, solo one VAL's).
     pub ratio: bool,
     /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8). With `split` on,
     /// k-means makes `ceil(kmeans_share * M)` VALs (one by default), so it changes little or nothing then.
