@@ -127,7 +127,7 @@ pub fn sweep_plot(
     {
         let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| err(&e))?;
+        let root = root.titled(title, ("sans-serif", title_size(&root, title, 22.0))).map_err(|e| err(&e))?;
         let (left, right) = root.split_horizontally(600);
         let colors = [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189)];
 
@@ -208,6 +208,16 @@ pub struct TradeoffPoint {
     pub pick: bool,
 }
 
+/// The title's font size: `preferred`, or smaller so that the whole title fits the image's width (a long
+/// technique name and scene used to run off both edges); never below 10.
+fn title_size<DB: DrawingBackend>(area: &DrawingArea<DB, plotters::coord::Shift>, title: &str, preferred: f64) -> f64 {
+    let width = area.dim_in_pixel().0 as f64 * 0.96;
+    match area.estimate_text_size(title, &("sans-serif", preferred).into_text_style(area)) {
+        Ok((w, _)) if w as f64 > width => (preferred * width / w as f64).max(10.0),
+        _ => preferred,
+    }
+}
+
 /// Write a PNG of error against time per frame (and against a work count when `work_label` is given), one
 /// colour per try, the Pareto front as a black line, the pick ringed, the target's time as a dashed line.
 pub fn tradeoff_plot(
@@ -241,7 +251,7 @@ pub fn tradeoff_plot(
     {
         let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| err(&e))?;
-        let root = root.titled(title, ("sans-serif", 20)).map_err(|e| err(&e))?;
+        let root = root.titled(title, ("sans-serif", title_size(&root, title, 20.0))).map_err(|e| err(&e))?;
         let areas = root.split_evenly((1, panels.len()));
         let colors = [
             RGBColor(31, 119, 180),
@@ -334,4 +344,24 @@ pub fn tradeoff_plot(
     }
     let image = image::RgbImage::from_raw(size.0, size.1, rgb).ok_or_else(|| anyhow!("plot buffer size"))?;
     image.save_with_format(path, image::ImageFormat::Png).map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_long_title_gets_a_smaller_font_that_fits_and_a_short_one_keeps_its_own() {
+        register_font();
+        let (w, h) = (720u32, 520u32);
+        let mut rgb = vec![0u8; (w * h * 3) as usize];
+        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        assert_eq!(title_size(&root, "FLIP", 20.0), 20.0);
+        let long = "FLIP against unshadowed + vpl-raytraced on sponza (8 lights, 160x90), time in wall-clock steps \
+                    of the whole frame";
+        let size = title_size(&root, long, 20.0);
+        assert!((10.0..20.0).contains(&size), "{size}");
+        let (width, _) = root.estimate_text_size(long, &("sans-serif", size).into_text_style(&root)).unwrap();
+        assert!(width as f64 <= w as f64 * 0.97, "{width} px at {size} pt in {w} px");
+    }
 }
