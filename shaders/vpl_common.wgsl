@@ -30,19 +30,24 @@ struct GatherBatch {
     depth_far: f32,
     // offset of the map's centre from the VPL along its normal, world units
     origin_offset: f32,
-    // 1: interleaved sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64); 2: the same with
-    // the ratio estimator (`gather_out`)
+    // 1: interleaved sampling, each pixel of a B x B block gathers every B^2-th VPL (times B^2); 2: the same
+    // with the ratio estimator (`gather_out`)
     interleave: u32,
+    // B, the interleaving block's side (2-8; the paper's 8)
+    block: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 @group(2) @binding(0) var<storage, read> vpls: array<Vpl>;
 @group(2) @binding(1) var<uniform> gather: GatherBatch;
 @group(2) @binding(2) var<storage, read_write> indirect_out: array<vec4<f32>>;
-// Interleave 2 only: per pixel, the luminance of its 64th of the VPLs shadowed (x) and unshadowed (y), over pi.
+// Interleave 2 only: per pixel, the luminance of its share of the VPLs shadowed (x) and unshadowed (y), over pi.
 @group(2) @binding(3) var<storage, read_write> ratio_out: array<vec2<f32>>;
 
 // Which of the batch's VPLs a pixel gathers: all of them, or with interleaved sampling the pixel of class
-// c = (x mod 8) + 8 (y mod 8) takes those whose frame index is c mod 64, weighted by 64 (vpl_blur.wgsl spreads
+// c = (x mod B) + B (y mod B) takes those whose frame index is c mod B^2, weighted by B^2 (vpl_blur.wgsl spreads
 // them over the block again).
 struct GatherRange {
     start: u32,
@@ -56,10 +61,12 @@ fn gather_range(pixel: vec2<u32>) -> GatherRange {
     r.stride = 1u;
     r.scale = 1.0;
     if gather.interleave != 0u {
-        let pixel_class = (pixel.x % 8u) + 8u * (pixel.y % 8u);
-        r.start = (pixel_class + 64u - gather.first_vpl % 64u) % 64u;
-        r.stride = 64u;
-        r.scale = 64.0;
+        let b = clamp(gather.block, 2u, 8u);
+        let classes = b * b;
+        let pixel_class = (pixel.x % b) + b * (pixel.y % b);
+        r.start = (pixel_class + classes - gather.first_vpl % classes) % classes;
+        r.stride = classes;
+        r.scale = f32(classes);
     }
     return r;
 }

@@ -596,6 +596,40 @@ fn the_ratio_estimator_is_exact_without_shadows_and_nearer_the_full_gather_than_
 }
 
 #[test]
+fn a_smaller_interleaving_block_traces_more_rays_a_pixel_and_comes_nearer_the_full_gather() {
+    let scene = room();
+    let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
+    let vs = VplSettings { count: 1024, ..Default::default() };
+    let s = RenderSettings { width: 128, height: 96, ..settings(Component::Indirect, vs) };
+    let (full, _) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").render();
+    let mut runs = Vec::new();
+    for block in [8i64, 4] {
+        for ratio in [true, false] {
+            let params = [
+                ("interleave", ParamValue::Bool(true)),
+                ("ratio", ParamValue::Bool(ratio)),
+                ("block", ParamValue::Int(block)),
+            ];
+            let (img, report) = Shot::indirect(&scene, &lights, s.clone(), "vpl-raytraced").params(&params).render();
+            let (mut e, mut r) = (0.0f64, 0.0f64);
+            for (p, q) in full.iter().zip(&img) {
+                e += ((p[1] - q[1]) as f64).powi(2);
+                r += (p[1] as f64).powi(2);
+            }
+            runs.push((block, ratio, (e / r).sqrt(), report.indirect.as_ref().unwrap().work["shadow_rays"]));
+        }
+    }
+    for ratio in [true, false] {
+        let [(_, _, e8, rays8), (_, _, e4, rays4)] =
+            [8, 4].map(|b| *runs.iter().find(|r| r.0 == b && r.1 == ratio).unwrap());
+        // A pixel of a 4x4 block traces a 16th of the VPLs' rays, of an 8x8 block a 64th.
+        let more = rays4 / rays8;
+        assert!((3.6..4.4).contains(&more), "ratio {ratio}: {rays4} rays with block 4, {rays8} with 8");
+        assert!(e4 < e8, "ratio {ratio}: relative RMSE {e4:.4} with block 4, {e8:.4} with 8");
+    }
+}
+
+#[test]
 fn views_of_one_scene_share_its_gpu_copy_and_bvh_and_render_the_same() {
     let scene = room();
     let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];

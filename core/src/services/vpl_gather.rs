@@ -35,41 +35,97 @@ pub struct GatherBatchUniform {
     pub depth_near: f32,
     pub depth_far: f32,
     pub origin_offset: f32,
-    /// 1: interleaved sampling (every 64th VPL per pixel of an 8x8 block, times 64); 2: the same, writing the
-    /// luminances the blur's ratio estimator needs ([`interleave_mode`]).
+    /// 1: interleaved sampling (every B²-th VPL per pixel of a B x B block, times B²); 2: the same, writing
+    /// the luminances the blur's ratio estimator needs ([`Interleave::mode`]).
     pub interleave: u32,
+    /// B, the side of the interleaving block ([`Interleave::block`]); unused without interleaving.
+    pub block: u32,
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<GatherBatchUniform>() == 48);
+const _: () = assert!(std::mem::size_of::<GatherBatchUniform>() == 64);
 
-/// The `interleave` and `ratio` parameters every interleaving gather shows (the values given).
-pub fn interleave_params(interleave: bool, ratio: bool) -> [Param; 2] {
-    [
-        Param {
-            key: "interleave",
-            label: "Interleaved sampling",
-            help: "Each pixel of an 8x8 block gathers every 64th VPL (times 64), then a geometry-aware blur over the \
-                   block completes it (Dong section 6): 64x fewer VPLs and visibility tests per pixel",
-            kind: ParamKind::Bool,
-            value: ParamValue::Bool(interleave),
-        },
-        Param {
-            key: "ratio",
-            label: "Ratio estimator",
-            help: "With interleaving: each pixel's unshadowed light from every VPL times the share of it its 8x8 \
-                   window saw unblocked, so only visibility is blurred (beyond the paper; the unshadowed sum costs \
-                   every VPL per pixel again); off: the window's light averaged, as the paper",
-            kind: ParamKind::Bool,
-            value: ParamValue::Bool(ratio),
-        },
-    ]
+/// Interleaved sampling's parameters, the same for every gather that interleaves (`vpl-shadowmaps`,
+/// `vpl-raytraced`, `vpl-unshadowed`, `vpl-ism`, `val`): each pixel of a `block` x `block` tile gathers every
+/// `block`²-th VPL and [`InterleaveBlur`] completes it, with the ratio estimator or the paper's blur.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interleave {
+    /// Interleaved sampling (Dong section 6); off for the references.
+    pub on: bool,
+    /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
+    /// times its window's visibility share.
+    pub ratio: bool,
+    /// The block's side B: B² classes of VPLs, a B x B blur window (the paper's 8).
+    pub block: u32,
 }
 
-/// `GatherBatchUniform::interleave` for a technique's `interleave` and `ratio` parameters.
-pub fn interleave_mode(interleave: bool, ratio: bool) -> u32 {
-    match (interleave, ratio) {
-        (false, _) => 0,
-        (true, false) => 1,
-        (true, true) => 2,
+impl Default for Interleave {
+    fn default() -> Self {
+        Interleave { on: false, ratio: true, block: 8 }
+    }
+}
+
+/// The smallest and largest interleaving block.
+pub const MIN_BLOCK: u32 = 2;
+pub const MAX_BLOCK: u32 = 8;
+
+impl Interleave {
+    /// The parameters as the UI and the CLI see them.
+    pub fn describe(&self) -> [Param; 3] {
+        [
+            Param {
+                key: "interleave",
+                label: "Interleaved sampling",
+                help: "Each pixel of a B x B block (`block`, the paper's 8) gathers every B²-th VPL (times B²), then \
+                       a geometry-aware blur over the block completes it (Dong section 6): B² times fewer visibility \
+                       tests a pixel",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(self.on),
+            },
+            Param {
+                key: "ratio",
+                label: "Ratio estimator",
+                help: "With interleaving: each pixel's unshadowed light from every VPL times the share of it its \
+                       window saw unblocked, so only visibility is blurred (beyond the paper; the unshadowed sum \
+                       costs every VPL per pixel again); off: the window's light averaged, as the paper",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(self.ratio),
+            },
+            Param {
+                key: "block",
+                label: "Interleaving block",
+                help: "With interleaving: the block's side B, B² shares of the VPLs and a B x B blur (the paper's 8); \
+                       smaller: sharper and B² times fewer VPLs saved",
+                kind: ParamKind::Int { min: MIN_BLOCK as i64, max: MAX_BLOCK as i64 },
+                value: ParamValue::Int(self.block as i64),
+            },
+        ]
+    }
+
+    /// Set one of [`Interleave::describe`]'s parameters; false for another key.
+    pub fn set(&mut self, key: &str, value: &ParamValue) -> bool {
+        match (key, value) {
+            ("interleave", ParamValue::Bool(v)) => self.on = *v,
+            ("ratio", ParamValue::Bool(v)) => self.ratio = *v,
+            ("block", ParamValue::Int(v)) => self.block = (*v).clamp(MIN_BLOCK as i64, MAX_BLOCK as i64) as u32,
+            _ => return false,
+        }
+        true
+    }
+
+    /// `GatherBatchUniform::interleave`: 0 off, 1 the paper's blur, 2 the ratio estimator (when `ratio` and
+    /// `allow_ratio`: a technique may refuse it for a frame, e.g. VAL's `solo`).
+    pub fn mode(&self, allow_ratio: bool) -> u32 {
+        match (self.on, self.ratio && allow_ratio) {
+            (false, _) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+        }
+    }
+
+    /// The batch fields for these parameters.
+    pub fn apply(&self, batch: &mut GatherBatchUniform, allow_ratio: bool) {
+        batch.interleave = self.mode(allow_ratio);
+        batch.block = self.block.clamp(MIN_BLOCK, MAX_BLOCK);
     }
 }
 
@@ -78,7 +134,8 @@ pub fn interleave_mode(interleave: bool, ratio: bool) -> u32 {
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct BlurUniform {
     ratio: u32,
-    pad: [u32; 3],
+    block: u32,
+    pad: [u32; 2],
 }
 
 fn ratio_buffer(gpu: &GpuContext, size: u64) -> wgpu::Buffer {
@@ -245,9 +302,18 @@ impl InterleaveBlur {
         InterleaveBlur { pipeline, layout, uniform, scratch: None }
     }
 
-    /// `ratio`: the gathers ran with the ratio estimator (interleave mode 2) and this is their
-    /// [`VplGatherPass::ratio_buffer`].
-    pub fn encode(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder, ratio: Option<&wgpu::Buffer>) {
+    /// After the frame's last batch of `pass`, gathered with `interleave` (and the ratio estimator when
+    /// `allow_ratio`, as [`Interleave::apply`] was told).
+    pub fn encode(
+        &mut self,
+        ctx: &FrameContext,
+        encoder: &mut wgpu::CommandEncoder,
+        interleave: &Interleave,
+        allow_ratio: bool,
+        pass: &VplGatherPass,
+    ) {
+        let ratio = (interleave.mode(allow_ratio) == 2).then(|| pass.ratio_buffer());
+        let block = interleave.block;
         let size = ctx.indirect_buffer.size();
         if self.scratch.as_ref().is_none_or(|b| b.size() != size) {
             self.scratch = Some(ctx.gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -257,7 +323,8 @@ impl InterleaveBlur {
                 mapped_at_creation: false,
             }));
         }
-        let params = BlurUniform { ratio: ratio.is_some() as u32, pad: [0; 3] };
+        let params =
+            BlurUniform { ratio: ratio.is_some() as u32, block: block.clamp(MIN_BLOCK, MAX_BLOCK), pad: [0; 2] };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&params));
         let scratch = self.scratch.as_ref().expect("made above");
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {

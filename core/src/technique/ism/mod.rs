@@ -487,7 +487,7 @@ impl Technique for VplIsm {
         self.counts.shadow_maps = n;
         self.counts.figures.insert("vpls".into(), n as f64);
         map_figures(&mut self.counts, &self.params, &self.settings, self.maps.pool_points(), n);
-        Ok(if self.params.interleave { self.batches + 1 } else { self.batches })
+        Ok(if self.params.interleave.on { self.batches + 1 } else { self.batches })
     }
 
     fn encode_step(
@@ -497,8 +497,7 @@ impl Technique for VplIsm {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step >= self.batches {
-            let ratio = self.params.ratio.then(|| self.pass.ratio_buffer());
-            self.blur.encode(ctx, encoder, ratio);
+            self.blur.encode(ctx, encoder, &self.params.interleave, true, &self.pass);
             return Ok(());
         }
         let first = step * self.batch_size;
@@ -519,10 +518,9 @@ impl Technique for VplIsm {
         self.counts.work.shadow_texels_written += views.len() as u64 * res * res;
         // Step 4: the shared gather with the ISM lookup.
         let atlas = self.maps.atlas().expect("prepare made the batch");
-        let batch = GatherBatchUniform {
+        let mut batch = GatherBatchUniform {
             first_vpl: first as u32,
             vpl_count: (last - first) as u32,
-            interleave: crate::services::vpl_gather::interleave_mode(self.params.interleave, self.params.ratio),
             first_tile: 0,
             tiles_per_row: atlas.tiles_per_row,
             resolution: atlas.resolution,
@@ -533,6 +531,7 @@ impl Technique for VplIsm {
             origin_offset,
             ..Default::default()
         };
+        self.params.interleave.apply(&mut batch, true);
         let group = self.visibility_group.as_ref().expect("prepare made the visibility group");
         self.pass.encode(ctx, encoder, "vpl-ism gather", group, batch);
         let inspect = self.params.inspect as usize;

@@ -32,10 +32,9 @@ pub struct IsmParams {
     pub inspect: u32,
     /// `vpl-ism`: VPLs gathered per step (also at most one batch of maps).
     pub vpls_per_step: u32,
-    /// `vpl-ism`: interleaved sampling and the geometry-aware blur (Dong section 6), as the other gathers.
-    pub interleave: bool,
-    /// `vpl-ism`: with interleaving, the ratio estimator (`vpl_blur.wgsl`), as the other gathers.
-    pub ratio: bool,
+    /// `vpl-ism`: interleaved sampling and the geometry-aware blur (Dong section 6), its ratio estimator and
+    /// block, as the other gathers.
+    pub interleave: crate::services::vpl_gather::Interleave,
 }
 
 impl Default for IsmParams {
@@ -51,8 +50,7 @@ impl Default for IsmParams {
             atlas_mib: 64,
             inspect: 0,
             vpls_per_step: 256,
-            interleave: false,
-            ratio: true,
+            interleave: Default::default(),
         }
     }
 }
@@ -151,7 +149,7 @@ impl IsmParams {
                 crate::vpl::MAX_VPLS as i64,
                 self.vpls_per_step,
             ));
-            list.extend(crate::services::vpl_gather::interleave_params(self.interleave, self.ratio));
+            list.extend(self.interleave.describe());
         } else {
             list.push(int(
                 "inspect",
@@ -180,9 +178,12 @@ impl IsmParams {
             ("atlas_mib", ParamValue::Int(v)) => self.atlas_mib = *v as u32,
             ("inspect", ParamValue::Int(v)) => self.inspect = *v as u32,
             ("vpls_per_step", ParamValue::Int(v)) => self.vpls_per_step = *v as u32,
-            ("interleave", ParamValue::Bool(v)) => self.interleave = *v,
-            ("ratio", ParamValue::Bool(v)) => self.ratio = *v,
-            _ => unreachable!("check_param accepted an unknown key"),
+            (k, v) => {
+                // Interleaving's parameters, or none ([`Interleave::set`]).
+                if !self.interleave.set(k, v) {
+                    unreachable!("check_param accepted an unknown key")
+                }
+            }
         }
         Ok(())
     }

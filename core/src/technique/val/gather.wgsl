@@ -1,8 +1,8 @@
 // Virtual area lights (Dong et al. 2009, section 4): every pixel is lit by all VPLs of the batch (or, with
-// interleaving, by its 1/64 share), VPL i using the visibility of its VAL C(i). A VAL's visibility is computed
-// at most once per pixel (at most MAX_VALS; with interleaving only for the VALs of the pixel's VPLs), then
-// shared by the VAL's VPLs. Visibility of VAL m from its
-// paraboloid map (tile m of the atlas, the map facing the VAL's normal, vpl_basis.wgsl):
+// interleaving, by its 1/B^2 share, the paper's 1/64), VPL i using the visibility of its VAL C(i). A VAL's
+// visibility is computed at most once per pixel (at most MAX_VALS; with interleaving only for the VALs of the
+// pixel's VPLs), then shared by the VAL's VPLs. Visibility of VAL m from its paraboloid map (tile m of the
+// atlas, the map facing the VAL's normal, vpl_basis.wgsl):
 // - hard: one depth test (the banding the paper avoids);
 // - cssm (the paper): convolution soft shadow maps, Fourier basis textures filtered by mip-mapping (below);
 // - pcss: blocker search over the VAL's angular size, z_avg, the paper's penumbra
@@ -340,8 +340,8 @@ fn val_soft(s: Surface, m: u32, lk: ValLookup) -> f32 {
 // lights it once, VAL by VAL, so that neighbouring pixels test the same VAL together (those wholly behind the
 // pixel's tangent plane return at once, `val_visibility`); a VAL of less than `soft_share` of the pixel's light
 // gets one depth test (twenty-second session; the same image as testing every VAL before the sum at 0). With
-// interleaving (the paper's: "when shading from VPL i we use the VAL at index C(i)") a pixel's 1/64 share holds
-// at most 16 VPLs, so a VAL is tested only at the first of its VPLs that lights the pixel. Measured on lavapipe
+// interleaving (the paper's: "when shading from VPL i we use the VAL at index C(i)") a pixel's share holds few
+// VPLs (16 of 1,024 with the paper's 8x8 block), so a VAL is tested only at the first of its VPLs that lights the pixel. Measured on lavapipe
 // (Sponza, M = 128, 160x90, visibility pass, two builds alternated): with interleaving 306 / 411 ms testing
 // every VAL against 58 / 65 ms testing at the first VPL; without it, finding the VALs that light the pixel first
 // (a second pass over the VPLs) took 571 / 599 ms against 378 / 525, and testing at the first VPL about 715 (the

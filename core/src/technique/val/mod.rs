@@ -250,10 +250,10 @@ impl VirtualAreaLights {
 }
 
 impl VirtualAreaLights {
-    /// The interleaving's ratio estimator for this frame: not with `solo`, whose gather takes one VAL's VPLs
-    /// where the ratio's unshadowed sum takes every VPL.
-    fn ratio(&self) -> bool {
-        self.params.ratio && self.params.solo < 0
+    /// Whether this frame allows the interleaving's ratio estimator (when `ratio` asks for it): not with `solo`,
+    /// whose gather takes one VAL's VPLs where the ratio's unshadowed sum takes every VPL.
+    fn allow_ratio(&self) -> bool {
+        self.params.solo < 0
     }
 
     /// Each VAL's `Delta` in the penumbra estimate (`size`): its rectangle's diagonal or its VPLs' spread.
@@ -432,7 +432,7 @@ impl Technique for VirtualAreaLights {
             log::info!("val: {words_needed} words of member lists exceed a storage binding; every VPL evaluated");
         }
         self.counts.batches = self.batches;
-        Ok(if self.params.interleave { self.batches + 1 } else { self.batches })
+        Ok(if self.params.interleave.on { self.batches + 1 } else { self.batches })
     }
 
     fn encode_step(
@@ -442,8 +442,7 @@ impl Technique for VirtualAreaLights {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            let ratio = self.ratio().then(|| self.pass.ratio_buffer());
-            self.blur.encode(ctx, encoder, ratio);
+            self.blur.encode(ctx, encoder, &self.params.interleave, self.allow_ratio(), &self.pass);
             return Ok(());
         }
         if step == 0 {

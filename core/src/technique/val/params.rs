@@ -70,10 +70,9 @@ pub struct ValParams {
     pub normal_offset_texels: f32,
     /// Bias of a filter sample per texel of its offset, in texel footprints at the receiver.
     pub slope_bias: f32,
-    pub interleave: bool,
-    /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
-    /// times its window's visibility share; not with `solo` (the ratio's sum takes every VPL, solo one VAL's).
-    pub ratio: bool,
+    /// Interleaved sampling (section 6), its ratio estimator (not with `solo`: the ratio's sum takes every VPL,
+    /// solo one VAL's) and block.
+    pub interleave: crate::services::vpl_gather::Interleave,
     /// Start k-means from the previous frame's VALs (the variant the paper rejects, Fig. 8). With `split` on,
     /// k-means makes `ceil(kmeans_share * M)` VALs (one by default), so it changes little or nothing then.
     pub warm_start: bool,
@@ -147,8 +146,7 @@ impl Default for ValParams {
             bias_world: 0.01,
             normal_offset_texels: 1.5,
             slope_bias: 1.0,
-            interleave: false,
-            ratio: true,
+            interleave: Default::default(),
             warm_start: false,
             vpls_per_step: crate::vpl::MAX_VPLS,
             clustering: "gpu".into(),
@@ -443,7 +441,7 @@ impl ValParams {
         // Interleaving's two parameters, shared with the other gathers, before the warm start (as the paper's
         // section 6 before its ablation).
         let at = list.iter().position(|q| q.key == "warm_start").unwrap_or(list.len());
-        list.splice(at..at, crate::services::vpl_gather::interleave_params(p.interleave, p.ratio));
+        list.splice(at..at, p.interleave.describe());
         list
     }
 
@@ -463,8 +461,7 @@ impl ValParams {
             ("bias", ParamValue::Float(v)) => p.bias_world = *v,
             ("normal_offset", ParamValue::Float(v)) => p.normal_offset_texels = *v,
             ("slope_bias", ParamValue::Float(v)) => p.slope_bias = *v,
-            ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
-            ("ratio", ParamValue::Bool(v)) => p.ratio = *v,
+
             ("skip_unlit", ParamValue::Bool(v)) => p.skip_unlit = *v,
             ("clearance", ParamValue::Bool(v)) => p.clearance = *v,
             ("warm_start", ParamValue::Bool(v)) => p.warm_start = *v,
@@ -485,7 +482,12 @@ impl ValParams {
             ("proxy", ParamValue::Float(v)) => p.proxy = *v,
             ("proxy_error", ParamValue::Float(v)) => p.proxy_error = *v,
             ("max_edge", ParamValue::Float(v)) => p.max_edge = *v,
-            _ => unreachable!("check_param accepted an unknown key"),
+            (k, v) => {
+                // Interleaving's parameters, or none ([`Interleave::set`](crate::services::vpl_gather::Interleave::set)).
+                if !p.interleave.set(k, v) {
+                    unreachable!("check_param accepted an unknown key")
+                }
+            }
         }
     }
 }

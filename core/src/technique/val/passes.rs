@@ -156,12 +156,9 @@ impl VirtualAreaLights {
         });
         let first = step * self.batch_size;
         let last = (first + self.batch_size).min(self.vpls.vpls.len());
-        let batch = GatherBatchUniform {
-            first_vpl: first as u32,
-            vpl_count: (last - first) as u32,
-            interleave: crate::services::vpl_gather::interleave_mode(self.params.interleave, self.ratio()),
-            ..Default::default()
-        };
+        let mut batch =
+            GatherBatchUniform { first_vpl: first as u32, vpl_count: (last - first) as u32, ..Default::default() };
+        self.params.interleave.apply(&mut batch, self.allow_ratio());
         self.pass.encode(ctx, encoder, "val soft visibility + indirect", &group, batch);
     }
 }

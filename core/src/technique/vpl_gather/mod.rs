@@ -13,8 +13,9 @@
 //! - `vpl-unshadowed`: no visibility (`vpl_vis_none.wgsl`), the denominator of indirect shadow factors.
 //!
 //! `interleave` (all three, off by default and for the references): Dong et al. section 6's interleaved
-//! sampling, each pixel of an 8x8 block gathers every 64th VPL (times 64), and a last step blurs the indirect
-//! buffer over 8x8 windows on the same surface ([`InterleaveBlur`], `vpl_blur.wgsl`).
+//! sampling, each pixel of a B x B block (`block`, the paper's 8) gathers every B²-th VPL (times B²), and a last
+//! step blurs the indirect buffer over B x B windows on the same surface, with the ratio estimator (`ratio`) or
+//! as the paper ([`Interleave`], [`InterleaveBlur`], `vpl_blur.wgsl`).
 //!
 //! The radiance of VPL `i` at `x` is `rho(x)/pi * Phi_i/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2)`
 //! (`vpl_common.wgsl`); `d_clamp` is the render setting `vpl.clamp_world`.
@@ -32,9 +33,7 @@ use crate::scene::proxy::ProxyParams;
 use crate::scene::PointLight;
 use crate::services::cube_shadows::{CubeShadowRenderer, MapGeometry, ParaboloidCaster, MAX_CUBES_PER_BATCH};
 use crate::services::layouts::SharedLayouts;
-use crate::services::vpl_gather::{
-    interleave_mode, interleave_params, vpl_overlays, GatherBatchUniform, InterleaveBlur, VplGatherPass,
-};
+use crate::services::vpl_gather::{vpl_overlays, GatherBatchUniform, Interleave, InterleaveBlur, VplGatherPass};
 use crate::shaders;
 use crate::timing::PassTime;
 use crate::vpl::VplSet;
@@ -70,12 +69,9 @@ pub struct GatherParams {
     /// Shadow maps: the longest triangle edge the maps draw, as a share of the scene's diagonal (longer ones are
     /// cut, [`crate::scene::proxy`]: a paraboloid draws edges straight); 0: the scene's triangles as they are.
     pub max_edge: f32,
-    /// Interleaved sampling (Dong section 6): each pixel of an 8x8 block gathers every 64th VPL, then a
-    /// geometry-aware blur spreads them over the block. Off for the references.
-    pub interleave: bool,
-    /// With interleaving, the ratio estimator (`vpl_blur.wgsl`): each pixel's unshadowed light from every VPL
-    /// times its window's visibility share.
-    pub ratio: bool,
+    /// Interleaved sampling (Dong section 6), its ratio estimator and block ([`Interleave`]). Off for the
+    /// references.
+    pub interleave: Interleave,
     /// The light whose VPL paths the "vpl paths" overlay shows.
     pub path_light: u32,
 }
@@ -91,8 +87,7 @@ impl Default for GatherParams {
             atlas_budget_mib: 64,
             cull: true,
             max_edge: crate::scene::proxy::DEFAULT_MAX_EDGE,
-            interleave: false,
-            ratio: true,
+            interleave: Interleave::default(),
             path_light: 0,
         }
     }
@@ -203,7 +198,7 @@ impl Technique for VplGather {
             kind: ParamKind::Int { min: 1, max: crate::vpl::MAX_VPLS as i64 },
             value: ParamValue::Int(p.vpls_per_step as i64),
         }];
-        list.extend(interleave_params(p.interleave, p.ratio));
+        list.extend(p.interleave.describe());
         list.push(Param {
             key: "path_light",
             label: "Paths of light",
@@ -282,10 +277,13 @@ impl Technique for VplGather {
             ("atlas_mib", ParamValue::Int(v)) => p.atlas_budget_mib = *v as u32,
             ("cull", ParamValue::Bool(v)) => p.cull = *v,
             ("max_edge", ParamValue::Float(v)) => p.max_edge = *v,
-            ("interleave", ParamValue::Bool(v)) => p.interleave = *v,
-            ("ratio", ParamValue::Bool(v)) => p.ratio = *v,
             ("path_light", ParamValue::Int(v)) => p.path_light = *v as u32,
-            _ => unreachable!("check_param accepted an unknown key"),
+            (k, v) => {
+                // Interleaving's parameters, or none ([`Interleave::set`]).
+                if !p.interleave.set(k, v) {
+                    unreachable!("check_param accepted an unknown key")
+                }
+            }
         }
         Ok(())
     }
@@ -344,7 +342,7 @@ impl Technique for VplGather {
         }
         self.batches = batches;
         // With interleaving, one more step: the blur.
-        Ok(if self.params.interleave && batches > 0 { batches + 1 } else { batches })
+        Ok(if self.params.interleave.on && batches > 0 { batches + 1 } else { batches })
     }
 
     fn encode_step(
@@ -354,18 +352,14 @@ impl Technique for VplGather {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(), GpuError> {
         if step == self.batches {
-            let ratio = self.params.ratio.then(|| self.pass.ratio_buffer());
-            self.blur.encode(ctx, encoder, ratio);
+            self.blur.encode(ctx, encoder, &self.params.interleave, true, &self.pass);
             return Ok(());
         }
         let first = step * self.batch_size;
         let last = (first + self.batch_size).min(self.vpls.vpls.len());
-        let mut batch = GatherBatchUniform {
-            first_vpl: first as u32,
-            vpl_count: (last - first) as u32,
-            interleave: interleave_mode(self.params.interleave, self.params.ratio),
-            ..Default::default()
-        };
+        let mut batch =
+            GatherBatchUniform { first_vpl: first as u32, vpl_count: (last - first) as u32, ..Default::default() };
+        self.params.interleave.apply(&mut batch, true);
         match self.visibility {
             Visibility::ShadowMaps => {
                 // Step 1: this batch's paraboloid maps.
