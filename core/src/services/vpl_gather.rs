@@ -269,7 +269,7 @@ impl VplGatherPass {
     }
 }
 
-/// The geometry-aware 8x8 blur that completes interleaved sampling (`vpl_blur.wgsl`): blurs the indirect
+/// The geometry-aware B x B blur that completes interleaved sampling (`vpl_blur.wgsl`): blurs the indirect
 /// buffer into a scratch buffer and copies it back. Run once per frame, after the last gather. With the ratio
 /// estimator (the gathers ran with interleave mode 2) it blurs the visibility share alone and multiplies each
 /// pixel's unshadowed light from every VPL (what the gathers left in the indirect buffer) by it.

@@ -14,8 +14,8 @@
 //!    size, the paper's penumbra `p cos(beta) = (d - z_avg) Delta / z_avg`, `alpha = arctan(p cos(beta) / d)`,
 //!    kernel width `alpha / pi` of the map, percentage-closer filtering) or `hard` (one test, for teaching).
 //! 5. Shading (the shared VPL gather's terms): each pixel computes its M visibilities once, then sums all
-//!    (or, interleaved, 1/64 of the) VPLs with the visibility of their VAL; a geometry-aware blur follows when
-//!    interleaving. Receivers in a VAL's negative half-space see it fully (section 5.1).
+//!    (or, interleaved, the 1/B² share of the) VPLs with the visibility of their VAL; a geometry-aware blur
+//!    follows when interleaving. Receivers in a VAL's negative half-space see it fully (section 5.1).
 //!
 //! Deviations, and why:
 //! - The clustering runs on the GPU (`clustering = gpu`, [`gpu_kmeans`], `val/kmeans.wgsl`: one dispatch per
