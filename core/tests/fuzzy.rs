@@ -523,11 +523,12 @@ fn a_warm_started_gpu_kmeans_matches_its_cpu_twin_and_reseeds_centroids_that_lef
 }
 
 #[test]
-fn the_explain_steps_of_fuzzy_and_val_name_layers_they_have() {
-    // Every step that shows layers names at least one layer the technique offers after a frame, and every
-    // layer has a legend line of its own beyond the primitive counts.
+fn the_explain_steps_of_the_indirect_techniques_name_layers_they_have_and_parameters_they_take() {
+    // Every step that shows layers names at least one layer the technique offers after a frame, every step's
+    // parameters are the technique's and parse, and every layer has a legend line of its own beyond the
+    // primitive counts.
     let scene = room();
-    for key in ["fuzzy", "val"] {
+    for key in ["fuzzy", "val", "vpl-shadowmaps", "vpl-raytraced", "vpl-unshadowed"] {
         let renderer = Shot::indirect(&scene, &lights(), settings(64), key).render_keeping().renderer;
         let technique = renderer.indirect().unwrap();
         let layers = technique.overlays(&lights());
@@ -541,6 +542,13 @@ fn the_explain_steps_of_fuzzy_and_val_name_layers_they_have() {
                 step.title,
                 step.layers
             );
+        }
+        let params = technique.params();
+        for step in &steps {
+            for (k, text) in step.params {
+                let p = params.iter().find(|p| p.key == *k).unwrap_or_else(|| panic!("{key} '{}': no {k}", step.title));
+                p.kind.parse(k, text).unwrap_or_else(|e| panic!("{key} '{}': {k}={text}: {e:?}", step.title));
+            }
         }
         for layer in &layers {
             let legend = technique.overlay_legend(layer);

@@ -20,6 +20,8 @@
 //! The radiance of VPL `i` at `x` is `rho(x)/pi * Phi_i/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2)`
 //! (`vpl_common.wgsl`); `d_clamp` is the render setting `vpl.clamp_world`.
 
+mod explain;
+
 use std::sync::Arc;
 
 use super::{
@@ -403,6 +405,10 @@ impl Technique for VplGather {
             Visibility::ShadowMaps => "vpl shadow maps + gather",
             _ => "vpl gather",
         }
+    }
+
+    fn explain(&self) -> Vec<super::ExplainStep> {
+        explain::explain_steps(self.visibility)
     }
 
     fn shadow_atlas(&self) -> Option<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
