@@ -50,8 +50,8 @@ impl VirtualAreaLights {
             },
             ExplainStep {
                 title: "4-5. Soft visibility and shading",
-                text: "Each pixel sums its VPLs' light per VAL (interleaved: its share, a 64th with the 8x8 block; otherwise skipping \
-                       the VALs whose VPLs all lie behind it or face away from it), then computes the \
+                text: "Each pixel sums its VPLs' light per VAL (interleaved: its share, a 64th with the 8x8 block; \
+                       otherwise skipping the VALs whose VPLs all lie behind it or face away from it), then computes the \
                        visibility of every VAL that lights it once (CSSM, PCSS or hard; a VAL under 'Soft above \
                        share' of the pixel's light, one depth test) and weighs that VAL's light by it; set 'Show \
                        one VAL' to see one VAL's contribution alone.",
