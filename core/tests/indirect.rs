@@ -330,12 +330,30 @@ fn batched_gathers_equal_one_batch() {
     let scene = room();
     let lights = [white_light(Vec3::new(0.5, 3.0, 0.5), 8.0, 30.0)];
     let vs = VplSettings { count: 1024, ..Default::default() };
-    let one = [("vpls_per_step", ParamValue::Int(1024))];
-    let many = [("vpls_per_step", ParamValue::Int(37))];
-    for key in ["vpl-raytraced", "vpl-unshadowed"] {
-        let (a, ra) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(&one).render();
-        let (b, rb) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(&many).render();
-        assert_eq!(ra.indirect.as_ref().unwrap().counts.batches, 1);
+    // Also interleaved with the ratio estimator and a 3x3 block (9 classes, batches of 37 VPLs: a batch's
+    // first VPL is of any class, and the ratio's sums start with the frame's first batch only).
+    let interleaved = |n: i64| {
+        vec![
+            ("vpls_per_step", ParamValue::Int(n)),
+            ("interleave", ParamValue::Bool(true)),
+            ("ratio", ParamValue::Bool(true)),
+            ("block", ParamValue::Int(3)),
+        ]
+    };
+    let runs = [
+        ("vpl-raytraced", vec![("vpls_per_step", ParamValue::Int(1024))], vec![("vpls_per_step", ParamValue::Int(37))]),
+        (
+            "vpl-unshadowed",
+            vec![("vpls_per_step", ParamValue::Int(1024))],
+            vec![("vpls_per_step", ParamValue::Int(37))],
+        ),
+        ("vpl-raytraced", interleaved(1024), interleaved(37)),
+    ];
+    for (key, one, many) in &runs {
+        let key = *key;
+        let (a, ra) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(one).render();
+        let (b, rb) = Shot::indirect(&scene, &lights, settings(Component::Indirect, vs), key).params(many).render();
+        assert_eq!(ra.indirect.as_ref().unwrap().counts.batches, 1, "{key}");
         // The report separates the indirect technique's passes from the direct one's.
         let names: Vec<&str> = ra.indirect.as_ref().unwrap().passes.iter().map(|p| p.name.as_str()).collect();
         assert!(names.contains(&"vpl gather") && !names.contains(&"shading"), "{names:?}");
