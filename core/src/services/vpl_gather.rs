@@ -125,7 +125,8 @@ impl Interleave {
     /// The batch fields for these parameters.
     pub fn apply(&self, batch: &mut GatherBatchUniform, allow_ratio: bool) {
         batch.interleave = self.mode(allow_ratio);
-        batch.block = self.block.clamp(MIN_BLOCK, MAX_BLOCK);
+        // (The shaders clamp it to MIN_BLOCK..=MAX_BLOCK, as `set` does.)
+        batch.block = self.block;
     }
 }
 
@@ -226,7 +227,9 @@ impl VplGatherPass {
         self.encode_lights(ctx, encoder, label, visibility_group, batch, &ctx.vpls.buffer.buffer);
     }
 
-    /// [`Self::encode`] over another set of lights in the `GpuVpl` layout (e.g. VPL clusters).
+    /// [`Self::encode`] over another set of lights in the `GpuVpl` layout (e.g. VPL clusters). With the ratio
+    /// estimator (`batch.interleave` 2) the batch whose `first_vpl` is 0 starts the frame's ratio sums (clears
+    /// [`Self::ratio_buffer`]), so a frame's batches go in order from its first VPL, as every technique's do.
     pub fn encode_lights(
         &mut self,
         ctx: &FrameContext,
@@ -323,8 +326,7 @@ impl InterleaveBlur {
                 mapped_at_creation: false,
             }));
         }
-        let params =
-            BlurUniform { ratio: ratio.is_some() as u32, block: block.clamp(MIN_BLOCK, MAX_BLOCK), pad: [0; 2] };
+        let params = BlurUniform { ratio: ratio.is_some() as u32, block, pad: [0; 2] };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&params));
         let scratch = self.scratch.as_ref().expect("made above");
         let group = ctx.gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
