@@ -55,7 +55,7 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 16] = [
+const COMPARISONS: [&str; 17] = [
     "LightCluster d_init=0.5 vs reference",
     "LightCluster d_init=0.5, maps from a simplified copy",
     "LightCluster d_init=1.6 vs reference",
@@ -65,6 +65,7 @@ const COMPARISONS: [&str; 16] = [
     "INSM vs reference",
     "INSM, meshes simplified",
     "VALs vs one shadow map per VPL",
+    "VALs, M = ",
     "VALs, M = ",
     "VALs, M = ",
     "VALs, M = ",
