@@ -1105,6 +1105,45 @@ fn explain_steps_of_lightcluster_and_insm_switch_their_layers() {
 }
 
 #[test]
+fn explain_steps_of_val_and_fuzzy_set_the_parameters_that_show_them_and_give_them_back() {
+    use shadowlab_core::technique::ParamValue;
+    let mut h = start("explain-indirect", "cornell");
+    h.state_mut().session.indirect.vpl.count = 16;
+    h.state_mut().session.technique = "unshadowed".into();
+    h.state_mut().session.indirect.technique = Some("val".into());
+    h.run_steps(3);
+    h.state_mut().chrome.layout.focus(Pane::Explain);
+    h.run_steps(1);
+    let param = |h: &Harness<'static, ShadowLabApp>, key: &str, name: &str| {
+        h.state().session.indirect.params.get(key).and_then(|p| p.get(name)).cloned()
+    };
+    // VALs: one VAL's contribution alone, then every VAL again.
+    h.get_by_label("4. One VAL's soft shadow").click();
+    h.run_steps(2);
+    assert_eq!(param(&h, "val", "solo"), Some(ParamValue::Int(0)));
+    h.get_by_label("5. Every VAL: the indirect light").click();
+    h.run_steps(2);
+    assert_eq!(param(&h, "val", "solo"), Some(ParamValue::Int(-1)), "back to every VAL");
+    // Fuzzy clustering: each clustering alone (the paper's ablations), hard visibility, then the panel's choices.
+    h.state_mut().session.indirect.technique = Some("fuzzy".into());
+    h.state_mut().chrome.layout.focus(Pane::Explain);
+    h.run_steps(3);
+    let choice = |v: &str| Some(ParamValue::Choice(v.to_string()));
+    h.get_by_label("2. VPL clusters").click();
+    h.run_steps(2);
+    assert_eq!(param(&h, "fuzzy", "cluster"), choice("vpl"));
+    h.get_by_label("3-4. Shading-point clusters").click();
+    h.run_steps(2);
+    assert_eq!(param(&h, "fuzzy", "cluster"), choice("sp"));
+    h.get_by_label("5. Visibility between representatives").click();
+    h.run_steps(2);
+    assert_eq!((param(&h, "fuzzy", "cluster"), param(&h, "fuzzy", "mode")), (choice("both"), choice("hard")));
+    h.get_by_label("6. Weighted visibility").click();
+    h.run_steps(2);
+    assert_eq!((param(&h, "fuzzy", "cluster"), param(&h, "fuzzy", "mode")), (choice("both"), choice("weighted")));
+}
+
+#[test]
 fn an_insm_viewpoint_under_the_pointer_has_a_tooltip() {
     let mut h = start("viewpoint-tooltip", "arcade");
     h.state_mut().session.technique = "insm".into();

@@ -19,35 +19,43 @@ impl FuzzyClustering {
             ExplainStep {
                 title: "2. VPL clusters",
                 text: "K_vpl clusters by k-means over position and normal (equation 7: no two normals more than 30 \
-                       degrees apart); each becomes one light at its representative with its members' flux.",
+                       degrees apart); each becomes one light at its representative with its members' flux. Shown: \
+                       the VPLs clustered alone, every pixel tracing its own ray to each representative (section \
+                       4's ablation, 'Clustered' = vpl).",
                 layers: &["vpls by cluster", "vpls by cluster (every n-th)", "vpl cluster representatives"],
                 shows_shadow_maps: false,
+                params: &[("cluster", "vpl")],
                 ..Default::default()
             },
             ExplainStep {
                 title: "3-4. Shading-point clusters",
                 text: "The pixels' positions and normals clustered the same way (every gamma-th pixel in the \
-                       iterations), then every pixel assigned to its F nearest clusters.",
+                       iterations), then every pixel assigned to its F nearest clusters. Shown: the shading points \
+                       clustered alone, every VPL its own light ('Clustered' = sp).",
                 layers: &["shading-point clusters", "shading-point centroids"],
                 shows_shadow_maps: false,
+                params: &[("cluster", "sp")],
                 ..Default::default()
             },
             ExplainStep {
                 title: "5. Visibility between representatives",
                 text: "One shadow ray from each shading-point cluster's representative to each light: K_sp x K_vpl \
                        rays instead of one per pixel and VPL. Alt+click a pixel to see its clusters' rays (green \
-                       visible, red blocked).",
+                       visible, red blocked). Shown: both clustered, each pixel with its nearest cluster's visibility \
+                       alone ('Visibility' = hard): the clusters' borders show.",
                 layers: &[
                     "probe: clusters and visibility rays (green visible, red blocked)",
                     "vpl cluster representatives",
                 ],
                 shows_shadow_maps: false,
+                params: &[("cluster", "both"), ("mode", "hard")],
                 ..Default::default()
             },
             ExplainStep {
                 title: "6. Weighted visibility",
                 text: "Each pixel shades every light with its own BRDF and geometry term and the visibility of its F \
-                       clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard).",
+                       clusters, weighted by inverse distance (weighted), equally (fuzzy) or its nearest only (hard). \
+                       Shown: the panel's choices again (both clustered, weighted, by default).",
                 layers: &["shading-point clusters (blended as the visibility mode weighs them)"],
                 shows_shadow_maps: false,
                 ..Default::default()

@@ -49,12 +49,22 @@ impl VirtualAreaLights {
                 ..Default::default()
             },
             ExplainStep {
-                title: "4-5. Soft visibility and shading",
-                text: "Each pixel sums its VPLs' light per VAL (interleaved: its share, a 64th with the 8x8 block; \
-                       otherwise skipping the VALs whose VPLs all lie behind it or face away from it), then computes the \
-                       visibility of every VAL that lights it once (CSSM, PCSS or hard; a VAL under 'Soft above \
-                       share' of the pixel's light, one depth test) and weighs that VAL's light by it; set 'Show \
-                       one VAL' to see one VAL's contribution alone.",
+                title: "4. One VAL's soft shadow",
+                text: "Each pixel sums its VPLs' light per VAL, then looks up each VAL that lights it once in that \
+                       VAL's map (PCSS: a blocker search, then a penumbra from the VAL's size Δ; or CSSM, or hard) and \
+                       weighs the VAL's light by that visibility. Shown: VAL 0's contribution alone, its VPLs' light \
+                       with its soft shadow ('Show one VAL' picks another; -1 shows them all).",
+                layers: &["val centres", "val normals"],
+                shows_shadow_maps: false,
+                params: &[("solo", "0")],
+                ..Default::default()
+            },
+            ExplainStep {
+                title: "5. Every VAL: the indirect light",
+                text: "The sum over the VALs (interleaved: each pixel its share of the VPLs, a 64th with the 8x8 block, \
+                       then the blur; otherwise each pixel skips the VALs whose VPLs all lie behind it or face away from \
+                       it, and a VAL under 'Soft above share' of its light gets one depth test). Compare it with one \
+                       shadow map per VPL (View: Difference, against vpl-shadowmaps).",
                 layers: &[],
                 shows_shadow_maps: false,
                 ..Default::default()
