@@ -195,6 +195,53 @@ fn bad_input_gives_a_one_line_error() {
 }
 
 #[test]
+fn a_sweep_in_rounds_gives_the_median_speedup_of_its_rounds_and_their_range() {
+    let dir = out_dir("sweep-rounds");
+    let csv = dir.join("rounds.csv");
+    let png = dir.join("rounds.png");
+    let mut args = vec!["sweep", "--quiet", "--scene", "cornell", "--technique", "lightcluster"];
+    args.extend(["--param", "d_init=0.3,0.6", "--width", "48", "--height", "32", "--shadow-res", "32"]);
+    args.extend(["--warmup", "0", "--repeat", "1", "--no-flip", "--rounds", "3"]);
+    args.extend(["--out", csv.to_str().unwrap(), "--plot", png.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 2, "one row per setting, not per round:\n{text}");
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let value = |line: &str, name: &str| -> String {
+        let i = header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+        line.split(',').nth(i).unwrap().to_string()
+    };
+    for line in &lines[1..] {
+        assert_eq!(value(line, "rounds"), "3", "{line}");
+        let number = |name: &str| value(line, name).parse::<f64>().unwrap();
+        let (low, mid, high) = (number("speedup_min"), number("speedup"), number("speedup_max"));
+        assert!(low > 0.0 && low <= mid && mid <= high, "{low} {mid} {high}: {line}");
+    }
+    assert!(png.exists());
+    // One round is the plain sweep: its range is its one speedup.
+    let one = dir.join("one.csv");
+    let mut args = vec!["sweep", "--quiet", "--scene", "cornell", "--technique", "lightcluster"];
+    args.extend(["--param", "d_init=0.3", "--width", "32", "--height", "24", "--shadow-res", "16"]);
+    args.extend(["--warmup", "0", "--repeat", "1", "--no-flip", "--out", one.to_str().unwrap()]);
+    assert!(shadowlab(&args).status.success());
+    let text = std::fs::read_to_string(&one).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    let at = |name: &str| row[header.iter().position(|h| *h == name).unwrap()];
+    assert_eq!((at("rounds"), at("speedup_min"), at("speedup_max")), ("1", at("speedup"), at("speedup")));
+    // Rounds need one light count, and a number of them from 1 to 50.
+    let mut args = vec!["sweep", "--scene", "cornell", "--lights", "random:8:1:1", "--param", "lights=4,8"];
+    args.extend(["--rounds", "2", "--out", one.to_str().unwrap()]);
+    assert_fails_with(&args, "--rounds needs one light count");
+    assert_fails_with(
+        &["sweep", "--scene", "cornell", "--param", "d_init=0.3", "--rounds", "0", "--out", one.to_str().unwrap()],
+        "rounds",
+    );
+}
+
+#[test]
 fn bad_sweeps_are_refused_before_rendering() {
     let csv = out_dir("bad-sweep").join("r.csv");
     let csv = csv.to_str().unwrap();

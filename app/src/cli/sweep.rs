@@ -40,6 +40,40 @@ pub struct SweepArgs {
     /// A PNG plot of time and RMSE against the first swept (numeric) parameter.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Measure the target and every setting this many times over, alternating (the target, every setting, the
+    /// target, every setting, ...), and give each setting the median of its rounds' speedups, each against the
+    /// target of its own round, with their range (`speedup_min`, `speedup_max`): on a shared machine a load
+    /// that comes and goes during the sweep then falls on both sides. The images and metrics are the first
+    /// round's.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
+}
+
+/// One later round's times of a setting: its frame and its round's target, in the setting's clock.
+struct RoundTimes {
+    ms: f64,
+    against_ms: f64,
+    wall_ms: f64,
+    against_wall_ms: f64,
+    wall_min_ms: f64,
+    against_wall_min_ms: f64,
+}
+
+impl RoundTimes {
+    fn of(
+        technique: &crate::measure::TimingSummary,
+        target: &crate::measure::TimingSummary,
+        clock: shadowlab_core::timing::TimingSource,
+    ) -> RoundTimes {
+        RoundTimes {
+            ms: technique.median_in(clock),
+            against_ms: target.median_in(clock),
+            wall_ms: technique.wall_median_ms,
+            against_wall_ms: target.wall_median_ms,
+            wall_min_ms: technique.wall_min_ms,
+            against_wall_min_ms: target.wall_min_ms,
+        }
+    }
 }
 
 /// The swept pseudo-parameter that changes the number of lights, not a technique parameter.
@@ -123,6 +157,12 @@ pub fn run(args: SweepArgs) -> Result<()> {
     for setting in &settings {
         lights_for(setting)?;
     }
+    if !(1..=50).contains(&args.rounds) {
+        bail!("--rounds takes 1 to 50 rounds, not {}", args.rounds);
+    }
+    if args.rounds > 1 && swept.iter().any(|(k, _)| k == LIGHTS_KEY) {
+        bail!("--rounds needs one light count: it cannot be combined with --param lights=...");
+    }
     let render_target = |renderer: &mut Renderer, lights: &[PointLight]| -> Result<_> {
         let target = crate::measure::render_technique(
             renderer,
@@ -178,6 +218,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
             "against_maps_res",
             "indirect_maps_res",
             "against_indirect_maps_res",
+            "rounds",
+            "speedup_min",
+            "speedup_max",
         ]
         .map(String::from),
     );
@@ -189,7 +232,11 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let mut row_figures: Vec<std::collections::BTreeMap<String, f64>> = Vec::new();
     let mut plot_rows: Vec<crate::plot::PlotRow> = Vec::new();
     let mut progress = Progress::new(&format!("sweep {}", args.target.technique), quiet).with_unit("setting");
-    progress.update(0, settings.len());
+    let renders = settings.len() * args.rounds as usize;
+    progress.update(0, renders);
+    // Per setting, the first round's times in its clock (later rounds add to them).
+    let mut rounds_of: Vec<Vec<RoundTimes>> = Vec::new();
+    let mut clocks: Vec<shadowlab_core::timing::TimingSource> = Vec::new();
     let mut plotted_counts: Vec<usize> = Vec::new();
     let mut told_clock = false;
     let mut told_resolution = false;
@@ -290,6 +337,9 @@ pub fn run(args: SweepArgs) -> Result<()> {
         let [res, indirect_res] = crate::equal_terms::resolutions(&r.parameters);
         let [against_res, against_indirect_res] = crate::equal_terms::resolutions(&target.parameters);
         row.extend([res, against_res, indirect_res, against_indirect_res]);
+        row.extend(["1".to_string(), format!("{:.2}", speedup.ratio), format!("{:.2}", speedup.ratio)]);
+        rounds_of.push(vec![RoundTimes::of(&r.timing, &target.timing, speedup.clock)]);
+        clocks.push(speedup.clock);
         if !told_resolution && !quiet {
             let technique_name = f.indirect_choice().name_with(&args.target.technique);
             let against_name = target_indirect.name_with(&args.target.against);
@@ -320,7 +370,56 @@ pub fn run(args: SweepArgs) -> Result<()> {
             figures.extend(nonzero.map(|(k, v)| (format!("indirect.work.{k}"), *v)));
         }
         row_figures.push(figures);
-        progress.update(i + 1, settings.len());
+        progress.update(i + 1, renders);
+    }
+    // Later rounds: the target, then every setting again, times only.
+    let mut target_rounds = vec![target.timing.clone()];
+    let mut setting_rounds: Vec<Vec<crate::measure::TimingSummary>> =
+        plot_timings.iter().map(|t| vec![t.clone()]).collect();
+    for round in 1..args.rounds as usize {
+        let (t, _) = render_target(&mut renderer, &lights)?;
+        for (i, setting) in settings.iter().enumerate() {
+            let r = crate::measure::render_technique(
+                &mut renderer,
+                &args.target.technique,
+                f.shadow_res,
+                &technique_params(setting),
+                &camera,
+                &lights,
+                &indirect_for(setting, &f.indirect),
+                f.warmup,
+                f.repeat,
+                no_progress,
+            )?;
+            rounds_of[i].push(RoundTimes::of(&r.timing, &t.timing, clocks[i]));
+            setting_rounds[i].push(r.timing);
+            progress.update(round * settings.len() + i + 1, renders);
+        }
+        target_rounds.push(t.timing);
+    }
+    if args.rounds > 1 {
+        let column = |name: &str| header.iter().position(|h| h == name).expect("a fixed column");
+        for (row, times) in rows.iter_mut().zip(&rounds_of) {
+            let ratios: Vec<f64> = times.iter().map(|t| t.against_ms / t.ms.max(1e-9)).collect();
+            let med = |f: &dyn Fn(&RoundTimes) -> f64| crate::measure::median(times.iter().map(f).collect());
+            let least = |f: &dyn Fn(&RoundTimes) -> f64| times.iter().map(f).fold(f64::INFINITY, f64::min);
+            let (wall_min, against_wall_min) = (least(&|t| t.wall_min_ms), least(&|t| t.against_wall_min_ms));
+            for (name, value) in [
+                ("total_ms", med(&|t| t.ms)),
+                ("against_ms", med(&|t| t.against_ms)),
+                ("speedup", crate::measure::median(ratios.clone())),
+                ("wall_ms", med(&|t| t.wall_ms)),
+                ("against_wall_ms", med(&|t| t.against_wall_ms)),
+                ("wall_min_ms", wall_min),
+                ("against_wall_min_ms", against_wall_min),
+                ("wall_speedup", against_wall_min / wall_min.max(1e-9)),
+                ("speedup_min", ratios.iter().copied().fold(f64::INFINITY, f64::min)),
+                ("speedup_max", ratios.iter().copied().fold(0.0, f64::max)),
+            ] {
+                row[column(name)] = format!("{value:.2}");
+            }
+            row[column("rounds")] = times.len().to_string();
+        }
     }
     let figure_keys: std::collections::BTreeSet<&String> = row_figures.iter().flat_map(|f| f.keys()).collect();
     header.extend(figure_keys.iter().map(|k| k.to_string()));
@@ -368,10 +467,19 @@ pub fn run(args: SweepArgs) -> Result<()> {
         };
         let clock =
             plot_timings.iter().fold(target.timing.clock, |c, t| shadowlab_core::timing::common_clock(c, t.clock));
+        let over_rounds = |timings: &[crate::measure::TimingSummary]| {
+            crate::measure::median(timings.iter().map(|t| t.median_in(clock)).collect())
+        };
         for (row, timing) in plot_rows.iter_mut().zip(&plot_timings) {
             row.ms = timing.median_in(clock);
         }
-        let reference_ms = (!lights_swept).then_some(target.timing.median_in(clock));
+        if args.rounds > 1 {
+            // One plot row per setting (no light-count curve with rounds): the median over the rounds.
+            for (row, timings) in plot_rows.iter_mut().zip(&setting_rounds) {
+                row.ms = over_rounds(timings);
+            }
+        }
+        let reference_ms = (!lights_swept).then_some(over_rounds(&target_rounds));
         let title = format!("{title}, time in {}", clock.name());
         crate::plot::sweep_plot(&tmp, &title, &swept[0].0, &plot_rows, &against_name, reference_ms)?;
         std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display()))?;
