@@ -49,7 +49,7 @@ pub struct SweepArgs {
     pub rounds: u32,
 }
 
-/// One later round's times of a setting: its frame and its round's target, in the setting's clock.
+/// One round's times of a setting: its frame and its round's target, in the clock of the setting's first round.
 struct RoundTimes {
     ms: f64,
     against_ms: f64,
