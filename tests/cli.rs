@@ -242,6 +242,37 @@ fn a_sweep_in_rounds_gives_the_median_speedup_of_its_rounds_and_their_range() {
 }
 
 #[test]
+fn a_compare_in_rounds_reports_each_rounds_speedup_and_their_median() {
+    let dir = out_dir("compare-rounds");
+    let (png, json) = (dir.join("diff.png"), dir.join("r.json"));
+    let mut args = vec!["compare", "--quiet", "--scene", "cornell", "--technique", "lightcluster"];
+    args.extend(["--width", "48", "--height", "32", "--shadow-res", "32", "--warmup", "0", "--repeat", "1"]);
+    args.extend(["--no-flip", "--rounds", "3", "--out", png.to_str().unwrap(), "--report", json.to_str().unwrap()]);
+    let out = shadowlab(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let rounds = &r["rounds"];
+    assert_eq!(rounds["count"], 3, "{r}");
+    let ratios: Vec<f64> = rounds["ratios"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(ratios.len(), 3);
+    let (low, high) = (rounds["ratio_min"].as_f64().unwrap(), rounds["ratio_max"].as_f64().unwrap());
+    let mut sorted = ratios.clone();
+    sorted.sort_by(f64::total_cmp);
+    let speedup = r["speedup"]["ratio"].as_f64().unwrap();
+    assert_eq!((low, speedup, high), (sorted[0], sorted[1], sorted[2]), "the median of three, within their range");
+    let (t, a) = (rounds["technique_ms"].as_f64().unwrap(), rounds["against_ms"].as_f64().unwrap());
+    assert!(t > 0.0 && a > 0.0, "{rounds}");
+    // One round (the default) writes no rounds; a count outside 1 to 50 is refused.
+    let mut args = vec!["compare", "--quiet", "--scene", "cornell", "--technique", "lightcluster"];
+    args.extend(["--width", "32", "--height", "24", "--shadow-res", "16", "--warmup", "0", "--repeat", "1"]);
+    args.extend(["--no-flip", "--out", png.to_str().unwrap(), "--report", json.to_str().unwrap()]);
+    assert!(shadowlab(&args).status.success());
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert!(r.get("rounds").is_none(), "{r}");
+    assert_fails_with(&["compare", "--scene", "cornell", "--rounds", "51", "--out", png.to_str().unwrap()], "rounds");
+}
+
+#[test]
 fn bad_sweeps_are_refused_before_rendering() {
     let csv = out_dir("bad-sweep").join("r.csv");
     let csv = csv.to_str().unwrap();

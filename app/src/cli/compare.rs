@@ -42,6 +42,25 @@ pub struct CompareArgs {
     /// Metrics and timings as JSON.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Measure both sides this many times over, alternating (the target, the technique, the target, ...), and
+    /// give the median of the rounds' speedups, each against the target of its own round, with their range: on
+    /// a shared machine a load that comes and goes then falls on both sides. The images and metrics are the
+    /// first round's.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
+}
+
+/// The rounds of `--rounds`: the speedup above is the median of theirs, the times the medians of theirs.
+#[derive(Serialize)]
+struct RoundsReport {
+    count: usize,
+    /// Each round's speedup, in the report's clock.
+    ratios: Vec<f64>,
+    ratio_min: f64,
+    ratio_max: f64,
+    /// The medians over the rounds of each side's median frame, in the report's clock.
+    technique_ms: f64,
+    against_ms: f64,
 }
 
 #[derive(Serialize)]
@@ -74,6 +93,9 @@ struct CompareReport<'a> {
     against_report_indirect: Option<&'a shadowlab_core::renderer::IndirectReport>,
     /// Set when the two sides' maps are not at one resolution (both named).
     resolution_note: Option<&'a str>,
+    /// With `--rounds` above 1: each round's speedup and the medians `speedup` comes from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rounds: Option<RoundsReport>,
 }
 
 pub fn run(args: CompareArgs) -> Result<()> {
@@ -90,6 +112,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
     args.target.check()?;
     if !(args.gain.is_finite() && args.gain > 0.0) {
         bail!("--gain {}: must be a number > 0", args.gain);
+    }
+    if !(1..=50).contains(&args.rounds) {
+        bail!("--rounds takes 1 to 50 rounds, not {}", args.rounds);
     }
     let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
@@ -140,14 +165,80 @@ pub fn run(args: CompareArgs) -> Result<()> {
         !args.no_flip,
         f.exposure,
     )?;
-    let speedup = crate::measure::Speedup::of(&tech.timing, &target.timing);
+    let mut speedup = crate::measure::Speedup::of(&tech.timing, &target.timing);
     let clock = speedup.clock;
+    // Later rounds: both sides again, times only; the speedup becomes the median of the rounds'.
+    let (mut tech_ms, mut against_ms) = (tech.timing.median_in(clock), target.timing.median_in(clock));
+    let mut rounds = None;
+    if args.rounds > 1 {
+        // Per round: each side's median frame in `clock`, and in the wall clock.
+        struct Round {
+            ms: f64,
+            against_ms: f64,
+            wall_ms: f64,
+            against_wall_ms: f64,
+        }
+        let round = |t: &crate::measure::TimingSummary, a: &crate::measure::TimingSummary| Round {
+            ms: t.median_in(clock),
+            against_ms: a.median_in(clock),
+            wall_ms: t.wall_median_ms,
+            against_wall_ms: a.wall_median_ms,
+        };
+        let mut times = vec![round(&tech.timing, &target.timing)];
+        for _ in 1..args.rounds {
+            let no_progress = &mut |_: &str| {};
+            let t = crate::measure::render_technique(
+                &mut renderer,
+                &args.target.against,
+                f.shadow_res,
+                &args.target.against_params,
+                &camera,
+                &lights,
+                &against_indirect,
+                f.warmup,
+                f.repeat,
+                no_progress,
+            )?;
+            let r = crate::measure::render_technique(
+                &mut renderer,
+                &args.target.technique,
+                f.shadow_res,
+                &args.params,
+                &camera,
+                &lights,
+                &indirect,
+                f.warmup,
+                f.repeat,
+                no_progress,
+            )?;
+            times.push(round(&r.timing, &t.timing));
+        }
+        let ratios: Vec<f64> = times.iter().map(|t| t.against_ms / t.ms.max(1e-9)).collect();
+        let median = |f: &dyn Fn(&Round) -> f64| crate::measure::median(times.iter().map(f).collect());
+        tech_ms = median(&|t| t.ms);
+        against_ms = median(&|t| t.against_ms);
+        speedup.ratio = crate::measure::median(ratios.clone());
+        speedup.wall_ratio = median(&|t| t.against_wall_ms / t.wall_ms.max(1e-9));
+        rounds = Some(RoundsReport {
+            count: times.len(),
+            ratio_min: ratios.iter().copied().fold(f64::INFINITY, f64::min),
+            ratio_max: ratios.iter().copied().fold(0.0, f64::max),
+            ratios,
+            technique_ms: tech_ms,
+            against_ms,
+        });
+    }
     let resolution_note = crate::equal_terms::resolution_note(
         &indirect.name_with(&args.target.technique),
         &tech.parameters,
         &against_indirect.name_with(&args.target.against),
         &target.parameters,
     );
+    // "median of 3", or with rounds "median of 3, over 4 rounds".
+    let medians = |frames: usize| match &rounds {
+        Some(r) => format!("median of {frames}, over {} rounds", r.count),
+        None => format!("median of {frames}"),
+    };
     if let (Some(path), Some(target_image)) = (&args.figure, target_image) {
         use crate::figure::{compose, metrics_caption, FigurePane};
         let metrics_lines = metrics_caption(&metrics);
@@ -181,9 +272,9 @@ pub fn run(args: CompareArgs) -> Result<()> {
                         indirect.name_with(&args.target.technique),
                         indirect.params_caption(&args.params) + &maps_caption(&tech.parameters),
                         format!(
-                            "{:.1} ms (median of {}, {}), ×{:.2}",
-                            tech.timing.median_in(clock),
-                            tech.timing.frames,
+                            "{:.1} ms ({}, {}), ×{:.2}",
+                            tech_ms,
+                            medians(tech.timing.frames),
                             clock.name(),
                             speedup.ratio
                         ),
@@ -195,7 +286,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
                         against_indirect.name_with(&args.target.against),
                         against_indirect.params_caption(&args.target.against_params)
                             + &maps_caption(&target.parameters),
-                        format!("{:.1} ms (median of {})", target.timing.median_in(clock), target.timing.frames),
+                        format!("{:.1} ms ({})", against_ms, medians(target.timing.frames)),
                     ],
                 },
                 FigurePane {
@@ -235,15 +326,21 @@ pub fn run(args: CompareArgs) -> Result<()> {
             eprintln!("note: {note}");
         }
         eprintln!(
-            "time (median of {}, {}): {} {:.2} ms, {} {:.2} ms, speedup {}",
-            tech.timing.frames,
+            "time ({}, {}): {} {:.2} ms, {} {:.2} ms, speedup {}",
+            medians(tech.timing.frames),
             clock.name(),
             indirect.name_with(&args.target.technique),
-            tech.timing.median_in(clock),
+            tech_ms,
             against_indirect.name_with(&args.target.against),
-            target.timing.median_in(clock),
+            against_ms,
             speedup.text()
         );
+        if let Some(r) = &rounds {
+            eprintln!(
+                "rounds: {} alternated, each against its own target; the median above, the rounds x{:.2} to x{:.2}",
+                r.count, r.ratio_min, r.ratio_max
+            );
+        }
         eprintln!("wrote {}", args.out.display());
     }
     if let Some(path) = &args.report {
@@ -271,6 +368,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
             technique_indirect: tech.report.indirect.as_ref(),
             against_report_indirect: target.report.indirect.as_ref(),
             resolution_note: resolution_note.as_deref(),
+            rounds,
         };
         write_atomic(path, serde_json::to_string_pretty(&r)?.as_bytes())?;
     }
