@@ -89,6 +89,25 @@ fn vpl_term(s: Surface, v: Vpl) -> vec3<f32> {
     return v.flux.rgb * (cos_i * cos_x / (PI * max(d2, gather.clamp_sq)));
 }
 
+// The ratio estimator's unshadowed light from every VPL of the batch (interleave 2; none otherwise), and the VPL
+// evaluations it took. A loop of its own: inside a range's loop with its visibility tests, the neighbouring
+// pixels' ranges (other classes, the same SIMD group) would run those tests at every VPL.
+struct EveryVpl {
+    light: vec3<f32>,
+    evaluations: u32,
+}
+
+fn every_vpl_unshadowed(s: Surface) -> EveryVpl {
+    var out = EveryVpl(vec3<f32>(0.0), 0u);
+    if gather.interleave == 2u {
+        for (var k = 0u; k < gather.vpl_count; k++) {
+            out.light += vpl_term(s, vpls[gather.first_vpl + k]);
+        }
+        out.evaluations = gather.vpl_count;
+    }
+    return out;
+}
+
 // A pixel's part of a batch, added into the indirect buffer: `lit` and `open` its range's VPLs with and without
 // visibility, `all` every VPL's unshadowed light (the ratio estimator's; zero otherwise). Plain: rho/pi times the
 // shadowed sum, weighted by the range. With the ratio estimator (interleave 2): rho/pi times every VPL's

@@ -27,16 +27,8 @@ fn gather_main(@builtin(global_invocation_id) id: vec3<u32>) {
             open += term;
         }
     }
-    // The ratio estimator's unshadowed light from every VPL, in a loop of its own: in one loop with the range's
-    // visibility tests, the neighbouring pixels' ranges (other classes) would run those tests at every VPL.
-    var all = vec3<f32>(0.0);
-    if gather.interleave == 2u {
-        for (var k = 0u; k < gather.vpl_count; k++) {
-            all += vpl_term(s, vpls[gather.first_vpl + k]);
-        }
-        evaluations += gather.vpl_count;
-    }
-    count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, evaluations);
+    let all = every_vpl_unshadowed(s);
+    count_work(vec2<i32>(id.xy), WORK_VPL_EVALUATIONS, evaluations + all.evaluations);
     count_visibility_work(vec2<i32>(id.xy));
-    gather_out(id.y * width + id.x, s.albedo, range, sum, open, all);
+    gather_out(id.y * width + id.x, s.albedo, range, sum, open, all.light);
 }

@@ -7,5 +7,6 @@ pub mod files;
 pub mod gui;
 pub mod measure;
 pub mod plot;
+pub mod rounds;
 pub mod sequence;
 pub mod tradeoff;

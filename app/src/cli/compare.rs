@@ -50,19 +50,6 @@ pub struct CompareArgs {
     pub rounds: u32,
 }
 
-/// The rounds of `--rounds`: the speedup above is the median of theirs, the times the medians of theirs.
-#[derive(Serialize)]
-struct RoundsReport {
-    count: usize,
-    /// Each round's speedup, in the report's clock.
-    ratios: Vec<f64>,
-    ratio_min: f64,
-    ratio_max: f64,
-    /// The medians over the rounds of each side's median frame, in the report's clock.
-    technique_ms: f64,
-    against_ms: f64,
-}
-
 #[derive(Serialize)]
 struct CompareReport<'a> {
     adapter: String,
@@ -95,7 +82,7 @@ struct CompareReport<'a> {
     resolution_note: Option<&'a str>,
     /// With `--rounds` above 1: each round's speedup and the medians `speedup` comes from.
     #[serde(skip_serializing_if = "Option::is_none")]
-    rounds: Option<RoundsReport>,
+    rounds: Option<crate::rounds::Rounds>,
 }
 
 pub fn run(args: CompareArgs) -> Result<()> {
@@ -113,9 +100,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if !(args.gain.is_finite() && args.gain > 0.0) {
         bail!("--gain {}: must be a number > 0", args.gain);
     }
-    if !(1..=50).contains(&args.rounds) {
-        bail!("--rounds takes 1 to 50 rounds, not {}", args.rounds);
-    }
+    crate::rounds::check(args.rounds)?;
     let (gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
     let quiet = f.quiet;
@@ -126,31 +111,38 @@ pub fn run(args: CompareArgs) -> Result<()> {
     };
     let indirect = f.indirect_choice();
     let against_indirect = args.target.against_indirect(&indirect)?;
-    let target = crate::measure::render_technique(
-        &mut renderer,
-        &args.target.against,
-        f.shadow_res,
-        &args.target.against_params,
-        &camera,
-        &lights,
-        &against_indirect,
-        f.warmup,
-        f.repeat,
-        &mut say,
-    )?;
+    // Each side as one measurement (every round renders both the same way).
+    let render_target = |renderer: &mut shadowlab_core::Renderer, progress: &mut dyn FnMut(&str)| {
+        crate::measure::render_technique(
+            renderer,
+            &args.target.against,
+            f.shadow_res,
+            &args.target.against_params,
+            &camera,
+            &lights,
+            &against_indirect,
+            f.warmup,
+            f.repeat,
+            progress,
+        )
+    };
+    let render_tech = |renderer: &mut shadowlab_core::Renderer, progress: &mut dyn FnMut(&str)| {
+        crate::measure::render_technique(
+            renderer,
+            &args.target.technique,
+            f.shadow_res,
+            &args.params,
+            &camera,
+            &lights,
+            &indirect,
+            f.warmup,
+            f.repeat,
+            progress,
+        )
+    };
+    let target = render_target(&mut renderer, &mut say)?;
     let target_image = args.figure.as_ref().map(|_| renderer.read_output()).transpose()?;
-    let tech = crate::measure::render_technique(
-        &mut renderer,
-        &args.target.technique,
-        f.shadow_res,
-        &args.params,
-        &camera,
-        &lights,
-        &indirect,
-        f.warmup,
-        f.repeat,
-        &mut say,
-    )?;
+    let tech = render_tech(&mut renderer, &mut say)?;
     let tech_image = renderer.read_output()?;
     if let Some(path) = &args.image {
         write_atomic(path, &encode_png(&tech_image)?)?;
@@ -171,62 +163,17 @@ pub fn run(args: CompareArgs) -> Result<()> {
     let (mut tech_ms, mut against_ms) = (tech.timing.median_in(clock), target.timing.median_in(clock));
     let mut rounds = None;
     if args.rounds > 1 {
-        // Per round: each side's median frame in `clock`, and in the wall clock.
-        struct Round {
-            ms: f64,
-            against_ms: f64,
-            wall_ms: f64,
-            against_wall_ms: f64,
-        }
-        let round = |t: &crate::measure::TimingSummary, a: &crate::measure::TimingSummary| Round {
-            ms: t.median_in(clock),
-            against_ms: a.median_in(clock),
-            wall_ms: t.wall_median_ms,
-            against_wall_ms: a.wall_median_ms,
-        };
-        let mut times = vec![round(&tech.timing, &target.timing)];
+        let mut times = vec![crate::rounds::Round::of(&tech.timing, &target.timing, clock)];
         for _ in 1..args.rounds {
-            let no_progress = &mut |_: &str| {};
-            let t = crate::measure::render_technique(
-                &mut renderer,
-                &args.target.against,
-                f.shadow_res,
-                &args.target.against_params,
-                &camera,
-                &lights,
-                &against_indirect,
-                f.warmup,
-                f.repeat,
-                no_progress,
-            )?;
-            let r = crate::measure::render_technique(
-                &mut renderer,
-                &args.target.technique,
-                f.shadow_res,
-                &args.params,
-                &camera,
-                &lights,
-                &indirect,
-                f.warmup,
-                f.repeat,
-                no_progress,
-            )?;
-            times.push(round(&r.timing, &t.timing));
+            let t = render_target(&mut renderer, &mut |_: &str| {})?;
+            let r = render_tech(&mut renderer, &mut |_: &str| {})?;
+            times.push(crate::rounds::Round::of(&r.timing, &t.timing, clock));
         }
-        let ratios: Vec<f64> = times.iter().map(|t| t.against_ms / t.ms.max(1e-9)).collect();
-        let median = |f: &dyn Fn(&Round) -> f64| crate::measure::median(times.iter().map(f).collect());
-        tech_ms = median(&|t| t.ms);
-        against_ms = median(&|t| t.against_ms);
-        speedup.ratio = crate::measure::median(ratios.clone());
-        speedup.wall_ratio = median(&|t| t.against_wall_ms / t.wall_ms.max(1e-9));
-        rounds = Some(RoundsReport {
-            count: times.len(),
-            ratio_min: ratios.iter().copied().fold(f64::INFINITY, f64::min),
-            ratio_max: ratios.iter().copied().fold(0.0, f64::max),
-            ratios,
-            technique_ms: tech_ms,
-            against_ms,
-        });
+        let summary = crate::rounds::Rounds::of(&times);
+        (tech_ms, against_ms) = (summary.technique_ms, summary.against_ms);
+        speedup.ratio = summary.ratio;
+        speedup.wall_ratio = crate::rounds::Rounds::wall_ratio(&times);
+        rounds = Some(summary);
     }
     let resolution_note = crate::equal_terms::resolution_note(
         &indirect.name_with(&args.target.technique),

@@ -49,33 +49,6 @@ pub struct SweepArgs {
     pub rounds: u32,
 }
 
-/// One round's times of a setting: its frame and its round's target, in the clock of the setting's first round.
-struct RoundTimes {
-    ms: f64,
-    against_ms: f64,
-    wall_ms: f64,
-    against_wall_ms: f64,
-    wall_min_ms: f64,
-    against_wall_min_ms: f64,
-}
-
-impl RoundTimes {
-    fn of(
-        technique: &crate::measure::TimingSummary,
-        target: &crate::measure::TimingSummary,
-        clock: shadowlab_core::timing::TimingSource,
-    ) -> RoundTimes {
-        RoundTimes {
-            ms: technique.median_in(clock),
-            against_ms: target.median_in(clock),
-            wall_ms: technique.wall_median_ms,
-            against_wall_ms: target.wall_median_ms,
-            wall_min_ms: technique.wall_min_ms,
-            against_wall_min_ms: target.wall_min_ms,
-        }
-    }
-}
-
 /// The swept pseudo-parameter that changes the number of lights, not a technique parameter.
 const LIGHTS_KEY: &str = "lights";
 
@@ -128,7 +101,6 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, &args.frame)?;
     let f = &args.frame;
     let quiet = f.quiet;
-    let no_progress = &mut |_: &str| {};
     // Check every setting before the first (slow) render.
     {
         let mut probe =
@@ -157,14 +129,13 @@ pub fn run(args: SweepArgs) -> Result<()> {
     for setting in &settings {
         lights_for(setting)?;
     }
-    if !(1..=50).contains(&args.rounds) {
-        bail!("--rounds takes 1 to 50 rounds, not {}", args.rounds);
-    }
+    crate::rounds::check(args.rounds)?;
     if args.rounds > 1 && swept.iter().any(|(k, _)| k == LIGHTS_KEY) {
         bail!("--rounds needs one light count: it cannot be combined with --param lights=...");
     }
-    let render_target = |renderer: &mut Renderer, lights: &[PointLight]| -> Result<_> {
-        let target = crate::measure::render_technique(
+    // The target alone (a later round's times), and with the inputs the metrics compare against.
+    let time_target = |renderer: &mut Renderer, lights: &[PointLight]| {
+        crate::measure::render_technique(
             renderer,
             &args.target.against,
             f.shadow_res,
@@ -175,9 +146,27 @@ pub fn run(args: SweepArgs) -> Result<()> {
             f.warmup,
             f.repeat,
             &mut |_: &str| {},
-        )?;
+        )
+    };
+    let render_target = |renderer: &mut Renderer, lights: &[PointLight]| -> Result<_> {
+        let target = time_target(renderer, lights)?;
         let inputs = crate::measure::compare_inputs(renderer, &camera, lights)?;
         Ok((target, inputs))
+    };
+    // One setting, with the frame's lights.
+    let render_setting = |renderer: &mut Renderer, setting: &[(String, String)], lights: &[PointLight]| {
+        crate::measure::render_technique(
+            renderer,
+            &args.target.technique,
+            f.shadow_res,
+            &technique_params(setting),
+            &camera,
+            lights,
+            &indirect_for(setting, &f.indirect),
+            f.warmup,
+            f.repeat,
+            &mut |_: &str| {},
+        )
     };
     let mut lights = lights;
     let mut light_count = None;
@@ -235,7 +224,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let renders = settings.len() * args.rounds as usize;
     progress.update(0, renders);
     // Per setting, the first round's times in its clock (later rounds add to them).
-    let mut rounds_of: Vec<Vec<RoundTimes>> = Vec::new();
+    let mut rounds_of: Vec<Vec<crate::rounds::Round>> = Vec::new();
     let mut clocks: Vec<shadowlab_core::timing::TimingSource> = Vec::new();
     let mut plotted_counts: Vec<usize> = Vec::new();
     let mut told_clock = false;
@@ -261,19 +250,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
                 plot_timings.push(target.timing.clone());
             }
         }
-        let strings = technique_params(setting);
-        let r = crate::measure::render_technique(
-            &mut renderer,
-            &args.target.technique,
-            f.shadow_res,
-            &strings,
-            &camera,
-            &lights,
-            &indirect_for(setting, &f.indirect),
-            f.warmup,
-            f.repeat,
-            no_progress,
-        )?;
+        let r = render_setting(&mut renderer, setting, &lights)?;
         let (m, _) = crate::measure::compare_images(
             &r.image,
             &target.image,
@@ -338,7 +315,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         let [against_res, against_indirect_res] = crate::equal_terms::resolutions(&target.parameters);
         row.extend([res, against_res, indirect_res, against_indirect_res]);
         row.extend(["1".to_string(), format!("{:.2}", speedup.ratio), format!("{:.2}", speedup.ratio)]);
-        rounds_of.push(vec![RoundTimes::of(&r.timing, &target.timing, speedup.clock)]);
+        rounds_of.push(vec![crate::rounds::Round::of(&r.timing, &target.timing, speedup.clock)]);
         clocks.push(speedup.clock);
         if !told_resolution && !quiet {
             let technique_name = f.indirect_choice().name_with(&args.target.technique);
@@ -377,21 +354,10 @@ pub fn run(args: SweepArgs) -> Result<()> {
     let mut setting_rounds: Vec<Vec<crate::measure::TimingSummary>> =
         plot_timings.iter().map(|t| vec![t.clone()]).collect();
     for round in 1..args.rounds as usize {
-        let (t, _) = render_target(&mut renderer, &lights)?;
+        let t = time_target(&mut renderer, &lights)?;
         for (i, setting) in settings.iter().enumerate() {
-            let r = crate::measure::render_technique(
-                &mut renderer,
-                &args.target.technique,
-                f.shadow_res,
-                &technique_params(setting),
-                &camera,
-                &lights,
-                &indirect_for(setting, &f.indirect),
-                f.warmup,
-                f.repeat,
-                no_progress,
-            )?;
-            rounds_of[i].push(RoundTimes::of(&r.timing, &t.timing, clocks[i]));
+            let r = render_setting(&mut renderer, setting, &lights)?;
+            rounds_of[i].push(crate::rounds::Round::of(&r.timing, &t.timing, clocks[i]));
             setting_rounds[i].push(r.timing);
             progress.update(round * settings.len() + i + 1, renders);
         }
@@ -400,25 +366,22 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if args.rounds > 1 {
         let column = |name: &str| header.iter().position(|h| h == name).expect("a fixed column");
         for (row, times) in rows.iter_mut().zip(&rounds_of) {
-            let ratios: Vec<f64> = times.iter().map(|t| t.against_ms / t.ms.max(1e-9)).collect();
-            let med = |f: &dyn Fn(&RoundTimes) -> f64| crate::measure::median(times.iter().map(f).collect());
-            let least = |f: &dyn Fn(&RoundTimes) -> f64| times.iter().map(f).fold(f64::INFINITY, f64::min);
-            let (wall_min, against_wall_min) = (least(&|t| t.wall_min_ms), least(&|t| t.against_wall_min_ms));
+            let r = crate::rounds::Rounds::of(times);
             for (name, value) in [
-                ("total_ms", med(&|t| t.ms)),
-                ("against_ms", med(&|t| t.against_ms)),
-                ("speedup", crate::measure::median(ratios.clone())),
-                ("wall_ms", med(&|t| t.wall_ms)),
-                ("against_wall_ms", med(&|t| t.against_wall_ms)),
-                ("wall_min_ms", wall_min),
-                ("against_wall_min_ms", against_wall_min),
-                ("wall_speedup", against_wall_min / wall_min.max(1e-9)),
-                ("speedup_min", ratios.iter().copied().fold(f64::INFINITY, f64::min)),
-                ("speedup_max", ratios.iter().copied().fold(0.0, f64::max)),
+                ("total_ms", r.technique_ms),
+                ("against_ms", r.against_ms),
+                ("speedup", r.ratio),
+                ("wall_ms", r.wall_ms),
+                ("against_wall_ms", r.against_wall_ms),
+                ("wall_min_ms", r.wall_min_ms),
+                ("against_wall_min_ms", r.against_wall_min_ms),
+                ("wall_speedup", r.against_wall_min_ms / r.wall_min_ms.max(1e-9)),
+                ("speedup_min", r.ratio_min),
+                ("speedup_max", r.ratio_max),
             ] {
                 row[column(name)] = format!("{value:.2}");
             }
-            row[column("rounds")] = times.len().to_string();
+            row[column("rounds")] = r.count.to_string();
         }
     }
     let figure_keys: std::collections::BTreeSet<&String> = row_figures.iter().flat_map(|f| f.keys()).collect();

@@ -485,13 +485,9 @@ fn sum_testing_at_first_vpl(s: Surface, range: GatherRange) -> VplSum {
             out.open += term;
         }
     }
-    // The ratio estimator's unshadowed light from every VPL, in a loop of its own (vpl_gather.wgsl says why).
-    if gather.interleave == 2u {
-        for (var k = 0u; k < gather.vpl_count; k++) {
-            out.all += vpl_term(s, vpls[gather.first_vpl + k]);
-        }
-        out.evaluations += gather.vpl_count;
-    }
+    let every = every_vpl_unshadowed(s);
+    out.all = every.light;
+    out.evaluations += every.evaluations;
     return out;
 }
 
