@@ -29,24 +29,6 @@ fn settings(component: Component, vpl: VplSettings) -> RenderSettings {
     }
 }
 
-fn scene_of(name: &str, meshes: Vec<Mesh>, albedo: f32, camera: Camera) -> Scene {
-    let m = Material { name: "m".into(), base_color: Vec4::new(albedo, albedo, albedo, 1.0), ..Default::default() };
-    let mut scene = Scene {
-        name: name.into(),
-        source: SceneSource::Builtin("test".into()),
-        meshes,
-        materials: vec![m],
-        textures: vec![],
-        lights: vec![],
-        directional: vec![],
-        camera,
-        bounds: Aabb::EMPTY,
-        warnings: vec![],
-    };
-    scene.finalize(std::path::Path::new("test")).unwrap();
-    scene
-}
-
 /// A UV sphere of radius `r` around the origin with inward normals.
 fn inward_sphere(r: f32, stacks: u32, slices: u32) -> Mesh {
     let mut positions = Vec::new();
@@ -75,36 +57,6 @@ fn inward_sphere(r: f32, stacks: u32, slices: u32) -> Mesh {
 }
 
 // --- VPL generation -------------------------------------------------------------------------------------------
-
-/// Flux a point light at height `h` above the centre of a square of side `side` sends onto it, by midpoint
-/// quadrature of `I * attenuation(d) * cos` (the renderer's falloff) over the square.
-fn intercepted_flux(intensity: f32, range: f32, h: f32, side: f32) -> f64 {
-    let n = 1000;
-    let cell = side as f64 / n as f64;
-    let mut sum = 0.0f64;
-    for i in 0..n {
-        for j in 0..n {
-            let x = (i as f64 + 0.5) * cell - side as f64 / 2.0;
-            let z = (j as f64 + 0.5) * cell - side as f64 / 2.0;
-            let d = (x * x + z * z + (h * h) as f64).sqrt();
-            let cos = h as f64 / d;
-            sum += intensity as f64 * attenuation(d as f32, range) as f64 * cos * cell * cell;
-        }
-    }
-    sum
-}
-
-/// The scene's BVH (the renderer's service), on a GPU of its own.
-fn scene_bvh(scene: &Scene) -> std::sync::Arc<shadowlab_core::accel::scene_bvh::SceneBvh> {
-    let gpu = gpu();
-    let layout = shadowlab_core::accel::gpu_scene::GpuScene::material_layout(&gpu.device);
-    shadowlab_core::accel::gpu_scene::GpuScene::new(&gpu, scene, &layout).bvh(&gpu).0
-}
-
-fn plane_scene(side: f32, albedo: f32) -> Scene {
-    let camera = Camera::look_at(Vec3::new(0.0, 6.0, 5.0), Vec3::ZERO, 60f32.to_radians(), 0.1, 50.0);
-    scene_of("plane", vec![quad("ground", Vec3::ZERO, side, 0)], albedo, camera)
-}
 
 #[test]
 fn vpls_carry_the_flux_the_plane_reflects_for_both_sources() {

@@ -39,6 +39,7 @@
 //! it, `vpl_common.wgsl`): `rho(x)/pi * Phi_i/pi * cos(theta_i) cos(theta_x) / max(d^2, d_clamp^2)`.
 
 pub mod halton;
+pub mod rsm;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -202,20 +203,6 @@ fn light_power(l: &PointLight) -> f32 {
     emission_solid_angle(l) * l.intensity * (l.color.x + l.color.y + l.color.z) / 3.0
 }
 
-/// Spots narrower than this get a single-face RSM (Dachsbacher's spot-light RSM); wider ones the cube.
-const SPOT_RSM_MAX_ANGLE: f32 = 80.0 * std::f32::consts::PI / 180.0;
-
-/// The direction through the centre of texel `(x, y)` of a single RSM face looking along `axis` with a
-/// half-angle whose tangent is `tan_half`, and the texel's solid angle.
-fn rsm_spot_texel(axis: Vec3, tan_half: f32, x: u32, y: u32) -> (Vec3, f32) {
-    let r = RSM_RESOLUTION as f32;
-    let s = ((x as f32 + 0.5) / r * 2.0 - 1.0) * tan_half;
-    let t = ((y as f32 + 0.5) / r * 2.0 - 1.0) * tan_half;
-    let (u, v) = axis.any_orthonormal_pair();
-    let texel_area = (2.0 * tan_half / r) * (2.0 * tan_half / r);
-    ((axis + u * s + v * t).normalize(), texel_area / (1.0 + s * s + t * t).powf(1.5))
-}
-
 /// A unit direction uniform in the cone of half-angle `angle` around `axis`.
 fn cone_direction(axis: Vec3, angle: f32, u: f32, v: f32) -> Vec3 {
     let cos = 1.0 - u * (1.0 - angle.cos());
@@ -241,25 +228,6 @@ fn cosine_direction(n: Vec3, u: f32, v: f32) -> Vec3 {
     (t * (r * phi.cos()) + b * (r * phi.sin()) + n * (1.0 - u).max(0.0).sqrt()).normalize_or(n)
 }
 
-/// The direction through the centre of RSM texel `(x, y)` of cube face `face` (the renderer's face order is
-/// irrelevant here: all six faces are drawn uniformly), and the texel's solid angle.
-fn rsm_texel(face: u32, x: u32, y: u32) -> (Vec3, f32) {
-    let r = RSM_RESOLUTION as f32;
-    let s = (x as f32 + 0.5) / r * 2.0 - 1.0;
-    let t = (y as f32 + 0.5) / r * 2.0 - 1.0;
-    let dir = match face {
-        0 => Vec3::new(1.0, -t, -s),
-        1 => Vec3::new(-1.0, -t, s),
-        2 => Vec3::new(s, 1.0, t),
-        3 => Vec3::new(s, -1.0, -t),
-        4 => Vec3::new(s, -t, 1.0),
-        _ => Vec3::new(-s, -t, -1.0),
-    };
-    let texel_area = (2.0 / r) * (2.0 / r);
-    let omega = texel_area / (1.0 + s * s + t * t).powf(1.5);
-    (dir.normalize(), omega)
-}
-
 /// Offset of a ray origin from a surface, relative to the scene's size.
 fn ray_epsilon(bvh: &SceneBvh) -> f32 {
     let b = bvh.cpu.nodes.first().map(|n| Vec3::from_array(n.max) - Vec3::from_array(n.min)).unwrap_or(Vec3::ONE);
@@ -267,57 +235,38 @@ fn ray_epsilon(bvh: &SceneBvh) -> f32 {
 }
 
 /// The square (`rsm`) or disc (`traced`) a sun's samples start from: perpendicular to its direction, covering
-/// the scene's bounding sphere, outside it towards the sun.
+/// the scene's bounding sphere, outside it towards the sun ([`rsm::SunSquare`], the disc inscribed in it).
 struct SunAperture {
-    /// Centre of the aperture (on the sun's side of the sphere).
-    origin: Vec3,
-    /// Unit axes of its plane.
-    u: Vec3,
-    v: Vec3,
-    /// The direction the sun's light travels (unit).
-    dir: Vec3,
-    /// The bounding sphere's radius.
-    radius: f32,
+    square: rsm::SunSquare,
     /// Its area: `4 R^2` (square) or `pi R^2` (disc).
     area: f32,
 }
 
 impl SunAperture {
     fn new(bvh: &SceneBvh, sun: &DirectionalLight, source: VplSource) -> Option<SunAperture> {
-        let root = bvh.cpu.nodes.first()?;
-        let (min, max) = (Vec3::from_array(root.min), Vec3::from_array(root.max));
-        let centre = (min + max) * 0.5;
-        let radius = ((max - min).length() * 0.5).max(1e-6);
-        let dir = sun.direction.try_normalize()?;
-        let (u, v) = dir.any_orthonormal_pair();
+        let square = rsm::SunSquare::new(bvh, sun)?;
+        let radius = square.radius;
         let area = match source {
             VplSource::Rsm => 4.0 * radius * radius,
             VplSource::Traced => std::f32::consts::PI * radius * radius,
         };
-        (centre.is_finite() && radius.is_finite()).then_some(SunAperture {
-            origin: centre - dir * (radius * 1.01),
-            u,
-            v,
-            dir,
-            radius,
-            area,
-        })
+        Some(SunAperture { square, area })
     }
 
     /// The start of sample `(a, b)` in [0, 1)^2: an RSM texel's centre, or a uniform point of the disc.
     fn point(&self, source: VplSource, a: f32, b: f32) -> Vec3 {
-        let (s, t) = match source {
+        match source {
             VplSource::Rsm => {
                 let r = RSM_RESOLUTION;
-                let texel = |x: f32| (((x * r as f32) as u32).min(r - 1) as f32 + 0.5) / r as f32 * 2.0 - 1.0;
-                (texel(a), texel(b))
+                let texel = |x: f32| ((x * r as f32) as u32).min(r - 1);
+                self.square.texel_point(r, texel(a), texel(b))
             }
             VplSource::Traced => {
                 let (r, phi) = (a.sqrt(), 2.0 * std::f32::consts::PI * b);
-                (r * phi.cos(), r * phi.sin())
+                let sq = &self.square;
+                sq.origin + (sq.u * (r * phi.cos()) + sq.v * (r * phi.sin())) * sq.radius
             }
-        };
-        self.origin + (self.u * s + self.v * t) * self.radius
+        }
     }
 }
 
@@ -394,7 +343,7 @@ pub fn generate(bvh: &SceneBvh, lights: &[PointLight], suns: &[DirectionalLight]
             Emitter::Sun(sun, Some(aperture)) => {
                 set.samples += 1;
                 let origin = aperture.point(settings.source, u[2], u[3]);
-                let Some(hit) = bvh.closest_hit(origin, aperture.dir, f32::INFINITY) else {
+                let Some(hit) = bvh.closest_hit(origin, aperture.square.dir, f32::INFINITY) else {
                     set.misses += 1;
                     continue;
                 };
@@ -451,11 +400,11 @@ fn point_sample(
         (VplSource::Traced, Some(spot)) => {
             (cone_direction(spot.direction, spot.outer_angle, u[1], u[2]), emission_solid_angle(light))
         }
-        (VplSource::Rsm, Some(spot)) if spot.outer_angle <= SPOT_RSM_MAX_ANGLE => {
+        (VplSource::Rsm, Some(spot)) if spot.outer_angle <= rsm::SPOT_RSM_MAX_ANGLE => {
             let r = RSM_RESOLUTION;
             let x = ((u[2] * r as f32) as u32).min(r - 1);
             let y = ((u[3] * r as f32) as u32).min(r - 1);
-            let (dir, omega) = rsm_spot_texel(spot.direction, spot.outer_angle.tan(), x, y);
+            let (dir, omega) = rsm::spot_texel(r, spot.direction, spot.outer_angle.tan(), x, y);
             (dir, omega * (r * r) as f32)
         }
         (VplSource::Rsm, _) => {
@@ -463,7 +412,7 @@ fn point_sample(
             let face = ((u[1] * 6.0) as u32).min(5);
             let x = ((u[2] * r as f32) as u32).min(r - 1);
             let y = ((u[3] * r as f32) as u32).min(r - 1);
-            let (dir, omega) = rsm_texel(face, x, y);
+            let (dir, omega) = rsm::cube_texel(r, face, x, y);
             (dir, omega * (6 * r * r) as f32)
         }
     };

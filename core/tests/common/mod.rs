@@ -4,9 +4,12 @@
 
 pub mod analytic;
 pub mod render;
+pub mod vpl_scenes;
 
 #[allow(unused_imports)] // not every test uses the render helpers
 pub use render::*;
+#[allow(unused_imports)]
+pub use vpl_scenes::*;
 
 use std::path::PathBuf;
 
