@@ -1027,6 +1027,54 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
 }
 
 #[test]
+fn the_maps_panel_shows_a_lights_reflective_shadow_map_with_the_texels_its_vpls_came_from() {
+    use shadowlab::gui::inspector::RSM_LABEL;
+    use shadowlab::rsm_picture::RsmShow;
+    use shadowlab_core::vpl::rsm::RsmLayout;
+    let mut h = start("inspector-rsm", "cornell");
+    h.state_mut().session.indirect.vpl.count = 256;
+    h.state_mut().session.indirect.technique = Some("vpl-raytraced".into());
+    h.state_mut().chrome.layout.focus(Pane::Maps);
+    h.run_steps(4);
+    // Chosen from the maps list, as a user would.
+    h.get_by_label("maps").click();
+    h.run_steps(2);
+    h.get_by_label(RSM_LABEL).click();
+    h.run_steps(2);
+    assert!(h.state().chrome.inspector.rsm_shown);
+    // Selecting a light shows its map: the Cornell box's lights are point lights, so a cube.
+    h.state_mut().session.selected = Some(3);
+    h.run_steps(3);
+    let light = h.state().session.animated_lights()[3];
+    let vpls = h.state().views.gpu.as_ref().unwrap().main.renderer.shared_vpls();
+    let app = h.state();
+    let rsm = &app.chrome.inspector.rsm;
+    assert_eq!(rsm.emitter, 3, "the selected light's RSM");
+    let image = rsm.image.as_ref().expect("the RSM was cast");
+    assert_eq!(image.layout, RsmLayout::Cube { eye: light.position });
+    assert_eq!((image.resolution, image.faces), (64, 6));
+    // Inside the closed box a texel sees a wall unless the wall lies past the light's range.
+    let seen: Vec<_> = image.texels.iter().flatten().collect();
+    assert!(seen.len() * 2 > image.texels.len(), "{} of {} texels see a wall", seen.len(), image.texels.len());
+    assert!(seen.iter().all(|t| t.distance <= light.range && t.flux.max_element() > 0.0));
+    // The rings: every first-bounce VPL of light 3 is counted in a texel.
+    let own = vpls.vpls.iter().filter(|v| v.light == 3).count();
+    assert!(own > 0 && rsm.drawn.values().sum::<u32>() as usize == own, "{own} VPLs, {:?}", rsm.drawn.len());
+    h.get_by_label_contains(&format!("of the frame's {} VPLs came from here", vpls.vpls.len()));
+    h.get_by_label_contains("light 3: a cube of 6 x 64² texels");
+    // The normal view, then a sun-less scene's last emitter is the last light.
+    h.get_by_label("normal").click();
+    h.run_steps(1);
+    assert_eq!(h.state().chrome.inspector.rsm.show, RsmShow::Normal);
+    // Back to the technique's maps: the reference's cube maps are read again.
+    h.get_by_label("maps").click();
+    h.run_steps(2);
+    h.get_by_label_contains("shadow maps").click();
+    h.run_steps(3);
+    assert!(!h.state().chrome.inspector.rsm_shown && h.state().chrome.inspector.atlas.is_some());
+}
+
+#[test]
 fn every_explain_step_of_every_technique_draws_without_a_panic() {
     // A glyph egui's fonts lack (an arrow, say) in a step's text panics the app when the step is chosen.
     let mut h = start("explain-all", "cornell");

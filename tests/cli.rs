@@ -870,6 +870,36 @@ fn maps_out_saves_the_shadow_atlases() {
 }
 
 #[test]
+fn rsm_out_saves_a_lights_reflective_shadow_map_with_its_vpls_marked() {
+    let dir = out_dir("rsm");
+    let rsm = dir.join("rsm.png");
+    let _ = std::fs::remove_file(&rsm);
+    let rsm_arg = rsm.to_str().unwrap().to_string();
+    let scene = ["--scene", "cornell", "--width", "32", "--height", "24", "--technique", "unshadowed"];
+    let with = ["--vpls", "512", "--indirect", "vpl-raytraced", "--rsm-light", "5", "--rsm-res", "32"];
+    render_ok("rsm", &[&scene[..], &with[..], &["--rsm-out", &rsm_arg][..]].concat());
+    let png = image::open(&rsm).unwrap().to_rgba8();
+    // A point light's cube as a cross of 4 x 3 faces; inside the box the walls it reaches are lit, and the
+    // texels its VPLs came from are marked.
+    assert_eq!(png.dimensions(), (128, 96));
+    let mark = [255, 60, 200, 255];
+    assert!(png.pixels().any(|p| p.0 == mark), "no VPL marked");
+    assert!(png.pixels().any(|p| p.0 != mark && p[0].max(p[1]) > 100), "nothing lit");
+    // Normals without an indirect technique: no marks.
+    let normals = ["--rsm-light", "0", "--rsm-show", "normal", "--rsm-out", &rsm_arg];
+    render_ok("rsm", &[&scene[..], &normals[..]].concat());
+    let png = image::open(&rsm).unwrap().to_rgba8();
+    assert!(!png.pixels().any(|p| p.0 == mark), "marks without VPLs");
+    let out = dir.join("x.png");
+    let base = ["render", "--scene", "cornell", "--width", "8", "--height", "8", "--out", out.to_str().unwrap()];
+    let bad_light = ["--rsm-out", &rsm_arg, "--rsm-light", "40"];
+    assert_fails_with(&[&base[..], &bad_light[..]].concat(), "--rsm-light 40: the scene has 32 point lights");
+    let bad_res = ["--rsm-out", &rsm_arg, "--rsm-res", "0"];
+    assert_fails_with(&[&base[..], &bad_res[..]].concat(), "choose 1 to 512");
+    assert_fails_with(&[&base[..], &["--rsm-out", "rsm.jpg"][..]].concat(), "rsm.jpg");
+}
+
+#[test]
 fn a_scene_without_lights_gets_a_default_layout_and_says_so() {
     let dir = out_dir("unlit");
     let png = dir.join("out.png");

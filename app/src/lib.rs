@@ -8,5 +8,6 @@ pub mod gui;
 pub mod measure;
 pub mod plot;
 pub mod rounds;
+pub mod rsm_picture;
 pub mod sequence;
 pub mod tradeoff;

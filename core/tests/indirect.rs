@@ -4,11 +4,9 @@
 mod common;
 
 use common::*;
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3};
 use shadowlab_core::renderer::Component;
-use shadowlab_core::scene::{
-    attenuation, Aabb, Camera, DirectionalLight, Material, Mesh, PointLight, Scene, SceneSource,
-};
+use shadowlab_core::scene::{attenuation, Camera, DirectionalLight, Mesh, PointLight, Scene};
 use shadowlab_core::technique::ParamValue;
 use shadowlab_core::vpl::{self, Vpl, VplSet, VplSettings, VplSource};
 use shadowlab_core::{RenderSettings, Renderer, ToneMap};

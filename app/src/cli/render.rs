@@ -12,6 +12,7 @@ use super::args::{check_technique, FrameArgs, SceneArgs, TechniqueChoice};
 use super::progress::Progress;
 use super::setup::{draw_overlays, setup};
 use crate::files::{check_output_path, encode_png, write_atomic};
+use crate::rsm_picture::{mark_drawn, picture, RsmShow};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -38,6 +39,20 @@ pub struct RenderArgs {
     /// images the technique renders (INSM's intermediate images) as `<name>-images.png`.
     #[arg(long)]
     pub maps_out: Option<PathBuf>,
+    /// Save a light's reflective shadow map (what the `rsm` VPL source draws its VPLs from; cast on the CPU) as
+    /// this PNG: a cube unfolded as a cross, a spot's face or a sun's square; with an indirect technique, the
+    /// texels the frame's first-bounce VPLs of that light came from in magenta.
+    #[arg(long)]
+    pub rsm_out: Option<PathBuf>,
+    /// Whose RSM: a point light's index, or the number of point lights + k for sun k.
+    #[arg(long, default_value_t = 0)]
+    pub rsm_light: usize,
+    /// The RSM's texels a face side (1 to 512).
+    #[arg(long, default_value_t = 128)]
+    pub rsm_res: u32,
+    /// What the RSM's texels show.
+    #[arg(long, value_enum, default_value_t = RsmShow::Flux)]
+    pub rsm_show: RsmShow,
 }
 
 #[derive(Serialize)]
@@ -59,6 +74,9 @@ struct RenderReport<'a> {
 pub fn run(args: RenderArgs) -> Result<()> {
     check_output_path(&args.out, "png")?;
     if let Some(m) = &args.maps_out {
+        check_output_path(m, "png")?;
+    }
+    if let Some(m) = &args.rsm_out {
         check_output_path(m, "png")?;
     }
     if let Some(r) = &args.report {
@@ -122,6 +140,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if wrote == 0 {
             bail!("--maps-out: neither '{}' nor the indirect technique renders shadow maps", args.choice.technique);
         }
+    }
+    if let Some(path) = &args.rsm_out {
+        write_rsm(&renderer, &lights, &args, path)?;
     }
     if args.overlays || !args.overlay_layers.is_empty() {
         draw_overlays(&mut renderer, technique.as_ref(), &camera, &lights, &args.overlay_layers)?;
@@ -206,6 +227,54 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if !frame.quiet {
             eprintln!("wrote {}", path.display());
         }
+    }
+    Ok(())
+}
+
+/// `--rsm-out`: the chosen light's reflective shadow map, with the texels its VPLs of this frame came from.
+fn write_rsm(
+    renderer: &shadowlab_core::Renderer,
+    lights: &[shadowlab_core::scene::PointLight],
+    args: &RenderArgs,
+    path: &std::path::Path,
+) -> Result<()> {
+    use shadowlab_core::vpl::rsm::{rsm_image, RsmEmitter};
+    let suns = renderer.directional_lights();
+    let i = args.rsm_light;
+    let emitter = match i.checked_sub(lights.len()) {
+        None => RsmEmitter::Point(&lights[i]),
+        Some(k) if k < suns.len() => RsmEmitter::Sun(&suns[k]),
+        Some(_) => bail!(
+            "--rsm-light {i}: the scene has {} point lights (0 to {}) and {} suns (numbered after them)",
+            lights.len(),
+            lights.len() as i64 - 1,
+            suns.len()
+        ),
+    };
+    let bvh = renderer.scene().bvh(renderer.gpu()).0;
+    let image = rsm_image(&bvh, emitter, args.rsm_res).map_err(|e| anyhow::anyhow!("--rsm-out: {e}"))?;
+    let mut png = picture(&image, args.rsm_show);
+    let drawn = image.drawn_texels(renderer.vpls(), i as u32);
+    mark_drawn(&mut png, &image, &drawn);
+    write_atomic(path, &encode_png(&png)?)?;
+    if !args.frame.quiet {
+        let total = image.total_flux();
+        eprintln!(
+            "wrote {} (the RSM of {}: {} faces of {}², reflected flux ({:.4}, {:.4}, {:.4}); {} of the frame's {} VPLs \
+             came from it, first bounce)",
+            path.display(),
+            match i.checked_sub(lights.len()) {
+                Some(k) => format!("sun {k}"),
+                None => format!("light {i}"),
+            },
+            image.faces,
+            image.resolution,
+            total.x,
+            total.y,
+            total.z,
+            drawn.values().sum::<u32>(),
+            renderer.vpls().vpls.len()
+        );
     }
     Ok(())
 }

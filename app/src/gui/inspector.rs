@@ -16,6 +16,13 @@ use glam::Vec3;
 use shadowlab_core::services::cube_shadows::{CubeAtlas, TileProjection};
 use shadowlab_core::GpuContext;
 
+use crate::gui::image_view::ImageView;
+use crate::gui::rsm_view::RsmView;
+use crate::rsm_picture::{CROSS, FACES};
+
+/// The maps list's entry for [`RsmView`].
+pub const RSM_LABEL: &str = "reflective shadow map of a light (where VPLs come from)";
+
 /// Which maps are shown: the direct or the indirect technique's, its shadow maps (`set` 0) or its depth
 /// image set `set - 1` ([`Technique::depth_images`](shadowlab_core::technique::Technique::depth_images)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,10 +115,6 @@ impl AtlasDepths {
         self.cube_count
     }
 }
-
-/// Where each face of a cube goes in the cross, in tiles: +y on top, −x +z +x −z across, −y below.
-const CROSS: [(u32, u32); 6] = [(2, 1), (0, 1), (1, 0), (1, 2), (1, 1), (3, 1)];
-const FACES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
 /// What the inspector shows: an image of depths (NaN where nothing is, outside the cross) and, per pixel, the
 /// tile it came from (tiles are `resolution`-aligned in both layouts, so a pixel's texel in its tile is its
@@ -285,9 +288,8 @@ pub struct Inspector {
     texture: Option<egui::TextureHandle>,
     /// The frame (view frame key, source) the atlas was read from.
     pub read_from: Option<(u64, MapSource)>,
-    /// Texel of the shown image per point of the panel, and the image's offset (zoom and pan).
-    zoom: f32,
-    offset: egui::Vec2,
+    /// Zoom and pan.
+    view: ImageView,
     pub error: Option<String>,
     /// The readout of the texel under the pointer in the last frame.
     pub readout: Option<String>,
@@ -300,6 +302,9 @@ pub struct Inspector {
     pub note: Option<String>,
     /// The map sets the techniques offered in the last UI frame, with their labels.
     pub sources: Vec<(MapSource, String)>,
+    /// Show a light's reflective shadow map ([`RsmView`]) instead of a technique's maps.
+    pub rsm_shown: bool,
+    pub rsm: RsmView,
 }
 
 impl Default for Inspector {
@@ -311,14 +316,15 @@ impl Default for Inspector {
             shown: None,
             texture: None,
             read_from: None,
-            zoom: 1.0,
-            offset: egui::Vec2::ZERO,
+            view: ImageView::default(),
             error: None,
             readout: None,
             linear: false,
             followed: None,
             note: None,
             sources: Vec::new(),
+            rsm_shown: false,
+            rsm: RsmView::default(),
         }
     }
 }
@@ -359,8 +365,7 @@ impl Inspector {
                 if self.cube != Some(c) {
                     self.cube = Some(c);
                     self.shown = None;
-                    self.zoom = 1.0;
-                    self.offset = egui::Vec2::ZERO;
+                    self.view.reset();
                 }
             }
             None => self.note = Some(format!("light {light} has no cube map in the last batch")),
@@ -378,18 +383,33 @@ impl Inspector {
         }
     }
 
-    /// The panel's controls and image; `sources` are the map sets the techniques offer this frame.
-    pub fn ui(&mut self, ui: &mut egui::Ui, sources: Vec<(MapSource, String)>) {
+    /// The panel's controls and image; `sources` are the map sets the techniques offer this frame, `lights` the
+    /// point lights (the RSM view numbers suns after them).
+    pub fn ui(&mut self, ui: &mut egui::Ui, sources: Vec<(MapSource, String)>, lights: usize) {
         self.sources = sources;
         let sources = &self.sources;
-        let current = sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none");
+        let current = match self.rsm_shown {
+            true => RSM_LABEL,
+            false => sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none"),
+        };
         // Labelled (the label also names it for accessibility), and narrow enough to leave the label room.
         let combo = egui::ComboBox::from_label("maps").width((ui.available_width() - 48.0).max(80.0));
+        let (mut source, mut rsm_shown) = (self.source, self.rsm_shown);
         combo.selected_text(current).show_ui(ui, |ui| {
-            for (source, label) in sources {
-                ui.selectable_value(&mut self.source, *source, label);
+            for (s, label) in sources {
+                if ui.selectable_label(!rsm_shown && source == *s, label).clicked() {
+                    (source, rsm_shown) = (*s, false);
+                }
+            }
+            if ui.selectable_label(rsm_shown, RSM_LABEL).clicked() {
+                rsm_shown = true;
             }
         });
+        (self.source, self.rsm_shown) = (source, rsm_shown);
+        if self.rsm_shown {
+            self.rsm.ui(ui, lights);
+            return;
+        }
         if let Some(e) = &self.error {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
         }
@@ -433,45 +453,12 @@ impl Inspector {
         if cube != self.cube {
             self.cube = cube;
             self.shown = None;
-            self.zoom = 1.0;
-            self.offset = egui::Vec2::ZERO;
+            self.view.reset();
         }
         self.refresh(ui.ctx());
         let (Some(shown), Some(texture)) = (&self.shown, &self.texture) else { return };
-        let size = egui::vec2(ui.available_width(), (ui.available_height() - 24.0).max(120.0));
-        let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
-        // Fit the image into the rect at zoom 1, then zoom around the pointer and pan by dragging.
-        let image_size = egui::vec2(shown.width as f32, shown.height as f32);
-        let fit = (rect.width() / image_size.x).min(rect.height() / image_size.y);
-        if response.hovered() {
-            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                let before = self.zoom;
-                self.zoom = (self.zoom * (scroll * 0.005).exp()).clamp(1.0, 64.0);
-                if let Some(p) = response.hover_pos() {
-                    // Keep the texel under the pointer where it is.
-                    let from_center = p - rect.center() - self.offset;
-                    self.offset -= from_center * (self.zoom / before - 1.0);
-                }
-            }
-        }
-        if response.dragged() {
-            self.offset += response.drag_delta();
-        }
-        let scale = fit * self.zoom;
-        let shown_rect = egui::Rect::from_center_size(rect.center() + self.offset, image_size * scale);
-        let painter = ui.painter_at(rect);
-        painter.rect_filled(rect, 0.0, egui::Color32::from_gray(30));
-        painter.image(
-            texture.id(),
-            shown_rect,
-            egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
-            egui::Color32::WHITE,
-        );
-        self.readout = response.hover_pos().and_then(|p| {
-            let t = (p - shown_rect.min) / scale;
-            (t.x >= 0.0 && t.y >= 0.0).then(|| shown.readout(t.x as u32, t.y as u32)).flatten()
-        });
+        let placed = self.view.show(ui, texture, [shown.width, shown.height], 24.0);
+        self.readout = placed.hovered.and_then(|(x, y)| shown.readout(x, y));
         ui.label(self.readout.clone().unwrap_or_else(|| "scroll to zoom, drag to pan".into()));
     }
 }

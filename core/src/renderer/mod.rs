@@ -331,6 +331,11 @@ impl Renderer {
         &self.vpls.set
     }
 
+    /// The same, shared: a new set is a new allocation, so the pointer tells whether the VPLs changed.
+    pub fn shared_vpls(&self) -> std::sync::Arc<VplSet> {
+        self.vpls.set.clone()
+    }
+
     /// Replace the scene's geometry and materials.
     pub fn set_scene(&mut self, scene: &Scene) {
         self.scene = std::sync::Arc::new(GpuScene::new(&self.gpu, scene, &self.layouts.material));

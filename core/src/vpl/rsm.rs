@@ -89,7 +89,7 @@ fn cube_texel_of(r: u32, dir: Vec3) -> Option<(u32, u32, u32)> {
     } else {
         (if dir.z > 0.0 { 4 } else { 5 }, a.z)
     };
-    if !(m > 0.0) {
+    if m.is_nan() || m <= 0.0 {
         return None;
     }
     let d = dir / m;

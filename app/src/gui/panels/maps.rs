@@ -11,6 +11,7 @@ use crate::gui::views::Views;
 /// the camera moves), then shows them; a selected light shows its cube map.
 pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, ui: &mut egui::Ui) {
     use crate::gui::inspector::{AtlasDepths, MapSource};
+    use crate::gui::rsm_view::RsmInputs;
     use shadowlab_core::technique::Technique;
     // Every map set of the direct and the indirect technique: shadow maps first, then depth images.
     fn sets(t: &dyn Technique) -> Vec<(&shadowlab_core::services::cube_shadows::CubeAtlas, &'static str)> {
@@ -44,6 +45,23 @@ pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, 
             inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
         }
         let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
+        if inspector.rsm_shown {
+            let lights = session.animated_lights();
+            let renderer = &gpu.main.renderer;
+            let ctx = gpu.ctx.clone();
+            let bvh = || renderer.scene().bvh(&ctx).0;
+            inspector.rsm.update(&RsmInputs {
+                bvh: &bvh,
+                scene: std::sync::Arc::as_ptr(&renderer.shared_scene()) as usize,
+                lights: &lights,
+                suns: renderer.directional_lights(),
+                vpls: &renderer.shared_vpls(),
+                selected,
+                settled: gpu.main.is_converged(),
+            });
+            inspector.ui(ui, sources, lights.len());
+            return;
+        }
         let source = inspector.source;
         let from = (gpu.main.frame_key(), source);
         if gpu.main.is_converged() && complete && inspector.read_from != Some(from) {
@@ -82,5 +100,5 @@ pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, 
     if let Some((i, positions)) = follow {
         inspector.follow_light(i, &positions);
     }
-    inspector.ui(ui, sources);
+    inspector.ui(ui, sources, session.lights.len());
 }
