@@ -1072,6 +1072,13 @@ fn the_maps_panel_shows_a_lights_reflective_shadow_map_with_the_texels_its_vpls_
     h.get_by_label_contains("shadow maps").click();
     h.run_steps(3);
     assert!(!h.state().chrome.inspector.rsm_shown && h.state().chrome.inspector.atlas.is_some());
+    // The VPL techniques' first Explain step shows it again.
+    h.state_mut().chrome.layout.focus(Pane::Explain);
+    h.run_steps(1);
+    h.get_by_label("1. Virtual point lights").click();
+    h.run_steps(2);
+    assert!(h.state().chrome.inspector.rsm_shown, "the VPL step shows the RSM");
+    h.get_by_label_contains("of the frame's");
 }
 
 #[test]

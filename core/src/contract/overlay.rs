@@ -184,7 +184,8 @@ pub struct HoverPoint {
 
 /// One step of a technique's paper, for teaching ("Explain" in the app): what it does, and what shows it: the
 /// overlay layers to switch on (the technique's others are switched off), whether its maps show it (and which:
-/// `maps` 0 is `Technique::shadow_atlas`, `i` ≥ 1 the i-th of `Technique::depth_images`), and parameter
+/// `maps` 0 is `Technique::shadow_atlas`, `i` ≥ 1 the i-th of `Technique::depth_images`, [`RSM_MAPS`] a light's
+/// reflective shadow map, where the shared VPLs come from), and parameter
 /// values that make the image show the step (e.g. one cluster's visibility alone), as text the parameter's kind
 /// parses; the app sets them while the step is chosen and restores the user's values for the other steps.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -196,6 +197,10 @@ pub struct ExplainStep {
     pub maps: usize,
     pub params: &'static [(&'static str, &'static str)],
 }
+
+/// [`ExplainStep::maps`] of a step shown by a light's reflective shadow map (the selected light's), with the
+/// texels the frame's VPLs came from: no technique's own maps, the renderer's shared VPL source.
+pub const RSM_MAPS: usize = usize::MAX;
 
 /// The legend of the layers of [`light_overlays`], which every technique offers; None for other layers.
 pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {

@@ -35,7 +35,7 @@ pub use crate::services::context::{accumulate_pass, DirectionalVisibility, Frame
 
 pub use overlay::{
     index_color, light_layer_legend, light_overlay_color, light_overlays, sun_overlays, ExplainStep, Glyph, HoverPoint,
-    LegendEntry, LightDetails, Overlay, OverlayLayer, SUNS_LAYER,
+    LegendEntry, LightDetails, Overlay, OverlayLayer, RSM_MAPS, SUNS_LAYER,
 };
 pub use params::{check_param, CameraPose, Param, ParamError, ParamKind, ParamValue};
 pub use work::WorkCounts;

@@ -71,7 +71,10 @@ pub fn show_explain_step(
     }
     let indirect = key != session.technique;
     if step.shows_shadow_maps {
-        chrome.inspector.source = crate::gui::inspector::MapSource { indirect, set: step.maps };
+        chrome.inspector.rsm_shown = step.maps == shadowlab_core::technique::RSM_MAPS;
+        if !chrome.inspector.rsm_shown {
+            chrome.inspector.source = crate::gui::inspector::MapSource { indirect, set: step.maps };
+        }
         chrome.layout.request_focus(Pane::Maps);
     }
     let named: std::collections::BTreeSet<&str> = steps.iter().flat_map(|s| s.params.iter().map(|(k, _)| *k)).collect();

@@ -13,7 +13,8 @@ impl FuzzyClustering {
                 text:
                     "Particles traced from the lights leave virtual point lights where they land (the shared VPL set).",
                 layers: &["vpls (flux)", "vpls (flux, every n-th)"],
-                shows_shadow_maps: false,
+                shows_shadow_maps: true,
+                maps: crate::technique::RSM_MAPS,
                 ..Default::default()
             },
             ExplainStep {

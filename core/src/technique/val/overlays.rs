@@ -11,7 +11,8 @@ impl VirtualAreaLights {
                 title: "1. VPLs",
                 text: "The lights' reflective shadow maps leave virtual point lights on the surfaces they light.",
                 layers: &["vpls by val"],
-                shows_shadow_maps: false,
+                shows_shadow_maps: true,
+                maps: crate::technique::RSM_MAPS,
                 ..Default::default()
             },
             ExplainStep {

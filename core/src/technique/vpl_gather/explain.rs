@@ -32,6 +32,8 @@ pub(super) fn explain_steps(visibility: Visibility) -> Vec<ExplainStep> {
                    bounce) a VPL stands, reflecting the surface's share of the flux; it sends Phi/pi cos cos / \
                    max(d^2, d_clamp^2) to a pixel. Coloured by flux.",
             layers: &["vpls (flux)", "vpls (flux, every n-th)", "vpl normals", "vpl normals (every n-th)"],
+            shows_shadow_maps: true,
+            maps: crate::technique::RSM_MAPS,
             params: &[("interleave", "off")],
             ..Default::default()
         },
