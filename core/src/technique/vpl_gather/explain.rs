@@ -35,7 +35,6 @@ pub(super) fn explain_steps(visibility: Visibility) -> Vec<ExplainStep> {
             shows_shadow_maps: true,
             maps: crate::technique::RSM_MAPS,
             params: &[("interleave", "off")],
-            ..Default::default()
         },
         ExplainStep {
             title: "2. Each VPL's visibility",
