@@ -14,6 +14,9 @@ pub const CROSS: [(u32, u32); 6] = [(2, 1), (0, 1), (1, 0), (1, 2), (1, 1), (3, 
 pub const FACES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 /// Outside the cross.
 const OUTSIDE: [u8; 4] = [20, 24, 40, 255];
+/// A texel that sees nothing (its ray leaves the scene or the light's range): a checkerboard of 4-texel
+/// squares, so it is not taken for a dark surface.
+pub const EMPTY: [[u8; 4]; 2] = [[62, 62, 66, 255], [40, 40, 44, 255]];
 /// A texel a VPL was drawn from, in a file.
 pub const MARK: [u8; 4] = [255, 60, 200, 255];
 
@@ -62,7 +65,7 @@ pub fn texel_at(image: &RsmImage, px: u32, py: u32) -> Option<(u32, u32, u32)> {
 }
 
 /// The map as colours: flux (tone-mapped so the 99th percentile of the brightest channel is white), normals or
-/// distance; empty texels black, outside the cross dark blue.
+/// distance; texels that see nothing a grey checkerboard ([`EMPTY`]), outside the cross dark blue.
 pub fn picture(image: &RsmImage, show: RsmShow) -> image::RgbaImage {
     let [w, h] = picture_size(image);
     let texels = image.texels.iter().flatten();
@@ -76,7 +79,7 @@ pub fn picture(image: &RsmImage, show: RsmShow) -> image::RgbaImage {
         .flat_map(|py| (0..w).map(move |px| (px, py)))
         .flat_map(|(px, py)| {
             let Some((face, x, y)) = texel_at(image, px, py) else { return OUTSIDE };
-            let Some(t) = image.texel(face, x, y) else { return [0, 0, 0, 255] };
+            let Some(t) = image.texel(face, x, y) else { return EMPTY[((x / 4 + y / 4) % 2) as usize] };
             let c = match show {
                 RsmShow::Flux => (t.flux / white).clamp(Vec3::ZERO, Vec3::ONE).powf(1.0 / 2.2),
                 RsmShow::Normal => t.normal * 0.5 + 0.5,
@@ -169,7 +172,7 @@ mod tests {
         let at = |p: &image::RgbaImage, x: u32, y: u32| p.get_pixel(x, y).0;
         assert_eq!(at(&picture, 3, 1), [255; 4]);
         assert!(at(&picture, 2, 0)[0] < 200 && at(&picture, 2, 0)[0] > 0);
-        assert_eq!(at(&picture, 2, 2), [0, 0, 0, 255], "-x sees nothing");
+        assert_eq!((at(&picture, 0, 2), at(&picture, 1, 3)), (EMPTY[0], EMPTY[0]), "-x sees nothing");
         assert_eq!(at(&picture, 0, 0), OUTSIDE, "outside the cross");
         // Normals -y: (0.5, 0, 0.5) in RGB; distance: the nearest white-ish, the farthest darker.
         let normals = super::picture(&image, RsmShow::Normal);
