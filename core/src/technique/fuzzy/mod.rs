@@ -47,6 +47,7 @@ pub mod kmeans;
 mod overlays;
 pub mod params;
 mod passes;
+mod preview;
 
 use std::sync::Arc;
 
@@ -127,6 +128,8 @@ struct Inspection {
     /// the overlays every UI frame.
     hard_map: Option<Arc<Vec<u32>>>,
     blend_map: Option<Arc<Vec<[u8; 4]>>>,
+    /// Their size: the frame's, or the preview's grid while the camera moves ([`preview`]).
+    map_size: (u32, u32),
 }
 
 pub struct FuzzyClustering {
@@ -184,6 +187,8 @@ pub struct FuzzyClustering {
     last_step: &'static str,
     /// The camera of the last frame: the shading-point clusters are of its view.
     frame_camera: Option<crate::scene::Camera>,
+    /// The camera the preview last clustered the shading points for ([`preview`]).
+    followed_view: Option<crate::scene::Camera>,
 }
 
 /// The largest turn (degrees) and move (share of the scene's diagonal) of the camera between two frames for
@@ -273,6 +278,7 @@ impl FuzzyClustering {
             ray_pass,
             vpls: Arc::default(),
             frame_camera: None,
+            followed_view: None,
             mode: ClusterMode::Both,
             light_count: 0,
             sp_count: 0,
@@ -354,6 +360,7 @@ impl Technique for FuzzyClustering {
     fn prepare(&mut self, ctx: &FrameContext) -> Result<usize, GpuError> {
         self.vpls = ctx.vpls.set.clone();
         self.frame_camera = Some(*ctx.camera);
+        self.followed_view = None;
         self.scene_size = ctx.scene.bounds.size().length().max(1e-6);
         self.mode = self.params.cluster_mode();
         let (w, h) = ctx.size;

@@ -198,10 +198,15 @@ impl FuzzyClustering {
             }
         }
         let mut stale_layers = vec!["probe: clusters and visibility rays (green visible, red blocked)"];
+        let mut note = ctx.vpl_note();
         if self.frame_camera.as_ref() != Some(ctx.camera) {
-            stale_layers.extend(SP_LAYERS);
+            // The camera moved: the shading points again on the CPU, or the last frame's layers, said stale.
+            match self.follow_view(ctx) {
+                Some(view) => note = Some(note.map_or(view.clone(), |n| format!("{n}; {view}"))),
+                None => stale_layers.extend(SP_LAYERS),
+            }
         }
-        crate::technique::OverlayUpdate::Live { note: ctx.vpl_note(), stale_layers }
+        crate::technique::OverlayUpdate::Live { note, stale_layers }
     }
 
     pub(super) fn overlay_layers(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
@@ -244,7 +249,7 @@ impl FuzzyClustering {
                     .collect(),
             });
         }
-        let (w, h) = ins.size;
+        let (w, h) = ins.map_size;
         if let Some(ids) = &ins.hard_map {
             layers.push(OverlayLayer {
                 name: "shading-point clusters",
@@ -296,27 +301,9 @@ impl FuzzyClustering {
         if ins.sp_assignment.is_empty() || ins.sp_assignment.len() != pixels * f {
             return;
         }
-        ins.hard_map = Some(Arc::new(ins.sp_assignment.iter().step_by(f).copied().collect()));
-        let mode = self.params.shade_mode();
-        let blend: Vec<[u8; 4]> = (0..pixels)
-            .map(|m| {
-                let e = &ins.sp_assignment[m * f..m * f + f];
-                if e[0] == u32::MAX {
-                    return [0, 0, 0, 0];
-                }
-                let weights = kmeans::weights(mode, e, &ins.sp_inverse[m * f..m * f + f]);
-                let mut c = [0.0f32; 3];
-                for (&k, &wt) in e.iter().zip(&weights) {
-                    if k != u32::MAX && wt > 0.0 {
-                        let col = index_color(k as usize);
-                        for i in 0..3 {
-                            c[i] += wt * col[i];
-                        }
-                    }
-                }
-                [(c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8, 140]
-            })
-            .collect();
+        let (hard, blend) = pixel_maps(self.params.shade_mode(), f, &ins.sp_assignment, &ins.sp_inverse);
+        ins.map_size = (w, h);
+        ins.hard_map = Some(Arc::new(hard));
         ins.blend_map = Some(Arc::new(blend));
     }
 
@@ -353,4 +340,36 @@ impl FuzzyClustering {
         }
         out
     }
+}
+
+/// The per-pixel maps of an assignment of `F` entries a pixel: each pixel's nearest cluster, and the clusters'
+/// colours blended by the mode's weights (transparent where the pixel has no cluster).
+pub(super) fn pixel_maps(
+    mode: kmeans::ShadeMode,
+    f: usize,
+    assignment: &[u32],
+    inverse: &[f32],
+) -> (Vec<u32>, Vec<[u8; 4]>) {
+    let f = f.max(1);
+    let hard = assignment.iter().step_by(f).copied().collect();
+    let blend = (0..assignment.len() / f)
+        .map(|m| {
+            let e = &assignment[m * f..m * f + f];
+            if e[0] == u32::MAX {
+                return [0, 0, 0, 0];
+            }
+            let weights = kmeans::weights(mode, e, &inverse[m * f..m * f + f]);
+            let mut c = [0.0f32; 3];
+            for (&k, &wt) in e.iter().zip(&weights) {
+                if k != u32::MAX && wt > 0.0 {
+                    let col = index_color(k as usize);
+                    for i in 0..3 {
+                        c[i] += wt * col[i];
+                    }
+                }
+            }
+            [(c[0] * 255.0) as u8, (c[1] * 255.0) as u8, (c[2] * 255.0) as u8, 140]
+        })
+        .collect();
+    (hard, blend)
 }
