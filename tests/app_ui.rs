@@ -1009,6 +1009,17 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     let distance = shown.distance(r / 2, r / 2).expect("the first viewpoint sees the room");
     // Inside the 2 m room every surface is less than its diagonal (3.5 m) away, from a viewpoint at most ~2 m outside.
     assert!(readout.contains("tile 0 · view") && distance > 0.05 && distance < 6.0, "{readout}");
+    // Explain step 3 (their meshes) turns `mesh_views` on and shows the meshes seen from the viewpoints.
+    h.state_mut().chrome.layout.focus(Pane::Explain);
+    h.run_steps(1);
+    h.get_by_label("3. Their meshes").click();
+    h.run_steps(5);
+    let meshes = MapSource { indirect: false, set: 2 };
+    let sources = h.state().chrome.inspector.sources.clone();
+    assert!(sources.iter().any(|(s, l)| *s == meshes && l.contains("meshes seen from the viewpoints")), "{sources:?}");
+    assert_eq!(h.state().chrome.inspector.source, meshes);
+    let atlas = h.state().chrome.inspector.atlas.as_ref().expect("the meshes' views were read back");
+    assert!(atlas.what.contains("meshes seen from the viewpoints") && atlas.depths.iter().any(|d| *d < 1.0));
     // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
     h.state_mut().session.technique = "lightcluster".into();
     h.state_mut().chrome.inspector.source = MapSource::DIRECT;

@@ -521,3 +521,68 @@ fn steep_edges_held_to_the_tighter_tolerance_open_the_arcades_arches() {
         shares[1] * 100.0
     );
 }
+
+#[test]
+fn the_meshes_seen_from_the_viewpoints_match_the_intermediate_images_and_leave_the_image_alone() {
+    // `mesh_views` renders the reconstructed meshes from every viewpoint into a depth image set of their own,
+    // tile j from viewpoint j as the intermediate images: where the mesh reproduces the surface the two agree
+    // (up to the rasterisation of the same surface twice); where epsilon cuts it the mesh leaves holes. The
+    // frame's image and counts do not change.
+    let scene = plane_and_occluder();
+    let lights = lights_above();
+    let mut r = renderer(&scene, linear_settings(W, H));
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.custom_viewpoints = viewpoints_over_the_plate();
+    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    insm.set_param("insm_res", &ParamValue::Int(64)).unwrap();
+    let (without, plain) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    assert_eq!(insm.depth_images().len(), 1, "off by default: the intermediate images alone");
+    assert_eq!(insm.tuning_params(), ["mesh_views"]);
+    insm.set_param("mesh_views", &ParamValue::Bool(true)).unwrap();
+    let (with, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
+    assert!(with == without, "the meshes' views changed the image");
+    assert_eq!(report.counts.technique.insm_mesh_triangles, plain.counts.technique.insm_mesh_triangles);
+    assert_eq!(report.counts.technique.shadow_triangles_submitted, plain.counts.technique.shadow_triangles_submitted);
+    let images = insm.depth_images();
+    assert_eq!(images.len(), 2);
+    assert!(images[1].1.contains("meshes seen from the viewpoints"), "{}", images[1].1);
+    let gpu = r.gpu().clone();
+    let read = |atlas: &shadowlab_core::services::cube_shadows::CubeAtlas| {
+        let size = atlas.texture.size();
+        let bytes =
+            shadowlab_core::gpu::readback::read_texture(&gpu, &atlas.texture, size.width, size.height, 4).unwrap();
+        let depths: Vec<f32> = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
+        (depths, size.width, atlas.resolution, atlas.tiles_per_row, atlas.projections.clone())
+    };
+    let (source, width, res, per_row, projections) = read(images[0].0);
+    let (meshes, mesh_width, mesh_res, mesh_per_row, mesh_projections) = read(images[1].0);
+    assert_eq!((mesh_width, mesh_res, mesh_per_row), (width, res, per_row), "the same layout");
+    let k = viewpoints_over_the_plate().len();
+    assert_eq!(mesh_projections[..k], projections[..k], "tile j seen from viewpoint j");
+    // Over every viewpoint's tile, the texels that see a surface in the image: the mesh sees it there too, at
+    // about the same distance (a sample of slack at the plate's eroded rim).
+    let (mut seen, mut agree, mut holes) = (0, 0, 0);
+    for tile in 0..k as u32 {
+        let reader = projections[tile as usize].unwrap().reader(res);
+        let (tx, ty) = ((tile % per_row) * res, (tile / per_row) * res);
+        for v in 0..res {
+            for u in 0..res {
+                let i = ((ty + v) * width + tx + u) as usize;
+                let Some(d) = reader.distance(u, v, source[i]).filter(|_| source[i] < 1.0) else { continue };
+                seen += 1;
+                match reader.distance(u, v, meshes[i]).filter(|_| meshes[i] < 1.0) {
+                    Some(m) if (m - d).abs() <= 0.02 * d => agree += 1,
+                    Some(_) => {}
+                    None => holes += 1,
+                }
+            }
+        }
+    }
+    assert!(seen > 1000, "{seen} texels see the scene");
+    assert!(agree * 100 >= seen * 95, "{agree} of {seen} texels agree ({holes} holes)");
+    // With epsilon 0 no edge is connected: no mesh, and the meshes' views are empty.
+    insm.set_param("epsilon", &ParamValue::Float(0.0)).unwrap();
+    frame(&mut r, &mut insm, &scene.camera, &lights);
+    let (empty, ..) = read(insm.depth_images()[1].0);
+    assert!(empty.iter().all(|&d| d >= 1.0), "a mesh without triangles drew something");
+}

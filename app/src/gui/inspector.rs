@@ -302,6 +302,9 @@ pub struct Inspector {
     pub note: Option<String>,
     /// The map sets the techniques offered in the last UI frame, with their labels.
     pub sources: Vec<(MapSource, String)>,
+    /// A set asked for (by an Explain step) that the technique offers only from its next frame, with the frame
+    /// key it was asked in: shown once offered, forgotten once a later frame completed without it.
+    pub requested: Option<(MapSource, u64)>,
     /// Show a light's reflective shadow map ([`RsmView`]) instead of a technique's maps.
     pub rsm_shown: bool,
     pub rsm: RsmView,
@@ -323,6 +326,7 @@ impl Default for Inspector {
             followed: None,
             note: None,
             sources: Vec::new(),
+            requested: None,
             rsm_shown: false,
             rsm: RsmView::default(),
         }
@@ -405,6 +409,9 @@ impl Inspector {
                 rsm_shown = true;
             }
         });
+        if (source, rsm_shown) != (self.source, self.rsm_shown) {
+            self.requested = None;
+        }
         (self.source, self.rsm_shown) = (source, rsm_shown);
         if self.rsm_shown {
             self.rsm.ui(ui, lights);

@@ -73,7 +73,10 @@ pub fn show_explain_step(
     if step.shows_shadow_maps {
         chrome.inspector.rsm_shown = step.maps == shadowlab_core::technique::RSM_MAPS;
         if !chrome.inspector.rsm_shown {
-            chrome.inspector.source = crate::gui::inspector::MapSource { indirect, set: step.maps };
+            let source = crate::gui::inspector::MapSource { indirect, set: step.maps };
+            // The step's parameters may make the set first in the next frame (INSM's meshes' views).
+            let key = views.gpu.as_ref().map_or(0, |g| g.main.frame_key());
+            (chrome.inspector.source, chrome.inspector.requested) = (source, Some((source, key)));
         }
         chrome.layout.request_focus(Pane::Maps);
     }

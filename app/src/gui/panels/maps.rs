@@ -41,10 +41,17 @@ pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, 
                 sources.extend(labelled(t.borrow().as_ref(), true));
             }
         }
+        let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
+        if let Some((wanted, asked_in)) = inspector.requested {
+            if sources.iter().any(|(s, _)| *s == wanted) {
+                (inspector.source, inspector.requested) = (wanted, None);
+            } else if complete && gpu.main.is_converged() && gpu.main.frame_key() != asked_in {
+                inspector.requested = None;
+            }
+        }
         if !sources.iter().any(|(s, _)| *s == inspector.source) {
             inspector.source = sources.first().map(|(s, _)| *s).unwrap_or(MapSource::DIRECT);
         }
-        let complete = gpu.main.last_report.as_ref().is_some_and(|r| r.technique == key);
         if inspector.rsm_shown {
             let lights = session.animated_lights();
             let renderer = &gpu.main.renderer;

@@ -217,6 +217,9 @@ pub struct Insm {
     /// The placement the last frame used.
     placement_used: viewpoints::Placement,
     images: CubeShadowRenderer,
+    /// The meshes seen from the viewpoints (`mesh_views`, inspection), and whether this frame renders them.
+    mesh_images: CubeShadowRenderer,
+    frame_mesh_views: bool,
     shadows: PerLightShadows,
     triangulate_pipeline: wgpu::ComputePipeline,
     /// Pass 1 of the adaptive mesh: which tiles merge.
@@ -318,6 +321,8 @@ impl Insm {
             auto_placement: None,
             placement_used: viewpoints::Placement::Box,
             images: CubeShadowRenderer::new(gpu),
+            mesh_images: CubeShadowRenderer::with_pushed_vertices(gpu),
+            frame_mesh_views: false,
             shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_pushed_vertices(gpu)),
             triangulate_pipeline,
             classify_pipeline,
@@ -537,8 +542,12 @@ impl Technique for Insm {
         let n = self.shadows.visible_lights() as u64;
         let budget = k as u64 * ctx.scene.triangle_count + 2 * n * k as u64 * (res as u64).pow(2);
         self.counts.insm_triangle_budget = Some(budget);
-        // Steps: one per intermediate map, the triangulation, then the light batches.
-        self.counts.batches = k as usize + 1 + batches;
+        self.frame_mesh_views = self.params.mesh_views;
+        if self.frame_mesh_views {
+            self.mesh_images.ensure_tiles(ctx.gpu, res, k as usize);
+        }
+        // Steps: one per intermediate map, the triangulation, the meshes' views (`mesh_views`), the light batches.
+        self.counts.batches = k as usize + 1 + usize::from(self.frame_mesh_views) + batches;
         Ok(self.counts.batches)
     }
 
@@ -560,6 +569,11 @@ impl Technique for Insm {
         if !self.tiles_ready {
             self.read_tiles(ctx.gpu)?;
         }
+        let views_step = usize::from(self.frame_mesh_views);
+        if views_step == 1 && step == k + 1 {
+            self.encode_mesh_views(ctx, encoder);
+            return Ok(());
+        }
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
         let geometry = CubeGeometry {
             vertex_buffer: &mesh.vertices,
@@ -572,7 +586,7 @@ impl Technique for Insm {
             receivers: None,
             push_per_depth: self.push_per_depth,
         };
-        let stats = self.shadows.encode_batch(ctx, step - k - 1, encoder, geometry, &self.lookup);
+        let stats = self.shadows.encode_batch(ctx, step - k - 1 - views_step, encoder, geometry, &self.lookup);
         self.counts.add_cube_stats(&stats);
         Ok(())
     }
@@ -607,7 +621,16 @@ impl Technique for Insm {
     }
 
     fn depth_images(&self) -> Vec<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
-        self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect()
+        let mut images: Vec<_> =
+            self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect();
+        if let Some(a) = self.mesh_images.atlas().filter(|_| self.frame_mesh_views) {
+            images.push((a, "the meshes seen from the viewpoints (mesh_views), tile by tile as the images"));
+        }
+        images
+    }
+
+    fn tuning_params(&self) -> &'static [&'static str] {
+        &["mesh_views"]
     }
 
     fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {

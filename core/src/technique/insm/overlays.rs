@@ -30,10 +30,13 @@ impl Insm {
                        only where the second differences of depth show a step across it (ε; a tighter one where \
                        the surface is seen nearly edge-on). Red: dropped edges. Beyond the paper, \
                        planar tiles are merged (adaptive) and a map leaves out what another map reconstructs more \
-                       finely (drop_covered).",
+                       finely (drop_covered). The Shadow maps panel shows the meshes seen from the viewpoints \
+                       (mesh_views): against step 2's images, what the meshes kept, bridged or lost.",
                 layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
-                shows_shadow_maps: false,
-                ..Default::default()
+                // The meshes seen from the viewpoints (depth image set 2), to hold against step 2's images.
+                shows_shadow_maps: true,
+                maps: 2,
+                params: &[("mesh_views", "on")],
             },
             ExplainStep {
                 title: "4. Cube maps from the meshes",

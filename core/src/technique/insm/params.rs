@@ -98,6 +98,9 @@ pub struct InsmParams {
     pub bias_samples: f32,
     /// Each mesh vertex drawn this many of its own samples' widths further from the light (beyond the paper).
     pub push_samples: f32,
+    /// Also render the meshes from the viewpoints, for inspection beside the intermediate images (the image does
+    /// not change; the frame takes k more views).
+    pub mesh_views: bool,
     /// The per-light cube maps (`shadow_res` is the per-light resolution of the paper's Table 3).
     pub cube: CubeMapParams,
 }
@@ -121,6 +124,7 @@ impl Default for InsmParams {
             box_distance: viewpoints::DEFAULT_BOX_DISTANCE,
             bias_samples: DEFAULT_BIAS_SAMPLES,
             push_samples: DEFAULT_PUSH_SAMPLES,
+            mesh_views: false,
             cube: CubeMapParams { shadow_resolution: 512, ..CubeMapParams::default() },
         }
     }
@@ -232,6 +236,15 @@ impl InsmParams {
                 value: ParamValue::Bool(self.dilate),
             },
             Param {
+                key: "mesh_views",
+                label: "Meshes from the viewpoints",
+                help: "Also draw the meshes seen from each viewpoint, beside the intermediate depth images in the \
+                       Shadow maps panel, to see what the triangulation kept, bridged or lost (inspection: the \
+                       image does not change; the frame's time includes k more views)",
+                kind: ParamKind::Bool,
+                value: ParamValue::Bool(self.mesh_views),
+            },
+            Param {
                 key: "placement",
                 label: "Viewpoints",
                 help: "auto: inside for an enclosed interior, box for an object (the scene decides); box: the \
@@ -301,6 +314,7 @@ impl InsmParams {
             ("simplify", ParamValue::Float(v)) => self.simplify = *v,
             ("simplify_error", ParamValue::Float(v)) => self.simplify_error = *v,
             ("dilate", ParamValue::Bool(v)) => self.dilate = *v,
+            ("mesh_views", ParamValue::Bool(v)) => self.mesh_views = *v,
             ("box_distance", ParamValue::Float(v)) => self.box_distance = *v,
             ("bias_samples", ParamValue::Float(v)) => self.bias_samples = *v,
             ("push_samples", ParamValue::Float(v)) => self.push_samples = *v,

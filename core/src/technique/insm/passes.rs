@@ -128,6 +128,26 @@ impl Insm {
         self.counts.add_cube_stats(&stats);
     }
 
+    /// With `mesh_views`, step `k + 1`: the reconstructed meshes as the per-light maps draw them (simplified
+    /// when `simplify` is below 1), unpushed, seen from every viewpoint into their own atlas, tile `j` from
+    /// viewpoint `j` as the intermediate images: side by side, what the triangulation kept, bridged or lost
+    /// (inspection; not in the frame's counts, in its time).
+    pub(super) fn encode_mesh_views(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
+        let Some(mesh) = self.mesh.as_ref() else { return };
+        let geometry = CubeGeometry {
+            vertex_buffer: &mesh.vertices,
+            index_buffer: self.simplified.as_ref().unwrap_or(&mesh.indices),
+            chunks: &self.tiles,
+            triangle_count: self.tiles_triangles,
+            cull: true,
+            cutouts: None,
+            receivers: None,
+            push_per_depth: 0.0,
+        };
+        let label = "insm meshes from the viewpoints (inspection)";
+        self.mesh_images.render_views(ctx.gpu, geometry, ctx.timer, encoder, label, &self.view_matrices, 0, true);
+    }
+
     /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
     pub(super) fn encode_triangulation(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
