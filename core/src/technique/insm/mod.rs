@@ -178,6 +178,30 @@ struct MeshBuffers {
     bind_group: wgpu::BindGroup,
 }
 
+impl MeshBuffers {
+    /// The reconstructed meshes as the per-light maps draw them: in tiles (`chunks`, non-empty ones of this
+    /// frame), through `simplified`'s indices when the meshes were simplified, each vertex pushed away from the
+    /// map's centre by `push_per_depth` of its view depth (0: where it is). Receivers are set by `encode_batch`.
+    fn geometry<'a>(
+        &'a self,
+        simplified: Option<&'a wgpu::Buffer>,
+        chunks: &'a [Chunk],
+        triangle_count: u64,
+        push_per_depth: f32,
+    ) -> CubeGeometry<'a> {
+        CubeGeometry {
+            vertex_buffer: &self.vertices,
+            index_buffer: simplified.unwrap_or(&self.indices),
+            chunks,
+            triangle_count,
+            cull: true,
+            cutouts: None,
+            receivers: None,
+            push_per_depth,
+        }
+    }
+}
+
 /// What the overlays show of the last frame's meshes.
 #[derive(Default)]
 struct MeshSnapshot {
@@ -575,17 +599,7 @@ impl Technique for Insm {
             return Ok(());
         }
         let mesh = self.mesh.as_ref().expect("prepare created the mesh buffers");
-        let geometry = CubeGeometry {
-            vertex_buffer: &mesh.vertices,
-            index_buffer: self.simplified.as_ref().unwrap_or(&mesh.indices),
-            chunks: &self.tiles,
-            triangle_count: self.tiles_triangles,
-            cull: true,
-            cutouts: None,
-            // Set by `encode_batch` from the frame (receiver-aware culling of the mesh's tiles).
-            receivers: None,
-            push_per_depth: self.push_per_depth,
-        };
+        let geometry = mesh.geometry(self.simplified.as_ref(), &self.tiles, self.tiles_triangles, self.push_per_depth);
         let stats = self.shadows.encode_batch(ctx, step - k - 1 - views_step, encoder, geometry, &self.lookup);
         self.counts.add_cube_stats(&stats);
         Ok(())

@@ -134,16 +134,7 @@ impl Insm {
     /// (inspection; not in the frame's counts, in its time).
     pub(super) fn encode_mesh_views(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
         let Some(mesh) = self.mesh.as_ref() else { return };
-        let geometry = CubeGeometry {
-            vertex_buffer: &mesh.vertices,
-            index_buffer: self.simplified.as_ref().unwrap_or(&mesh.indices),
-            chunks: &self.tiles,
-            triangle_count: self.tiles_triangles,
-            cull: true,
-            cutouts: None,
-            receivers: None,
-            push_per_depth: 0.0,
-        };
+        let geometry = mesh.geometry(self.simplified.as_ref(), &self.tiles, self.tiles_triangles, 0.0);
         let label = "insm meshes from the viewpoints (inspection)";
         self.mesh_images.render_views(ctx.gpu, geometry, ctx.timer, encoder, label, &self.view_matrices, 0, true);
     }
