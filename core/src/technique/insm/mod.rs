@@ -89,6 +89,7 @@
 //! Frame steps: steps `0..k` render one intermediate shadow map each, step `k` triangulates them all, steps
 //! `k+1..` are the light batches (the first reads the tile list back).
 
+mod mesh;
 mod overlays;
 mod params;
 mod passes;
@@ -114,6 +115,7 @@ use crate::services::cube_shadows::{CubeGeometry, CubeShadowRenderer};
 use crate::services::layouts::SharedLayouts;
 use crate::services::per_light_shadows::PerLightShadows;
 use crate::timing::PassTime;
+use mesh::{MeshBuffers, MESH_VERTEX_BYTES};
 pub use params::{InsmParams, MAX_INSM_RESOLUTION, MAX_VIEWPOINTS};
 use triangulate::{GpuTile, MapView, MeshSettings, SampledImage, MAX_TRIANGLES_PER_TILE};
 use viewpoints::Viewpoint;
@@ -162,45 +164,6 @@ struct GpuView {
     _pad: f32,
 }
 const _: () = assert!(std::mem::size_of::<GpuView>() == 144);
-
-/// Vertex of a reconstructed mesh: world position and inverse depth (0 = background sample).
-const MESH_VERTEX_BYTES: u64 = 16;
-
-/// The reconstructed meshes of `k` maps of `resolution²`, and their readback buffers.
-struct MeshBuffers {
-    k: u32,
-    resolution: u32,
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    tiles: wgpu::Buffer,
-    tiles_readback: wgpu::Buffer,
-    vertices_readback: Option<wgpu::Buffer>,
-    bind_group: wgpu::BindGroup,
-}
-
-impl MeshBuffers {
-    /// The reconstructed meshes as the per-light maps draw them: in tiles (`chunks`, non-empty ones of this
-    /// frame), through `simplified`'s indices when the meshes were simplified, each vertex pushed away from the
-    /// map's centre by `push_per_depth` of its view depth (0: where it is). Receivers are set by `encode_batch`.
-    fn geometry<'a>(
-        &'a self,
-        simplified: Option<&'a wgpu::Buffer>,
-        chunks: &'a [Chunk],
-        triangle_count: u64,
-        push_per_depth: f32,
-    ) -> CubeGeometry<'a> {
-        CubeGeometry {
-            vertex_buffer: &self.vertices,
-            index_buffer: simplified.unwrap_or(&self.indices),
-            chunks,
-            triangle_count,
-            cull: true,
-            cutouts: None,
-            receivers: None,
-            push_per_depth,
-        }
-    }
-}
 
 /// What the overlays show of the last frame's meshes.
 #[derive(Default)]
@@ -408,32 +371,6 @@ impl Insm {
                 MapView { clip_from_world: *m, near, far, steep: self.params.steep_slope(v.fov_y_deg, res) }
             })
             .collect()
-    }
-
-    /// Read back the samples and the triangles of each reconstructed mesh, as the GPU wrote them (for tests and
-    /// tools): `(samples, triangles as sample indices)`. Call after a frame.
-    pub fn read_meshes(&self, gpu: &GpuContext) -> Result<(Vec<Vec4>, Vec<[u32; 3]>), GpuError> {
-        let mesh = self.mesh.as_ref().ok_or_else(|| GpuError::Readback("INSM has not rendered a frame".into()))?;
-        let tiles: Vec<GpuTile> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.tiles)?).to_vec();
-        self.read_mesh_triangles(gpu, &tiles)
-    }
-
-    /// The samples and the triangles of `tiles` (this frame's, already read back), from the GPU's buffers.
-    fn read_mesh_triangles(&self, gpu: &GpuContext, tiles: &[GpuTile]) -> Result<(Vec<Vec4>, Vec<[u32; 3]>), GpuError> {
-        let mesh = self.mesh.as_ref().ok_or_else(|| GpuError::Readback("INSM has not rendered a frame".into()))?;
-        let samples: Vec<Vec4> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.vertices)?).to_vec();
-        let indices: Vec<u32> = bytemuck::cast_slice(&read_buffer(gpu, &mesh.indices)?).to_vec();
-        let mut triangles = Vec::new();
-        for (t, tile) in tiles.iter().enumerate() {
-            let base = t * MAX_TRIANGLES_PER_TILE as usize * 3;
-            for i in 0..tile.count.min(MAX_TRIANGLES_PER_TILE) as usize {
-                let o = base + i * 3;
-                if let Some(tri) = indices.get(o..o + 3) {
-                    triangles.push([tri[0], tri[1], tri[2]]);
-                }
-            }
-        }
-        Ok((samples, triangles))
     }
 }
 
