@@ -14,7 +14,7 @@ use eframe::egui;
 use shadowlab_core::accel::scene_bvh::SceneBvh;
 use shadowlab_core::scene::{DirectionalLight, PointLight};
 use shadowlab_core::vpl::rsm::{rsm_image, RsmEmitter, RsmImage, RsmLayout};
-use shadowlab_core::vpl::{VplSet, VplSource};
+use shadowlab_core::vpl::{VplSet, VplSource, RSM_RESOLUTION};
 
 use crate::gui::image_view::ImageView;
 use crate::gui::inspector::fit_texture;
@@ -80,6 +80,8 @@ pub struct RsmView {
     pub readout: Option<String>,
     followed: Option<usize>,
     emitters: usize,
+    /// The map shown is not the chosen light's as it is now: it is cast once the frame settles.
+    pub waiting: bool,
 }
 
 impl Default for RsmView {
@@ -101,6 +103,7 @@ impl Default for RsmView {
             readout: None,
             followed: None,
             emitters: 0,
+            waiting: false,
         }
     }
 }
@@ -136,6 +139,7 @@ impl RsmView {
             None => Emitter::Point(lights[self.emitter]),
         };
         let cast = Cast { index: self.emitter, emitter, resolution: self.resolution, scene: inputs.scene };
+        self.waiting = self.cast.as_ref() != Some(&cast) && !inputs.settled;
         if self.cast.as_ref() != Some(&cast) && inputs.settled {
             let bvh = (inputs.bvh)();
             let started = std::time::Instant::now();
@@ -171,8 +175,12 @@ impl RsmView {
                 Some(s) => {
                     let from = self.drawn.values().sum::<u32>();
                     let how = match s.source {
-                        VplSource::Rsm => "drawn from the light's 256² map: a ring may hold several",
-                        VplSource::Traced => "traced particles (vpl_source traced): ringed where their first hits lie",
+                        VplSource::Rsm => {
+                            format!("drawn from the light's {0}² faces: a ring may hold several", RSM_RESOLUTION)
+                        }
+                        VplSource::Traced => {
+                            "traced particles (vpl_source traced): ringed where their first hits lie".to_string()
+                        }
                     };
                     format!("{from} of the frame's {} VPLs came from here, first bounce ({how}).", set.vpls.len())
                 }
@@ -215,6 +223,9 @@ impl RsmView {
         });
         if let Some(e) = &self.error {
             ui.colored_label(egui::Color32::LIGHT_RED, e);
+        }
+        if self.waiting {
+            ui.label("The map is cast once the frame settles (a light or the camera is moving).");
         }
         let Some(image) = &self.image else { return };
         let what = match image.layout {
