@@ -260,14 +260,14 @@ fn write_rsm(
     if !args.frame.quiet {
         let total = image.total_flux();
         eprintln!(
-            "wrote {} (the RSM of {}: {} faces of {}², reflected flux ({:.4}, {:.4}, {:.4}); {} of the frame's {} VPLs \
-             came from it, first bounce)",
+            "wrote {} (the RSM of {}: {} of {}², reflected flux ({:.4}, {:.4}, {:.4}); {} of the frame's {} VPLs came \
+             from it, first bounce)",
             path.display(),
             match i.checked_sub(lights.len()) {
                 Some(k) => format!("sun {k}"),
                 None => format!("light {i}"),
             },
-            image.faces,
+            if image.faces == 1 { "one face".to_string() } else { format!("{} faces", image.faces) },
             image.resolution,
             total.x,
             total.y,
