@@ -1020,6 +1020,16 @@ fn the_inspector_lists_insms_intermediate_images_and_lightclusters_cluster_maps(
     assert_eq!(h.state().chrome.inspector.source, meshes);
     let atlas = h.state().chrome.inspector.atlas.as_ref().expect("the meshes' views were read back");
     assert!(atlas.what.contains("meshes seen from the viewpoints") && atlas.depths.iter().any(|d| *d < 1.0));
+    // The step's maps fill the 3D view (the panel's image, large) until the view is clicked.
+    assert!(h.state().chrome.explain.map_in_view, "a step about maps shows them in the view");
+    let (_, size, what) = h.state().chrome.inspector.on_screen(32).expect("the panel's image is on screen");
+    assert!(size[0] > 0 && what.contains("meshes seen from the viewpoints"), "{what}");
+    let centre = h.state().views.last_viewport_rect.expect("the view was laid out").center();
+    let selected = h.state().session.selected;
+    press(&mut h, centre, true, egui::Modifiers::NONE);
+    press(&mut h, centre, false, egui::Modifiers::NONE);
+    assert!(!h.state().chrome.explain.map_in_view, "a click returns to the scene");
+    assert_eq!(h.state().session.selected, selected, "the click that closed the maps selected nothing");
     // LightCluster: a cube map per cluster; selecting a light shows its cluster's.
     h.state_mut().session.technique = "lightcluster".into();
     h.state_mut().chrome.inspector.source = MapSource::DIRECT;

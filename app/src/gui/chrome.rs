@@ -60,11 +60,21 @@ impl Chrome {
 }
 
 /// The Explain panel's state.
-#[derive(Default)]
 pub struct Explain {
     /// The chosen step: (technique key, step index).
     pub step: Option<(String, usize)>,
     /// Parameter values from before an Explain step set them, per (technique, parameter): restored when a step
     /// that does not set them is chosen.
     pub saved: BTreeMap<(String, String), ParamValue>,
+    /// A step about maps shows them alone in the 3D view (the Shadow maps panel's image, large), until the view
+    /// is clicked, Esc is pressed or a step without maps is chosen.
+    pub maps_in_view: bool,
+    /// The chosen step's maps are in the view now.
+    pub map_in_view: bool,
+}
+
+impl Default for Explain {
+    fn default() -> Self {
+        Explain { step: None, saved: BTreeMap::new(), maps_in_view: true, map_in_view: false }
+    }
 }

@@ -21,7 +21,7 @@ use crate::gui::rsm_view::RsmView;
 use crate::rsm_picture::{CROSS, FACES};
 
 /// The maps list's entry for [`RsmView`].
-pub const RSM_LABEL: &str = "reflective shadow map of a light (where VPLs come from)";
+pub const RSM_LABEL: &str = "a light's reflective shadow map (VPL source)";
 
 /// Which maps are shown: the direct or the indirect technique's, its shadow maps (`set` 0) or its depth
 /// image set `set - 1` ([`Technique::depth_images`](shadowlab_core::technique::Technique::depth_images)).
@@ -387,6 +387,20 @@ impl Inspector {
         }
     }
 
+    /// The image the panel shows (its texture, its size in texels) and what it is: the chosen maps (a cube map
+    /// as a cross, or the whole atlas) or a light's RSM; None before one was read back.
+    pub fn on_screen(&self, lights: usize) -> Option<(egui::TextureId, [u32; 2], String)> {
+        if self.rsm_shown {
+            return self.rsm.on_screen(lights);
+        }
+        let (shown, texture, atlas) = (self.shown.as_ref()?, self.texture.as_ref()?, self.atlas.as_ref()?);
+        let what = match self.cube.filter(|&c| c < atlas.cubes()) {
+            Some(c) => format!("{}: cube {c} as a cross", atlas.what),
+            None => atlas.what.to_string(),
+        };
+        Some((texture.id(), [shown.width, shown.height], what))
+    }
+
     /// The panel's controls and image; `sources` are the map sets the techniques offer this frame, `lights` the
     /// point lights (the RSM view numbers suns after them).
     pub fn ui(&mut self, ui: &mut egui::Ui, sources: Vec<(MapSource, String)>, lights: usize) {
@@ -397,7 +411,9 @@ impl Inspector {
             false => sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none"),
         };
         // Labelled (the label also names it for accessibility), and narrow enough to leave the label room.
-        let combo = egui::ComboBox::from_label("maps").width((ui.available_width() - 48.0).max(80.0));
+        let combo = egui::ComboBox::from_label("maps")
+            .width((ui.available_width() - 64.0).max(80.0))
+            .wrap_mode(egui::TextWrapMode::Truncate);
         let (mut source, mut rsm_shown) = (self.source, self.rsm_shown);
         combo.selected_text(current).show_ui(ui, |ui| {
             for (s, label) in sources {

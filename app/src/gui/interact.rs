@@ -97,7 +97,11 @@ impl ShadowLabApp {
             }
         }
         let gizmo_active = self.interaction.drag.is_some();
-        if response.clicked() {
+        // An Explain step's maps fill the view: a click or Esc returns to the image (and does nothing else).
+        let map_in_view = self.chrome.explain.map_in_view;
+        if map_in_view && (response.clicked() || ui.input(|i| i.key_pressed(egui::Key::Escape))) {
+            self.chrome.explain.map_in_view = false;
+        } else if response.clicked() {
             if let Some(pos) = response.interact_pointer_pos() {
                 let ctrl = ui.input(|i| i.modifiers.command);
                 let alt = ui.input(|i| i.modifiers.alt);
@@ -173,6 +177,9 @@ impl ShadowLabApp {
         if self.session.view.legend {
             legend::paint_in_view(&painter, rect, &self.views.legends);
         }
+        if self.chrome.explain.map_in_view {
+            self.paint_map_in_view(&painter, rect);
+        }
         // A light under the pointer: its details in a tooltip.
         if self.interaction.drag.is_none() && !interacting {
             if let Some(pos) = response.hover_pos() {
@@ -199,5 +206,34 @@ impl ShadowLabApp {
         if interacting || self.session.animation != Animation::Off {
             ui.ctx().request_repaint();
         }
+    }
+
+    /// The Explain step's maps alone over the 3D view: the Shadow maps panel's image, fitted, with what it is.
+    fn paint_map_in_view(&self, painter: &egui::Painter, rect: egui::Rect) {
+        painter.rect_filled(rect, 0.0, egui::Color32::from_rgb(16, 18, 28));
+        let caption = match self.chrome.inspector.on_screen(self.session.lights.len()) {
+            Some((texture, [w, h], what)) => {
+                let area = rect.shrink(24.0);
+                let scale = (area.width() / w.max(1) as f32).min(area.height() / h.max(1) as f32);
+                let image = egui::Rect::from_center_size(area.center(), egui::vec2(w as f32, h as f32) * scale);
+                let uv = egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+                painter.image(texture, image, uv, egui::Color32::WHITE);
+                if self.chrome.inspector.rsm_shown {
+                    let marks = self.chrome.inspector.rsm.marks();
+                    let point = |x: u32, y: u32| image.min + egui::vec2(x as f32 + 0.5, y as f32 + 0.5) * scale;
+                    super::rsm_view::ring(painter, &marks, point, scale);
+                }
+                format!("{what} (the Shadow maps panel's image; click the view or press Esc for the scene)")
+            }
+            None => "the step's maps appear here once the frame has rendered them (click the view or Esc)".into(),
+        };
+        let font = egui::FontId::proportional(14.0);
+        painter.text(
+            rect.left_top() + egui::vec2(8.0, 4.0),
+            egui::Align2::LEFT_TOP,
+            caption,
+            font,
+            egui::Color32::WHITE,
+        );
     }
 }

@@ -117,6 +117,23 @@ fn emitter_name(index: usize, lights: usize) -> String {
 }
 
 impl RsmView {
+    /// The picture on screen (its texture and size in texels) and what it is, for the 3D view.
+    pub fn on_screen(&self, lights: usize) -> Option<(egui::TextureId, [u32; 2], String)> {
+        let ((texture, _), image) = (self.texture.as_ref()?, self.image.as_ref()?);
+        let name = emitter_name(self.emitter, lights);
+        Some((texture.id(), picture_size(image), format!("{name}'s reflective shadow map")))
+    }
+
+    /// The picture's pixels to ring (the texels the frame's VPLs came from), when rings are on.
+    pub fn marks(&self) -> Vec<(u32, u32)> {
+        match (&self.image, self.marks) {
+            (Some(image), true) => {
+                self.drawn.keys().take(MAX_MARKS).map(|&(face, x, y)| pixel_of(image, face, x, y)).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// Cast the map again if its light, resolution or scene changed (once settled), and count the VPLs drawn
     /// from it when the frame's VPLs changed.
     pub fn update(&mut self, inputs: &RsmInputs) {
@@ -254,15 +271,18 @@ impl RsmView {
         let Some((texture, _)) = &self.texture else { return };
         let size = picture_size(image);
         let placed = self.view.show(ui, texture, size, 24.0);
-        if self.marks {
-            let radius = (placed.scale * 0.5).max(2.0);
-            let stroke = egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 60, 200));
-            for &(face, x, y) in self.drawn.keys().take(MAX_MARKS) {
-                let (px, py) = pixel_of(image, face, x, y);
-                placed.painter.circle_stroke(placed.point(px, py), radius, stroke);
-            }
-        }
+        ring(&placed.painter, &self.marks(), |x, y| placed.point(x, y), placed.scale);
         self.readout = placed.hovered.and_then(|(px, py)| readout(image, &self.drawn, px, py));
         ui.label(self.readout.clone().unwrap_or_else(|| "scroll to zoom, drag to pan".into()));
+    }
+}
+
+/// Ring the picture pixels `marks` (the texels VPLs came from), drawn at `point(x, y)` with `scale` points a
+/// texel: in the panel and over the 3D view alike.
+pub fn ring(painter: &egui::Painter, marks: &[(u32, u32)], point: impl Fn(u32, u32) -> egui::Pos2, scale: f32) {
+    let radius = (scale * 0.5).max(2.0);
+    let stroke = egui::Stroke::new(1.5, egui::Color32::from_rgb(255, 60, 200));
+    for &(x, y) in marks {
+        painter.circle_stroke(point(x, y), radius, stroke);
     }
 }

@@ -11,6 +11,8 @@ use crate::gui::views::Views;
 /// overlay layers (and the shadow-map panel) that show it.
 pub fn explain_ui(session: &mut Session, views: &mut Views, chrome: &mut Chrome, ui: &mut egui::Ui) {
     ui.heading("Explain");
+    ui.checkbox(&mut chrome.explain.maps_in_view, "a step's maps alone in the view")
+        .on_hover_text("A step about maps shows them large in the 3D view; click the view or press Esc to return");
     // The direct technique's steps, then the indirect technique's (when one is chosen and describes any).
     let mut sections: Vec<(String, &'static str, Vec<shadowlab_core::technique::ExplainStep>)> = Vec::new();
     {
@@ -70,6 +72,7 @@ pub fn show_explain_step(
         session.view.overlays.insert(name, on);
     }
     let indirect = key != session.technique;
+    chrome.explain.map_in_view = step.shows_shadow_maps && chrome.explain.maps_in_view;
     if step.shows_shadow_maps {
         chrome.inspector.rsm_shown = step.maps == shadowlab_core::technique::RSM_MAPS;
         if !chrome.inspector.rsm_shown {
