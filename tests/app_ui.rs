@@ -1436,6 +1436,45 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
     bad.get_by_label_contains("--app-against-indirect 'magic'");
 }
 
+#[test]
+fn the_app_opens_on_an_explain_step_of_the_indirect_technique_and_refuses_a_step_it_lacks() {
+    // A class opens the app on the VPL step: the selected light's RSM in the Shadow maps panel and in the view.
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("start-explain")),
+        synchronous: true,
+        builtin: Some("cornell".into()),
+        start: StartState {
+            indirect: Some("vpl-raytraced".into()),
+            explain: Some("vpl-raytraced:1".into()),
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    h.run_steps(6);
+    let app = h.state();
+    assert_eq!(app.chrome.explain.step, Some(("vpl-raytraced".into(), 0)));
+    assert!(app.chrome.inspector.rsm_shown && app.chrome.explain.map_in_view);
+    assert!(app.chrome.inspector.rsm.image.is_some(), "light 0's RSM was cast");
+    // The direct technique's step by number; a step past the list and a technique not in use are messages.
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("start-explain-bad")),
+        synchronous: true,
+        start: StartState { technique: Some("lightcluster".into()), explain: Some("9".into()), ..Default::default() },
+        ..Default::default()
+    });
+    h.run_steps(2);
+    h.get_by_label_contains("--app-explain '9': 'lightcluster' has 6 Explain steps (1 to 6)");
+    assert_eq!(h.state().chrome.explain.step, None);
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("start-explain-other")),
+        synchronous: true,
+        start: StartState { explain: Some("val:2".into()), ..Default::default() },
+        ..Default::default()
+    });
+    h.run_steps(2);
+    h.get_by_label_contains("'val' is not the technique or the indirect technique");
+}
+
 /// Click "Run trade-off" (scrolled into the Sweep pane) and wait for the worker to finish.
 fn run_tradeoff(h: &mut Harness<'static, ShadowLabApp>) {
     h.get_by_label("Run trade-off").scroll_to_me();

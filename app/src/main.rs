@@ -54,6 +54,7 @@ fn main() -> ExitCode {
                 against: args.app_against,
                 against_params: args.app_against_params,
                 against_indirect: args.app_against_indirect,
+                explain: args.app_explain,
             },
             relaunch_on_device_loss: true,
             no_file_dialogs: false,

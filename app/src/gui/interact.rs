@@ -180,8 +180,8 @@ impl ShadowLabApp {
         if self.chrome.explain.map_in_view {
             self.paint_map_in_view(&painter, rect);
         }
-        // A light under the pointer: its details in a tooltip.
-        if self.interaction.drag.is_none() && !interacting {
+        // A light under the pointer: its details in a tooltip (not over an Explain step's maps).
+        if self.interaction.drag.is_none() && !interacting && !self.chrome.explain.map_in_view {
             if let Some(pos) = response.hover_pos() {
                 let lines = match gizmo::pick_light(&projection, &self.session.animated_lights(), pos, 10.0) {
                     Some(i) => self.light_tooltip(i),

@@ -143,6 +143,49 @@ impl ShadowLabApp {
                 _ => report(self, anyhow!("--app-indirect-param needs --app-indirect")),
             }
         }
+        if let Some(spec) = &start.explain {
+            if let Err(e) = self.open_explain_step(spec) {
+                report(self, anyhow!("--app-explain '{spec}': {e:#}"));
+            }
+        }
+    }
+
+    /// Choose Explain step `[KEY:]N` as the panel does (its layers, maps and parameters), with the panel in front.
+    fn open_explain_step(&mut self, spec: &str) -> Result<()> {
+        let (key, n) = match spec.rsplit_once(':') {
+            Some((k, n)) => (k.trim().to_string(), n),
+            None => (self.session.technique.clone(), spec),
+        };
+        let n: usize = n.trim().parse().map_err(|_| anyhow!("the step is a number from 1"))?;
+        let indirect = self.session.indirect.technique.as_deref() == Some(key.as_str());
+        if key != self.session.technique && !indirect {
+            let within = match &self.session.indirect.technique {
+                Some(k) => format!("'{}' or '{k}'", self.session.technique),
+                None => format!("'{}'", self.session.technique),
+            };
+            bail!("'{key}' is not the technique or the indirect technique (choose {within})");
+        }
+        let gpu = self.views.gpu.as_mut().ok_or_else(|| anyhow!("no GPU"))?;
+        let steps = if indirect {
+            gpu.main.indirect_technique(&key)?.borrow().explain()
+        } else {
+            gpu.main.technique(&key)?.explain()
+        };
+        if n == 0 || n > steps.len() {
+            bail!("'{key}' has {} Explain steps (1 to {})", steps.len(), steps.len());
+        }
+        super::panels::explain::show_explain_step(
+            &mut self.session,
+            &mut self.views,
+            &mut self.chrome,
+            &key,
+            &steps,
+            n - 1,
+        );
+        self.chrome.explain.step = Some((key, n - 1));
+        // The Explain panel in front now; a step about maps asked for the Shadow maps panel too (another group).
+        self.chrome.layout.focus(super::layout::Pane::Explain);
+        Ok(())
     }
 
     /// The line printed at exit (`--quit-after`): the scene and view, both configurations as they rendered

@@ -54,6 +54,9 @@ pub struct StartState {
     pub against_params: Vec<String>,
     /// The target's indirect technique (`none`, or a key).
     pub against_indirect: Option<String>,
+    /// An Explain step to open on: `N` (1-based) of the technique's steps, or `KEY:N` of technique `KEY` (the
+    /// technique or the indirect technique).
+    pub explain: Option<String>,
 }
 
 /// What the app did when its GPU device was lost.
