@@ -244,12 +244,13 @@ fn write_rsm(
     let emitter = match i.checked_sub(lights.len()) {
         None => RsmEmitter::Point(&lights[i]),
         Some(k) if k < suns.len() => RsmEmitter::Sun(&suns[k]),
-        Some(_) => bail!(
-            "--rsm-light {i}: the scene has {} point lights (0 to {}) and {} suns (numbered after them)",
-            lights.len(),
-            lights.len() as i64 - 1,
-            suns.len()
-        ),
+        Some(_) => {
+            let points = match lights.len() {
+                0 => "no point lights".to_string(),
+                n => format!("{n} point lights (0 to {})", n - 1),
+            };
+            bail!("--rsm-light {i}: the scene has {points} and {} suns (numbered after them)", suns.len())
+        }
     };
     let bvh = renderer.scene().bvh(renderer.gpu()).0;
     let image = rsm_image(&bvh, emitter, args.rsm_res).map_err(|e| anyhow::anyhow!("--rsm-out: {e}"))?;
