@@ -256,6 +256,28 @@ impl Shown {
     }
 }
 
+/// `text` as it fits in `width` points in the button font, cut with "…" where it does not.
+fn fit_text(ui: &egui::Ui, text: &str, width: f32) -> String {
+    let font = egui::TextStyle::Button.resolve(ui.style());
+    let wide = |t: String| ui.ctx().fonts_mut(|f| f.layout_no_wrap(t, font.clone(), egui::Color32::WHITE).size().x);
+    if wide(text.to_string()) <= width {
+        return text.to_string();
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let fits = |n: usize| wide(chars[..n].iter().collect::<String>() + "…") <= width;
+    // The longest prefix that fits (the width grows with the prefix).
+    let (mut lo, mut hi) = (0, chars.len());
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    chars[..lo].iter().collect::<String>() + "…"
+}
+
 /// An image no larger than `max_side` on either side (the GPU's texture limit; a large atlas exceeds it):
 /// shrunk by a whole factor, each pixel the brightest of its block, so thin near geometry stays visible. The
 /// readout still reads the full-resolution depths.
@@ -411,9 +433,10 @@ impl Inspector {
             false => sources.iter().find(|(s, _)| *s == self.source).map(|(_, l)| l.as_str()).unwrap_or("none"),
         };
         // Labelled (the label also names it for accessibility), and narrow enough to leave the label room.
-        let combo = egui::ComboBox::from_label("maps")
-            .width((ui.available_width() - 64.0).max(80.0))
-            .wrap_mode(egui::TextWrapMode::Truncate);
+        // The chosen set's name cut to the room the label "maps" leaves (egui would wrap the label instead).
+        let room = (ui.available_width() - 80.0).max(60.0);
+        let current = fit_text(ui, current, room);
+        let combo = egui::ComboBox::from_label("maps").width(room);
         let (mut source, mut rsm_shown) = (self.source, self.rsm_shown);
         combo.selected_text(current).show_ui(ui, |ui| {
             for (s, label) in sources {
