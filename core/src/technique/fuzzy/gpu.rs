@@ -79,6 +79,15 @@ pub struct GpuPoint {
 const _: () = assert!(std::mem::size_of::<GpuPoint>() == 48);
 
 impl GpuPoint {
+    /// A VPL as a light of the shading (every VPL its own, `cluster=sp`).
+    pub fn of_vpl(v: &crate::vpl::Vpl) -> GpuPoint {
+        GpuPoint {
+            position: v.position.extend(1.0).to_array(),
+            normal: v.normal.extend(1.0).to_array(),
+            flux: v.flux.extend(0.0).to_array(),
+        }
+    }
+
     pub fn exists(&self) -> bool {
         self.position[3] > 0.5
     }

@@ -197,14 +197,19 @@ impl FuzzyClustering {
                 self.inspection.vpl_assignment = (0..vpls.len()).map(|m| c.assignment[m * c.fuzziness]).collect();
             }
         }
-        let mut stale_layers = vec!["probe: clusters and visibility rays (green visible, red blocked)"];
+        const PROBE: &str = "probe: clusters and visibility rays (green visible, red blocked)";
+        let mut stale_layers = Vec::new();
         let mut note = ctx.vpl_note();
         if self.frame_camera.as_ref() != Some(ctx.camera) {
-            // The camera moved: the shading points again on the CPU, or the last frame's layers, said stale.
+            // The camera moved: the shading points (and the probe) again on the CPU, or the last frame's layers,
+            // said stale.
             match self.follow_view(ctx) {
                 Some(view) => note = Some(note.map_or(view.clone(), |n| format!("{n}; {view}"))),
-                None => stale_layers.extend(SP_LAYERS),
+                None => stale_layers.extend(SP_LAYERS.iter().chain([&PROBE])),
             }
+        } else if !same_set {
+            // Only the lights moved: the probe's rays go to the frame's VPL clusters, which moved with them.
+            stale_layers.push(PROBE);
         }
         crate::technique::OverlayUpdate::Live { note, stale_layers }
     }
@@ -317,17 +322,30 @@ impl FuzzyClustering {
         if x < 0 || y < 0 || x as u32 >= w || y as u32 >= h || self.inspection.sp_assignment.is_empty() {
             return Vec::new();
         }
-        let Some(bvh) = &self.bvh else { return Vec::new() };
         let pixel = (y as usize) * w as usize + x as usize;
         let entries = &self.inspection.sp_assignment[pixel * f..pixel * f + f];
+        self.probe_rays(ctx.camera.position, entries, &self.inspection.sp_clusters, lights)
+    }
+
+    /// A probed point's clusters (`entries`, its F nearest, of `clusters`) and a shadow ray from each one's
+    /// representative to every light (at most 4,096 lines), green when visible, red when blocked, traced on the
+    /// CPU through the BVH with the GPU's offsets (`ray_bias` of the distance from `eye`).
+    pub(super) fn probe_rays(
+        &self,
+        eye: Vec3,
+        entries: &[u32],
+        clusters: &[GpuPoint],
+        lights: &[GpuPoint],
+    ) -> Vec<Overlay> {
+        let Some(bvh) = &self.bvh else { return Vec::new() };
         let live: Vec<&GpuPoint> = lights.iter().filter(|l| l.exists()).collect();
         let used = entries.iter().take_while(|&&k| k != u32::MAX).count().max(1);
         let stride = (used * live.len()).div_ceil(4096).max(1);
         let mut out = Vec::new();
         for &k in entries.iter().take_while(|&&k| k != u32::MAX) {
-            let Some(rep) = self.inspection.sp_clusters.get(k as usize).filter(|r| r.exists()) else { continue };
+            let Some(rep) = clusters.get(k as usize).filter(|r| r.exists()) else { continue };
             out.push(Overlay::Point { position: rep.position(), color: index_color(k as usize), radius_px: 7.0 });
-            let eps = self.params.ray_bias * (ctx.camera.position - rep.position()).length().max(1.0);
+            let eps = self.params.ray_bias * (eye - rep.position()).length().max(1.0);
             let origin = rep.position() + rep.normal() * eps;
             for light in live.iter().step_by(stride) {
                 let target = light.position() + light.normal() * eps;

@@ -123,16 +123,7 @@ impl FuzzyClustering {
                 self.build_pixel_maps();
                 if self.params.probe_x >= 0 && self.params.probe_y >= 0 {
                     let lights: Vec<GpuPoint> = match self.mode {
-                        ClusterMode::ShadingPoints => self
-                            .vpls
-                            .vpls
-                            .iter()
-                            .map(|v| GpuPoint {
-                                position: v.position.extend(1.0).to_array(),
-                                normal: v.normal.extend(1.0).to_array(),
-                                flux: v.flux.extend(0.0).to_array(),
-                            })
-                            .collect(),
+                        ClusterMode::ShadingPoints => self.vpls.vpls.iter().map(GpuPoint::of_vpl).collect(),
                         _ => self.inspection.vpl_clusters.clone(),
                     };
                     self.inspection.probe = self.probe_overlay(ctx, &lights);

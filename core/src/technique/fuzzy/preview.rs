@@ -6,7 +6,8 @@
 //! pixel's shading point is the first surface its central ray meets in the scene's BVH (the surface the
 //! G-buffer holds there, with the triangle's geometric normal for the interpolated one), `K_sp` the frame's,
 //! `gamma` scaled down with the grid. The per-pixel maps are the grid's, stretched over the view; the
-//! centroids and clusters are the CPU run's. The frame's own assignment (the probe reads it) is left alone.
+//! centroids and clusters are the CPU run's, and the probe (Alt+click) shows its pixel's clusters there with their
+//! rays to the lights. The frame's own assignment is left alone.
 
 use glam::{Vec2, Vec3};
 
@@ -59,7 +60,8 @@ impl FuzzyClustering {
         }
         let (pw, ph, s) = preview_grid(w, h);
         let note = format!("shading points from a {pw}x{ph} grid of rays on the CPU (the frame's: {w}x{h})");
-        if self.followed_view.as_ref() == Some(ctx.camera) {
+        let key = (*ctx.camera, std::sync::Arc::as_ptr(&self.vpls) as usize);
+        if self.followed_view == Some(key) {
             return Some(note);
         }
         let points: Vec<kmeans::Point> = (0..ph)
@@ -98,7 +100,19 @@ impl FuzzyClustering {
         ins.map_size = (pw, ph);
         ins.hard_map = Some(std::sync::Arc::new(hard));
         ins.blend_map = Some(std::sync::Arc::new(blend));
-        self.followed_view = Some(*ctx.camera);
+        // The probe: the frame's pixel in the grid, its F clusters, rays to the lights the frame would trace to.
+        let (x, y) = (self.params.probe_x, self.params.probe_y);
+        if x >= 0 && y >= 0 && (x as u32) < w && (y as u32) < h {
+            let m = (y as u32 / s).min(ph - 1) as usize * pw as usize + (x as u32 / s).min(pw - 1) as usize;
+            let entries = c.assignment[m * c.fuzziness..(m + 1) * c.fuzziness].to_vec();
+            let lights: Vec<GpuPoint> = match self.params.cluster_mode() {
+                ClusterMode::ShadingPoints => self.vpls.vpls.iter().map(GpuPoint::of_vpl).collect(),
+                _ => self.inspection.vpl_clusters.clone(),
+            };
+            let probe = self.probe_rays(ctx.camera.position, &entries, &self.inspection.sp_clusters, &lights);
+            self.inspection.probe = probe;
+        }
+        self.followed_view = Some(key);
         Some(note)
     }
 }
