@@ -138,6 +138,14 @@ fn viewpoints_over_the_plate() -> Vec<Viewpoint> {
         .collect()
 }
 
+/// INSM on `r`'s device with the custom placement of [`viewpoints_over_the_plate`].
+fn insm_over_the_plate(r: &shadowlab_core::Renderer) -> Insm {
+    let mut insm = Insm::new(r.gpu(), r.layouts());
+    insm.custom_viewpoints = viewpoints_over_the_plate();
+    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    insm
+}
+
 #[test]
 fn insm_shadows_match_the_reference_and_improve_with_resolution() {
     let scene = plane_and_occluder();
@@ -146,9 +154,7 @@ fn insm_shadows_match_the_reference_and_improve_with_resolution() {
     let mut reference = r.create_technique("reference").unwrap();
     reference.set_param("shadow_res", &ParamValue::Int(512)).unwrap();
     let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
-    let mut insm = Insm::new(r.gpu(), r.layouts());
-    insm.custom_viewpoints = viewpoints_over_the_plate();
-    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    let mut insm = insm_over_the_plate(&r);
     let mut shares = Vec::new();
     for res in [16, 128] {
         insm.set_param("insm_res", &ParamValue::Int(res)).unwrap();
@@ -369,9 +375,7 @@ fn pushed_mesh_vertices_move_away_from_the_light_by_their_own_sample_widths() {
     let scene = plane_and_occluder();
     let lights = [white_light(Vec3::new(0.0, 3.0, 0.0), 3.0, 8.0)];
     let mut r = renderer(&scene, linear_settings(W, H));
-    let mut insm = Insm::new(r.gpu(), r.layouts());
-    insm.custom_viewpoints = viewpoints_over_the_plate();
-    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    let mut insm = insm_over_the_plate(&r);
     insm.set_param("insm_res", &ParamValue::Int(32)).unwrap();
     insm.set_param("bias_samples", &ParamValue::Float(0.0)).unwrap();
     // The plate stands 1 m above the ground, 4.1 m from the viewpoints (60° views, its view depth about 4.1 m):
@@ -531,9 +535,7 @@ fn the_meshes_seen_from_the_viewpoints_match_the_intermediate_images_and_leave_t
     let scene = plane_and_occluder();
     let lights = lights_above();
     let mut r = renderer(&scene, linear_settings(W, H));
-    let mut insm = Insm::new(r.gpu(), r.layouts());
-    insm.custom_viewpoints = viewpoints_over_the_plate();
-    insm.set_param("placement", &ParamValue::Choice("custom".into())).unwrap();
+    let mut insm = insm_over_the_plate(&r);
     insm.set_param("insm_res", &ParamValue::Int(64)).unwrap();
     let (without, plain) = frame(&mut r, &mut insm, &scene.camera, &lights);
     assert_eq!(insm.depth_images().len(), 1, "off by default: the intermediate images alone");
@@ -548,11 +550,8 @@ fn the_meshes_seen_from_the_viewpoints_match_the_intermediate_images_and_leave_t
     assert!(images[1].1.contains("meshes seen from the viewpoints"), "{}", images[1].1);
     let gpu = r.gpu().clone();
     let read = |atlas: &shadowlab_core::services::cube_shadows::CubeAtlas| {
-        let size = atlas.texture.size();
-        let bytes =
-            shadowlab_core::gpu::readback::read_texture(&gpu, &atlas.texture, size.width, size.height, 4).unwrap();
-        let depths: Vec<f32> = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
-        (depths, size.width, atlas.resolution, atlas.tiles_per_row, atlas.projections.clone())
+        let depths = shadowlab_core::gpu::readback::read_depths(&gpu, &atlas.texture).unwrap();
+        (depths, atlas.texture.size().width, atlas.resolution, atlas.tiles_per_row, atlas.projections.clone())
     };
     let (source, width, res, per_row, projections) = read(images[0].0);
     let (meshes, mesh_width, mesh_res, mesh_per_row, mesh_projections) = read(images[1].0);

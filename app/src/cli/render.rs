@@ -264,10 +264,7 @@ fn write_rsm(
             "wrote {} (the RSM of {}: {} of {}², reflected flux ({:.4}, {:.4}, {:.4}); {} of the frame's {} VPLs came \
              from it, first bounce)",
             path.display(),
-            match i.checked_sub(lights.len()) {
-                Some(k) => format!("sun {k}"),
-                None => format!("light {i}"),
-            },
+            shadowlab_core::vpl::emitter_name(i, lights.len()),
             if image.faces == 1 { "one face".to_string() } else { format!("{} faces", image.faces) },
             image.resolution,
             total.x,

@@ -53,8 +53,7 @@ pub struct AtlasDepths {
 impl AtlasDepths {
     pub fn read(gpu: &GpuContext, atlas: &CubeAtlas, what: &'static str) -> anyhow::Result<AtlasDepths> {
         let size = atlas.texture.size();
-        let bytes = shadowlab_core::gpu::readback::read_texture(gpu, &atlas.texture, size.width, size.height, 4)?;
-        let depths = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
+        let depths = shadowlab_core::gpu::readback::read_depths(gpu, &atlas.texture)?;
         Ok(AtlasDepths::new(
             depths,
             (size.width, size.height),

@@ -11,10 +11,11 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use eframe::egui;
+use shadowlab_core::accel::gpu_scene::GpuScene;
 use shadowlab_core::accel::scene_bvh::SceneBvh;
 use shadowlab_core::scene::{DirectionalLight, PointLight};
 use shadowlab_core::vpl::rsm::{rsm_image, RsmEmitter, RsmImage, RsmLayout};
-use shadowlab_core::vpl::{VplSet, VplSource, RSM_RESOLUTION};
+use shadowlab_core::vpl::{emitter_name, VplSet, VplSource, RSM_RESOLUTION};
 
 use crate::gui::image_view::ImageView;
 use crate::gui::inspector::fit_texture;
@@ -32,21 +33,29 @@ enum Emitter {
     Sun(DirectionalLight),
 }
 
-/// What an image was cast from.
-#[derive(Clone, Debug, PartialEq)]
+/// What an image was cast from. The scene is held, so that a new scene is never taken for the old one at the
+/// same address.
+#[derive(Clone)]
 struct Cast {
     index: usize,
     emitter: Emitter,
     resolution: u32,
-    scene: usize,
+    scene: Arc<GpuScene>,
+}
+
+impl PartialEq for Cast {
+    fn eq(&self, o: &Cast) -> bool {
+        (self.index, self.emitter, self.resolution) == (o.index, o.emitter, o.resolution)
+            && Arc::ptr_eq(&self.scene, &o.scene)
+    }
 }
 
 /// What the view reads from the app each UI frame.
 pub struct RsmInputs<'a> {
     /// The scene's BVH (built on first use).
     pub bvh: &'a dyn Fn() -> Arc<SceneBvh>,
-    /// Identifies the scene's geometry: a new scene casts again.
-    pub scene: usize,
+    /// The scene's geometry: a new scene casts again.
+    pub scene: Arc<GpuScene>,
     pub lights: &'a [PointLight],
     pub suns: &'a [DirectionalLight],
     /// The frame's VPLs (empty without an indirect technique).
@@ -69,9 +78,9 @@ pub struct RsmView {
     cast: Option<Cast>,
     /// CPU milliseconds of the last cast.
     pub cast_ms: f64,
-    /// Texel (face, x, y) -> VPLs drawn from it; and the VPL set they were counted in.
+    /// Texel (face, x, y) -> VPLs drawn from it; and the VPL set (held) and emitter they were counted for.
     pub drawn: BTreeMap<(u32, u32, u32), u32>,
-    drawn_from: Option<(usize, usize)>,
+    drawn_from: Option<(Arc<VplSet>, usize)>,
     /// VPLs in the frame, and how they were made.
     vpl_note: String,
     pub error: Option<String>,
@@ -105,14 +114,6 @@ impl Default for RsmView {
             emitters: 0,
             waiting: false,
         }
-    }
-}
-
-/// "light i" or "sun k".
-fn emitter_name(index: usize, lights: usize) -> String {
-    match index.checked_sub(lights) {
-        Some(k) => format!("sun {k}"),
-        None => format!("light {index}"),
     }
 }
 
@@ -155,7 +156,7 @@ impl RsmView {
             Some(k) => Emitter::Sun(suns[k]),
             None => Emitter::Point(lights[self.emitter]),
         };
-        let cast = Cast { index: self.emitter, emitter, resolution: self.resolution, scene: inputs.scene };
+        let cast = Cast { index: self.emitter, emitter, resolution: self.resolution, scene: inputs.scene.clone() };
         self.waiting = self.cast.as_ref() != Some(&cast) && !inputs.settled;
         if self.cast.as_ref() != Some(&cast) && inputs.settled {
             let bvh = (inputs.bvh)();
@@ -177,9 +178,9 @@ impl RsmView {
             self.drawn_from = None;
             self.view.reset();
         }
-        let counted = (Arc::as_ptr(inputs.vpls) as usize, self.emitter);
-        if self.drawn_from != Some(counted) {
-            self.drawn_from = Some(counted);
+        let counted = |(set, emitter): &(Arc<VplSet>, usize)| Arc::ptr_eq(set, inputs.vpls) && *emitter == self.emitter;
+        if !self.drawn_from.as_ref().is_some_and(counted) {
+            self.drawn_from = Some((inputs.vpls.clone(), self.emitter));
             self.drawn = match &self.image {
                 Some(image) => image.drawn_texels(inputs.vpls, self.emitter as u32),
                 None => BTreeMap::new(),

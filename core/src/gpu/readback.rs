@@ -181,12 +181,18 @@ pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, G
     map_read(gpu, &staging, buffer.size())
 }
 
+/// The depths of a whole 32-bit float depth texture, row by row.
+pub fn read_depths(gpu: &GpuContext, texture: &wgpu::Texture) -> Result<Vec<f32>, GpuError> {
+    let size = texture.size();
+    let bytes = read_texture(gpu, texture, size.width, size.height, 4)?;
+    Ok(bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect())
+}
+
 /// A depth atlas as a grey PNG-ready image: near is white, far (and empty) is black, stretched between the
 /// nearest and farthest drawn depth so both hardware (cube) and linear (paraboloid) depth are readable.
 pub fn depth_atlas_image(gpu: &GpuContext, texture: &wgpu::Texture) -> Result<image::RgbaImage, GpuError> {
     let size = texture.size();
-    let bytes = read_texture(gpu, texture, size.width, size.height, 4)?;
-    let depths: Vec<f32> = bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]])).collect();
+    let depths = read_depths(gpu, texture)?;
     let drawn = depths.iter().copied().filter(|&d| d < 1.0);
     let (lo, hi) = drawn.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| (lo.min(d), hi.max(d)));
     let span = (hi - lo).max(1e-6);

@@ -18,20 +18,18 @@ impl Renderer {
     /// Per pixel, true where the G-buffer holds geometry (not background): the pixels comparisons count.
     pub fn read_geometry_mask(&self) -> Result<Vec<bool>, GpuError> {
         let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
-        Ok(bytes.chunks_exact(4).map(|d| f32::from_le_bytes([d[0], d[1], d[2], d[3]]) < 1.0).collect())
+        Ok(readback::read_depths(&self.gpu, &t.depth_texture)?.into_iter().map(|d| d < 1.0).collect())
     }
 
     /// World position of every pixel of the last frame (None for background), from the G-buffer depth.
     pub fn read_world_positions(&self, camera: &Camera) -> Result<Vec<Option<Vec3>>, GpuError> {
         let t = &self.targets;
-        let bytes = readback::read_texture(&self.gpu, &t.depth_texture, t.width, t.height, 4)?;
+        let depths = readback::read_depths(&self.gpu, &t.depth_texture)?;
         let world_from_clip = camera.clip_from_world(t.width as f32 / t.height as f32).inverse();
-        Ok(bytes
-            .chunks_exact(4)
+        Ok(depths
+            .into_iter()
             .enumerate()
-            .map(|(i, d)| {
-                let depth = f32::from_le_bytes([d[0], d[1], d[2], d[3]]);
+            .map(|(i, depth)| {
                 if depth >= 1.0 {
                     return None;
                 }

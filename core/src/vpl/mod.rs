@@ -176,14 +176,20 @@ pub struct VplSet {
 impl VplSet {
     /// "light i" or "sun k": where VPL light index `light` came from.
     pub fn light_name(&self, light: u32) -> String {
-        match light.checked_sub(self.point_lights) {
-            Some(k) => format!("sun {k}"),
-            None => format!("light {light}"),
-        }
+        emitter_name(light as usize, self.point_lights as usize)
     }
 
     pub fn total_flux(&self) -> Vec3 {
         self.vpls.iter().map(|v| v.flux).sum()
+    }
+}
+
+/// "light i" or "sun k" for emitter `index` of `point_lights` point lights followed by the suns, the numbering
+/// of [`Vpl::light`] (and of `render --rsm-light`).
+pub fn emitter_name(index: usize, point_lights: usize) -> String {
+    match index.checked_sub(point_lights) {
+        Some(k) => format!("sun {k}"),
+        None => format!("light {index}"),
     }
 }
 

@@ -59,7 +59,7 @@ pub fn maps_ui(session: &Session, views: &mut Views, inspector: &mut Inspector, 
             let bvh = || renderer.scene().bvh(&ctx).0;
             inspector.rsm.update(&RsmInputs {
                 bvh: &bvh,
-                scene: std::sync::Arc::as_ptr(&renderer.shared_scene()) as usize,
+                scene: renderer.shared_scene(),
                 lights: &lights,
                 suns: renderer.directional_lights(),
                 vpls: &renderer.shared_vpls(),

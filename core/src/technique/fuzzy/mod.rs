@@ -187,8 +187,8 @@ pub struct FuzzyClustering {
     last_step: &'static str,
     /// The camera of the last frame: the shading-point clusters are of its view.
     frame_camera: Option<crate::scene::Camera>,
-    /// The camera and VPL set the preview last clustered the shading points for ([`preview`]).
-    followed_view: Option<(crate::scene::Camera, usize)>,
+    /// The camera and VPL set (held) the preview last clustered the shading points for ([`preview`]).
+    followed_view: Option<(crate::scene::Camera, Arc<VplSet>)>,
 }
 
 /// The largest turn (degrees) and move (share of the scene's diagonal) of the camera between two frames for

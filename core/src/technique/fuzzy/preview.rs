@@ -60,8 +60,10 @@ impl FuzzyClustering {
         }
         let (pw, ph, s) = preview_grid(w, h);
         let note = format!("shading points from a {pw}x{ph} grid of rays on the CPU (the frame's: {w}x{h})");
-        let key = (*ctx.camera, std::sync::Arc::as_ptr(&self.vpls) as usize);
-        if self.followed_view == Some(key) {
+        let followed = |(camera, vpls): &(Camera, std::sync::Arc<crate::vpl::VplSet>)| {
+            camera == ctx.camera && std::sync::Arc::ptr_eq(vpls, &self.vpls)
+        };
+        if self.followed_view.as_ref().is_some_and(followed) {
             return Some(note);
         }
         let points: Vec<kmeans::Point> = (0..ph)
@@ -112,7 +114,7 @@ impl FuzzyClustering {
             let probe = self.probe_rays(ctx.camera.position, &entries, &self.inspection.sp_clusters, &lights);
             self.inspection.probe = probe;
         }
-        self.followed_view = Some(key);
+        self.followed_view = Some((*ctx.camera, self.vpls.clone()));
         Some(note)
     }
 }

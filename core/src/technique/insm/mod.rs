@@ -205,7 +205,7 @@ pub struct Insm {
     placement_used: viewpoints::Placement,
     images: CubeShadowRenderer,
     /// The meshes seen from the viewpoints (`mesh_views`, inspection), and whether this frame renders them.
-    mesh_images: CubeShadowRenderer,
+    mesh_images: Option<CubeShadowRenderer>,
     frame_mesh_views: bool,
     shadows: PerLightShadows,
     triangulate_pipeline: wgpu::ComputePipeline,
@@ -308,7 +308,7 @@ impl Insm {
             auto_placement: None,
             placement_used: viewpoints::Placement::Box,
             images: CubeShadowRenderer::new(gpu),
-            mesh_images: CubeShadowRenderer::with_pushed_vertices(gpu),
+            mesh_images: None,
             frame_mesh_views: false,
             shadows: PerLightShadows::new(gpu, layouts, CubeShadowRenderer::with_pushed_vertices(gpu)),
             triangulate_pipeline,
@@ -505,7 +505,9 @@ impl Technique for Insm {
         self.counts.insm_triangle_budget = Some(budget);
         self.frame_mesh_views = self.params.mesh_views;
         if self.frame_mesh_views {
-            self.mesh_images.ensure_tiles(ctx.gpu, res, k as usize);
+            // Made the first time it is asked for: most frames never draw the meshes' views.
+            let images = self.mesh_images.get_or_insert_with(|| CubeShadowRenderer::with_pushed_vertices(ctx.gpu));
+            images.ensure_tiles(ctx.gpu, res, k as usize);
         }
         // Steps: one per intermediate map, the triangulation, the meshes' views (`mesh_views`), the light batches.
         self.counts.batches = k as usize + 1 + usize::from(self.frame_mesh_views) + batches;
@@ -574,7 +576,7 @@ impl Technique for Insm {
     fn depth_images(&self) -> Vec<(&crate::services::cube_shadows::CubeAtlas, &'static str)> {
         let mut images: Vec<_> =
             self.images.atlas().map(|a| (a, "intermediate depth images, one per viewpoint")).into_iter().collect();
-        if let Some(a) = self.mesh_images.atlas().filter(|_| self.frame_mesh_views) {
+        if let Some(a) = self.mesh_images.as_ref().and_then(|m| m.atlas()).filter(|_| self.frame_mesh_views) {
             images.push((a, "the meshes seen from the viewpoints (mesh_views), tile by tile as the images"));
         }
         images

@@ -65,10 +65,10 @@ impl Insm {
     /// viewpoint `j` as the intermediate images: side by side, what the triangulation kept, bridged or lost
     /// (inspection; not in the frame's counts, in its time).
     pub(super) fn encode_mesh_views(&mut self, ctx: &FrameContext, encoder: &mut wgpu::CommandEncoder) {
-        let Some(mesh) = self.mesh.as_ref() else { return };
+        let (Some(mesh), Some(images)) = (self.mesh.as_ref(), self.mesh_images.as_mut()) else { return };
         let geometry = mesh.geometry(self.simplified.as_ref(), &self.tiles, self.tiles_triangles, 0.0);
         let label = "insm meshes from the viewpoints (inspection)";
-        self.mesh_images.render_views(ctx.gpu, geometry, ctx.timer, encoder, label, &self.view_matrices, 0, true);
+        images.render_views(ctx.gpu, geometry, ctx.timer, encoder, label, &self.view_matrices, 0, true);
     }
 
     /// Step `k`: Algorithm 1 line 3 for all maps, and the copies the first light batch reads back.
