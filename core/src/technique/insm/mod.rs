@@ -26,24 +26,29 @@
 //!   unshadowed image). Here an edge is kept when one known second difference is below epsilon, so a step cuts
 //!   only the edge across it and a surface keeps its last sample: the paper's half sample.
 //! - Beyond the paper, `adaptive` meshes (on by default): Algorithm 2 gives two triangles per 2x2 samples, so
-//!   a wall costs as many triangles as a statue. A first pass flags each whole 8x8-neighbourhood tile that
-//!   is planar by the same epsilon: every neighbourhood keeps both triangles and every sample's inverse depth
-//!   (affine in image coordinates on a plane) is within epsilon (relative) of the affine function through the
-//!   tile's corners. A flagged tile is written as two triangles when its four neighbours are flagged (or
-//!   have no neighbourhoods), otherwise as a fan from its centre sample whose sides facing unflagged
-//!   neighbours keep all nine samples: neighbours then share every vertex of their common side, so the mesh
-//!   has no T-junctions and no cracks (tested on the CPU twin: areas and edge counts). A planar tile costs 2 to
-//!   ~20 triangles instead of 128. `adaptive = off` is Algorithm 2 exactly. The plane test has its own
-//!   tolerance `merge_epsilon` (0.002, relative inverse depth): real planes pass it to rounding, and it bounds
-//!   how far a merged tile may stray from its samples; with `epsilon` (0.01) merged tiles stood up to 1 % of
-//!   the depth off the surface (10 cm at 10 m) and the conference room's error against the ray tracer rose
-//!   from 11.38 % to 11.65 %.
+//!   a wall costs as many triangles as a statue. A first pass asks of each 8x8-neighbourhood tile a quadtree
+//!   of blocks (the tile, its 4x4 quadrants, its 2x2 blocks; `merge_block` the smallest) whether each is
+//!   planar: whole, every neighbourhood keeping both triangles, and every sample's inverse depth (affine in
+//!   image coordinates on a plane) within `merge_epsilon` (relative) of the affine function through the
+//!   block's corners. Every neighbourhood then belongs to the largest planar block around it, or to itself
+//!   alone; a sample is a vertex when it is a corner of one of those leaves around it, and a merged leaf is two
+//!   triangles when its sides hold no vertex but its corners, else a fan from its centre sample over every
+//!   vertex of its boundary: neighbouring leaves share every vertex of their common side, so the mesh has no
+//!   T-junctions and no cracks (tested on the CPU twin: areas and edge counts). With whole tiles only (the
+//!   first version, `merge_block = 8x8`) the tiles a crease, an edge or a silhouette crosses kept all of
+//!   Algorithm 2's triangles, 90 % of the mesh; their planar quadrants and 2x2 blocks halve the meshes of the
+//!   built-ins and take 37 % off the real scenes' (measured: `docs/techniques/insm.md`). A quadtree across
+//!   tiles would take off about 1 % more (measured on the CPU twin, not built). `adaptive = off` is Algorithm
+//!   2 exactly. The plane test's tolerance `merge_epsilon` (0.002, relative inverse depth) is its own: real
+//!   planes pass it to rounding, and it bounds how far a merged block may stray from its samples; with
+//!   `epsilon` (0.01) merged tiles stood up to 1 % of the depth off the surface (10 cm at 10 m) and the
+//!   conference room's error against the ray tracer rose from 11.38 % to 11.65 %.
 //! - Beyond the paper, `drop_covered` (on by default): `k` viewpoints in a room see the same walls, so each
 //!   wall was reconstructed up to ten times and every cube map rasterised all the copies. A sample of map `j`
 //!   is covered when another map `i` reconstructs it more finely: the sample projects into a neighbourhood of
 //!   `i` that keeps both triangles, lies on `i`'s triangle there (inverse depth within `epsilon`, relative),
 //!   and that neighbourhood's world area is smaller than the one the sample starts in map `j` (within 5 %:
-//!   the lower-numbered map). A triangle whose three corners are covered is dropped (a merged tile when all
+//!   the lower-numbered map). A triangle whose three corners are covered is dropped (a merged block when all
 //!   its samples are). The surface stays in the finest map that sees it: for any point, the finest map
 //!   covering it is covered by none, so it keeps its triangles. The argument is the paper's own premise (the
 //!   union of the meshes stands for the scene's surfaces, and each map's mesh is accurate to its sampling):
@@ -146,7 +151,8 @@ struct TriangulateUniform {
     drop_covered: u32,
     dilate: u32,
     step_epsilon: f32,
-    _pad: [u32; 3],
+    min_block: u32,
+    _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<TriangulateUniform>() == 48);
 
@@ -292,7 +298,8 @@ impl Insm {
                 drop_covered: 0,
                 dilate: 0,
                 step_epsilon: 0.0,
-                _pad: [0; 3],
+                min_block: 2,
+                _pad: [0; 2],
             }),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
@@ -495,7 +502,8 @@ impl Technique for Insm {
             drop_covered: u32::from(mesh.drop_covered),
             dilate: u32::from(self.params.dilate),
             step_epsilon: mesh.step_epsilon,
-            _pad: [0; 3],
+            min_block: mesh.min_block,
+            _pad: [0; 2],
         };
         ctx.gpu.queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&uniform));
 

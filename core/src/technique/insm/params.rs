@@ -75,9 +75,11 @@ pub struct InsmParams {
     pub step_epsilon: f32,
     /// The angle from face-on beyond which an edge is steep, degrees (90: none is).
     pub steep_angle: f32,
-    /// Merge planar 8x8 tiles into a few triangles (the adaptive mesh, beyond the paper).
+    /// Merge planar blocks of neighbourhoods into a few triangles (the adaptive mesh, beyond the paper).
     pub adaptive: bool,
-    /// Relative tolerance of the merge test (planes pass it to rounding; it bounds how far a merged tile
+    /// The smallest block the adaptive mesh merges, neighbourhoods a side (2, 4 or 8: whole tiles only).
+    pub merge_block: u32,
+    /// Relative tolerance of the merge test (planes pass it to rounding; it bounds how far a merged block
     /// strays from its samples).
     pub merge_epsilon: f32,
     /// Drop the triangles of a map whose corners another map reconstructs more finely (beyond the paper).
@@ -115,6 +117,7 @@ impl Default for InsmParams {
             step_epsilon: DEFAULT_STEP_EPSILON,
             steep_angle: DEFAULT_STEEP_ANGLE,
             adaptive: true,
+            merge_block: 2,
             merge_epsilon: MeshSettings::default().merge_epsilon,
             drop_covered: true,
             simplify: 1.0,
@@ -185,16 +188,24 @@ impl InsmParams {
             Param {
                 key: "adaptive",
                 label: "Adaptive mesh",
-                help: "Merge planar 8x8 tiles of the depth images into a few triangles (beyond the paper; off: \
-                       Algorithm 2's two triangles per 2x2 samples)",
+                help: "Merge planar blocks of the depth images (a quadtree in each 8x8 tile) into a few triangles \
+                       (beyond the paper; off: Algorithm 2's two triangles per 2x2 samples)",
                 kind: ParamKind::Bool,
                 value: ParamValue::Bool(self.adaptive),
             },
             Param {
+                key: "merge_block",
+                label: "Smallest merged block",
+                help: "The smallest planar block of neighbourhoods the adaptive mesh merges: 2x2, 4x4, or 8x8 \
+                       (whole tiles only, as before the quadtree)",
+                kind: ParamKind::Choice(MERGE_BLOCKS),
+                value: ParamValue::Choice(format!("{0}x{0}", self.merge_block)),
+            },
+            Param {
                 key: "merge_epsilon",
                 label: "Merge tolerance",
-                help: "Relative inverse-depth tolerance within which a tile's samples must lie on its plane to be \
-                       merged (the adaptive mesh)",
+                help: "Relative inverse-depth tolerance within which a block's samples must lie on its plane to \
+                       be merged (the adaptive mesh)",
                 kind: ParamKind::Float { min: 0.0, max: 1.0 },
                 value: ParamValue::Float(self.merge_epsilon),
             },
@@ -309,6 +320,9 @@ impl InsmParams {
             ("step_epsilon", ParamValue::Float(v)) => self.step_epsilon = *v,
             ("steep_angle", ParamValue::Float(v)) => self.steep_angle = *v,
             ("adaptive", ParamValue::Bool(v)) => self.adaptive = *v,
+            ("merge_block", ParamValue::Choice(v)) => {
+                self.merge_block = 1 << (1 + MERGE_BLOCKS.iter().position(|b| b == v).expect("check_param checked it"))
+            }
             ("merge_epsilon", ParamValue::Float(v)) => self.merge_epsilon = *v,
             ("drop_covered", ParamValue::Bool(v)) => self.drop_covered = *v,
             ("simplify", ParamValue::Float(v)) => self.simplify = *v,
@@ -385,10 +399,14 @@ impl InsmParams {
             step_epsilon: self.step_epsilon_at(resolution),
             adaptive: self.adaptive,
             merge_epsilon: self.merge_epsilon,
+            min_block: self.merge_block,
             drop_covered: self.drop_covered,
         }
     }
 }
+
+/// The choices of `merge_block`: 2, 4 and 8 neighbourhoods a side.
+const MERGE_BLOCKS: &[&str] = &["2x2", "4x4", "8x8"];
 
 /// A tolerance `e` given at 128² for `resolution`² maps: scaled as 128 / resolution, down to `EPSILON_FLOOR`
 /// (a smaller `e` as it is).

@@ -101,17 +101,20 @@ impl Insm {
         let tiles: Vec<GpuTile> = bytemuck::cast_slice(&map_read(gpu, &mesh.tiles_readback, tile_bytes)?).to_vec();
         self.tiles.clear();
         self.mesh_triangles = 0;
-        // What the adaptive mesh merged: how much a coarser merge (across tiles) could still save.
-        let (mut merged_tiles, mut merged_triangles) = (0u64, 0u64);
+        // What the adaptive mesh merged: whole tiles (how much a merge across tiles could still save) and tiles
+        // merged in part (planar blocks beside a crease, an edge or a silhouette).
+        let (mut merged_tiles, mut merged_triangles, mut partly_merged) = (0u64, 0u64, 0u64);
         for (i, t) in tiles.iter().enumerate() {
             let count = t.count.min(MAX_TRIANGLES_PER_TILE);
             if count == 0 {
                 continue;
             }
             self.mesh_triangles += count as u64;
-            if t.merged != 0 {
+            if t.merged & triangulate::TILE_BIT != 0 {
                 merged_tiles += 1;
                 merged_triangles += count as u64;
+            } else if t.merged != 0 {
+                partly_merged += 1;
             }
             let min = Vec3::from_slice(&t.bounds_min[..3]);
             let max = Vec3::from_slice(&t.bounds_max[..3]);
@@ -148,6 +151,7 @@ impl Insm {
         self.counts.figures.insert("mesh_tiles".into(), self.tiles.len() as f64);
         self.counts.figures.insert("mesh_merged_tiles".into(), merged_tiles as f64);
         self.counts.figures.insert("mesh_merged_triangles".into(), merged_triangles as f64);
+        self.counts.figures.insert("mesh_partly_merged_tiles".into(), partly_merged as f64);
         self.cpu_times.push(PassTime {
             name: "mesh readback".into(),
             ms: start.elapsed().as_secs_f64() * 1e3,

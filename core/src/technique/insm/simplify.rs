@@ -1,10 +1,10 @@
 //! The reconstructed meshes simplified before the per-light maps draw them (beyond the paper, `simplify` below
 //! 1; off by default).
 //!
-//! Algorithm 2 makes two triangles per 2x2 samples and the adaptive mesh merges only whole planar 8x8 tiles, so
-//! a tile holding a crease, an edge or a silhouette keeps all its triangles: on the built-in scenes 91 % of the
-//! mesh is in such tiles, and the meshes are 30-40 times the scenes they stand for (Cornell box: 95,524
-//! triangles for 2,292). Every light's cube map draws them, so INSM was slower than the reference there. Here
+//! Algorithm 2 makes two triangles per 2x2 samples and the adaptive mesh merges only planar blocks (2x2 to 8x8
+//! neighbourhoods), so every neighbourhood at a crease, an edge or a silhouette keeps its triangles: the
+//! meshes are 15-20 times the built-in scenes they stand for (Cornell box: 48,100 triangles for 2,292; 95,524
+//! when only whole tiles merged). Every light's cube map draws them, so INSM is slower than the reference there. Here
 //! the triangles the GPU wrote are read back once per mesh and collapsed with meshoptimizer's quadric edge
 //! collapse ([`meshopt::simplify`]) toward `keep` of their count, never moving the surface by more than
 //! `max_error` (world units). The meshes' borders (cut edges, holes, image borders) are not locked: a border

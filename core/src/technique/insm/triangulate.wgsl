@@ -14,21 +14,25 @@
 // outside the image or on the background gives no information.
 //
 // Adaptive meshes (a deviation beyond the paper, `adaptive` on; the CPU twin is
-// core/src/technique/insm/triangulate.rs): a first pass (`classify`) flags each whole tile whose 64
-// neighbourhoods all keep both triangles and whose samples' inverse depths are all within merge_epsilon
-// (relative) of the affine function through its corners z(0,0), z(8,0), z(0,8) (the second-difference test
-// taken across the tile: affine on a plane). The second pass (`triangulate`) writes a flagged tile as two triangles when its four
-// neighbours are flagged too (or have no neighbourhoods), else as a fan from its centre sample over its
-// boundary, one segment per side facing a flagged (or absent) neighbour and every sample of the other sides,
-// so neighbours always share every vertex of a common side: no T-junctions, no cracks. The plane test uses
-// merge_epsilon (tighter than eps). `classify` also writes every sample's vertex and, per tile, which of its
-// neighbourhoods keep both triangles (`full_lo`, `full_hi`), so that `triangulate` can look at other maps.
+// core/src/technique/insm/triangulate.rs): a first pass (`classify`) asks of each tile a quadtree of blocks:
+// the whole tile, its four 4x4 quadrants and its sixteen 2x2 blocks (those at least `min_block` a side). A
+// block is planar when it is whole (its samples lie in the image), all its neighbourhoods keep both triangles,
+// and its samples' inverse depths are all within merge_epsilon (relative) of the affine function through its
+// corners z(0,0), z(s,0), z(0,s) (the second-difference test taken across the block: affine on a plane); the
+// tile's `merged` mask holds a bit per planar block. In the second pass (`triangulate`) every neighbourhood
+// belongs to a leaf, the largest planar block around it or itself alone (`leaf_of`). A sample is a vertex when
+// it is a corner of the leaf of one of the neighbourhoods around it (`is_vertex`); a merged leaf is written as
+// two triangles when its sides hold no vertex but its corners, else as a fan from its centre sample over every
+// vertex of its boundary, so neighbouring leaves (in this tile or the next) share every vertex of a common
+// side: no T-junctions, no cracks. The plane test uses merge_epsilon (tighter than eps). `classify` also writes
+// every sample's vertex and, per tile, which of its neighbourhoods keep both triangles (`full_lo`, `full_hi`),
+// so that `triangulate` can look at other maps.
 //
 // Covered triangles (a deviation beyond the paper, `drop_covered` on; see core/src/technique/insm/mod.rs): a
 // sample of map j is covered when another map i reconstructs it more finely (it projects into a neighbourhood
 // of i that keeps both triangles, lies on i's triangle there within eps, and that neighbourhood is smaller in
 // world area than the sample's own, within FINER_SLACK: the lower-numbered map). `triangulate` drops a
-// triangle whose three corners are covered, and a merged tile whose samples all are.
+// triangle whose three corners are covered, and a merged block whose samples all are.
 //
 // Outputs: one vertex per sample (world position, inverse depth; inverse depth 0 = background), the kept
 // triangles of each tile compacted at the start of the tile's fixed slot of MAX_TRIS triangles, and per tile
@@ -51,7 +55,8 @@ struct Params {
     dilate: u32,
     // the tolerance for a steep edge (`edge_connected`), at most epsilon
     step_epsilon: f32,
-    _pad0: u32,
+    // the smallest block the adaptive mesh merges, neighbourhoods a side (2, 4 or TILE)
+    min_block: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -68,7 +73,8 @@ struct View {
 
 struct Tile {
     count: u32,
-    // 1 when the adaptive mesh merged the tile (written by `classify`, kept by `triangulate`)
+    // the planar mask (written by `classify`, kept by `triangulate`): bit 0 the whole tile, bits 1 + qy * 2 + qx
+    // its 4x4 quadrants, bits 5 + by * 4 + bx its 2x2 blocks
     merged: u32,
     // bit y * TILE + x: neighbourhood (x, y) of the tile keeps both triangles (`classify`; kept by `triangulate`)
     full_lo: u32,
@@ -99,12 +105,11 @@ var<private> tile_origin: vec2<i32>;
 var<private> map_steep: f32;
 
 var<workgroup> tri_count: atomic<u32>;
-var<workgroup> planar_count: atomic<u32>;
+var<workgroup> planar_mask: atomic<u32>;
 var<workgroup> full_bits: array<atomic<u32>, 2>;
 // Sample (x, y) of the tile (0..=TILE each): 1 when another map reconstructs it more finely.
 const CORNERS: u32 = 9u; // TILE + 1
 var<workgroup> covered: array<u32, 81>; // CORNERS * CORNERS
-var<workgroup> covered_count: atomic<u32>;
 var<workgroup> lo: array<atomic<u32>, 3>;
 var<workgroup> hi: array<atomic<u32>, 3>;
 
@@ -237,10 +242,9 @@ fn load_halo(wg: vec3<u32>, li: u32, from_vertices: bool) {
     }
     if li == 0u {
         atomicStore(&tri_count, 0u);
-        atomicStore(&planar_count, 0u);
+        atomicStore(&planar_mask, 0u);
         atomicStore(&full_bits[0], 0u);
         atomicStore(&full_bits[1], 0u);
-        atomicStore(&covered_count, 0u);
         for (var i = 0u; i < 3u; i++) {
             atomicStore(&lo[i], 0xffffffffu);
             atomicStore(&hi[i], 0u);
@@ -306,22 +310,56 @@ fn dilated_position(s: vec2<i32>) -> vec3<f32> {
     return p;
 }
 
-// Sample p's inverse depth within eps of the affine function through the tile's corners.
-fn on_tile_plane(p: vec2<i32>) -> bool {
-    let z00 = z_at(tile_origin);
-    let z10 = z_at(tile_origin + vec2<i32>(i32(TILE), 0));
-    let z01 = z_at(tile_origin + vec2<i32>(0, i32(TILE)));
-    let f = vec2<f32>(p - tile_origin) / f32(TILE);
-    let fit = z00 + (z10 - z00) * f.x + (z01 - z00) * f.y;
-    let z = z_at(p);
-    return abs(z - fit) < params.merge_epsilon * z;
+// Block `bit` of a tile's planar mask: its origin in the tile and its side, in neighbourhoods.
+fn mask_block(bit: u32) -> vec3<u32> {
+    if bit == 0u {
+        return vec3<u32>(0u, 0u, TILE);
+    }
+    if bit < 5u {
+        return vec3<u32>((bit - 1u) % 2u * 4u, (bit - 1u) / 2u * 4u, 4u);
+    }
+    return vec3<u32>((bit - 5u) % 4u * 2u, (bit - 5u) / 4u * 2u, 2u);
+}
+
+// Block b (origin in the tile, side) is planar: whole, every neighbourhood keeps both triangles (the tile's
+// full bits, complete when this runs), every sample within merge_epsilon of the affine function through its
+// corners. The twin of `SampledImage::block_planar`.
+fn block_planar(b: vec3<u32>) -> bool {
+    let o = tile_origin + vec2<i32>(b.xy);
+    let s = i32(b.z);
+    if any(o + vec2<i32>(s) >= vec2<i32>(i32(params.resolution))) {
+        return false;
+    }
+    for (var j = 0u; j < b.z; j++) {
+        for (var i = 0u; i < b.z; i++) {
+            let bit = (b.y + j) * TILE + b.x + i;
+            if ((atomicLoad(&full_bits[bit / 32u]) >> (bit % 32u)) & 1u) == 0u {
+                return false;
+            }
+        }
+    }
+    let z00 = z_at(o);
+    let z10 = z_at(o + vec2<i32>(s, 0));
+    let z01 = z_at(o + vec2<i32>(0, s));
+    for (var j = 0; j <= s; j++) {
+        for (var i = 0; i <= s; i++) {
+            let f = vec2<f32>(f32(i), f32(j)) / f32(s);
+            let fit = z00 + (z10 - z00) * f.x + (z01 - z00) * f.y;
+            let z = z_at(o + vec2<i32>(i, j));
+            // Written so that NaN fails.
+            if !(abs(z - fit) < params.merge_epsilon * z) {
+                return false;
+            }
+        }
+    }
+    return true;
 }
 
 fn tile_index(image: u32, t: vec2<u32>) -> u32 {
     return (image * params.tiles_per_side + t.y) * params.tiles_per_side + t.x;
 }
 
-// Pass 1 of the adaptive mesh: flag the tiles to merge.
+// Pass 1 of the adaptive mesh: which blocks of each tile are planar.
 @compute @workgroup_size(8, 8, 1)
 fn classify(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -331,7 +369,6 @@ fn classify(
     load_halo(wg, li, false);
     workgroupBarrier();
     let r = params.resolution;
-    let whole = wg.x * TILE + TILE < r && wg.y * TILE + TILE < r;
     let uv = wg.xy * TILE + lid.xy;
     // The vertex of sample (u, v): every sample belongs to exactly one invocation. Written here so that
     // `triangulate` reads every map's samples from the buffer.
@@ -345,18 +382,20 @@ fn classify(
         let kept = neighbourhood_triangles(p00);
         if kept.x && kept.y {
             atomicOr(&full_bits[li / 32u], 1u << (li % 32u));
-            let planar = on_tile_plane(p00) && on_tile_plane(p00 + vec2<i32>(0, 1))
-                && on_tile_plane(p00 + vec2<i32>(1, 1)) && on_tile_plane(p00 + vec2<i32>(1, 0));
-            if whole && planar {
-                atomicAdd(&planar_count, 1u);
-            }
+        }
+    }
+    workgroupBarrier();
+    // Invocation 0 asks of the whole tile, 1-4 of its quadrants, 5-20 of its 2x2 blocks.
+    if params.adaptive != 0u && li < 21u {
+        let b = mask_block(li);
+        if b.z >= params.min_block && block_planar(b) {
+            atomicOr(&planar_mask, 1u << li);
         }
     }
     workgroupBarrier();
     if li == 0u {
-        let flag = params.adaptive != 0u && atomicLoad(&planar_count) == TILE * TILE;
         let t = tile_index(wg.z, wg.xy);
-        tiles[t].merged = select(0u, 1u, flag);
+        tiles[t].merged = atomicLoad(&planar_mask);
         tiles[t].full_lo = atomicLoad(&full_bits[0]);
         tiles[t].full_hi = atomicLoad(&full_bits[1]);
     }
@@ -459,23 +498,47 @@ fn corner_covered(p: vec2<i32>) -> bool {
     return covered[l.y * CORNERS + l.x] != 0u;
 }
 
-// A side of a merged tile meets a merged neighbour, or one without neighbourhoods.
-fn side_is_coarse(image: u32, t: vec2<i32>) -> bool {
+// The leaf of the quadtree that holds neighbourhood n of `image`: the largest planar block of its tile's mask
+// around it, or n alone, as (origin, side) in neighbourhoods; side 0 outside the image's neighbourhoods. The
+// twin of `SampledImage::leaf`.
+fn leaf_of(image: u32, n: vec2<i32>) -> vec3<i32> {
     let neighbourhoods = i32(params.resolution) - 1;
-    if any(t < vec2<i32>(0)) || any(t * i32(TILE) >= vec2<i32>(neighbourhoods)) {
-        return true;
+    if any(n < vec2<i32>(0)) || any(n >= vec2<i32>(neighbourhoods)) {
+        return vec3<i32>(0);
     }
-    return tiles[tile_index(image, vec2<u32>(t))].merged != 0u;
+    let t = vec2<u32>(n) / TILE;
+    let mask = tiles[tile_index(image, t)].merged;
+    let l = vec2<u32>(n) % TILE;
+    let bits = vec3<u32>(0u, 1u + l.y / 4u * 2u + l.x / 4u, 5u + l.y / 2u * 4u + l.x / 2u);
+    for (var i = 0u; i < 3u; i++) {
+        if ((mask >> bits[i]) & 1u) != 0u {
+            let b = mask_block(bits[i]);
+            return vec3<i32>(vec2<i32>(t * TILE + b.xy), i32(b.z));
+        }
+    }
+    return vec3<i32>(n, 1);
 }
 
-// Boundary point k (0..=TILE) of side `side` in fan order: top right to left, left down, bottom left to right,
-// right up (tile coordinates).
-fn side_point(side: u32, k: u32) -> vec2<u32> {
+// Sample p is a vertex of the adaptive mesh: a corner of the leaf of one of the neighbourhoods around it.
+fn is_vertex(image: u32, p: vec2<i32>) -> bool {
+    for (var d = 0; d < 4; d++) {
+        let leaf = leaf_of(image, p - vec2<i32>(d % 2, d / 2));
+        let l = p - leaf.xy;
+        if leaf.z > 0 && (l.x == 0 || l.x == leaf.z) && (l.y == 0 || l.y == leaf.z) {
+            return true;
+        }
+    }
+    return false;
+}
+
+// Boundary point k (0..=s) of side `side` of a block of side s, in fan order: top right to left, left down,
+// bottom left to right, right up (block coordinates).
+fn side_point(side: u32, k: i32, s: i32) -> vec2<i32> {
     switch side {
-        case 0u: { return vec2<u32>(TILE - k, 0u); }
-        case 1u: { return vec2<u32>(0u, k); }
-        case 2u: { return vec2<u32>(k, TILE); }
-        default: { return vec2<u32>(TILE, TILE - k); }
+        case 0u: { return vec2<i32>(s - k, 0); }
+        case 1u: { return vec2<i32>(0, k); }
+        case 2u: { return vec2<i32>(k, s); }
+        default: { return vec2<i32>(s, s - k); }
     }
 }
 
@@ -483,6 +546,64 @@ fn emit(o: u32, a: u32, b: u32, c: u32) {
     indices[o] = a;
     indices[o + 1u] = b;
     indices[o + 2u] = c;
+}
+
+// The triangles of merged leaf `leaf` (origin, side; in this tile) of `image` into tile `tile`'s slot: none when
+// another map reconstructs all its samples more finely, two when its sides hold no vertex but its corners,
+// else a fan from its centre over the vertices of its boundary. The twin of `SampledImage::leaf_triangles`.
+fn emit_leaf(image: u32, tile: u32, leaf: vec3<i32>) {
+    let o = leaf.xy;
+    let s = leaf.z;
+    var all_covered = true;
+    for (var j = 0; j <= s && all_covered; j++) {
+        for (var i = 0; i <= s; i++) {
+            if !corner_covered(o + vec2<i32>(i, j)) {
+                all_covered = false;
+                break;
+            }
+        }
+    }
+    if all_covered {
+        return;
+    }
+    var n = 0u;
+    for (var side = 0u; side < 4u; side++) {
+        for (var k = 0; k < s; k++) {
+            let p = o + side_point(side, k, s);
+            n += u32(is_vertex(image, p));
+            // Bounds: every sample of the boundary (a superset of the vertices).
+            grow_bounds(p_at(p));
+        }
+    }
+    grow_bounds(p_at(o + vec2<i32>(s / 2)));
+    let r = i32(params.resolution);
+    let base = i32(image) * r * r;
+    let index = base + o.y * r + o.x;
+    if n == 4u {
+        let slot = atomicAdd(&tri_count, 2u);
+        let out = (tile * MAX_TRIS + slot) * 3u;
+        emit(out, u32(index), u32(index + s * r), u32(index + s * r + s));
+        emit(out + 3u, u32(index + s * r + s), u32(index + s), u32(index));
+        return;
+    }
+    let slot = atomicAdd(&tri_count, n);
+    var out = (tile * MAX_TRIS + slot) * 3u;
+    let centre = u32(index + (s / 2) * r + s / 2);
+    // The first boundary point, the top right corner, is a vertex.
+    let first = u32(index + s);
+    var previous = first;
+    for (var side = 0u; side < 4u; side++) {
+        for (var k = select(0, 1, side == 0u); k < s; k++) {
+            let l = side_point(side, k, s);
+            if is_vertex(image, o + l) {
+                let v = u32(index + l.y * r + l.x);
+                emit(out, centre, previous, v);
+                out += 3u;
+                previous = v;
+            }
+        }
+    }
+    emit(out, centre, previous, first);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -503,59 +624,22 @@ fn triangulate(
         let inside = all(p < vec2<i32>(i32(r)));
         let cov = params.drop_covered != 0u && inside && sample_covered(p, image, groups.z);
         covered[c] = select(0u, 1u, cov);
-        if cov {
-            atomicAdd(&covered_count, 1u);
-        }
     }
     workgroupBarrier();
     let uv = wg.xy * TILE + lid.xy;
     let tile = (image * params.tiles_per_side + wg.y) * params.tiles_per_side + wg.x;
     let base = image * r * r;
     let p00 = vec2<i32>(uv);
+    let mask = tiles[tile].merged;
 
-    let tile_merged = tiles[tile].merged != 0u;
-    // A merged tile is whole: all its samples lie in the image.
-    let tile_dropped = tile_merged && atomicLoad(&covered_count) == CORNERS * CORNERS;
-    if tile_merged && !tile_dropped && li < 4u {
-        // Invocation `li` writes side `li` of the merged tile's fan (or, with four coarse sides, invocation 0
-        // the two triangles).
-        let t = vec2<i32>(wg.xy);
-        let coarse = vec4<bool>(
-            side_is_coarse(image, t + vec2<i32>(0, -1)),
-            side_is_coarse(image, t + vec2<i32>(-1, 0)),
-            side_is_coarse(image, t + vec2<i32>(0, 1)),
-            side_is_coarse(image, t + vec2<i32>(1, 0)),
-        );
-        let origin = wg.xy * TILE;
-        let corner = base + origin.y * r + origin.x;
-        if all(coarse) {
-            if li == 0u {
-                let slot = atomicAdd(&tri_count, 2u);
-                let o = (tile * MAX_TRIS + slot) * 3u;
-                emit(o, corner, corner + TILE * r, corner + TILE * r + TILE);
-                emit(o + 3u, corner + TILE * r + TILE, corner + TILE, corner);
-            }
-        } else {
-            let step = select(1u, TILE, coarse[li]);
-            let slot = atomicAdd(&tri_count, TILE / step);
-            var o = (tile * MAX_TRIS + slot) * 3u;
-            let centre = corner + (TILE / 2u) * r + TILE / 2u;
-            for (var k = 0u; k < TILE; k += step) {
-                let a = side_point(li, k);
-                let b = side_point(li, k + step);
-                emit(o, centre, corner + a.y * r + a.x, corner + b.y * r + b.x);
-                o += 3u;
-            }
-        }
-        // Bounds: every sample of the side (a superset of the vertices used), and the centre.
-        for (var k = 0u; k <= TILE; k++) {
-            grow_bounds(p_at(vec2<i32>(side_point(li, k) + origin)));
-        }
-        grow_bounds(p_at(vec2<i32>(origin + vec2<u32>(TILE / 2u))));
+    let leaf = leaf_of(image, p00);
+    // A merged leaf is written by the invocation of its first neighbourhood.
+    if leaf.z > 1 && all(leaf.xy == p00) {
+        emit_leaf(image, tile, leaf);
     }
 
     // The two triangles of the neighbourhood (Algorithm 2, lines 2-5).
-    if !tile_merged && uv.x + 1u < r && uv.y + 1u < r {
+    if leaf.z == 1 {
         let kept = neighbourhood_triangles(p00);
         let p01 = p00 + vec2<i32>(0, 1);
         let p11 = p00 + vec2<i32>(1, 1);
@@ -595,7 +679,7 @@ fn triangulate(
         var t: Tile;
         t.count = atomicLoad(&tri_count);
         // Neighbours may read these flags meanwhile: they are written with the values they had.
-        t.merged = select(0u, 1u, tile_merged);
+        t.merged = mask;
         t.full_lo = tiles[tile].full_lo;
         t.full_hi = tiles[tile].full_hi;
         t.bounds_min = vec4<f32>(unordered(atomicLoad(&lo[0])), unordered(atomicLoad(&lo[1])), unordered(atomicLoad(&lo[2])), 0.0);

@@ -215,13 +215,20 @@ fn a_curved_image_keeps_full_resolution() {
     let r = 4 * TILE + 1;
     let s = image(r, |x, y| 0.5 + 0.001 * (x * x + y * y) as f32);
     let img = SampledImage { resolution: r, samples: &s };
-    assert!(img.merged_tiles(0.01, MeshSettings::default().merge_epsilon).iter().all(|m| !m));
+    assert!(img.planar_masks(0.01, MeshSettings::default().merge_epsilon, TILE).iter().all(|&m| m == 0));
     let sorted = |mut t: Vec<[u32; 3]>| {
         t.sort();
         t
     };
-    assert_eq!(sorted(img.mesh(&adaptive_mesh(0.01))), sorted(img.triangles(0.01)));
+    let tiles_only = MeshSettings { min_block: TILE, ..adaptive_mesh(0.01) };
+    assert_eq!(sorted(img.mesh(&tiles_only)), sorted(img.triangles(0.01)));
     assert_eq!(img.triangles(0.01).len(), 2 * 32 * 32);
+    // 2x2 blocks merge only far from the origin, where the bend is small against the depth; the first
+    // ones, where it is not, keep their four triangles each.
+    let masks = img.planar_masks(0.01, MeshSettings::default().merge_epsilon, 2);
+    assert_eq!(masks[0] & 1 << 5, 0, "the first 2x2 block bends by 0.4 % of its depth");
+    let blocks = img.mesh(&adaptive_mesh(0.01));
+    assert_watertight(r, &blocks);
 }
 
 #[test]
@@ -235,15 +242,16 @@ fn merged_and_full_tiles_meet_without_cracks() {
     let s = image(r, |x, y| 0.6 + 0.001 * x as f32 + bump(x, y));
     let img = SampledImage { resolution: r, samples: &s };
     // The crack test, at a merge tolerance as loose as epsilon so that the bump's neighbours merge.
-    let settings =
-        MeshSettings { epsilon: 0.01, step_epsilon: 0.01, adaptive: true, merge_epsilon: 0.01, drop_covered: false };
-    let merged = img.merged_tiles(0.01, settings.merge_epsilon);
-    let tps = tiles_per_side(r) as usize;
-    assert!(!merged[tps + 1], "the bump's tile must not merge");
-    assert!(merged.iter().filter(|&&m| m).count() >= 8, "the flat tiles merge: {merged:?}");
-    let mesh = img.mesh(&settings);
-    assert!(mesh.len() < img.triangles(0.01).len() / 2);
-    assert_watertight(r, &mesh);
+    for min_block in [TILE, 4, 2] {
+        let settings = MeshSettings { merge_epsilon: 0.01, min_block, ..adaptive_mesh(0.01) };
+        let masks = img.planar_masks(0.01, settings.merge_epsilon, min_block);
+        let tps = tiles_per_side(r) as usize;
+        assert_eq!(masks[tps + 1] & TILE_BIT, 0, "the bump's tile must not merge");
+        assert!(masks.iter().filter(|&&m| m & TILE_BIT != 0).count() >= 8, "the flat tiles merge: {masks:?}");
+        let mesh = img.mesh(&settings);
+        assert!(mesh.len() < img.triangles(0.01).len() / 2);
+        assert_watertight(r, &mesh);
+    }
 }
 
 #[test]
@@ -252,8 +260,61 @@ fn the_default_merge_tolerance_keeps_curved_tiles_that_epsilon_would_merge() {
     let r = 4 * TILE + 1;
     let s = image(r, |x, y| 0.5 + 0.00004 * (x * x + y * y) as f32);
     let img = SampledImage { resolution: r, samples: &s };
-    assert!(img.merged_tiles(0.01, 0.01).iter().filter(|&&m| m).count() >= 4);
-    assert!(img.merged_tiles(0.01, MeshSettings::default().merge_epsilon).iter().filter(|&&m| m).count() < 4);
+    let whole_tiles =
+        |merge_epsilon| img.planar_masks(0.01, merge_epsilon, TILE).iter().filter(|&&m| m & TILE_BIT != 0).count();
+    assert!(whole_tiles(0.01) >= 4);
+    assert!(whole_tiles(MeshSettings::default().merge_epsilon) < 4);
+}
+
+#[test]
+fn planar_blocks_beside_a_crease_merge_inside_their_tile_and_stay_watertight() {
+    // Two planes meeting along sample column 13 (a roof seen from above): every neighbourhood keeps both
+    // triangles, but the tiles and blocks across the crease are not planar. With whole tiles only, tile 1 of
+    // each row keeps Algorithm 2's 128 triangles; with 4x4 and 2x2 blocks its quadrant left of the crease and
+    // the 2x2 blocks right of it merge.
+    let r = 4 * TILE + 1;
+    // The crease bends by 0.8 % of the depth: within ε (1 %), not within the merge tolerance (0.2 %).
+    let roof = |x: u32| if x <= 13 { 0.002 * x as f32 } else { 0.002 * (26.0 - x as f32) };
+    let s = image(r, |x, y| 0.5 + roof(x) + 0.001 * y as f32);
+    let img = SampledImage { resolution: r, samples: &s };
+    assert_eq!(img.triangles(0.01).len(), 2 * 32 * 32, "the crease is connected");
+    let mesh = |min_block| img.mesh(&MeshSettings { min_block, ..adaptive_mesh(0.01) });
+    let (tiles, quadrants, blocks) = (mesh(TILE), mesh(4), mesh(2));
+    for m in [&tiles, &quadrants, &blocks] {
+        assert_watertight(r, m);
+    }
+    // Tile 1 of a row: 128 triangles whole-tile only; its left quadrants merge at 4, and at 2 also the 2x2
+    // blocks of its right quadrants but the column of blocks across the crease (12..14).
+    let masks = img.planar_masks(0.01, MeshSettings::default().merge_epsilon, 2);
+    let m = masks[1];
+    assert_eq!(m & TILE_BIT, 0);
+    assert_eq!(m & 0b11110, 0b01010, "quadrants 0 and 2 (left of the crease) are planar: {m:#b}");
+    for (bx, by) in [(2, 0), (3, 0), (2, 3), (3, 3)] {
+        let planar = m & 1 << (5 + by * 4 + bx) != 0;
+        assert_eq!(planar, bx == 3, "block ({bx}, {by}) of tile 1: {m:#b}");
+    }
+    let counts = (tiles.len(), quadrants.len(), blocks.len());
+    assert!(counts.1 < counts.0 && counts.2 < counts.1, "{counts:?}");
+    // 608 triangles whole tiles only, 320 with 2x2 blocks.
+    assert!(counts.2 * 3 < counts.0 * 2, "{counts:?}");
+}
+
+#[test]
+fn the_partial_tiles_at_the_image_edge_merge_their_whole_blocks() {
+    // 64 samples a side: 63 neighbourhoods, so the last tile of a row or column holds 7 and never merges
+    // whole; its first quadrant and its whole 2x2 blocks do.
+    let r = 8 * TILE;
+    let s = image(r, |x, y| 0.5 + 0.002 * x as f32 + 0.001 * y as f32);
+    let img = SampledImage { resolution: r, samples: &s };
+    let mesh = |min_block| img.mesh(&MeshSettings { min_block, ..adaptive_mesh(1e-3) });
+    let (tiles, blocks) = (mesh(TILE), mesh(2));
+    assert_watertight(r, &tiles);
+    assert_watertight(r, &blocks);
+    let masks = img.planar_masks(1e-3, MeshSettings::default().merge_epsilon, 2);
+    let last = masks[7];
+    assert_eq!(last & TILE_BIT, 0);
+    assert_eq!(last & 0b11110, 0b01010, "only the left quadrants are whole: {last:#b}");
+    assert!(blocks.len() * 2 < tiles.len(), "{} against {}", blocks.len(), tiles.len());
 }
 
 /// A camera at `eye` looking straight down (up = -z), 60°, with near and far as INSM sets them.
