@@ -36,8 +36,8 @@
 //!   vertex of its boundary: neighbouring leaves share every vertex of their common side, so the mesh has no
 //!   T-junctions and no cracks (tested on the CPU twin: areas and edge counts). With whole tiles only (the
 //!   first version, `merge_block = 8x8`) the tiles a crease, an edge or a silhouette crosses kept all of
-//!   Algorithm 2's triangles, 90 % of the mesh; their planar quadrants and 2x2 blocks halve the meshes of the
-//!   built-ins and take 37 % off the real scenes' (measured: `docs/techniques/insm.md`). A quadtree across
+//!   Algorithm 2's triangles, 90 % of the mesh; their planar quadrants and 2x2 blocks take 37-50 % off the
+//!   meshes (the Cornell box's halved; measured: `docs/techniques/insm.md`). A quadtree across
 //!   tiles would take off about 1 % more (measured on the CPU twin, not built). `adaptive = off` is Algorithm
 //!   2 exactly. The plane test's tolerance `merge_epsilon` (0.002, relative inverse depth) is its own: real
 //!   planes pass it to rounding, and it bounds how far a merged block may stray from its samples; with
