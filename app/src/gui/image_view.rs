@@ -1,5 +1,6 @@
 //! A zoomable, pannable image filling the rest of a panel (the shadow-map inspector's and the RSM view's):
-//! fitted at zoom 1, scroll to zoom around the pointer (1 to 64), drag to pan.
+//! fitted at zoom 1, scroll to zoom around the pointer (1 to 64), drag to pan; and an image shrunk to the GPU's
+//! texture limit ([`fit_texture`]).
 
 use eframe::egui;
 
@@ -76,5 +77,45 @@ impl ImageView {
             (t.x >= 0.0 && t.y >= 0.0 && t.x < image_size.x && t.y < image_size.y).then_some((t.x as u32, t.y as u32))
         });
         Placed { rect: shown, scale, painter, hovered }
+    }
+}
+
+/// An image no larger than `max_side` on either side (the GPU's texture limit; a large atlas exceeds it):
+/// shrunk by a whole factor, each pixel the brightest of its block, so thin near geometry stays visible. The
+/// readout still reads the full-resolution depths.
+pub fn fit_texture(image: egui::ColorImage, max_side: usize) -> egui::ColorImage {
+    let [w, h] = image.size;
+    let factor = w.max(h).div_ceil(max_side.max(1));
+    if factor <= 1 {
+        return image;
+    }
+    let (sw, sh) = (w.div_ceil(factor), h.div_ceil(factor));
+    let brightness = |c: egui::Color32| c.r() as u32 + c.g() as u32 + c.b() as u32;
+    let pixels = (0..sh)
+        .flat_map(|y| (0..sw).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let block = (y * factor..((y + 1) * factor).min(h))
+                .flat_map(|py| (x * factor..((x + 1) * factor).min(w)).map(move |px| py * w + px));
+            block.map(|i| image.pixels[i]).max_by_key(|c| brightness(*c)).unwrap_or_default()
+        })
+        .collect();
+    egui::ColorImage::new([sw, sh], pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_over_the_texture_limit_is_shrunk_keeping_its_bright_texels() {
+        let (w, h) = (10usize, 5usize);
+        let mut pixels = vec![egui::Color32::BLACK; w * h];
+        pixels[3 * w + 7] = egui::Color32::WHITE;
+        let image = egui::ColorImage::new([w, h], pixels);
+        assert_eq!(fit_texture(image.clone(), 10).size, [10, 5], "within the limit: unchanged");
+        let small = fit_texture(image, 4);
+        assert_eq!(small.size, [4, 2], "shrunk by 3, rounded up");
+        assert_eq!(small.pixels[4 + 2], egui::Color32::WHITE, "the white texel's block stays white");
+        assert_eq!(small.pixels.iter().filter(|c| **c == egui::Color32::WHITE).count(), 1);
     }
 }

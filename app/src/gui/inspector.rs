@@ -16,7 +16,7 @@ use glam::Vec3;
 use shadowlab_core::services::cube_shadows::{CubeAtlas, TileProjection};
 use shadowlab_core::GpuContext;
 
-use crate::gui::image_view::ImageView;
+use crate::gui::image_view::{fit_texture, ImageView};
 use crate::gui::rsm_view::RsmView;
 use crate::rsm_picture::{CROSS, FACES};
 
@@ -277,28 +277,6 @@ fn fit_text(ui: &egui::Ui, text: &str, width: f32) -> String {
     chars[..lo].iter().collect::<String>() + "…"
 }
 
-/// An image no larger than `max_side` on either side (the GPU's texture limit; a large atlas exceeds it):
-/// shrunk by a whole factor, each pixel the brightest of its block, so thin near geometry stays visible. The
-/// readout still reads the full-resolution depths.
-pub fn fit_texture(image: egui::ColorImage, max_side: usize) -> egui::ColorImage {
-    let [w, h] = image.size;
-    let factor = w.max(h).div_ceil(max_side.max(1));
-    if factor <= 1 {
-        return image;
-    }
-    let (sw, sh) = (w.div_ceil(factor), h.div_ceil(factor));
-    let brightness = |c: egui::Color32| c.r() as u32 + c.g() as u32 + c.b() as u32;
-    let pixels = (0..sh)
-        .flat_map(|y| (0..sw).map(move |x| (x, y)))
-        .map(|(x, y)| {
-            let block = (y * factor..((y + 1) * factor).min(h))
-                .flat_map(|py| (x * factor..((x + 1) * factor).min(w)).map(move |px| py * w + px));
-            block.map(|i| image.pixels[i]).max_by_key(|c| brightness(*c)).unwrap_or_default()
-        })
-        .collect();
-    egui::ColorImage::new([sw, sh], pixels)
-}
-
 /// The panel's state.
 pub struct Inspector {
     pub source: MapSource,
@@ -555,19 +533,6 @@ mod tests {
         // Tiles without a projection (not rendered this frame) have no distance.
         let unknown = AtlasDepths::new(depths, (w, h), r, per_row, Vec::new(), "images");
         assert!(!Shown::new(&unknown, None).readout(0, 0).unwrap().contains("distance"));
-    }
-
-    #[test]
-    fn an_image_over_the_texture_limit_is_shrunk_keeping_its_bright_texels() {
-        let (w, h) = (10usize, 5usize);
-        let mut pixels = vec![egui::Color32::BLACK; w * h];
-        pixels[3 * w + 7] = egui::Color32::WHITE;
-        let image = egui::ColorImage::new([w, h], pixels);
-        assert_eq!(fit_texture(image.clone(), 10).size, [10, 5], "within the limit: unchanged");
-        let small = fit_texture(image, 4);
-        assert_eq!(small.size, [4, 2], "shrunk by 3, rounded up");
-        assert_eq!(small.pixels[4 + 2], egui::Color32::WHITE, "the white texel's block stays white");
-        assert_eq!(small.pixels.iter().filter(|c| **c == egui::Color32::WHITE).count(), 1);
     }
 
     #[test]

@@ -17,8 +17,7 @@ use shadowlab_core::scene::{DirectionalLight, PointLight};
 use shadowlab_core::vpl::rsm::{rsm_image, RsmEmitter, RsmImage, RsmLayout};
 use shadowlab_core::vpl::{emitter_name, VplSet, VplSource, RSM_RESOLUTION};
 
-use crate::gui::image_view::ImageView;
-use crate::gui::inspector::fit_texture;
+use crate::gui::image_view::{fit_texture, ImageView};
 use crate::rsm_picture::{picture, picture_size, pixel_of, readout, RsmShow};
 
 /// The resolutions offered (texels a face side).
