@@ -1475,6 +1475,31 @@ fn the_app_opens_on_an_explain_step_of_the_indirect_technique_and_refuses_a_step
     h.get_by_label_contains("'val' is not the technique or the indirect technique");
 }
 
+#[test]
+fn the_app_starts_with_the_overlay_layers_it_is_told_and_names_the_ones_it_offers_for_a_bad_one() {
+    // A README picture by command: INSM's mesh shown, the light ranges (shown by default over INSM) hidden.
+    let mut h = harness(Startup {
+        data_dir: Some(data_dir("start-overlays")),
+        synchronous: true,
+        builtin: Some("cornell".into()),
+        start: StartState {
+            technique: Some("insm".into()),
+            overlays: vec!["insm MESH (wireframe)".into(), "light ranges=off".into(), "no such layer".into()],
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    // INSM offers its mesh layers once it has a mesh: the names are checked after the first frame.
+    h.run_steps(6);
+    assert!(h.state().views.gpu.as_ref().unwrap().main.last_report.is_some(), "a frame completed");
+    let layers: std::collections::BTreeMap<String, bool> = h.state_mut().overlay_layers().into_iter().collect();
+    assert_eq!(layers.get("INSM mesh (wireframe)"), Some(&true), "{layers:?}");
+    assert_eq!(layers.get("light ranges"), Some(&false), "{layers:?}");
+    assert!(!h.state().session.view.overlays.contains_key("no such layer"));
+    assert!(!h.state().session.view.overlays.contains_key("insm MESH (wireframe)"), "the offered name kept");
+    h.get_by_label_contains("--app-overlay 'no such layer': no such layer (the technique offers: ");
+}
+
 /// Click "Run trade-off" (scrolled into the Sweep pane) and wait for the worker to finish.
 fn run_tradeoff(h: &mut Harness<'static, ShadowLabApp>) {
     h.get_by_label("Run trade-off").scroll_to_me();

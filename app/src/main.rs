@@ -55,6 +55,7 @@ fn main() -> ExitCode {
                 against_params: args.app_against_params,
                 against_indirect: args.app_against_indirect,
                 explain: args.app_explain,
+                overlays: args.app_overlays,
             },
             relaunch_on_device_loss: true,
             no_file_dialogs: false,

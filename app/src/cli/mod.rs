@@ -74,6 +74,10 @@ pub struct Cli {
     /// indirect technique `KEY` (its layers, maps and parameters, as choosing it in the Explain panel).
     #[arg(long = "app-explain", value_name = "[KEY:]N")]
     pub app_explain: Option<String>,
+    /// App: show an overlay layer of the technique or the indirect technique by its name as the Overlays panel
+    /// lists it (`LAYER`, or `LAYER=off` to hide one shown by default); repeatable.
+    #[arg(long = "app-overlay", value_name = "LAYER[=on|off]")]
+    pub app_overlays: Vec<String>,
     /// App: save a screenshot of the window to this PNG when quitting (with --quit-after).
     #[arg(long, hide = true)]
     pub screenshot: Option<PathBuf>,

@@ -213,6 +213,8 @@ struct Lifecycle {
     /// wgpu errors outside any error scope (egui's own painting, say), shown instead of panicking.
     uncaptured_errors: Arc<std::sync::Mutex<Vec<String>>>,
     relaunch_on_device_loss: bool,
+    /// `--app-overlay` layers (as given, and their names) to check once a frame has completed.
+    start_overlays: Vec<(String, String)>,
 }
 
 /// Where a UI frame's time goes, from one `ui` call to the next: our rendering ([`Views::render`]), the rest of
@@ -293,6 +295,7 @@ impl ShadowLabApp {
                 quitting: false,
                 uncaptured_errors: Default::default(),
                 relaunch_on_device_loss: startup.relaunch_on_device_loss,
+                start_overlays: Vec::new(),
             },
             recovery: None,
             soak: startup.soak_secs.map(|_| state::Soak::new()),
@@ -489,6 +492,7 @@ impl eframe::App for ShadowLabApp {
             self.error(format!("GPU error: {e}"));
         }
         self.receive_screenshots(&ctx);
+        self.check_start_overlays();
         if let Some(secs) = self.lifecycle.quit_after_secs {
             if !self.lifecycle.quitting && self.lifecycle.started.elapsed().as_secs_f32() >= secs {
                 self.lifecycle.quitting = true;

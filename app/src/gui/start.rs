@@ -53,6 +53,25 @@ fn parse_params(
     Ok(out)
 }
 
+/// `LAYER` or `LAYER=on|off`: the layer's name and whether it is shown.
+fn overlay_spec(spec: &str) -> (&str, bool) {
+    let (name, shown) = match spec.rsplit_once('=') {
+        Some((name, "on" | "true")) => (name, true),
+        Some((name, "off" | "false")) => (name, false),
+        _ => (spec, true),
+    };
+    (name.trim(), shown)
+}
+
+/// The layer named `name` (case aside) among the layers offered.
+fn offered_layer(name: &str, layers: &[String]) -> Result<String> {
+    match layers.iter().find(|l| l.eq_ignore_ascii_case(name)) {
+        Some(layer) => Ok(layer.clone()),
+        None if layers.is_empty() => bail!("the technique offers no overlay layers"),
+        None => bail!("no such layer (the technique offers: {})", layers.join(", ")),
+    }
+}
+
 impl ShadowLabApp {
     /// Apply the start options; each bad one is reported (on stderr and in the window) and skipped.
     pub fn apply_start(&mut self, start: StartState) {
@@ -148,6 +167,37 @@ impl ShadowLabApp {
                 report(self, anyhow!("--app-explain '{spec}': {e:#}"));
             }
         }
+        // Shown at once; checked against the layers offered once a frame has completed (INSM offers its mesh
+        // layers only when it has a mesh).
+        for spec in &start.overlays {
+            let (name, shown) = overlay_spec(spec);
+            self.session.view.overlays.insert(name.to_string(), shown);
+            self.lifecycle.start_overlays.push((spec.clone(), name.to_string()));
+        }
+    }
+
+    /// Once the view has completed a frame: each `--app-overlay` layer not offered is a message, and one named in
+    /// another case takes the offered layer's name.
+    pub(super) fn check_start_overlays(&mut self) {
+        let framed = self.views.gpu.as_ref().is_some_and(|g| g.main.last_report.is_some());
+        if self.lifecycle.start_overlays.is_empty() || !framed {
+            return;
+        }
+        let layers: Vec<String> = self.overlay_layers().into_iter().map(|(name, _)| name).collect();
+        for (spec, name) in std::mem::take(&mut self.lifecycle.start_overlays) {
+            match offered_layer(&name, &layers) {
+                Ok(layer) if layer == name => {}
+                Ok(layer) => {
+                    let shown = self.session.view.overlays.remove(&name).unwrap_or(true);
+                    self.session.view.overlays.insert(layer, shown);
+                }
+                Err(e) => {
+                    self.session.view.overlays.remove(&name);
+                    eprintln!("error: --app-overlay '{spec}': {e:#}");
+                    self.error(format!("--app-overlay '{spec}': {e:#}"));
+                }
+            }
+        }
     }
 
     /// Choose Explain step `[KEY:]N` as the panel does (its layers, maps and parameters), with the panel in front.
@@ -232,5 +282,23 @@ impl ShadowLabApp {
             _ => line += " | metrics: none (only the difference view computes them: --app-view difference)",
         }
         line
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_overlay_is_named_as_offered_with_an_optional_state() {
+        assert_eq!(overlay_spec("INSM mesh (wireframe)"), ("INSM mesh (wireframe)", true));
+        assert_eq!(overlay_spec("light ranges=off"), ("light ranges", false));
+        assert_eq!(overlay_spec("lights = on"), ("lights", true));
+        assert_eq!(overlay_spec("a=b"), ("a=b", true), "a state other than on/off is part of the name");
+        let layers = vec!["INSM mesh (wireframe)".to_string(), "light ranges".to_string()];
+        assert_eq!(offered_layer("insm MESH (wireframe)", &layers).unwrap(), "INSM mesh (wireframe)");
+        let e = offered_layer("INSM mesh", &layers).unwrap_err().to_string();
+        assert!(e.contains("no such layer") && e.contains("INSM mesh (wireframe), light ranges"), "{e}");
+        assert!(offered_layer("x", &[]).unwrap_err().to_string().contains("offers no overlay layers"));
     }
 }

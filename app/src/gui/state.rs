@@ -57,6 +57,9 @@ pub struct StartState {
     /// An Explain step to open on: `N` (1-based) of the technique's steps, or `KEY:N` of technique `KEY` (the
     /// technique or the indirect technique).
     pub explain: Option<String>,
+    /// Overlay layers to show (`LAYER`) or hide (`LAYER=off`) by the names the Overlays panel lists, applied
+    /// after the Explain step.
+    pub overlays: Vec<String>,
 }
 
 /// What the app did when its GPU device was lost.

@@ -87,7 +87,7 @@ impl Insm {
             "INSM mesh (wireframe)" => vec![LegendEntry::new(
                 Glyph::Palette,
                 palette,
-                "kept edges of the mesh triangulated from the samples (Algorithm 2)",
+                "edges of the mesh triangulated from the samples (Algorithm 2; planar blocks as fans)",
             )],
             "INSM simplified mesh (wireframe)" => vec![LegendEntry::new(
                 Glyph::Line,
