@@ -55,7 +55,7 @@ fn is_software(adapter: &str) -> bool {
         || ["llvmpipe", "lavapipe", "swiftshader", "softpipe", "basic render"].iter().any(|n| lower.contains(n))
 }
 
-const COMPARISONS: [&str; 17] = [
+const COMPARISONS: [&str; 18] = [
     "LightCluster d_init=0.5 vs reference",
     "LightCluster d_init=0.5, maps from a simplified copy",
     "LightCluster d_init=1.6 vs reference",
@@ -63,6 +63,7 @@ const COMPARISONS: [&str; 17] = [
     "LightCluster d_init=0.5, centers by greedy covering",
     "LightCluster d_init=1.6, simplified copy and cluster maps at half resolution",
     "INSM vs reference",
+    "INSM, whole tiles merged only",
     "INSM, meshes simplified",
     "VALs vs one shadow map per VPL",
     "VALs, M = ",

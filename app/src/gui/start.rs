@@ -55,7 +55,7 @@ fn parse_params(
 
 /// `LAYER` or `LAYER=on|off`: the layer's name and whether it is shown.
 fn overlay_spec(spec: &str) -> (&str, bool) {
-    let (name, shown) = match spec.rsplit_once('=') {
+    let (name, shown) = match spec.rsplit_once('=').map(|(name, state)| (name, state.trim())) {
         Some((name, "on" | "true")) => (name, true),
         Some((name, "off" | "false")) => (name, false),
         _ => (spec, true),
