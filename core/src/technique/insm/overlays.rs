@@ -29,8 +29,8 @@ impl Insm {
                 text: "Each image is triangulated (Algorithm 2): two triangles per 2x2 neighbourhood, an edge dropped \
                        only where the second differences of depth show a step across it (ε; a tighter one where \
                        the surface is seen nearly edge-on). Red: dropped edges. Beyond the paper, \
-                       planar blocks are merged (adaptive) and a map leaves out what another map reconstructs more \
-                       finely (drop_covered). The Shadow maps panel shows the meshes seen from the viewpoints \
+                       planar blocks of 2x2 to 8x8 neighbourhoods become fans of a few triangles (adaptive, \
+                       merge_block) and a map leaves out what another map reconstructs more finely (drop_covered). The Shadow maps panel shows the meshes seen from the viewpoints \
                        (mesh_views): against step 2's images, what the meshes kept, bridged or lost.",
                 layers: &["INSM mesh (wireframe)", "INSM dropped edges"],
                 // The meshes seen from the viewpoints (depth image set 2), to hold against step 2's images.
