@@ -128,7 +128,10 @@ use viewpoints::Viewpoint;
 use crate::shaders::WgslModule;
 /// This technique's own WGSL modules; its registry entry lists them and the naga test validates them.
 pub const SHADERS: &[WgslModule] = &[TRIANGULATE];
-const TRIANGULATE: WgslModule = crate::shaders::wgsl!("insm_triangulate", ["core/src/technique/insm/triangulate.wgsl"]);
+const TRIANGULATE: WgslModule = crate::shaders::wgsl!(
+    "insm_triangulate",
+    ["core/src/technique/insm/triangulate.wgsl", "core/src/technique/insm/triangulate_adaptive.wgsl"]
+);
 
 /// The reconstructed samples are read back for the overlays when they take at most this many bytes
 /// (10 maps of 256² are 10 MiB); beyond, the overlays show the viewpoints only.

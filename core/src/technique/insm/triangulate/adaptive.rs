@@ -1,7 +1,7 @@
 //! The adaptive mesh of the CPU twin (beyond the paper, `adaptive`): a quadtree of planar blocks in each tile
 //! (the whole tile, its 4x4 quadrants, its 2x2 blocks), each neighbourhood in the largest planar block around it,
 //! merged leaves written as two triangles or a fan over the vertices of their boundary. The twin of `classify`,
-//! `leaf_of`, `is_vertex` and `emit_leaf` in `insm/triangulate.wgsl`.
+//! `leaf_of`, `is_vertex` and `emit_leaf` in `insm/triangulate_adaptive.wgsl`.
 
 use super::{tiles_per_side, Connectivity, SampledImage, TILE};
 
