@@ -3,7 +3,7 @@
 //!
 //! Algorithm 2 makes two triangles per 2x2 samples and the adaptive mesh merges only planar blocks (2x2 to 8x8
 //! neighbourhoods), so every neighbourhood at a crease, an edge or a silhouette keeps its triangles: the
-//! meshes are 15-20 times the built-in scenes they stand for (Cornell box: 48,100 triangles for 2,292; 95,524
+//! meshes are 5-21 times the built-in scenes they stand for (Cornell box: 48,100 triangles for 2,292; 95,524
 //! when only whole tiles merged). Every light's cube map draws them, so INSM is slower than the reference there. Here
 //! the triangles the GPU wrote are read back once per mesh and collapsed with meshoptimizer's quadric edge
 //! collapse ([`meshopt::simplify`]) toward `keep` of their count, never moving the surface by more than
