@@ -304,7 +304,7 @@ fn mesh_overlays_are_built_only_when_shown() {
     insm.set_param("shadow_res", &ParamValue::Int(64)).unwrap();
     let lights = lights_above();
     frame(&mut r, &mut insm, &scene.camera, &lights);
-    let names = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
+    let names = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges", "INSM merged blocks"];
     let hidden = insm.overlays_shown(&lights, &|_, _| false);
     for name in names {
         let layer = hidden.iter().find(|l| l.name == name).unwrap_or_else(|| panic!("{name} is listed"));
@@ -318,6 +318,16 @@ fn mesh_overlays_are_built_only_when_shown() {
     // overlays() is everything, as before.
     let all = insm.overlays(&lights);
     assert!(all.iter().filter(|l| names.contains(&l.name)).all(|l| !l.primitives.is_empty()));
+    // The merged blocks are outlined four lines each, and none without the adaptive mesh.
+    let blocks = |insm: &Insm| {
+        let layers = insm.overlays_shown(&lights, &|name, _| name == "INSM merged blocks");
+        layers.into_iter().find(|l| l.name == "INSM merged blocks").unwrap().primitives.len()
+    };
+    let outlined = blocks(&insm);
+    assert!(outlined > 0 && outlined % 4 == 0, "{outlined} lines");
+    insm.set_param("adaptive", &ParamValue::Bool(false)).unwrap();
+    frame(&mut r, &mut insm, &scene.camera, &lights);
+    assert_eq!(blocks(&insm), 0, "Algorithm 2 merges nothing");
 }
 
 #[test]

@@ -200,7 +200,7 @@ struct SampleSource {
 }
 
 /// The mesh overlay layers: built only when one of them is shown.
-const MESH_LAYERS: [&str; 3] = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges"];
+const MESH_LAYERS: [&str; 4] = ["INSM samples", "INSM mesh (wireframe)", "INSM dropped edges", "INSM merged blocks"];
 /// The simplified meshes' wireframe (`simplify` below 1), built when they are.
 const SIMPLIFIED_LAYER: &str = "INSM simplified mesh (wireframe)";
 

@@ -89,6 +89,19 @@ impl Insm {
                 palette,
                 "edges of the mesh triangulated from the samples (Algorithm 2; planar blocks as fans)",
             )],
+            "INSM merged blocks" => {
+                let summary = "merged planar blocks: green 8x8, yellow 4x4, orange 2x2";
+                let mut entries = vec![LegendEntry::new(Glyph::Line, block_color(8), summary)];
+                entries.extend(
+                    [
+                        (8, "a whole 8x8 tile: 2 to 32 triangles instead of 128"),
+                        (4, "a 4x4 quadrant: 2 to 16 instead of 32"),
+                        (2, "a 2x2 block: 2 to 8 instead of 8"),
+                    ]
+                    .map(|(size, text)| LegendEntry::new(Glyph::Line, block_color(size), text)),
+                );
+                entries
+            }
             "INSM simplified mesh (wireframe)" => vec![LegendEntry::new(
                 Glyph::Line,
                 [0.2, 1.0, 0.6, 0.9],
@@ -216,7 +229,8 @@ impl MeshSnapshot {
 
         // Wireframe of the reconstructed triangles (the CPU twin's mesh): every `stride`-th when large.
         let mut wire = Vec::new();
-        let meshes = triangulate::meshes(&images, &snap.views, &snap.settings);
+        let (meshes, blocks): (Vec<_>, Vec<_>) =
+            triangulate::meshes_with_blocks(&images, &snap.views, &snap.settings).into_iter().unzip();
         let total: usize = meshes.iter().map(Vec::len).sum();
         let stride = total.div_ceil(MAX_WIREFRAME_TRIANGLES).max(1);
         for (j, (img, mesh)) in images.iter().zip(&meshes).enumerate() {
@@ -242,6 +256,31 @@ impl MeshSnapshot {
             }
         }
         layers.push(OverlayLayer { name: MESH_LAYERS[2], visible_by_default: false, primitives: dropped });
+
+        // The adaptive mesh's merged blocks, outlined by their size: what became fans of a few triangles.
+        let total: usize = blocks.iter().map(Vec::len).sum();
+        let stride = total.div_ceil(MAX_WIREFRAME_TRIANGLES).max(1);
+        let mut outlines = Vec::new();
+        for (img, leaves) in images.iter().zip(&blocks) {
+            for &(u0, v0, size) in leaves.iter().step_by(stride) {
+                let color = block_color(size);
+                let p = |i: u32, j: u32| img.samples[((v0 + j) * snap.resolution + u0 + i) as usize].truncate();
+                let corners = [p(0, 0), p(size, 0), p(size, size), p(0, size)];
+                for k in 0..4 {
+                    outlines.push(Overlay::Line { from: corners[k], to: corners[(k + 1) % 4], color });
+                }
+            }
+        }
+        layers.push(OverlayLayer { name: MESH_LAYERS[3], visible_by_default: false, primitives: outlines });
         layers
+    }
+}
+
+/// The outline colour of a merged block of `size` neighbourhoods a side.
+fn block_color(size: u32) -> [f32; 4] {
+    match size {
+        8.. => [0.2, 0.9, 0.4, 0.9],
+        4 => [1.0, 0.85, 0.2, 0.9],
+        _ => [1.0, 0.45, 0.1, 0.9],
     }
 }

@@ -241,10 +241,23 @@ pub fn covered_samples(
 
 /// The meshes of all maps (sample indices within each map), as `core/src/technique/insm/triangulate.wgsl` writes them.
 pub fn meshes(images: &[SampledImage], views: &[MapView], settings: &MeshSettings) -> Vec<Vec<[u32; 3]>> {
+    meshes_with_blocks(images, views, settings).into_iter().map(|(mesh, _)| mesh).collect()
+}
+
+/// A map's mesh (sample indices) and the merged blocks of its adaptive mesh (origin x, origin y, side).
+pub type MeshAndBlocks = (Vec<[u32; 3]>, Vec<(u32, u32, u32)>);
+
+/// Per map, its mesh (as [`meshes`]) and the merged blocks of its adaptive mesh that keep their triangles
+/// ([`SampledImage::merged_leaves`]; none without `adaptive`).
+pub fn meshes_with_blocks(images: &[SampledImage], views: &[MapView], settings: &MeshSettings) -> Vec<MeshAndBlocks> {
     (0..images.len())
         .map(|j| {
             let covered = settings.drop_covered.then(|| covered_samples(images, views, j, settings.connectivity()));
-            images[j].mesh_with(settings, settings.connectivity().for_view(&views[j]), covered.as_deref())
+            let img = &images[j];
+            let connectivity = settings.connectivity().for_view(&views[j]);
+            let masks = img.masks(settings, connectivity);
+            let mesh = img.mesh_from_masks(connectivity, &masks, covered.as_deref());
+            (mesh, img.merged_leaves(&masks, covered.as_deref()))
         })
         .collect()
 }
@@ -383,13 +396,22 @@ impl SampledImage<'_> {
         connectivity: Connectivity,
         covered: Option<&[bool]>,
     ) -> Vec<[u32; 3]> {
+        self.mesh_from_masks(connectivity, &self.masks(settings, connectivity), covered)
+    }
+
+    /// Every tile's planar mask under `settings` (all 0 without `adaptive`: Algorithm 2).
+    fn masks(&self, settings: &MeshSettings, connectivity: Connectivity) -> Vec<u32> {
         let tps = tiles_per_side(self.resolution);
-        let masks = if settings.adaptive {
+        if settings.adaptive {
             self.planar_masks(connectivity, settings.merge_epsilon, settings.min_block)
         } else {
             vec![0; (tps * tps) as usize]
-        };
-        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, connectivity, &masks, covered)).collect()
+        }
+    }
+
+    fn mesh_from_masks(&self, connectivity: Connectivity, masks: &[u32], covered: Option<&[bool]>) -> Vec<[u32; 3]> {
+        let tps = tiles_per_side(self.resolution);
+        (0..tps * tps).flat_map(|t| self.tile_triangles(t % tps, t / tps, connectivity, masks, covered)).collect()
     }
 
     /// Every kept triangle, neighbourhood by neighbourhood.

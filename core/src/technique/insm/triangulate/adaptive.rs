@@ -162,6 +162,27 @@ impl SampledImage<'_> {
         out
     }
 
+    /// The merged leaves of the adaptive mesh (origin x, origin y, side, in neighbourhoods), but those whose samples
+    /// are all `covered` (their triangles are dropped): what the overlay "INSM merged blocks" outlines.
+    pub fn merged_leaves(&self, masks: &[u32], covered: Option<&[bool]>) -> Vec<(u32, u32, u32)> {
+        let r = self.resolution;
+        let n = r.saturating_sub(1);
+        let is_covered = |x: u32, y: u32| covered.is_some_and(|c| c[(y * r + x) as usize]);
+        let mut out = Vec::new();
+        for v in 0..n {
+            for u in 0..n {
+                let Some((u0, v0, size)) = self.leaf(masks, u as i64, v as i64) else { continue };
+                if size == 1 || (u, v) != (u0, v0) {
+                    continue;
+                }
+                if !(0..=size).all(|j| (0..=size).all(|i| is_covered(u0 + i, v0 + j))) {
+                    out.push((u0, v0, size));
+                }
+            }
+        }
+        out
+    }
+
     /// A merged leaf's triangles (see [`SampledImage::tile_triangles`]).
     fn leaf_triangles(
         &self,

@@ -293,6 +293,14 @@ fn planar_blocks_beside_a_crease_merge_inside_their_tile_and_stay_watertight() {
         let planar = m & 1 << (5 + by * 4 + bx) != 0;
         assert_eq!(planar, bx == 3, "block ({bx}, {by}) of tile 1: {m:#b}");
     }
+    // The merged leaves (the overlay's outlines): tile 1's left quadrants and its 2x2 blocks right of the crease
+    // (x 14..16, four of them), the other tiles whole.
+    let leaves = img.merged_leaves(&masks, None);
+    assert!(leaves.contains(&(8, 0, 4)) && leaves.contains(&(8, 4, 4)), "{leaves:?}");
+    assert_eq!(leaves.iter().filter(|&&(x, _, s)| s == 2 && x == 14).count(), 4 * 4, "{leaves:?}");
+    assert!(!leaves.iter().any(|&(x, _, s)| s == 2 && x == 12), "the blocks across the crease stay: {leaves:?}");
+    let whole_tiles = masks.iter().filter(|&&m| m & TILE_BIT != 0).count();
+    assert_eq!(leaves.iter().filter(|&&(_, _, s)| s == TILE).count(), whole_tiles);
     let counts = (tiles.len(), quadrants.len(), blocks.len());
     assert!(counts.1 < counts.0 && counts.2 < counts.1, "{counts:?}");
     // 608 triangles whole tiles only, 320 with 2x2 blocks.
