@@ -53,6 +53,17 @@ fn reopen(file: &std::path::Path, dir: &std::path::Path) -> Harness<'static, Sha
     })
 }
 
+/// The app as a class or a script starts it: its start options (`--app-*`), on built-in scene `builtin` if any.
+fn started(name: &str, builtin: Option<&str>, start: StartState) -> Harness<'static, ShadowLabApp> {
+    harness(Startup {
+        data_dir: Some(data_dir(name)),
+        synchronous: true,
+        builtin: builtin.map(str::to_string),
+        start,
+        ..Default::default()
+    })
+}
+
 fn start(name: &str, scene: &str) -> Harness<'static, ShadowLabApp> {
     let mut h = harness(Startup { data_dir: Some(data_dir(name)), synchronous: true, ..Default::default() });
     h.state_mut().load_builtin(scene);
@@ -672,23 +683,14 @@ fn indirect_light_is_chosen_in_its_selector_reported_compared_and_saved() {
 
 #[test]
 fn the_app_can_start_with_an_indirect_technique() {
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("startup-indirect")),
-        synchronous: true,
-        builtin: Some("cornell".into()),
-        start: StartState { indirect: Some("val".into()), ..Default::default() },
-        ..Default::default()
-    });
+    let mut h =
+        started("startup-indirect", Some("cornell"), StartState { indirect: Some("val".into()), ..Default::default() });
     h.run_steps(3);
     assert_eq!(h.state().session.indirect.technique.as_deref(), Some("val"));
     assert!(h.query_all_by_label_contains("VALs (M)").count() >= 1, "the VAL parameter panel is shown");
     // An unknown key is a message, not a panic, and no indirect technique.
-    let mut bad = harness(Startup {
-        data_dir: Some(data_dir("startup-indirect-bad")),
-        synchronous: true,
-        start: StartState { indirect: Some("magic".into()), ..Default::default() },
-        ..Default::default()
-    });
+    let mut bad =
+        started("startup-indirect-bad", None, StartState { indirect: Some("magic".into()), ..Default::default() });
     bad.run_steps(2);
     assert!(bad.state().session.indirect.technique.is_none());
     bad.get_by_label_contains("unknown indirect technique 'magic'");
@@ -1393,11 +1395,10 @@ fn auto_exposure_is_on_in_the_app_and_the_preview_holds_it() {
 #[test]
 fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
     use shadowlab_core::technique::ParamValue;
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("start-state")),
-        synchronous: true,
-        builtin: Some("cornell".into()),
-        start: StartState {
+    let mut h = started(
+        "start-state",
+        Some("cornell"),
+        StartState {
             technique: Some("lightcluster".into()),
             params: vec!["d_init=0.9".into(), "filter=pcss".into()],
             view: Some("difference".into()),
@@ -1405,8 +1406,7 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
             against_params: vec!["bias=0.02".into()],
             ..Default::default()
         },
-        ..Default::default()
-    });
+    );
     h.run_steps(6);
     let s = &h.state().session;
     assert_eq!(s.technique, "lightcluster");
@@ -1419,17 +1419,16 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
     assert!(line.contains("d_init=0.9") && line.contains("against=raytraced bias=0.02"), "{line}");
     assert!(line.contains(" rmse="), "the last metrics: {line}");
     // A parameter the technique lacks is a message, and the rest still applies.
-    let mut bad = harness(Startup {
-        data_dir: Some(data_dir("start-state-bad")),
-        synchronous: true,
-        start: StartState {
+    let mut bad = started(
+        "start-state-bad",
+        None,
+        StartState {
             technique: Some("lightcluster".into()),
             params: vec!["warp=3".into()],
             against_indirect: Some("magic".into()),
             ..Default::default()
         },
-        ..Default::default()
-    });
+    );
     bad.run_steps(2);
     assert_eq!(bad.state().session.technique, "lightcluster");
     bad.get_by_label_contains("has no parameter 'warp'");
@@ -1439,38 +1438,31 @@ fn the_app_starts_on_a_stated_comparison_and_says_it_at_exit() {
 #[test]
 fn the_app_opens_on_an_explain_step_of_the_indirect_technique_and_refuses_a_step_it_lacks() {
     // A class opens the app on the VPL step: the selected light's RSM in the Shadow maps panel and in the view.
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("start-explain")),
-        synchronous: true,
-        builtin: Some("cornell".into()),
-        start: StartState {
+    let mut h = started(
+        "start-explain",
+        Some("cornell"),
+        StartState {
             indirect: Some("vpl-raytraced".into()),
             explain: Some("vpl-raytraced:1".into()),
             ..Default::default()
         },
-        ..Default::default()
-    });
+    );
     h.run_steps(6);
     let app = h.state();
     assert_eq!(app.chrome.explain.step, Some(("vpl-raytraced".into(), 0)));
     assert!(app.chrome.inspector.rsm_shown && app.chrome.explain.map_in_view);
     assert!(app.chrome.inspector.rsm.image.is_some(), "light 0's RSM was cast");
     // The direct technique's step by number; a step past the list and a technique not in use are messages.
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("start-explain-bad")),
-        synchronous: true,
-        start: StartState { technique: Some("lightcluster".into()), explain: Some("9".into()), ..Default::default() },
-        ..Default::default()
-    });
+    let mut h = started(
+        "start-explain-bad",
+        None,
+        StartState { technique: Some("lightcluster".into()), explain: Some("9".into()), ..Default::default() },
+    );
     h.run_steps(2);
     h.get_by_label_contains("--app-explain '9': 'lightcluster' has 6 Explain steps (1 to 6)");
     assert_eq!(h.state().chrome.explain.step, None);
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("start-explain-other")),
-        synchronous: true,
-        start: StartState { explain: Some("val:2".into()), ..Default::default() },
-        ..Default::default()
-    });
+    let mut h =
+        started("start-explain-other", None, StartState { explain: Some("val:2".into()), ..Default::default() });
     h.run_steps(2);
     h.get_by_label_contains("'val' is not the technique or the indirect technique");
 }
@@ -1478,17 +1470,15 @@ fn the_app_opens_on_an_explain_step_of_the_indirect_technique_and_refuses_a_step
 #[test]
 fn the_app_starts_with_the_overlay_layers_it_is_told_and_names_the_ones_it_offers_for_a_bad_one() {
     // A README picture by command: INSM's mesh shown, the light ranges (shown by default over INSM) hidden.
-    let mut h = harness(Startup {
-        data_dir: Some(data_dir("start-overlays")),
-        synchronous: true,
-        builtin: Some("cornell".into()),
-        start: StartState {
+    let mut h = started(
+        "start-overlays",
+        Some("cornell"),
+        StartState {
             technique: Some("insm".into()),
             overlays: vec!["insm MESH (wireframe)".into(), "light ranges=off".into(), "no such layer".into()],
             ..Default::default()
         },
-        ..Default::default()
-    });
+    );
     // INSM offers its mesh layers once it has a mesh: the names are checked after the first frame.
     h.run_steps(6);
     assert!(h.state().views.gpu.as_ref().unwrap().main.last_report.is_some(), "a frame completed");

@@ -31,6 +31,51 @@ fn share_over(a: &[[f32; 4]], b: &[[f32; 4]], tol: f32) -> f32 {
     over as f32 / a.len() as f32
 }
 
+/// The last frame's meshes: the samples the GPU wrote, its triangles as written, and the GPU's and the CPU twin's
+/// (run on those samples) as sets of indices into all maps' samples (`resolution`² each).
+struct BothMeshes {
+    samples: Vec<glam::Vec4>,
+    written: Vec<[u32; 3]>,
+    gpu: HashSet<[u32; 3]>,
+    cpu: HashSet<[u32; 3]>,
+}
+
+impl BothMeshes {
+    fn of(insm: &Insm, r: &shadowlab_core::Renderer, resolution: u32) -> BothMeshes {
+        let (samples, written) = insm.read_meshes(r.gpu()).unwrap();
+        let per_map = (resolution * resolution) as usize;
+        let images: Vec<SampledImage> =
+            samples.chunks(per_map).map(|s| SampledImage { resolution, samples: s }).collect();
+        let mut cpu = HashSet::new();
+        for (j, mesh) in triangulate::meshes(&images, &insm.map_views(), &insm.mesh_settings()).into_iter().enumerate()
+        {
+            let base = (j * per_map) as u32;
+            cpu.extend(mesh.into_iter().map(|t| t.map(|i| i + base)));
+        }
+        let gpu = written.iter().copied().collect();
+        BothMeshes { samples, written, gpu, cpu }
+    }
+
+    /// Triangles in one mesh and not the other (floating-point ties).
+    fn differ(&self) -> usize {
+        self.gpu.symmetric_difference(&self.cpu).count()
+    }
+}
+
+/// A built-in scene with its own lights, a renderer of `w`x`h`, and the reference's image at `shadow_res`.
+fn against_reference(
+    name: &str,
+    (w, h): (u32, u32),
+    shadow_res: i64,
+) -> (Scene, shadowlab_core::Renderer, Vec<[f32; 4]>) {
+    let scene = Scene::builtin(name).unwrap();
+    let mut r = renderer(&scene, linear_settings(w, h));
+    let mut reference = r.create_technique("reference").unwrap();
+    reference.set_param("shadow_res", &ParamValue::Int(shadow_res)).unwrap();
+    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &scene.lights);
+    (scene, r, expected)
+}
+
 #[test]
 fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
     let scene = plane_and_occluder();
@@ -46,23 +91,15 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
         insm.set_param("adaptive", &ParamValue::Bool(adaptive)).unwrap();
         insm.set_param("drop_covered", &ParamValue::Bool(drop_covered)).unwrap();
         let (_, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
-        let (samples, gpu_triangles) = insm.read_meshes(r.gpu()).unwrap();
+        let meshes = BothMeshes::of(&insm, &r, 64);
+        let (samples, gpu_triangles, cpu) = (&meshes.samples, &meshes.written, &meshes.cpu);
         assert_eq!(samples.len(), 6 * 64 * 64);
         assert!(!gpu_triangles.is_empty(), "the intermediate maps see the plane and the plate");
 
         // The CPU twin run on the samples the GPU wrote gives the same triangles (up to floating-point ties),
         // with Algorithm 2's mesh, the adaptive one and without the covered triangles.
-        let images: Vec<SampledImage> =
-            samples.chunks(64 * 64).map(|s| SampledImage { resolution: 64, samples: s }).collect();
-        let mut cpu: HashSet<[u32; 3]> = HashSet::new();
-        for (j, mesh) in triangulate::meshes(&images, &insm.map_views(), &insm.mesh_settings()).into_iter().enumerate()
-        {
-            let base = (j * 64 * 64) as u32;
-            cpu.extend(mesh.into_iter().map(|t| t.map(|i| i + base)));
-        }
-        let gpu: HashSet<[u32; 3]> = gpu_triangles.iter().copied().collect();
-        assert_eq!(gpu.len(), gpu_triangles.len(), "no triangle is written twice");
-        let differ = gpu.symmetric_difference(&cpu).count();
+        assert_eq!(meshes.gpu.len(), gpu_triangles.len(), "no triangle is written twice");
+        let differ = meshes.differ();
         assert!(
             differ * 1000 <= cpu.len().max(1000),
             "adaptive {adaptive}, drop_covered {drop_covered}: GPU and CPU triangulations differ in {differ} of {} \
@@ -71,7 +108,7 @@ fn gpu_triangulation_matches_the_cpu_twin_and_the_triangle_bound() {
         );
         // Every triangle joins valid samples; and the reconstructed vertices lie on the scene (plane y=0 or
         // plate y=1).
-        for t in &gpu_triangles {
+        for t in gpu_triangles {
             for &i in t {
                 let s = samples[i as usize];
                 assert!(s.w > 0.0, "triangle {t:?} uses a background sample");
@@ -190,12 +227,8 @@ fn insm_shadows_match_the_reference_and_improve_with_resolution() {
 
 #[test]
 fn the_papers_box_placement_stays_close_to_the_reference_on_cornell_and_auto_goes_inside() {
-    let scene = Scene::builtin("cornell").unwrap();
+    let (scene, mut r, expected) = against_reference("cornell", (W, H), 256);
     let lights = scene.lights.clone();
-    let mut r = renderer(&scene, linear_settings(W, H));
-    let mut reference = r.create_technique("reference").unwrap();
-    reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = r.create_technique("insm").unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
     insm.set_param("placement", &ParamValue::Choice("box".into())).unwrap();
@@ -335,12 +368,8 @@ fn dropping_covered_triangles_shrinks_the_mesh_and_keeps_the_image() {
     // The Cornell box from inside: the ten maps see the same walls, so much of each copy goes (measured
     // 91,090 of 125,356 triangles left: one map, near the floor, sees the blocks up close and keeps almost
     // all of its 30k); the image stays as close to the reference as with every copy.
-    let scene = Scene::builtin("cornell").unwrap();
+    let (scene, mut r, expected) = against_reference("cornell", (W, H), 256);
     let lights = scene.lights.clone();
-    let mut r = renderer(&scene, linear_settings(W, H));
-    let mut reference = r.create_technique("reference").unwrap();
-    reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = r.create_technique("insm").unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
     insm.set_param("placement", &ParamValue::Choice("inside".into())).unwrap();
@@ -361,32 +390,19 @@ fn planar_blocks_inside_tiles_halve_the_mesh_and_keep_the_image() {
     // silhouette crosses keeps all of Algorithm 2's triangles; merging its planar 4x4 and 2x2 blocks as well
     // halves the mesh (measured 95,517 to 48,100 triangles at 128²). The GPU writes what the CPU twin writes,
     // and the image stays as close to the reference.
-    let scene = Scene::builtin("cornell").unwrap();
-    let lights = scene.lights.clone();
-    let mut r = renderer(&scene, linear_settings(W, H));
-    let mut reference = r.create_technique("reference").unwrap();
-    reference.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
-    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
+    let (scene, mut r, expected) = against_reference("cornell", (W, H), 256);
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.set_param("shadow_res", &ParamValue::Int(256)).unwrap();
     insm.set_param("placement", &ParamValue::Choice("inside".into())).unwrap();
     let mut results = Vec::new();
     for block in ["8x8", "2x2"] {
         insm.set_param("merge_block", &ParamValue::Choice(block.into())).unwrap();
-        let (actual, report) = frame(&mut r, &mut insm, &scene.camera, &lights);
-        let (samples, gpu_triangles) = insm.read_meshes(r.gpu()).unwrap();
-        let images: Vec<SampledImage> =
-            samples.chunks(128 * 128).map(|s| SampledImage { resolution: 128, samples: s }).collect();
-        let mut cpu: HashSet<[u32; 3]> = HashSet::new();
-        for (j, mesh) in triangulate::meshes(&images, &insm.map_views(), &insm.mesh_settings()).into_iter().enumerate()
-        {
-            cpu.extend(mesh.into_iter().map(|t| t.map(|i| i + (j * 128 * 128) as u32)));
-        }
-        let gpu: HashSet<[u32; 3]> = gpu_triangles.iter().copied().collect();
-        let differ = gpu.symmetric_difference(&cpu).count();
-        assert!(differ * 1000 <= cpu.len(), "{block}: GPU and CPU differ in {differ} of {}", cpu.len());
+        let (actual, report) = frame(&mut r, &mut insm, &scene.camera, &scene.lights);
+        let meshes = BothMeshes::of(&insm, &r, 128);
+        let (differ, cpu) = (meshes.differ(), meshes.cpu.len());
+        assert!(differ * 1000 <= cpu, "{block}: GPU and CPU differ in {differ} of {cpu}");
         let partly = report.counts.technique.figures.get("mesh_partly_merged_tiles").copied().unwrap_or(0.0);
-        results.push((share_over(&actual, &expected, 0.05), gpu.len(), partly));
+        results.push((share_over(&actual, &expected, 0.05), meshes.gpu.len(), partly));
     }
     let [(share_tiles, tiles, partly_tiles), (share_blocks, blocks, partly_blocks)] = results[..] else {
         unreachable!()
@@ -540,12 +556,8 @@ fn steep_edges_held_to_the_tighter_tolerance_open_the_arcades_arches() {
     // sees the columns and the walls behind them metres apart from one sample to the next, and ε 0.04 joined
     // them into a curtain along the hall that shadowed its floor. Steep edges (seen at more than 75° from
     // face-on) are held to 0.02: the GPU cuts what the CPU twin cuts, and INSM comes closer to the reference.
-    let scene = Scene::builtin("arcade").unwrap();
+    let (scene, mut r, expected) = against_reference("arcade", (96, 54), 128);
     let lights = scene.lights.clone();
-    let mut r = renderer(&scene, linear_settings(96, 54));
-    let mut reference = r.create_technique("reference").unwrap();
-    reference.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
-    let (expected, _) = frame(&mut r, reference.as_mut(), &scene.camera, &lights);
     let mut insm = Insm::new(r.gpu(), r.layouts());
     insm.set_param("placement", &ParamValue::Choice("inside".into())).unwrap();
     insm.set_param("shadow_res", &ParamValue::Int(128)).unwrap();
@@ -555,18 +567,10 @@ fn steep_edges_held_to_the_tighter_tolerance_open_the_arcades_arches() {
     for angle in [90.0, 75.0] {
         insm.set_param("steep_angle", &ParamValue::Float(angle)).unwrap();
         let (actual, _) = frame(&mut r, &mut insm, &scene.camera, &lights);
-        let (samples, gpu_triangles) = insm.read_meshes(r.gpu()).unwrap();
-        let images: Vec<SampledImage> =
-            samples.chunks(128 * 128).map(|s| SampledImage { resolution: 128, samples: s }).collect();
-        let mut cpu: HashSet<[u32; 3]> = HashSet::new();
-        for (j, mesh) in triangulate::meshes(&images, &insm.map_views(), &insm.mesh_settings()).into_iter().enumerate()
-        {
-            cpu.extend(mesh.into_iter().map(|t| t.map(|i| i + (j * 128 * 128) as u32)));
-        }
-        let gpu: HashSet<[u32; 3]> = gpu_triangles.iter().copied().collect();
-        let differ = gpu.symmetric_difference(&cpu).count();
-        assert!(differ * 1000 <= cpu.len(), "steep angle {angle}: GPU and CPU differ in {differ} of {}", cpu.len());
-        sizes.push(gpu.len());
+        let meshes = BothMeshes::of(&insm, &r, 128);
+        let (differ, cpu) = (meshes.differ(), meshes.cpu.len());
+        assert!(differ * 1000 <= cpu, "steep angle {angle}: GPU and CPU differ in {differ} of {cpu}");
+        sizes.push(meshes.gpu.len());
         shares.push(share_over(&actual, &expected, 0.05));
     }
     assert!(sizes[1] < sizes[0], "the steep edges cut some triangles: {sizes:?}");
