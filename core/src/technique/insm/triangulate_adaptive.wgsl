@@ -115,15 +115,19 @@ fn emit_leaf(image: u32, tile: u32, leaf: vec3<i32>) {
     if all_covered {
         return;
     }
-    var n = 0u;
+    // Which boundary points (index side * s + k, at most 4 * TILE = 32: one bit each) are vertices, asked once.
+    var vertices_mask = 0u;
     for (var side = 0u; side < 4u; side++) {
         for (var k = 0; k < s; k++) {
             let p = o + side_point(side, k, s);
-            n += u32(is_vertex(image, p));
+            if is_vertex(image, p) {
+                vertices_mask |= 1u << (side * u32(s) + u32(k));
+            }
             // Bounds: every sample of the boundary (a superset of the vertices).
             grow_bounds(p_at(p));
         }
     }
+    let n = countOneBits(vertices_mask);
     grow_bounds(p_at(o + vec2<i32>(s / 2)));
     let r = i32(params.resolution);
     let base = i32(image) * r * r;
@@ -144,7 +148,7 @@ fn emit_leaf(image: u32, tile: u32, leaf: vec3<i32>) {
     for (var side = 0u; side < 4u; side++) {
         for (var k = select(0, 1, side == 0u); k < s; k++) {
             let l = side_point(side, k, s);
-            if is_vertex(image, o + l) {
+            if ((vertices_mask >> (side * u32(s) + u32(k))) & 1u) != 0u {
                 let v = u32(index + l.y * r + l.x);
                 emit(out, centre, previous, v);
                 out += 3u;
