@@ -229,6 +229,33 @@ fn a_broken_scene_file_keeps_the_current_scene() {
 #[test]
 fn view_screenshot_writes_a_png_at_render_resolution() {
     let mut h = start("shot", "cornell");
+    assert_screen_shows_the_screenshot(&mut h);
+}
+
+/// On the GL backend (llvmpipe's OpenGL 4.5 here), which a machine without Vulkan, Metal or DirectX 12 falls
+/// back to: the app starts (its device asks for compute shaders, not WebGL2's limits) and the screen shows
+/// the image it saves (GL cannot view the sRGB output as plain `Rgba8Unorm`; a copy is shown instead).
+#[test]
+fn app_on_the_gl_backend_shows_what_it_saves() {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(SIZE.0, SIZE.1))
+        .wgpu_setup(shadowlab::gui::wgpu_setup_on(wgpu::Backends::GL))
+        .with_max_steps(40)
+        .build_eframe(move |cc| {
+            let startup = Startup { data_dir: Some(data_dir("gl")), synchronous: true, ..Default::default() };
+            ShadowLabApp::new(cc, startup).expect("the app starts on the GL backend")
+        });
+    h.run_steps(3);
+    let backend = h.state().views.gpu.as_ref().expect("a GPU view").ctx.adapter_info.backend;
+    assert_eq!(backend, wgpu::Backend::Gl, "the harness was asked for GL only");
+    h.state_mut().load_builtin("cornell");
+    h.run_steps(3);
+    assert_screen_shows_the_screenshot(&mut h);
+}
+
+/// The view's screenshot is at render resolution, named after the scene and technique, and holds what the
+/// screen shows.
+fn assert_screen_shows_the_screenshot(h: &mut Harness<'static, ShadowLabApp>) {
     let path = h.state_mut().save_view_screenshot().unwrap();
     let img = image::open(&path).unwrap();
     let (w, _) = h.state().views.gpu.as_ref().unwrap().main.size;

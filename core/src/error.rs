@@ -43,6 +43,8 @@ pub enum LayoutError {
 pub enum GpuError {
     #[error("no GPU adapter found (on a machine without a GPU install Mesa lavapipe: apt-get install mesa-vulkan-drivers libvulkan1)")]
     NoAdapter,
+    #[error("the GPU adapter {0} has no compute shaders, which ShadowLab needs (Vulkan, Metal, DirectX 12, or OpenGL 4.3 and later)")]
+    NoCompute(String),
     #[error("the GPU adapter refused to create a device: {0}")]
     RequestDevice(String),
     #[error("GPU error: {0}")]

@@ -92,48 +92,53 @@ pub struct Startup {
     pub relaunch_on_device_loss: bool,
 }
 
-/// The device setup ShadowLab asks eframe for: timestamp queries when the adapter has them, and the adapter's
-/// texture and buffer limits (cube-map atlases are large).
+/// The device setup ShadowLab asks eframe for: the adapter [`select_adapter`] picks among the backends
+/// `WGPU_BACKEND` allows, and the device the CLI asks for too ([`shadowlab_core::gpu::device_descriptor`]:
+/// compute shaders, timestamp queries when the adapter has them, the adapter's texture and buffer limits).
 pub fn wgpu_setup() -> egui_wgpu::WgpuSetup {
+    wgpu_setup_with(egui_wgpu::WgpuSetupCreateNew::without_display_handle())
+}
+
+/// [`wgpu_setup`] on the given backends only (tests of one backend, e.g. `wgpu::Backends::GL`).
+pub fn wgpu_setup_on(backends: wgpu::Backends) -> egui_wgpu::WgpuSetup {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
+    setup.instance_descriptor.backends = backends;
+    wgpu_setup_with(setup)
+}
+
+fn wgpu_setup_with(mut setup: egui_wgpu::WgpuSetupCreateNew) -> egui_wgpu::WgpuSetup {
     setup.native_adapter_selector = Some(Arc::new(select_adapter));
-    setup.device_descriptor = Arc::new(|adapter| {
-        let base = if adapter.get_info().backend == wgpu::Backend::Gl {
-            wgpu::Limits::downlevel_webgl2_defaults()
-        } else {
-            wgpu::Limits::default()
-        };
-        let a = adapter.limits();
-        wgpu::DeviceDescriptor {
-            label: Some("shadowlab"),
-            required_features: adapter.features() & shadowlab_core::gpu::OPTIONAL_FEATURES,
-            required_limits: wgpu::Limits {
-                max_texture_dimension_2d: a.max_texture_dimension_2d.max(8192).min(a.max_texture_dimension_2d),
-                max_storage_buffer_binding_size: a.max_storage_buffer_binding_size,
-                max_buffer_size: a.max_buffer_size,
-                max_storage_buffers_per_shader_stage: a.max_storage_buffers_per_shader_stage.min(8),
-                ..base
-            },
-            ..Default::default()
-        }
-    });
+    setup.device_descriptor = Arc::new(shadowlab_core::gpu::device_descriptor);
     egui_wgpu::WgpuSetup::CreateNew(setup)
 }
 
 /// The adapter the app runs on, among those `WGPU_BACKEND` allows: the one `WGPU_ADAPTER_NAME` names when set,
-/// else a real GPU before a software one and any backend before GL. The renderer needs compute shaders, which
-/// the GL backend's WebGL2 limits lack; where Mesa offers both lavapipe (Vulkan) and llvmpipe (GL), wgpu's own
-/// choice can fall on GL.
-fn select_adapter(adapters: &[wgpu::Adapter], surface: Option<&wgpu::Surface<'_>>) -> Result<wgpu::Adapter, String> {
-    let usable: Vec<&wgpu::Adapter> =
+/// else a real GPU before a software one and any backend before GL (where Mesa offers both lavapipe (Vulkan)
+/// and llvmpipe (GL), wgpu's own choice can fall on GL). Adapters without compute shaders, which every technique
+/// needs, are passed over, and when only those are left the error says so.
+pub fn select_adapter(
+    adapters: &[wgpu::Adapter],
+    surface: Option<&wgpu::Surface<'_>>,
+) -> Result<wgpu::Adapter, String> {
+    let shown: Vec<&wgpu::Adapter> =
         adapters.iter().filter(|a| surface.is_none_or(|s| a.is_surface_supported(s))).collect();
+    let usable: Vec<&wgpu::Adapter> = shown.iter().copied().filter(|a| shadowlab_core::gpu::has_compute(a)).collect();
+    let no_compute = |a: &wgpu::Adapter| {
+        shadowlab_core::GpuError::NoCompute(format!("{} ({:?})", a.get_info().name, a.get_info().backend)).to_string()
+    };
     if let Ok(wanted) = std::env::var("WGPU_ADAPTER_NAME") {
         let wanted = wanted.to_lowercase();
-        return usable
-            .iter()
-            .find(|a| a.get_info().name.to_lowercase().contains(&wanted))
-            .map(|a| (*a).clone())
-            .ok_or_else(|| format!("no adapter named like WGPU_ADAPTER_NAME={wanted}"));
+        let named = |a: &&&wgpu::Adapter| a.get_info().name.to_lowercase().contains(&wanted);
+        return match (usable.iter().find(named), shown.iter().find(named)) {
+            (Some(a), _) => Ok((*a).clone()),
+            (None, Some(a)) => Err(no_compute(a)),
+            (None, None) => Err(format!("no adapter named like WGPU_ADAPTER_NAME={wanted}")),
+        };
+    }
+    if usable.is_empty() {
+        if let Some(a) = shown.first() {
+            return Err(no_compute(a));
+        }
     }
     let rank = |a: &&wgpu::Adapter| {
         let info = a.get_info();

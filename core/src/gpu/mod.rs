@@ -27,6 +27,41 @@ pub const TIMER_FEATURES: wgpu::Features = wgpu_profiler::GpuProfiler::ALL_WGPU_
 /// HDR target (`SharedLayouts::hdr_format`).
 pub const OPTIONAL_FEATURES: wgpu::Features = TIMER_FEATURES.union(wgpu::Features::FLOAT32_BLENDABLE);
 
+/// Whether `adapter` runs compute shaders, which every technique needs (GL before 4.3, GLES before 3.1 and
+/// WebGL2 do not).
+pub fn has_compute(adapter: &wgpu::Adapter) -> bool {
+    adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+}
+
+/// "llvmpipe (LLVM 15.0.6, 256 bits) (Gl)": an adapter as errors name it.
+fn adapter_label(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?})", info.name, info.backend)
+}
+
+/// What ShadowLab asks of a device on `adapter`, headless or in the app's window (one request, so the app and
+/// the CLI run the same shaders under the same limits): the optional features the adapter has, the downlevel
+/// defaults (compute shaders included) with the adapter's texture sizes, storage buffer sizes and array layers,
+/// and eight storage buffers per stage.
+pub fn device_descriptor(adapter: &wgpu::Adapter) -> wgpu::DeviceDescriptor<'static> {
+    let a = adapter.limits();
+    let limits = wgpu::Limits::downlevel_defaults().using_resolution(a.clone());
+    let limits = wgpu::Limits {
+        max_texture_array_layers: a.max_texture_array_layers,
+        max_storage_buffer_binding_size: a.max_storage_buffer_binding_size,
+        max_buffer_size: a.max_buffer_size,
+        // WebGPU's default, which every desktop adapter meets: the ray-traced shading binds lights, tile
+        // lists, the BVH and the work counters in one stage.
+        max_storage_buffers_per_shader_stage: a.max_storage_buffers_per_shader_stage.min(8),
+        ..limits
+    };
+    wgpu::DeviceDescriptor {
+        label: Some("shadowlab"),
+        required_features: adapter.features() & OPTIONAL_FEATURES,
+        required_limits: limits,
+        ..Default::default()
+    }
+}
+
 impl GpuContext {
     /// Create a device without a window. Honours `WGPU_BACKEND` (e.g. `vulkan`, `gl`), `WGPU_ADAPTER_NAME` and
     /// the debug/validation variables. Works on Mesa lavapipe and GL llvmpipe.
@@ -54,24 +89,11 @@ impl GpuContext {
         }
         let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, None))
             .map_err(|_| GpuError::NoAdapter)?;
-        let features = adapter.features() & OPTIONAL_FEATURES;
-        let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
-        let limits = wgpu::Limits {
-            max_texture_array_layers: adapter.limits().max_texture_array_layers,
-            max_storage_buffer_binding_size: adapter.limits().max_storage_buffer_binding_size,
-            max_buffer_size: adapter.limits().max_buffer_size,
-            // WebGPU's default, which every desktop adapter meets: the ray-traced shading binds lights, tile
-            // lists, the BVH and the work counters in one stage (the app asks eframe for the same).
-            max_storage_buffers_per_shader_stage: adapter.limits().max_storage_buffers_per_shader_stage.min(8),
-            ..limits
-        };
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("shadowlab"),
-            required_features: features,
-            required_limits: limits,
-            ..Default::default()
-        }))
-        .map_err(|e| GpuError::RequestDevice(e.to_string()))?;
+        if !has_compute(&adapter) {
+            return Err(GpuError::NoCompute(adapter_label(&adapter.get_info())));
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&device_descriptor(&adapter)))
+            .map_err(|e| GpuError::RequestDevice(e.to_string()))?;
         Ok(GpuContext::from_device(device, queue, adapter.get_info()))
     }
 

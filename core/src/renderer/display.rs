@@ -135,9 +135,11 @@ impl Renderer {
         };
         if timed {
             self.timer.render_pass(&mut encoder, "tonemap", desc, record);
+            self.targets.encode_display_copy(&mut encoder);
             self.timer.submit(&self.gpu, encoder, "tonemap")
         } else {
             record(&mut encoder.begin_render_pass(&desc));
+            self.targets.encode_display_copy(&mut encoder);
             self.gpu.queue.submit([encoder.finish()]);
             Ok(())
         }
@@ -170,6 +172,7 @@ impl Renderer {
             x_ray,
             self.overlay_style,
         );
+        t.encode_display_copy(&mut encoder);
         self.gpu.queue.submit([encoder.finish()]);
         Ok(())
     }

@@ -19,7 +19,12 @@ pub struct FrameTargets {
     /// The same texels as plain `Rgba8Unorm`: what egui samples. egui expects textures that are not
     /// sRGB-aware (its shader treats texels as gamma-encoded); through the sRGB view the screen showed the
     /// encoded image decoded once more, darker than every screenshot and figure (which read these bytes).
+    /// A view of `output_texture` where the device can view it in another format, else of `display_copy`.
     pub output_display: wgpu::TextureView,
+    /// On GL, which cannot view a texture in another format (`DownlevelFlags::VIEW_FORMATS`): a plain
+    /// `Rgba8Unorm` texture the output's bytes are copied into whenever the output changes
+    /// ([`FrameTargets::encode_display_copy`]), so the app shows the same image on GL as elsewhere.
+    display_copy: Option<wgpu::Texture>,
 }
 
 /// The plain view format of the output (see `FrameTargets::output_display`).
@@ -46,8 +51,8 @@ fn target(gpu: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFo
     })
 }
 
-/// Whether the device can view the output as plain `Rgba8Unorm`: GL lacks `DownlevelFlags::VIEW_FORMATS` (the
-/// app never displays on GL, which lacks the compute shaders it needs; the GL tests only read the output back).
+/// Whether the device can view the output as plain `Rgba8Unorm`: GL lacks `DownlevelFlags::VIEW_FORMATS`, so
+/// there the output is copied into a plain texture for display instead.
 fn plain_view(gpu: &GpuContext) -> bool {
     gpu.adapter_info.backend != wgpu::Backend::Gl
 }
@@ -58,6 +63,18 @@ impl FrameTargets {
         let hdr_texture = target(gpu, "hdr", width, height, SharedLayouts::hdr_format(&gpu.device), true);
         let output_texture = target(gpu, "output", width, height, SharedLayouts::OUTPUT_FORMAT, true);
         let depth_texture = target(gpu, "gbuffer depth", width, height, SharedLayouts::DEPTH_FORMAT, true);
+        let display_copy = (!plain_view(gpu)).then(|| {
+            gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("output for display"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: OUTPUT_DISPLAY_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            })
+        });
         FrameTargets {
             width,
             height,
@@ -69,11 +86,27 @@ impl FrameTargets {
             hdr: hdr_texture.create_view(&Default::default()),
             hdr_texture,
             output: output_texture.create_view(&Default::default()),
-            output_display: output_texture.create_view(&wgpu::TextureViewDescriptor {
-                format: plain_view(gpu).then_some(OUTPUT_DISPLAY_FORMAT),
-                ..Default::default()
-            }),
+            output_display: match &display_copy {
+                Some(copy) => copy.create_view(&Default::default()),
+                None => output_texture.create_view(&wgpu::TextureViewDescriptor {
+                    format: Some(OUTPUT_DISPLAY_FORMAT),
+                    ..Default::default()
+                }),
+            },
+            display_copy,
             output_texture,
+        }
+    }
+
+    /// Where the output cannot be viewed as plain `Rgba8Unorm` (GL): copy it into the display texture. Called
+    /// after every pass that writes the output (the tone mapping, the overlays); nothing elsewhere.
+    pub fn encode_display_copy(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(copy) = &self.display_copy {
+            encoder.copy_texture_to_texture(
+                self.output_texture.as_image_copy(),
+                copy.as_image_copy(),
+                wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+            );
         }
     }
 }
