@@ -284,7 +284,7 @@ impl CutoutTextures {
             bytemuck::cast_slice(&c.records),
         );
         let size = c.mask_size.max(1);
-        let layers = c.masks.len().max(1) as u32;
+        let layers = array_layers(c.masks.len() as u32);
         let masks = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("bvh cutout masks"),
             size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers },
@@ -373,7 +373,8 @@ impl SceneBvh {
     ) -> SceneBvh {
         let cpu = Bvh::from_geometry(geometry);
         let triangle_material = triangle_materials(geometry);
-        let max_layers = gpu.device.limits().max_texture_array_layers;
+        // One layer kept free for `array_layers`' padding.
+        let max_layers = gpu.device.limits().max_texture_array_layers.saturating_sub(1);
         let cutouts = BvhCutouts::build_with(&cpu, geometry, &triangle_material, cutout_alpha, max_layers);
         let cutout_textures = CutoutTextures::new(gpu, &cutouts);
         let surfaces: Vec<BvhSurface> = cpu
@@ -459,5 +460,32 @@ impl SceneBvh {
             normal: if n.dot(dir) > 0.0 { -n } else { n },
             albedo: Vec3::from_slice(&s.albedo[..3]),
         })
+    }
+}
+
+/// The layer count of a texture seen as a `D2Array` that holds `n` layers. GL cannot be told a texture's view
+/// dimension and guesses it from the layers (wgpu-hal's heuristics): one layer is a plain 2D texture, six a
+/// cube map, a larger multiple of six a cube array, and a `D2Array` view of those samples nothing. So a lone
+/// layer gets a second, and a multiple of six one more (the extra layers are never read).
+pub fn array_layers(n: u32) -> u32 {
+    match n {
+        0 | 1 => 2,
+        n if n % 6 == 0 => n + 1,
+        n => n,
+    }
+}
+
+#[cfg(test)]
+mod array_layer_tests {
+    use super::array_layers;
+
+    #[test]
+    fn array_layers_are_never_what_gl_takes_for_a_2d_texture_a_cube_or_a_cube_array() {
+        for n in 0..100 {
+            let l = array_layers(n);
+            assert!(l >= n.max(1), "{n} layers need room: {l}");
+            assert!(l > 1 && l % 6 != 0, "{n} -> {l}: GL would guess a 2D texture, a cube or a cube array");
+            assert!(l <= n + 2, "{n} -> {l}: at most one layer more (two for none)");
+        }
     }
 }
