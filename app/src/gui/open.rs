@@ -16,9 +16,9 @@ impl ShadowLabApp {
     pub fn set_scene(&mut self, mut scene: Scene) {
         self.views.set_scene(&scene);
         // A model without a camera of its own starts inside when it is an interior (the framing camera would
-        // see its roof), from outside otherwise.
+        // see its roof), from its open side when it is a room open on one side, from outside otherwise.
         if scene.camera_is_framing() {
-            if let Some(camera) = self.views.interior_view(&scene.bounds, scene.camera.fov_y) {
+            if let Some(camera) = self.views.first_view(&scene.bounds, scene.camera.fov_y) {
                 scene.camera = camera;
             }
         }

@@ -6,7 +6,8 @@
 //! a floor, whether or not there is a roof (a courtyard open to the sky is an interior; an object on a floor,
 //! seen from the middle of its bounds, has no walls); an interior is then seen from a
 //! point with room around it, near one end of its longest horizontal axis, at a third of its height, looking
-//! along that axis.
+//! along that axis; unless one of its sides is open (a Cornell box without its front wall, whose floor or water
+//! catches the low rays): then it is framed from outside that side ([`first_view`]).
 
 use glam::Vec3;
 
@@ -68,8 +69,13 @@ pub fn back_face_share(bvh: &Bvh, point: Vec3, t_max: f32) -> f32 {
     back as f32 / hits.max(1) as f32
 }
 
+/// The least distance to the model, as a share of the bounds' diagonal, of a point the enclosure is probed
+/// from: a point on or right beside a surface sees that surface in half the directions, whatever the model.
+pub const PROBE_CLEARANCE: f32 = 0.02;
+
 /// The point the enclosure is probed from: the middle of `bounds`, or, when that lies inside a solid (the
-/// Dragon's body on its floor), the first of a few points above and around it that does not. When every one
+/// Dragon's body on its floor) or touches a surface (a logo hung in the middle of a Cornell box, whose every
+/// probe ray hit it at once), the first of a few points above and around it that does not. When every one
 /// seems to (a room modelled with its faces turned outwards), the middle. None without triangles or bounds.
 pub fn open_middle(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
     if !(bounds.min.is_finite() && bounds.max.is_finite()) || bvh.triangles.is_empty() {
@@ -86,7 +92,10 @@ pub fn open_middle(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
         Vec3::new(0.0, 0.0, 0.3),
         Vec3::new(0.0, 0.0, -0.3),
     ];
-    let open = candidates.iter().map(|o| c + *o * size).find(|&p| back_face_share(bvh, p, diagonal) <= 0.5);
+    let open = candidates
+        .iter()
+        .map(|o| c + *o * size)
+        .find(|&p| back_face_share(bvh, p, diagonal) <= 0.5 && probe(bvh, p, diagonal).1 >= PROBE_CLEARANCE * diagonal);
     Some(open.unwrap_or(c))
 }
 
@@ -116,6 +125,56 @@ pub fn is_enclosed(bvh: &Bvh, bounds: &Aabb) -> bool {
 pub fn enclosed_share(bvh: &Bvh, point: Vec3, t_max: f32) -> f32 {
     let hits = directions().filter(|&d| closest_hit_cpu(bvh, point, d, t_max).is_some()).count();
     hits as f32 / PROBE_DIRECTIONS as f32
+}
+
+/// The share of near-horizontal rays (at most [`OPEN_SIDE_SECTOR`] degrees off `side`'s azimuth, elevations
+/// from a little below to a little above the horizon) from `point` that leave the model within `t_max`.
+pub fn miss_share_towards(bvh: &Bvh, point: Vec3, side: Vec3, t_max: f32) -> f32 {
+    let side_azimuth = side.z.atan2(side.x);
+    let (mut rays, mut misses) = (0, 0);
+    for step in -8..=8 {
+        let azimuth = side_azimuth + (step as f32 / 8.0 * OPEN_SIDE_SECTOR).to_radians();
+        for y in [-0.3f32, -0.15, 0.0, 0.15] {
+            let r = (1.0 - y * y).sqrt();
+            let dir = Vec3::new(r * azimuth.cos(), y, r * azimuth.sin());
+            rays += 1;
+            misses += usize::from(closest_hit_cpu(bvh, point, dir, t_max).is_none());
+        }
+    }
+    misses as f32 / rays as f32
+}
+
+/// Half the width of the sector [`open_side`] looks through, in degrees.
+pub const OPEN_SIDE_SECTOR: f32 = 40.0;
+
+/// The share of a side's near-horizontal rays that must leave the model for that side to be open.
+pub const OPEN_SIDE_SHARE: f32 = 0.5;
+
+/// The side (+X, -X, +Z or -Z) through which an enclosed model is open, when one is: a Cornell box's missing
+/// front wall, a stage. Seen from [`open_middle`]; the most open side when several are (a hall open at both
+/// ends).
+pub fn open_side(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
+    let point = open_middle(bvh, bounds)?;
+    let diagonal = bounds.size().length().max(1e-6);
+    [Vec3::Z, Vec3::X, Vec3::NEG_X, Vec3::NEG_Z]
+        .into_iter()
+        .map(|side| (miss_share_towards(bvh, point, side, diagonal), side))
+        .filter(|(share, _)| *share >= OPEN_SIDE_SHARE)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, side)| side)
+}
+
+/// The first view of a model without a camera: inside an interior ([`interior_view`]); from the open side of a
+/// room open on one side (a Cornell box whose probe rays mostly hit it, but whose front is missing); else None
+/// (keep the framing from +Z).
+pub fn first_view(bvh: &Bvh, bounds: &Aabb, fov_y: f32) -> Option<Camera> {
+    if !is_interior(bvh, bounds) {
+        return None;
+    }
+    match open_side(bvh, bounds) {
+        Some(side) => Some(Camera::framing_from(bounds, side)),
+        None => interior_view(bvh, bounds, fov_y),
+    }
 }
 
 /// A camera inside the interior in `bounds`, or None when the model is not one (keep the outside view).
@@ -242,5 +301,53 @@ mod tests {
         assert!(back_face_share(&Bvh::build(&out), bounds.center(), 50.0) > 0.9);
         assert!(is_interior(&Bvh::build(&out), &bounds));
         assert!(is_interior(&Bvh::build(&flipped(out)), &bounds));
+    }
+
+    #[test]
+    fn a_room_open_on_one_side_is_seen_from_that_side_and_a_closed_one_from_inside() {
+        // A room whose floor is a shallow pool (the Cornell box with water): low rays hit the floor, so it is an
+        // interior, but its -X wall is missing, and a camera inside near one end looked out of that opening.
+        let (min, max) = (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 3.0, 2.0));
+        let bounds = Aabb { min, max };
+        let mut tris: Vec<[Vec3; 3]> =
+            room(min, max, true).into_iter().filter(|t| t.iter().any(|v| v.x > -1.999)).collect();
+        tris.extend(
+            room(Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 1.2, 2.0), true)
+                .into_iter()
+                .take(2)
+                .map(|t| t.map(|v| v + Vec3::Y * 1.2)),
+        );
+        let bvh = Bvh::build(&tris);
+        assert!(is_interior(&bvh, &bounds));
+        assert_eq!(open_side(&bvh, &bounds), Some(Vec3::NEG_X));
+        let cam = first_view(&bvh, &bounds, 0.9).expect("a camera at the opening");
+        assert!(cam.position.x < min.x, "outside the open side: {}", cam.position);
+        assert!(cam.forward().x > 0.9, "looking in: {}", cam.forward());
+        // Closed all round: no open side, the camera inside as before.
+        let closed = Bvh::build(&room(Vec3::new(-10.0, 0.0, -4.0), Vec3::new(10.0, 6.0, 4.0), true));
+        let closed_bounds = Aabb { min: Vec3::new(-10.0, 0.0, -4.0), max: Vec3::new(10.0, 6.0, 4.0) };
+        assert_eq!(open_side(&closed, &closed_bounds), None);
+        let inside = first_view(&closed, &closed_bounds, 0.9).expect("an interior");
+        assert_eq!(Some(inside), interior_view(&closed, &closed_bounds, 0.9));
+    }
+
+    #[test]
+    fn the_probe_moves_off_a_surface_in_the_middle_of_the_bounds() {
+        // A small plate hung just under the middle of a room open at the front (the glTF Cornell box's logo,
+        // which the middle of its bounds touches): probed from there every ray downwards hit the plate at once,
+        // and the room passed for a closed interior, seen from inside.
+        let (min, max) = (Vec3::new(-2.0, 0.0, -2.0), Vec3::new(2.0, 3.0, 2.0));
+        let bounds = Aabb { min, max };
+        let open_front = room(min, max, true).into_iter().filter(|t| t.iter().any(|v| v.z < 1.999)).collect();
+        let mut tris = flipped(outwards(open_front, bounds.center()));
+        let plate = |x: f32, z: f32| Vec3::new(x, 1.499, z);
+        tris.push([plate(-0.3, -0.3), plate(0.3, 0.3), plate(0.3, -0.3)]);
+        tris.push([plate(-0.3, -0.3), plate(-0.3, 0.3), plate(0.3, 0.3)]);
+        let (share, nearest) = probe(&Bvh::build(&tris), bounds.center(), 10.0);
+        assert!(nearest < 2e-3 && share >= ENCLOSED_SHARE, "the middle touches the plate: {nearest}, {share}");
+        let bvh = Bvh::build(&tris);
+        let p = open_middle(&bvh, &bounds).unwrap();
+        assert!(probe(&bvh, p, 10.0).1 >= PROBE_CLEARANCE * bounds.size().length(), "probed away from the plate: {p}");
+        assert!(first_view(&bvh, &bounds, 0.9).is_none_or(|c| c.position.z > max.z), "seen from the open front");
     }
 }

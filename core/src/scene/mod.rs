@@ -302,11 +302,15 @@ impl Camera {
     }
     /// A camera that sees all of `bounds` from the front (+Z side), slightly above.
     pub fn framing(bounds: &Aabb) -> Camera {
+        Camera::framing_from(bounds, Vec3::Z)
+    }
+    /// A camera that sees all of `bounds` from the side `side` (a horizontal unit vector), slightly above.
+    pub fn framing_from(bounds: &Aabb, side: Vec3) -> Camera {
         let c = bounds.center();
         let radius = (bounds.size().length() * 0.5).max(1e-3);
         let fov_y = 50f32.to_radians();
         let dist = radius / (fov_y * 0.5).tan();
-        let pos = c + Vec3::new(0.0, radius * 0.25, dist);
+        let pos = c + Vec3::new(0.0, radius * 0.25, 0.0) + side * dist;
         Camera::look_at(pos, c, fov_y, (dist - radius).max(dist * 1e-3).max(1e-3) * 0.05, dist + radius * 2.0)
     }
     pub fn is_valid(&self) -> bool {

@@ -137,22 +137,20 @@ impl Views {
         Ok(())
     }
 
-    /// A camera inside the scene when it is an enclosed interior (through the scene's BVH, built once and
-    /// shared with the tracers), None for an object or without a GPU.
-    pub fn interior_view(
-        &self,
-        bounds: &shadowlab_core::math::Aabb,
-        fov_y: f32,
-    ) -> Option<shadowlab_core::scene::Camera> {
+    /// The first view of a model without a camera (`first_view::first_view`, through the scene's BVH, built
+    /// once and shared with the tracers): inside an enclosed interior, from the open side of a room open on one
+    /// side; None for an object (keep the framing) or without a GPU.
+    pub fn first_view(&self, bounds: &shadowlab_core::math::Aabb, fov_y: f32) -> Option<shadowlab_core::scene::Camera> {
         let gpu = self.gpu.as_ref()?;
         let (bvh, _) = gpu.main.renderer.shared_scene().bvh(&gpu.ctx);
-        shadowlab_core::accel::first_view::interior_view(&bvh.cpu, bounds, fov_y)
+        shadowlab_core::accel::first_view::first_view(&bvh.cpu, bounds, fov_y)
     }
 
-    /// "Frame scene": the interior view inside an enclosed interior, else the bounds framed from outside.
+    /// "Frame scene": the model's first view ([`Views::first_view`]: inside an enclosed interior, from the open
+    /// side of a room open on one side), else the bounds framed from outside.
     pub fn frame_scene(&self, session: &mut Session) {
         let bounds = session.scene.bounds;
-        match self.interior_view(&bounds, session.camera.fov_y) {
+        match self.first_view(&bounds, session.camera.fov_y) {
             Some(camera) => {
                 session.camera = super::camera::CameraController::from_camera(&camera, &bounds);
             }
