@@ -484,7 +484,7 @@ mod array_layer_tests {
         for n in 0..100 {
             let l = array_layers(n);
             assert!(l >= n.max(1), "{n} layers need room: {l}");
-            assert!(l > 1 && l % 6 != 0, "{n} -> {l}: GL would guess a 2D texture, a cube or a cube array");
+            assert!(l > 1 && !l.is_multiple_of(6), "{n} -> {l}: GL would guess a 2D texture, a cube or a cube array");
             assert!(l <= n + 2, "{n} -> {l}: at most one layer more (two for none)");
         }
     }
