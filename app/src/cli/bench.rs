@@ -1,5 +1,6 @@
-//! `shadowlab bench`: the standard suite, every technique on the built-in scenes (and the shared real scenes),
-//! compared with the reference; a Markdown table.
+//! `shadowlab bench`: the standard suite, every technique of the registries (direct, and indirect over the
+//! preview) on the built-in scenes (and the shared real scenes), each at its defaults against its own comparison
+//! target; a Markdown table. The suite is the registries': a technique added there is benched.
 
 use std::path::PathBuf;
 
@@ -7,9 +8,14 @@ use anyhow::Result;
 use clap::Args;
 use shadowlab_core::vpl::VplSettings;
 
+use shadowlab_core::renderer::{Component, Renderer};
+use shadowlab_core::scene::{Camera, PointLight};
+use shadowlab_core::technique::registry::{self, TechniqueEntry};
+
 use super::args::{FrameArgs, SceneArgs};
 use super::setup::setup;
 use crate::files::{check_output_path, write_atomic};
+use crate::measure::{IndirectChoice, Rendered};
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -23,6 +29,9 @@ pub struct BenchArgs {
     pub warmup: u32,
     #[arg(long, default_value_t = 3)]
     pub repeat: u32,
+    /// VPLs of the indirect rows.
+    #[arg(long, default_value_t = 256)]
+    pub vpls: u32,
     /// Folder of the shared real scenes (dabrovic-sponza, conference); skipped when absent.
     #[arg(long, default_value = "../shared/scenes")]
     pub scenes: PathBuf,
@@ -83,17 +92,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             });
         }
     }
-    // (technique, parameters) in the order of the table; the reference comes first: the others are compared
-    // with it.
-    let techniques: [(&str, &[&str]); 5] = [
-        ("reference", &[]),
-        ("unshadowed", &[]),
-        ("lightcluster", &["d_init=0.5", "filter=pcss"]),
-        ("lightcluster", &["d_init=0.5", "filter=pcf"]),
-        ("raytraced", &[]),
-    ];
     let mut md = String::from(
-        "| scene | technique | parameters | shadow maps | median ms | min ms | clock | speedup vs reference | RMSE | shadow error | lookups/px | taps/px | shadow rays | depth triangles | shadow texels |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | technique | against | shadow maps | median ms | min ms | clock | speedup | RMSE | shadow error | lookups/px | taps/px | shadow rays | depth triangles | shadow texels |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut adapter = String::new();
     for s in &suite {
@@ -113,7 +113,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             quiet: true,
             indirect: "none".into(),
             indirect_params: Vec::new(),
-            vpls: VplSettings::default().count,
+            vpls: args.vpls,
             vpl_source: "auto".into(),
             bounces: 1,
             vpl_clamp: VplSettings::default().clamp_world,
@@ -126,76 +126,141 @@ pub fn run(args: BenchArgs) -> Result<()> {
         eprintln!("{}: loading", s.name);
         let (gpu, mut renderer, _scene, lights, camera) = setup(&s.scene, &frame)?;
         adapter = gpu.adapter_description();
-        let inputs = crate::measure::compare_inputs(&mut renderer, &camera, &lights)?;
-        let mut reference: Option<crate::measure::Rendered> = None;
-        for (key, params) in techniques {
-            eprintln!("{}: {key} {}", s.name, params.join(" "));
-            let params: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-            let r = crate::measure::render_technique(
-                &mut renderer,
-                key,
-                frame.shadow_res,
-                &params,
-                &camera,
-                &lights,
-                &crate::measure::IndirectChoice::none(),
-                frame.warmup,
-                frame.repeat,
-                &mut |_| {},
-            )?;
-            let (rmse, shadow, speedup) = match &reference {
-                Some(reference) => {
-                    let (m, _) = crate::measure::compare_images(
-                        &r.image,
-                        &reference.image,
-                        &inputs,
-                        crate::measure::DiffKind::Absolute,
-                        1.0,
-                        false,
-                        1.0,
-                    )?;
-                    (
-                        format!("{:.5}", m.rmse),
-                        m.shadow_intensity_error.map(|e| format!("{:.2}%", e * 100.0)).unwrap_or_default(),
-                        {
-                            let sp = crate::measure::Speedup::of(&r.timing, &reference.timing);
-                            format!("{:.2} ({}; wall x{:.2})", sp.ratio, sp.clock.name(), sp.wall_ratio)
-                        },
-                    )
+        let mut bench =
+            SceneBench { renderer: &mut renderer, frame: &frame, camera: &camera, lights: &lights, name: s.name };
+        // Direct light: every technique of the registry at its defaults, against its own comparison target.
+        bench.rows(&mut md, registry::REGISTRY, |key| (key.to_string(), IndirectChoice::none()))?;
+        // Indirect light alone: every indirect technique over the preview, against its own target, on the VPLs
+        // it prefers (the target on the same ones).
+        bench.rows(&mut md, registry::INDIRECT_REGISTRY, |key| {
+            (registry::preview().key.to_string(), IndirectChoice { key: key.to_string(), params: Vec::new() })
+        })?;
+    }
+    md += &format!(
+        "\n{}x{}, {} texels per cube face, {} VPLs (indirect rows: the indirect component alone, over `{}`), median of {} \
+         frames after {} warm-up, on {adapter}. Each technique at its defaults against its registry's comparison \
+         target, both in the same clock.\n",
+        args.width,
+        args.height,
+        args.shadow_res,
+        args.vpls,
+        registry::preview().key,
+        args.repeat,
+        args.warmup
+    );
+    write_atomic(&args.out, md.as_bytes())?;
+    print!("{md}");
+    Ok(())
+}
+
+/// One scene's renderer and frame, and the targets rendered on it so far (each rendered once per VPL source).
+struct SceneBench<'a> {
+    renderer: &'a mut Renderer,
+    frame: &'a FrameArgs,
+    camera: &'a Camera,
+    lights: &'a [PointLight],
+    name: &'static str,
+}
+
+impl SceneBench<'_> {
+    /// The rows of `entries`: each technique `side(key)` makes (a direct key and an indirect choice) against its
+    /// entry's target, made by the same `side`; direct entries shade the whole image, indirect ones the
+    /// indirect component alone with the VPL source their entry prefers.
+    fn rows(
+        &mut self,
+        md: &mut String,
+        entries: &[TechniqueEntry],
+        side: impl Fn(&str) -> (String, IndirectChoice),
+    ) -> Result<()> {
+        let indirect = std::ptr::eq(entries, registry::INDIRECT_REGISTRY);
+        type Source = Option<shadowlab_core::vpl::VplSource>;
+        let mut done: Vec<(String, Source, Rendered)> = Vec::new();
+        let mut inputs: Option<(Source, crate::measure::CompareInputs)> = None;
+        for entry in entries {
+            let mut settings = self.renderer.settings().clone();
+            settings.component = if indirect { Component::Indirect } else { Component::Total };
+            let source = indirect.then(|| registry::preferred_vpl_source(entry.key).unwrap_or_default());
+            if let Some(source) = source {
+                settings.vpl.source = source;
+            }
+            if settings != *self.renderer.settings() {
+                self.renderer.set_settings(settings)?;
+            }
+            if inputs.as_ref().is_none_or(|(s, _)| *s != source) {
+                inputs = Some((source, crate::measure::compare_inputs(self.renderer, self.camera, self.lights)?));
+            }
+            let inputs = &inputs.as_ref().expect("made above").1;
+            for key in [entry.target, entry.key] {
+                if done.iter().any(|(k, s, _)| k == key && *s == source) {
+                    continue;
                 }
-                None => ("0".into(), "0%".into(), "1.00".into()),
+                eprintln!("{}: {key}", self.name);
+                let (direct, choice) = side(key);
+                let r = crate::measure::render_technique(
+                    self.renderer,
+                    &direct,
+                    self.frame.shadow_res,
+                    &[],
+                    self.camera,
+                    self.lights,
+                    &choice,
+                    self.frame.warmup,
+                    self.frame.repeat,
+                    &mut |_| {},
+                )?;
+                done.push((key.to_string(), source, r));
+            }
+            let find = |key: &str| done.iter().find(|(k, s, _)| k == key && *s == source).map(|(_, _, r)| r);
+            let (r, target) = (find(entry.key).expect("rendered above"), find(entry.target).expect("rendered above"));
+            let (against, rmse, shadow, speedup) = if entry.target == entry.key {
+                ("(itself: a ground truth)".to_string(), "-".to_string(), "-".to_string(), "-".to_string())
+            } else {
+                let (m, _) = crate::measure::compare_images(
+                    &r.image,
+                    &target.image,
+                    inputs,
+                    crate::measure::DiffKind::Absolute,
+                    1.0,
+                    false,
+                    1.0,
+                )?;
+                let sp = crate::measure::Speedup::of(&r.timing, &target.timing);
+                (
+                    entry.target.to_string(),
+                    format!("{:.5}", m.rmse),
+                    // Shadow factors are the direct lights' (the indirect component has none).
+                    m.shadow_intensity_error
+                        .filter(|_| !indirect)
+                        .map(|e| format!("{:.2}%", e * 100.0))
+                        .unwrap_or_else(|| "-".into()),
+                    format!("x{:.2} ({}; wall x{:.2})", sp.ratio, sp.clock.name(), sp.wall_ratio),
+                )
             };
-            let c = &r.report.counts.technique;
+            // The indirect technique's own counts and VPLs on indirect rows (the preview under it has none).
+            let (c, name) = match (&r.report.indirect, indirect) {
+                (Some(i), true) => {
+                    let vpls =
+                        if i.vpls > 0 { format!(", {} {} VPLs", i.vpls, i.vpl_source.name()) } else { String::new() };
+                    (&i.counts, format!("{} + {}{vpls}", registry::preview().key, entry.key))
+                }
+                _ => (&r.report.counts.technique, entry.key.to_string()),
+            };
             let work = r.report.total_work();
-            md += &format!(
-                "| {} | {} | {} | {}{} | {:.1} | {:.1} | {} | {} | {} | {} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} |\n",
-                s.name,
-                key,
-                params.join(" "),
+            md.push_str(&format!(
+                "| {} | {name} | {against} | {}{} | {:.1} | {:.1} | {} | {speedup} | {rmse} | {shadow} | {:.2} | {:.2} | {:.0} | {:.0} | {:.0} |\n",
+                self.name,
                 c.shadow_maps,
                 c.clusters.map(|n| format!(" ({n} clusters)")).unwrap_or_default(),
                 r.timing.median_ms,
                 r.timing.min_ms,
                 r.timing.clock.name(),
-                speedup,
-                rmse,
-                shadow,
                 work["shadow_lookups_per_pixel"],
                 work["filter_taps_per_pixel"],
                 work["shadow_rays"],
                 work["depth_triangles"],
                 work["shadow_texels_written"],
-            );
-            if reference.is_none() {
-                reference = Some(r);
-            }
+            ));
         }
+        Ok(())
     }
-    md += &format!(
-        "\n{}x{}, {} texels per cube face, median of {} frames after {} warm-up, on {adapter}.\n",
-        args.width, args.height, args.shadow_res, args.repeat, args.warmup
-    );
-    write_atomic(&args.out, md.as_bytes())?;
-    print!("{md}");
-    Ok(())
 }

@@ -109,8 +109,8 @@ pub enum Command {
     Compare(CompareArgs),
     /// Render a technique for every combination of parameter values, compared with the reference; CSV rows.
     Sweep(SweepArgs),
-    /// The standard suite: every technique on the built-in scenes (and the shared real scenes when present),
-    /// timed in one run, compared with the reference; writes a Markdown table.
+    /// The standard suite: every technique of the registries, direct and indirect, at its defaults against its
+    /// own comparison target on the built-in scenes (and the shared real scenes when present); a Markdown table.
     Bench(BenchArgs),
     /// Print a scene's statistics (triangles, materials, lights, bounds) and the GPU adapter.
     Info(SceneArgs),
