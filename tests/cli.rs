@@ -655,6 +655,22 @@ fn indirect_light_renders_compares_and_sweeps_by_component() {
     assert_eq!(r["against_indirect"]["key"], "vpl-raytraced");
     // Unshadowed VPLs are brighter than visible ones: the indirect component differs.
     assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0);
+    // No shadow error on the indirect component alone (its shadow factors are not the direct lights'; it read 0).
+    assert!(r["metrics"]["shadow_intensity_error"].is_null(), "{}", r["metrics"]);
+
+    // Without --against-indirect, the indirect component of a technique is compared with its own target (the
+    // same indirect technique on both sides differed by nothing: RMSE 0 whatever the technique).
+    let mut args: Vec<&str> =
+        vec!["compare", "--warmup", "0", "--out", diff.to_str().unwrap(), "--report", json.to_str().unwrap()];
+    args.extend(small);
+    args.extend(["--technique", "unshadowed", "--indirect", "val", "--component", "indirect", "--no-flip"]);
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("val against its own target, vpl-shadowmaps"), "{stderr}");
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(r["against_indirect"]["key"], "vpl-shadowmaps");
+    assert!(r["metrics"]["rmse"].as_f64().unwrap() > 0.0, "{}", r["metrics"]);
 
     // A sweep over an indirect parameter: one row per value, with the vpls column.
     let csv = dir.join("sweep.csv");

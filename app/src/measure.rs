@@ -351,11 +351,13 @@ pub enum DiffKind {
 }
 
 /// What a comparison needs besides the two images: the geometry mask and, for shadow factors, the
-/// unshadowed and ambient-only images.
+/// unshadowed and ambient-only images (None when the images are the indirect component alone: the direct
+/// lights' shadow factors are not in them, and the shadow error would read 0 whatever the images).
 pub struct CompareInputs {
     pub mask: Vec<bool>,
     pub unshadowed: Image,
     pub ambient: Image,
+    pub shadow_factors: bool,
 }
 
 pub fn compare_inputs(renderer: &mut Renderer, camera: &Camera, lights: &[PointLight]) -> Result<CompareInputs> {
@@ -387,7 +389,8 @@ pub fn compare_inputs(renderer: &mut Renderer, camera: &Camera, lights: &[PointL
         no_progress,
     )?
     .image;
-    Ok(CompareInputs { mask: renderer.read_geometry_mask()?, unshadowed, ambient })
+    let shadow_factors = renderer.settings().component != shadowlab_core::renderer::Component::Indirect;
+    Ok(CompareInputs { mask: renderer.read_geometry_mask()?, unshadowed, ambient, shadow_factors })
 }
 
 /// Metrics of `technique` against `target` and the difference image.
@@ -405,7 +408,7 @@ pub fn compare_images(
     let options = CompareOptions {
         flip,
         exposure,
-        visibility: Some(Visibility { technique: &v_t, reference: &v_r }),
+        visibility: inputs.shadow_factors.then_some(Visibility { technique: &v_t, reference: &v_r }),
         ..Default::default()
     };
     let metrics = compare::compare(technique, target, Some(&inputs.mask), &options)?;

@@ -125,7 +125,8 @@ pub struct TargetArgs {
     /// A parameter of the comparison target, `key=value`; repeatable.
     #[arg(long = "against-param", value_name = "KEY=VALUE")]
     pub against_params: Vec<String>,
-    /// The comparison target's indirect technique (default: the same as `--indirect`).
+    /// The comparison target's indirect technique (default: the same as `--indirect`; with `--component indirect`,
+    /// the indirect technique's own comparison target, e.g. `vpl-shadowmaps` for `val`).
     #[arg(long = "against-indirect", value_name = "KEY")]
     pub against_indirect: Option<String>,
     /// A parameter of the target's indirect technique, `key=value`; repeatable.
@@ -140,15 +141,36 @@ impl TargetArgs {
         check_technique(&self.against)
     }
 
-    /// The target's indirect technique: `--against-indirect` (with its parameters) or the technique side's.
-    pub fn against_indirect(&self, same: &IndirectChoice) -> Result<IndirectChoice> {
+    /// The target's indirect technique: `--against-indirect` (with its parameters), else the technique side's,
+    /// except when only the indirect component is compared (`indirect_only`): the same indirect technique on
+    /// both sides then differs by nothing (an error of 0 whatever the technique), so the target is that
+    /// technique's own comparison target in the registry (`val` against `vpl-shadowmaps`, `fuzzy` against
+    /// `vpl-raytraced`; a ground truth against itself), said on stderr unless `quiet`.
+    pub fn against_indirect(&self, same: &IndirectChoice, indirect_only: bool, quiet: bool) -> Result<IndirectChoice> {
         match &self.against_indirect {
             Some(k) => {
                 check_indirect(k)?;
                 Ok(IndirectChoice { key: k.clone(), params: self.against_indirect_params.to_vec() })
             }
-            None if self.against_indirect_params.is_empty() => Ok(same.clone()),
-            None => bail!("--against-indirect-param needs --against-indirect"),
+            None if !self.against_indirect_params.is_empty() => {
+                bail!("--against-indirect-param needs --against-indirect")
+            }
+            None => {
+                let own = technique::registry::indirect_entry(&same.key).map(|e| e.target).filter(|t| *t != same.key);
+                match own.filter(|_| indirect_only) {
+                    Some(target) => {
+                        if !quiet {
+                            eprintln!(
+                                "note: the indirect component of {} against its own target, {target} \
+                                 (--against-indirect chooses another)",
+                                same.key
+                            );
+                        }
+                        Ok(IndirectChoice { key: target.to_string(), params: Vec::new() })
+                    }
+                    None => Ok(same.clone()),
+                }
+            }
         }
     }
 }

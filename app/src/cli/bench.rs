@@ -228,11 +228,7 @@ impl SceneBench<'_> {
                 (
                     entry.target.to_string(),
                     format!("{:.5}", m.rmse),
-                    // Shadow factors are the direct lights' (the indirect component has none).
-                    m.shadow_intensity_error
-                        .filter(|_| !indirect)
-                        .map(|e| format!("{:.2}%", e * 100.0))
-                        .unwrap_or_else(|| "-".into()),
+                    m.shadow_intensity_error.map(|e| format!("{:.2}%", e * 100.0)).unwrap_or_else(|| "-".into()),
                     format!("x{:.2} ({}; wall x{:.2})", sp.ratio, sp.clock.name(), sp.wall_ratio),
                 )
             };

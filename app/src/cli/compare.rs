@@ -110,7 +110,7 @@ pub fn run(args: CompareArgs) -> Result<()> {
         }
     };
     let indirect = f.indirect_choice();
-    let against_indirect = args.target.against_indirect(&indirect)?;
+    let against_indirect = args.target.against_indirect(&indirect, f.component == "indirect", quiet)?;
     // Each side as one measurement (every round renders both the same way).
     let render_target = |renderer: &mut shadowlab_core::Renderer, progress: &mut dyn FnMut(&str)| {
         crate::measure::render_technique(

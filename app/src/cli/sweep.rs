@@ -111,7 +111,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         }
     }
     let same_indirect = f.indirect_choice();
-    let target_indirect = args.target.against_indirect(&same_indirect)?;
+    let target_indirect = args.target.against_indirect(&same_indirect, f.component == "indirect", quiet)?;
     // `--param lights=N1,N2,...` sweeps the light count of a `random:` layout: the comparison target is rendered
     // again for each count.
     let layout: LightLayout = layout::parse(&args.scene.lights)?;
