@@ -129,10 +129,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         let mut bench =
             SceneBench { renderer: &mut renderer, frame: &frame, camera: &camera, lights: &lights, name: s.name };
         // Direct light: every technique of the registry at its defaults, against its own comparison target.
-        bench.rows(&mut md, registry::REGISTRY, |key| (key.to_string(), IndirectChoice::none()))?;
+        bench.rows(&mut md, registry::REGISTRY, false, |key| (key.to_string(), IndirectChoice::none()))?;
         // Indirect light alone: every indirect technique over the preview, against its own target, on the VPLs
         // it prefers (the target on the same ones).
-        bench.rows(&mut md, registry::INDIRECT_REGISTRY, |key| {
+        bench.rows(&mut md, registry::INDIRECT_REGISTRY, true, |key| {
             (registry::preview().key.to_string(), IndirectChoice { key: key.to_string(), params: Vec::new() })
         })?;
     }
@@ -164,15 +164,15 @@ struct SceneBench<'a> {
 
 impl SceneBench<'_> {
     /// The rows of `entries`: each technique `side(key)` makes (a direct key and an indirect choice) against its
-    /// entry's target, made by the same `side`; direct entries shade the whole image, indirect ones the
+    /// entry's target, made by the same `side`; direct entries shade the whole image, `indirect` ones the
     /// indirect component alone with the VPL source their entry prefers.
     fn rows(
         &mut self,
         md: &mut String,
         entries: &[TechniqueEntry],
+        indirect: bool,
         side: impl Fn(&str) -> (String, IndirectChoice),
     ) -> Result<()> {
-        let indirect = std::ptr::eq(entries, registry::INDIRECT_REGISTRY);
         type Source = Option<shadowlab_core::vpl::VplSource>;
         let mut done: Vec<(String, Source, Rendered)> = Vec::new();
         let mut inputs: Option<(Source, crate::measure::CompareInputs)> = None;
