@@ -327,9 +327,13 @@ impl Session {
     }
 
     /// The comparison target's indirect technique key (None: direct light only): the view's own unless the
-    /// user chose another for the target ([`ViewSettings::against_indirect`]).
+    /// user chose another for the target ([`ViewSettings::against_indirect`]); with the indirect component
+    /// alone shown, the own technique's comparison target ([`own_indirect_target`]).
     pub fn against_indirect_key(&self) -> Option<&str> {
         match self.view.against_indirect.as_deref() {
+            None if self.indirect.component == Component::Indirect => {
+                self.indirect.technique.as_deref().map(own_indirect_target)
+            }
             None => self.indirect.technique.as_deref(),
             Some("none") => None,
             Some(k) => Some(k),
@@ -403,9 +407,30 @@ fn pairs(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
     params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
 }
 
+/// An indirect technique's own comparison target in the registry (`val`: `vpl-shadowmaps`), or the key itself
+/// for a ground truth or an unknown key. The indirect component alone, compared with the same indirect
+/// technique, differs by nothing: that view compares with this target unless the user chose another.
+pub fn own_indirect_target(key: &str) -> &str {
+    shadowlab_core::technique::registry::indirect_entry(key).map_or(key, |e| e.target)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_indirect_component_alone_is_compared_with_the_indirect_techniques_own_target() {
+        let mut session = Session::new(Scene::builtin("cornell").unwrap());
+        session.indirect.technique = Some("val".into());
+        assert_eq!(session.against_indirect_key(), Some("val"), "the whole image: the same indirect light");
+        session.indirect.component = Component::Indirect;
+        assert_eq!(session.against_indirect_key(), Some("vpl-shadowmaps"), "the indirect light alone: its target");
+        session.view.against_indirect = Some("vpl-raytraced".into());
+        assert_eq!(session.against_indirect_key(), Some("vpl-raytraced"), "the user's choice stands");
+        session.view.against_indirect = None;
+        session.indirect.technique = Some("pathtraced".into());
+        assert_eq!(session.against_indirect_key(), Some("pathtraced"), "a ground truth against itself");
+    }
 
     #[test]
     fn the_moving_preview_renders_a_fixed_pixel_budget_whatever_the_view_size() {

@@ -160,8 +160,14 @@ fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
         return;
     }
     let declared = own.as_deref().and_then(|k| INDIRECT_REGISTRY.iter().find(|e| e.key == k)).map(|e| e.target);
+    let indirect_only = session.indirect.component == shadowlab_core::renderer::Component::Indirect;
     let name = |choice: &Option<String>| -> String {
         match choice.as_deref() {
+            None if indirect_only && own.as_deref().is_some_and(|k| Some(k) != declared) => format!(
+                "{}'s target ({}; the indirect light alone)",
+                own.as_deref().unwrap_or_default(),
+                declared.unwrap_or_default()
+            ),
             None => format!("same ({})", own.as_deref().unwrap_or("none")),
             Some("none") => "none".to_string(),
             Some(k) if Some(k) == declared && own.as_deref() != Some(k) => {
@@ -187,8 +193,9 @@ fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
             .response
             .on_hover_text(
                 "The indirect technique of the comparison view (side by side, split, difference, figures, sweeps): \
-             the view's own compares the direct techniques under the same indirect light; a reference or ground \
-             truth compares the indirect technique itself",
+             the view's own compares the direct techniques under the same indirect light (with the indirect \
+             light alone shown, the indirect technique's own target instead: the same one would differ by \
+             nothing); a reference or ground truth compares the indirect technique itself",
             );
     });
 }
