@@ -1191,6 +1191,23 @@ fn suns_from_the_command_line_light_the_scene_directly_and_through_vpls() {
 }
 
 #[test]
+fn a_tradeoff_of_the_indirect_light_alone_is_against_the_indirect_techniques_own_target() {
+    // Without a target's indirect technique, VALs' indirect light was compared with the target's none (an
+    // error of the whole indirect light); now with their own target, one shadow map per VPL, and said so.
+    let dir = out_dir("tradeoff-indirect");
+    let csv = dir.join("t.csv");
+    let mut args = vec!["tradeoff", "--scene", "cornell", "--width", "32", "--height", "24", "--shadow-res", "16"];
+    args.extend(["--warmup", "0", "--repeat", "1", "--vpls", "32", "--component", "indirect"]);
+    args.extend(["--direct", "unshadowed", "--against", "unshadowed", "--try", "val vals=2", "--out"]);
+    args.push(csv.to_str().unwrap());
+    let out = shadowlab(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("val against its own target, vpl-shadowmaps"), "{stderr}");
+    assert!(stderr.contains("against unshadowed + vpl-shadowmaps"), "{stderr}");
+}
+
+#[test]
 fn a_sweep_names_each_sides_map_resolution_and_says_when_they_differ() {
     // The techniques' default map resolutions differ (the reference 1024², INSM 512²): a comparison at two
     // resolutions is named as such, on the terminal and in the CSV, and one `--shadow-res` sets both.

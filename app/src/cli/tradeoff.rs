@@ -85,8 +85,11 @@ fn goal(args: &TradeoffArgs) -> Result<Goal> {
     }
 }
 
-/// The target: a try with one value per parameter.
-fn target(args: &TradeoffArgs) -> Result<(String, Vec<String>, IndirectChoice)> {
+/// The target: a try with one value per parameter. On the indirect component alone, a target that names no
+/// indirect technique (and no `--against-indirect`) takes the tries' indirect technique's own comparison target
+/// (`vpl-shadowmaps` for `val`), said unless quiet: without it the tries' indirect light was compared with the
+/// target's none, or with the same technique, which differs by nothing.
+fn target(args: &TradeoffArgs, tries: &[TrySpec]) -> Result<(String, Vec<String>, IndirectChoice)> {
     let spec = TrySpec::parse(&args.against, &args.direct, &args.frame.indirect)
         .map_err(|e| anyhow!("{}", e.to_string().replace("--try", "--against")))?;
     if let Some((k, v)) = spec.params.iter().find(|(_, v)| v.len() != 1) {
@@ -101,7 +104,24 @@ fn target(args: &TradeoffArgs) -> Result<(String, Vec<String>, IndirectChoice)> 
     } else if !args.against_indirect_params.is_empty() {
         bail!("--against-indirect-param needs --against-indirect");
     } else if !named_indirect {
-        indirect.params.extend(args.frame.indirect_params.iter().cloned());
+        let own_target = tries
+            .iter()
+            .find(|t| t.indirect != "none")
+            .and_then(|t| technique::registry::indirect_entry(&t.indirect))
+            .filter(|e| e.target != e.key && args.frame.component == "indirect");
+        match own_target {
+            Some(e) => {
+                if !args.frame.quiet {
+                    eprintln!(
+                        "note: the indirect component of {} against its own target, {} (--against KEY+INDIRECT or \
+                         --against-indirect chooses another)",
+                        e.key, e.target
+                    );
+                }
+                indirect = IndirectChoice { key: e.target.to_string(), params: Vec::new() };
+            }
+            None => indirect.params.extend(args.frame.indirect_params.iter().cloned()),
+        }
     }
     Ok((spec.technique, tradeoff::direct_params(&setting), indirect))
 }
@@ -141,7 +161,7 @@ pub fn run(args: TradeoffArgs) -> Result<()> {
     if grid > crate::measure::MAX_SWEEP_SETTINGS {
         bail!("the tries make {grid} settings; at most {}", crate::measure::MAX_SWEEP_SETTINGS);
     }
-    let (against, against_params, against_indirect) = target(&args)?;
+    let (against, against_params, against_indirect) = target(&args, &tries)?;
     let f = &args.frame;
     let (_gpu, mut renderer, scene, lights, camera) = setup(&args.scene, f)?;
     // Every setting checked before the first (slow) render: each parameter's values applied once.
