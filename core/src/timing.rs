@@ -34,7 +34,10 @@ use step_wait::{StepSlot, StepWaiter, Waiting};
 /// A step must take at least this long from submit to completion before `auto` judges its timestamps.
 pub const AUTO_MIN_STEP_MS: f64 = 2.0;
 /// `auto` leaves the timestamps when a judged step's timestamps cover less than this share of its wall time...
-pub const AUTO_MIN_COVERAGE: f64 = 0.5;
+/// (0.5 until the twenty-ninth session, which let ISM's step through at 60 %: lavapipe's timestamps around its
+/// compute passes read 15-33 ms of a 70-100 ms step, its splat 0.0 ms, and a bench row read x1.01 over the
+/// reference in them where the wall clocks said x0.61; the steps that hold cover 83-99 % of theirs.)
+pub const AUTO_MIN_COVERAGE: f64 = 0.75;
 /// ...and the time they miss is at least this share of the frame's wall-clock steps: a step whose missing time
 /// is smaller cannot move a ratio of two frames by more than that, while a loaded machine delays small steps
 /// (measured: a 6.7 ms tone-map step with 2.5 ms of timestamps while two test processes shared 2 cores).
@@ -545,6 +548,10 @@ mod tests {
         let busy = [step("tonemap", 6.7), step("shadows", 400.0)];
         let loaded = [("tonemap".to_string(), 2.5), ("shadows".to_string(), 399.0)];
         assert_eq!(judge(&busy, &loaded, &[0, 1]), None);
+        // A step whose timestamps cover 60 % of it (ISM's on lavapipe, in a loaded run) leaves them too.
+        let ism = [step("gbuffer", 5.0), step("ism maps + shading", 290.0)];
+        let partial = [("gbuffer".to_string(), 4.5), ("ism maps + shading".to_string(), 174.0)];
+        assert!(judge(&ism, &partial, &[0, 1]).is_some_and(|r| r.contains("under 75 %")));
         // Two passes of one step add up.
         let split = [("a".to_string(), 2.4), ("b".to_string(), 2.4)];
         assert_eq!(judge(&[step("both", 5.0)], &split, &[0, 0]), None);
