@@ -206,7 +206,9 @@ pub const RSM_MAPS: usize = usize::MAX;
 pub fn light_layer_legend(layer: &OverlayLayer) -> Option<Vec<LegendEntry>> {
     let white = [1.0, 1.0, 1.0, 1.0];
     Some(match layer.name {
-        "lights" => vec![LegendEntry::new(Glyph::Dot, white, "a light, in its colour; size grows with √intensity")],
+        "lights" => {
+            vec![LegendEntry::new(Glyph::Dot, white, "a light, in its colour; size √intensity, less in a crowd")]
+        }
         "light ranges" => vec![LegendEntry::new(Glyph::Circle, white, "L_att: where the light's falloff reaches 0")],
         "spot cones" => vec![LegendEntry::new(Glyph::Line, white, "a spot light's axis and cone, ¼ of L_att long")],
         SUNS_LAYER => vec![
@@ -231,6 +233,19 @@ pub fn light_overlay_color(l: &PointLight) -> [f32; 4] {
     [c.x, c.y, c.z, 1.0]
 }
 
+/// Up to this many lights their dots keep their full size; beyond it they shrink as `sqrt(n)` grows, so that
+/// thousands of lights stay a cloud of points instead of a solid sheet (100,000 dots of 2-6 pixels covered the
+/// whole view), down to [`MIN_LIGHT_DOT_SCALE`] of it.
+pub const FULL_SIZE_LIGHT_DOTS: usize = 256;
+/// The smallest share of their size light dots shrink to.
+pub const MIN_LIGHT_DOT_SCALE: f32 = 0.25;
+
+/// The radius in pixels of a light's dot: 2 to 6 pixels with √intensity, times the crowd's scale.
+pub fn light_dot_radius(intensity: f32, max_intensity: f32, lights: usize) -> f32 {
+    let crowd = (FULL_SIZE_LIGHT_DOTS as f32 / lights.max(1) as f32).sqrt().clamp(MIN_LIGHT_DOT_SCALE, 1.0);
+    ((2.0 + 4.0 * (intensity / max_intensity.max(1e-6)).clamp(0.0, 1.0).sqrt()) * crowd).max(1.0)
+}
+
 /// The overlays every technique offers for its lights: dots sized by intensity, and range spheres (`L_att`).
 pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
     let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
@@ -243,7 +258,7 @@ pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
                 .map(|l| Overlay::Point {
                     position: l.position,
                     color: light_overlay_color(l),
-                    radius_px: 2.0 + 4.0 * (l.intensity / max_intensity).sqrt(),
+                    radius_px: light_dot_radius(l.intensity, max_intensity, lights.len()),
                 })
                 .collect(),
         },
@@ -324,6 +339,16 @@ pub fn sun_overlays(suns: &[DirectionalLight], bounds: &Aabb) -> OverlayLayer {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn light_dots_grow_with_intensity_and_shrink_in_a_crowd() {
+        assert_eq!(light_dot_radius(1.0, 1.0, 10), 6.0);
+        assert_eq!(light_dot_radius(0.0, 1.0, 10), 2.0);
+        assert_eq!(light_dot_radius(1.0, 1.0, FULL_SIZE_LIGHT_DOTS), 6.0, "full size up to the threshold");
+        assert!((light_dot_radius(1.0, 1.0, 4 * FULL_SIZE_LIGHT_DOTS) - 3.0).abs() < 1e-5, "half at four times");
+        assert_eq!(light_dot_radius(1.0, 1.0, 100_000), 6.0 * MIN_LIGHT_DOT_SCALE);
+        assert_eq!(light_dot_radius(0.0, 1.0, 100_000), 1.0, "never under a pixel");
+    }
 
     #[test]
     fn a_suns_arrow_points_along_its_light_to_the_scenes_centre() {
