@@ -409,4 +409,19 @@ fn every_entry_creates_its_technique_which_accepts_its_software_defaults() {
             assert!(keys.contains(key), "{}: tuning parameter {key} is not a parameter", entry.key);
         }
     }
+    // Every direct technique shows the lights, one dot a light, in a layer shown by default ("lights", or
+    // LightCluster's "lights by cluster"); the preview showed none, so the lights a user placed were invisible
+    // with it chosen.
+    let lights = [white_light(Vec3::new(0.0, 2.0, 0.0), 1.0, 5.0), white_light(Vec3::new(1.0, 2.0, 0.0), 2.0, 5.0)];
+    for entry in REGISTRY {
+        let technique = (entry.create)(renderer.gpu(), renderer.layouts());
+        let layers = technique.overlays(&lights);
+        let names: Vec<&str> = layers.iter().map(|l| l.name).collect();
+        let shown = layers.iter().find(|l| l.name.starts_with("lights") && l.visible_by_default);
+        let shown = shown.unwrap_or_else(|| panic!("{}: no lights layer shown by default in {names:?}", entry.key));
+        // (LightCluster colours its lights by cluster, once a frame has clustered them.)
+        if shown.name == "lights" {
+            assert_eq!(shown.primitives.len(), 2, "{}: a dot a light", entry.key);
+        }
+    }
 }

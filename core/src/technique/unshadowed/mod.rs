@@ -129,7 +129,9 @@ impl Technique for Unshadowed {
         true
     }
 
-    fn overlays(&self, _lights: &[PointLight]) -> Vec<OverlayLayer> {
-        Vec::new()
+    /// The lights every technique shows (without them a user who chose the preview could not see the lights
+    /// they place).
+    fn overlays(&self, lights: &[PointLight]) -> Vec<OverlayLayer> {
+        super::light_overlays(lights)
     }
 }
