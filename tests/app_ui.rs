@@ -733,6 +733,23 @@ fn the_app_can_start_with_an_indirect_technique() {
     bad.run_steps(2);
     assert!(bad.state().session.indirect.technique.is_none());
     bad.get_by_label_contains("unknown indirect technique 'magic'");
+    // With the indirect light alone (`--app-component indirect`): against VALs' own target, said in the exit line.
+    let start = StartState {
+        indirect: Some("val".into()),
+        component: Some("indirect".into()),
+        view: Some("difference".into()),
+        ..Default::default()
+    };
+    let mut alone = started("startup-indirect-alone", Some("cornell"), start);
+    alone.state_mut().session.indirect.vpl.count = 64;
+    alone.run_steps(8);
+    assert_eq!(alone.state().session.indirect.component, shadowlab_core::renderer::Component::Indirect);
+    let line = alone.state().exit_line();
+    assert!(line.contains("component=indirect") && line.contains("indirect=vpl-shadowmaps"), "{line}");
+    let mut wrong =
+        started("startup-component-bad", None, StartState { component: Some("both".into()), ..Default::default() });
+    wrong.run_steps(2);
+    wrong.get_by_label_contains("--app-component 'both': choose total, direct, indirect");
 }
 
 #[test]

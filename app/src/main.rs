@@ -71,6 +71,7 @@ fn main() -> ExitCode {
                 against: args.app_against,
                 against_params: args.app_against_params,
                 against_indirect: args.app_against_indirect,
+                component: args.app_component,
                 explain: args.app_explain,
                 overlays: args.app_overlays,
             },

@@ -70,6 +70,10 @@ pub struct Cli {
         help = args::registry_help("App: the comparison target's indirect technique, none or one of", true)
     )]
     pub app_against_indirect: Option<String>,
+    /// App: the component of the light the views show: total, direct or indirect (with an indirect technique,
+    /// `indirect` compares it with its own target, e.g. VALs with one shadow map per VPL).
+    #[arg(long = "app-component", value_name = "COMPONENT")]
+    pub app_component: Option<String>,
     /// App: open on an Explain step: `N` (1-based) of the technique's steps, or `KEY:N` of the technique or the
     /// indirect technique `KEY` (its layers, maps and parameters, as choosing it in the Explain panel).
     #[arg(long = "app-explain", value_name = "[KEY:]N")]

@@ -131,6 +131,15 @@ impl ShadowLabApp {
                 );
             }
         }
+        if let Some(c) = &start.component {
+            match shadowlab_core::renderer::Component::parse(c) {
+                Some(component) => self.session.indirect.component = component,
+                None => report(
+                    self,
+                    anyhow!("--app-component '{c}': choose {}", shadowlab_core::renderer::Component::NAMES.join(", ")),
+                ),
+            }
+        }
         let direct = [
             (self.session.technique.clone(), &start.params, "--app-param"),
             (self.session.view.compare_against.clone(), &start.against_params, "--app-against-param"),
@@ -249,8 +258,12 @@ impl ShadowLabApp {
             Some(k) => format!(" indirect={k}{}", params(s.indirect.params.get(k))),
             None => String::new(),
         };
+        let component = match s.indirect.component {
+            shadowlab_core::renderer::Component::Total => String::new(),
+            c => format!(" component={}", c.name()),
+        };
         let mut line = format!(
-            "shadowlab: scene={} view={} | technique={}{}{} | against={}{}{}",
+            "shadowlab: scene={} view={}{component} | technique={}{}{} | against={}{}{}",
             s.scene.name,
             view_name(s.view.mode),
             s.technique,

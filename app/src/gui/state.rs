@@ -54,6 +54,8 @@ pub struct StartState {
     pub against_params: Vec<String>,
     /// The target's indirect technique (`none`, or a key).
     pub against_indirect: Option<String>,
+    /// The component of the light the views show: total, direct or indirect.
+    pub component: Option<String>,
     /// An Explain step to open on: `N` (1-based) of the technique's steps, or `KEY:N` of technique `KEY` (the
     /// technique or the indirect technique).
     pub explain: Option<String>,
