@@ -16,23 +16,6 @@ fn parse_size(text: &str) -> Result<(f32, f32), String> {
     Ok((w, h))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::parse_size;
-
-    #[test]
-    fn a_window_size_is_parsed_and_one_out_of_range_says_the_range() {
-        assert_eq!(parse_size("1280x800"), Ok((1280.0, 800.0)));
-        assert!(parse_size("1280*800").unwrap_err().contains("expected WIDTHxHEIGHT"));
-        assert!(parse_size("wide x 800").unwrap_err().contains("expected WIDTHxHEIGHT"));
-        for small_or_large in ["300x200", "100x80", "20000x800", "NaNx800"] {
-            let e = parse_size(small_or_large).unwrap_err();
-            assert!(e.contains("at least 320x240") || e.contains("expected"), "{small_or_large}: {e}");
-        }
-        assert!(parse_size("300x200").unwrap_err().contains("at least 320x240"));
-    }
-}
-
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn,wgpu_hal::gles::egl=off")).init();
     let args = cli::Cli::parse();
@@ -88,5 +71,22 @@ fn main() -> ExitCode {
             eprintln!("error: {}", chain.join(": "));
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn a_window_size_is_parsed_and_one_out_of_range_says_the_range() {
+        assert_eq!(parse_size("1280x800"), Ok((1280.0, 800.0)));
+        assert!(parse_size("1280*800").unwrap_err().contains("expected WIDTHxHEIGHT"));
+        assert!(parse_size("wide x 800").unwrap_err().contains("expected WIDTHxHEIGHT"));
+        for small_or_large in ["300x200", "100x80", "20000x800", "NaNx800"] {
+            let e = parse_size(small_or_large).unwrap_err();
+            assert!(e.contains("at least 320x240") || e.contains("expected"), "{small_or_large}: {e}");
+        }
+        assert!(parse_size("300x200").unwrap_err().contains("at least 320x240"));
     }
 }
