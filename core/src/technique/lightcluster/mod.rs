@@ -39,6 +39,7 @@
 //! ([`cover`]: the light that covers the most lights not covered yet, the same covering bound), which takes fewer
 //! clusters where the paper's order wastes centers (Sponza's 80 lights at `d_init` 0.5: 20 instead of 26).
 
+mod cluster_params;
 pub mod clustering;
 pub mod cover;
 mod cull_sort;
