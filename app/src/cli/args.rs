@@ -119,8 +119,13 @@ impl FrameArgs {
 pub struct TargetArgs {
     #[arg(long, default_value = "lightcluster", help = registry_help("Technique", false))]
     pub technique: String,
-    /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`.
-    #[arg(long, default_value = shadowlab_core::technique::registry::REFERENCE)]
+    /// What to compare against: `reference` (cube map per light) or another technique such as `raytraced`
+    /// (default: `reference`; with `--component indirect`, the technique itself, so that both sides differ only
+    /// in their indirect light).
+    #[arg(long = "against", value_name = "AGAINST")]
+    pub against_given: Option<String>,
+    /// The target's direct technique: `--against`, or its default ([`TargetArgs::resolve`]).
+    #[arg(skip)]
     pub against: String,
     /// A parameter of the comparison target, `key=value`; repeatable.
     #[arg(long = "against-param", value_name = "KEY=VALUE")]
@@ -135,6 +140,28 @@ pub struct TargetArgs {
 }
 
 impl TargetArgs {
+    /// Settle the target's direct technique: `--against` when given; else the reference, or, when only the
+    /// indirect component is compared (`indirect_only`), the technique itself: its direct light is not in the
+    /// images, and a reference under the target's indirect light cost that side time the other did not pay
+    /// (`compare --technique unshadowed --indirect val --component indirect` read x3.79 where the indirect
+    /// techniques alone differ far less). Said on stderr unless `quiet`.
+    pub fn resolve(&mut self, indirect_only: bool, quiet: bool) {
+        self.against = match &self.against_given {
+            Some(k) => k.clone(),
+            None if indirect_only => {
+                if !quiet && self.technique != technique::registry::REFERENCE {
+                    eprintln!(
+                        "note: the indirect component alone: the target's direct technique is {} too (--against \
+                         chooses another)",
+                        self.technique
+                    );
+                }
+                self.technique.clone()
+            }
+            None => technique::registry::REFERENCE.to_string(),
+        };
+    }
+
     /// Both technique keys are registered.
     pub fn check(&self) -> Result<()> {
         check_technique(&self.technique)?;

@@ -96,6 +96,8 @@ pub fn run(args: CompareArgs) -> Result<()> {
     if let Some(r) = &args.figure {
         check_output_path(r, "png")?;
     }
+    let mut args = args;
+    args.target.resolve(args.frame.component == "indirect", args.frame.quiet);
     args.target.check()?;
     if !(args.gain.is_finite() && args.gain > 0.0) {
         bail!("--gain {}: must be a number > 0", args.gain);

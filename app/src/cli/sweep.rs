@@ -80,6 +80,8 @@ pub fn run(args: SweepArgs) -> Result<()> {
     if let Some(m) = &args.markdown {
         check_output_path(m, "md")?;
     }
+    let mut args = args;
+    args.target.resolve(args.frame.component == "indirect", args.frame.quiet);
     args.target.check()?;
     if let Some(p) = &args.plot {
         check_output_path(p, "png")?;
