@@ -153,7 +153,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// One scene's renderer and frame, and the targets rendered on it so far (each rendered once per VPL source).
+/// One scene of the suite: its renderer, frame arguments, camera and lights (each call of [`SceneBench::rows`]
+/// renders a target once per VPL source and reuses it for every technique that names it).
 struct SceneBench<'a> {
     renderer: &'a mut Renderer,
     frame: &'a FrameArgs,
