@@ -135,11 +135,11 @@ impl Renderer {
         };
         if timed {
             self.timer.render_pass(&mut encoder, "tonemap", desc, record);
-            self.targets.encode_display_copy(&mut encoder);
+            self.targets.output_written();
             self.timer.submit(&self.gpu, encoder, "tonemap")
         } else {
             record(&mut encoder.begin_render_pass(&desc));
-            self.targets.encode_display_copy(&mut encoder);
+            self.targets.output_written();
             self.gpu.queue.submit([encoder.finish()]);
             Ok(())
         }
@@ -172,7 +172,20 @@ impl Renderer {
             x_ray,
             self.overlay_style,
         );
-        t.encode_display_copy(&mut encoder);
+        self.gpu.queue.submit([encoder.finish()]);
+        self.targets.output_written();
+        Ok(())
+    }
+
+    /// Before the app shows [`FrameTargets::output_display`]: on GL, copy the output into it if it changed
+    /// (once a UI frame at most, after the tone mapping and the overlays); nothing elsewhere.
+    pub fn sync_display(&mut self) -> Result<(), GpuError> {
+        if !self.targets.display_stale() {
+            return Ok(());
+        }
+        self.gpu.check_lost()?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.targets.encode_display_copy(&mut encoder);
         self.gpu.queue.submit([encoder.finish()]);
         Ok(())
     }

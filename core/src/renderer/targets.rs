@@ -22,9 +22,12 @@ pub struct FrameTargets {
     /// A view of `output_texture` where the device can view it in another format, else of `display_copy`.
     pub output_display: wgpu::TextureView,
     /// On GL, which cannot view a texture in another format (`DownlevelFlags::VIEW_FORMATS`): a plain
-    /// `Rgba8Unorm` texture the output's bytes are copied into whenever the output changes
+    /// `Rgba8Unorm` texture the output's bytes are copied into when the app is about to show them
     /// ([`FrameTargets::encode_display_copy`]), so the app shows the same image on GL as elsewhere.
     display_copy: Option<wgpu::Texture>,
+    /// The output changed since the display copy was last made (GL only; the CLI never shows the output, so its
+    /// measured steps never pay for a copy).
+    display_stale: bool,
 }
 
 /// The plain view format of the output (see `FrameTargets::output_display`).
@@ -94,19 +97,31 @@ impl FrameTargets {
                 }),
             },
             display_copy,
+            display_stale: false,
             output_texture,
         }
     }
 
-    /// Where the output cannot be viewed as plain `Rgba8Unorm` (GL): copy it into the display texture. Called
-    /// after every pass that writes the output (the tone mapping, the overlays); nothing elsewhere.
-    pub fn encode_display_copy(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some(copy) = &self.display_copy {
-            encoder.copy_texture_to_texture(
-                self.output_texture.as_image_copy(),
-                copy.as_image_copy(),
-                wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
-            );
-        }
+    /// A pass wrote the output (the tone mapping, the overlays): the display copy, where there is one, is stale.
+    pub fn output_written(&mut self) {
+        self.display_stale = self.display_copy.is_some();
+    }
+
+    /// Whether the display copy is behind the output (GL, after a pass wrote it).
+    pub fn display_stale(&self) -> bool {
+        self.display_stale
+    }
+
+    /// Where the output cannot be viewed as plain `Rgba8Unorm` (GL) and changed since the last copy: copy it
+    /// into the display texture (true when a copy was encoded). Nothing elsewhere.
+    pub fn encode_display_copy(&mut self, encoder: &mut wgpu::CommandEncoder) -> bool {
+        let Some(copy) = self.display_copy.as_ref().filter(|_| self.display_stale) else { return false };
+        encoder.copy_texture_to_texture(
+            self.output_texture.as_image_copy(),
+            copy.as_image_copy(),
+            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
+        );
+        self.display_stale = false;
+        true
     }
 }

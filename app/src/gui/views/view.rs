@@ -441,8 +441,10 @@ impl View {
         }
     }
 
+    /// Draw the overlays over the output, the last write of a UI frame, and make the output ready to show.
     pub fn overlays(&mut self, camera: &Camera, primitives: &[Overlay], x_ray: bool) -> Result<()> {
         self.renderer.draw_overlays(camera, primitives, x_ray)?;
+        self.renderer.sync_display()?;
         Ok(())
     }
 
