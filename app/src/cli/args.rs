@@ -182,22 +182,19 @@ impl TargetArgs {
             None if !self.against_indirect_params.is_empty() => {
                 bail!("--against-indirect-param needs --against-indirect")
             }
-            None => {
-                let own = technique::registry::indirect_entry(&same.key).map(|e| e.target).filter(|t| *t != same.key);
-                match own.filter(|_| indirect_only) {
-                    Some(target) => {
-                        if !quiet {
-                            eprintln!(
-                                "note: the indirect component of {} against its own target, {target} \
+            None => match technique::registry::own_indirect_target(&same.key).filter(|_| indirect_only) {
+                Some(target) => {
+                    if !quiet {
+                        eprintln!(
+                            "note: the indirect component of {} against its own target, {target} \
                                  (--against-indirect chooses another)",
-                                same.key
-                            );
-                        }
-                        Ok(IndirectChoice { key: target.to_string(), params: Vec::new() })
+                            same.key
+                        );
                     }
-                    None => Ok(same.clone()),
+                    Ok(IndirectChoice { key: target.to_string(), params: Vec::new() })
                 }
-            }
+                None => Ok(same.clone()),
+            },
         }
     }
 }

@@ -104,21 +104,19 @@ fn target(args: &TradeoffArgs, tries: &[TrySpec]) -> Result<(String, Vec<String>
     } else if !args.against_indirect_params.is_empty() {
         bail!("--against-indirect-param needs --against-indirect");
     } else if !named_indirect {
-        let own_target = tries
-            .iter()
-            .find(|t| t.indirect != "none")
-            .and_then(|t| technique::registry::indirect_entry(&t.indirect))
-            .filter(|e| e.target != e.key && args.frame.component == "indirect");
+        let own_target =
+            tries.iter().find(|t| t.indirect != "none").filter(|_| args.frame.component == "indirect").and_then(|t| {
+                technique::registry::own_indirect_target(&t.indirect).map(|target| (&t.indirect, target))
+            });
         match own_target {
-            Some(e) => {
+            Some((key, target)) => {
                 if !args.frame.quiet {
                     eprintln!(
-                        "note: the indirect component of {} against its own target, {} (--against KEY+INDIRECT or \
-                         --against-indirect chooses another)",
-                        e.key, e.target
+                        "note: the indirect component of {key} against its own target, {target} (--against \
+                         KEY+INDIRECT or --against-indirect chooses another)"
                     );
                 }
-                indirect = IndirectChoice { key: e.target.to_string(), params: Vec::new() };
+                indirect = IndirectChoice { key: target.to_string(), params: Vec::new() };
             }
             None => indirect.params.extend(args.frame.indirect_params.iter().cloned()),
         }

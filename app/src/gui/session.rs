@@ -328,12 +328,15 @@ impl Session {
 
     /// The comparison target's indirect technique key (None: direct light only): the view's own unless the
     /// user chose another for the target ([`ViewSettings::against_indirect`]); with the indirect component
-    /// alone shown, the own technique's comparison target ([`own_indirect_target`]).
+    /// alone shown, the own technique's comparison target
+    /// ([`shadowlab_core::technique::registry::own_indirect_target`]).
     pub fn against_indirect_key(&self) -> Option<&str> {
         match self.view.against_indirect.as_deref() {
-            None if self.indirect.component == Component::Indirect => {
-                self.indirect.technique.as_deref().map(own_indirect_target)
-            }
+            None if self.indirect.component == Component::Indirect => self
+                .indirect
+                .technique
+                .as_deref()
+                .map(|k| shadowlab_core::technique::registry::own_indirect_target(k).unwrap_or(k)),
             None => self.indirect.technique.as_deref(),
             Some("none") => None,
             Some(k) => Some(k),
@@ -405,13 +408,6 @@ impl Session {
 /// Parameter values as `key=value`.
 fn pairs(params: Option<&BTreeMap<String, ParamValue>>) -> Vec<String> {
     params.map(|p| p.iter().map(|(k, v)| format!("{k}={v}")).collect()).unwrap_or_default()
-}
-
-/// An indirect technique's own comparison target in the registry (`val`: `vpl-shadowmaps`), or the key itself
-/// for a ground truth or an unknown key. The indirect component alone, compared with the same indirect
-/// technique, differs by nothing: that view compares with this target unless the user chose another.
-pub fn own_indirect_target(key: &str) -> &str {
-    shadowlab_core::technique::registry::indirect_entry(key).map_or(key, |e| e.target)
 }
 
 #[cfg(test)]

@@ -285,6 +285,13 @@ pub fn create_indirect(key: &str, gpu: &GpuContext, layouts: &SharedLayouts) -> 
     indirect_entry(key).map(|e| (e.create)(gpu, layouts))
 }
 
+/// The comparison target an indirect technique declares (`val`: `vpl-shadowmaps`), None for a ground truth
+/// (its own target) or an unknown key. Comparing the indirect light alone with the same technique differs by
+/// nothing, so the CLI, the trade-off and the app compare it with this one unless told otherwise.
+pub fn own_indirect_target(key: &str) -> Option<&'static str> {
+    indirect_entry(key).map(|e| e.target).filter(|t| *t != key)
+}
+
 /// The VPL source the indirect technique `key`'s paper uses (Colom 2022 traces particles), None when it has
 /// no preference or is unknown.
 pub fn preferred_vpl_source(key: &str) -> Option<VplSource> {
@@ -309,6 +316,17 @@ pub fn keys() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_indirect_technique_names_its_own_target_and_a_ground_truth_none() {
+        assert_eq!(own_indirect_target("val"), Some(INDIRECT_REFERENCE));
+        assert_eq!(own_indirect_target("fuzzy"), Some("vpl-raytraced"));
+        assert_eq!(own_indirect_target("pathtraced"), None, "a ground truth is its own target");
+        assert_eq!(own_indirect_target("nope"), None);
+        for e in INDIRECT_REGISTRY {
+            assert!(own_indirect_target(e.key).is_none_or(|t| indirect_entry(t).is_some()), "{}", e.key);
+        }
+    }
 
     #[test]
     fn every_target_is_registered_and_is_a_target() {

@@ -159,21 +159,19 @@ fn target_indirect_ui(session: &mut Session, ui: &mut egui::Ui) {
     if own.is_none() && session.view.against_indirect.is_none() {
         return;
     }
-    let declared = own.as_deref().and_then(|k| INDIRECT_REGISTRY.iter().find(|e| e.key == k)).map(|e| e.target);
+    // The view's declared target, where it is not the view's own technique (a ground truth's is itself).
+    let declared = own.as_deref().and_then(shadowlab_core::technique::registry::own_indirect_target);
     let indirect_only = session.indirect.component == shadowlab_core::renderer::Component::Indirect;
+    let own_name = own.as_deref().unwrap_or("none");
     let name = |choice: &Option<String>| -> String {
-        match choice.as_deref() {
-            None if indirect_only && own.as_deref().is_some_and(|k| Some(k) != declared) => format!(
-                "{}'s target ({}; the indirect light alone)",
-                own.as_deref().unwrap_or_default(),
-                declared.unwrap_or_default()
-            ),
-            None => format!("same ({})", own.as_deref().unwrap_or("none")),
-            Some("none") => "none".to_string(),
-            Some(k) if Some(k) == declared && own.as_deref() != Some(k) => {
-                format!("{k} ({}'s target)", own.as_deref().unwrap_or_default())
+        match (choice.as_deref(), declared) {
+            (None, Some(target)) if indirect_only => {
+                format!("{own_name}'s target ({target}; the indirect light alone)")
             }
-            Some(k) => k.to_string(),
+            (None, _) => format!("same ({own_name})"),
+            (Some("none"), _) => "none".to_string(),
+            (Some(k), Some(target)) if k == target => format!("{k} ({own_name}'s target)"),
+            (Some(k), _) => k.to_string(),
         }
     };
     let current = session.view.against_indirect.clone();
