@@ -155,7 +155,11 @@ pub const OPEN_SIDE_SHARE: f32 = 0.5;
 /// ends).
 pub fn open_side(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
     let point = open_middle(bvh, bounds)?;
-    let diagonal = bounds.size().length().max(1e-6);
+    open_side_from(bvh, point, bounds.size().length().max(1e-6))
+}
+
+/// [`open_side`] seen from `point`, rays up to `diagonal` long.
+fn open_side_from(bvh: &Bvh, point: Vec3, diagonal: f32) -> Option<Vec3> {
     [Vec3::Z, Vec3::X, Vec3::NEG_X, Vec3::NEG_Z]
         .into_iter()
         .map(|side| (miss_share_towards(bvh, point, side, diagonal), side))
@@ -168,12 +172,15 @@ pub fn open_side(bvh: &Bvh, bounds: &Aabb) -> Option<Vec3> {
 /// room open on one side (a Cornell box whose probe rays mostly hit it, but whose front is missing); else None
 /// (keep the framing from +Z).
 pub fn first_view(bvh: &Bvh, bounds: &Aabb, fov_y: f32) -> Option<Camera> {
-    if !is_interior(bvh, bounds) {
+    // The probe point and the enclosure once, for both questions.
+    let point = open_middle(bvh, bounds)?;
+    let diagonal = bounds.size().length().max(1e-6);
+    if probe(bvh, point, diagonal).0 < ENCLOSED_SHARE {
         return None;
     }
-    match open_side(bvh, bounds) {
+    match open_side_from(bvh, point, diagonal) {
         Some(side) => Some(Camera::framing_from(bounds, side)),
-        None => interior_view(bvh, bounds, fov_y),
+        None => inside_view(bvh, bounds, fov_y),
     }
 }
 
@@ -182,6 +189,11 @@ pub fn interior_view(bvh: &Bvh, bounds: &Aabb, fov_y: f32) -> Option<Camera> {
     if !is_interior(bvh, bounds) {
         return None;
     }
+    inside_view(bvh, bounds, fov_y)
+}
+
+/// The camera of [`interior_view`], for bounds already known to hold an interior.
+fn inside_view(bvh: &Bvh, bounds: &Aabb, fov_y: f32) -> Option<Camera> {
     let size = bounds.size();
     let center = bounds.center();
     let diagonal = size.length();
