@@ -240,15 +240,22 @@ pub const FULL_SIZE_LIGHT_DOTS: usize = 256;
 /// The smallest share of their size light dots shrink to.
 pub const MIN_LIGHT_DOT_SCALE: f32 = 0.25;
 
-/// The radius in pixels of a light's dot: 2 to 6 pixels with √intensity, times the crowd's scale.
-pub fn light_dot_radius(intensity: f32, max_intensity: f32, lights: usize) -> f32 {
-    let crowd = (FULL_SIZE_LIGHT_DOTS as f32 / lights.max(1) as f32).sqrt().clamp(MIN_LIGHT_DOT_SCALE, 1.0);
-    ((2.0 + 4.0 * (intensity / max_intensity.max(1e-6)).clamp(0.0, 1.0).sqrt()) * crowd).max(1.0)
+/// The share of their size light dots keep among `lights` lights: 1 up to [`FULL_SIZE_LIGHT_DOTS`], then
+/// `sqrt(FULL_SIZE_LIGHT_DOTS / lights)`, at least [`MIN_LIGHT_DOT_SCALE`].
+pub fn light_dot_scale(lights: usize) -> f32 {
+    (FULL_SIZE_LIGHT_DOTS as f32 / lights.max(1) as f32).sqrt().clamp(MIN_LIGHT_DOT_SCALE, 1.0)
+}
+
+/// The radius in pixels of a light's dot: 2 to 6 pixels with √intensity, times the crowd's `scale`
+/// ([`light_dot_scale`]), never under a pixel.
+pub fn light_dot_radius(intensity: f32, max_intensity: f32, scale: f32) -> f32 {
+    ((2.0 + 4.0 * (intensity / max_intensity.max(1e-6)).clamp(0.0, 1.0).sqrt()) * scale).max(1.0)
 }
 
 /// The overlays every technique offers for its lights: dots sized by intensity, and range spheres (`L_att`).
 pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
     let max_intensity = lights.iter().map(|l| l.intensity).fold(0.0f32, f32::max).max(1e-6);
+    let scale = light_dot_scale(lights.len());
     let mut layers = vec![
         OverlayLayer {
             name: "lights",
@@ -258,7 +265,7 @@ pub fn light_overlays(lights: &[PointLight]) -> Vec<OverlayLayer> {
                 .map(|l| Overlay::Point {
                     position: l.position,
                     color: light_overlay_color(l),
-                    radius_px: light_dot_radius(l.intensity, max_intensity, lights.len()),
+                    radius_px: light_dot_radius(l.intensity, max_intensity, scale),
                 })
                 .collect(),
         },
@@ -342,12 +349,21 @@ mod tests {
 
     #[test]
     fn light_dots_grow_with_intensity_and_shrink_in_a_crowd() {
-        assert_eq!(light_dot_radius(1.0, 1.0, 10), 6.0);
-        assert_eq!(light_dot_radius(0.0, 1.0, 10), 2.0);
-        assert_eq!(light_dot_radius(1.0, 1.0, FULL_SIZE_LIGHT_DOTS), 6.0, "full size up to the threshold");
-        assert!((light_dot_radius(1.0, 1.0, 4 * FULL_SIZE_LIGHT_DOTS) - 3.0).abs() < 1e-5, "half at four times");
-        assert_eq!(light_dot_radius(1.0, 1.0, 100_000), 6.0 * MIN_LIGHT_DOT_SCALE);
-        assert_eq!(light_dot_radius(0.0, 1.0, 100_000), 1.0, "never under a pixel");
+        let radius = |intensity: f32, lights: usize| light_dot_radius(intensity, 1.0, light_dot_scale(lights));
+        assert_eq!(radius(1.0, 10), 6.0);
+        assert_eq!(radius(0.0, 10), 2.0);
+        assert_eq!(radius(1.0, FULL_SIZE_LIGHT_DOTS), 6.0, "full size up to the threshold");
+        assert!((radius(1.0, 4 * FULL_SIZE_LIGHT_DOTS) - 3.0).abs() < 1e-5, "half at four times");
+        assert_eq!(radius(1.0, 100_000), 6.0 * MIN_LIGHT_DOT_SCALE);
+        assert_eq!(radius(0.0, 100_000), 1.0, "never under a pixel");
+        // The layer itself: a crowd's dots are smaller than a few lights' of the same intensity.
+        let light = |x: f32| PointLight::new(Vec3::new(x, 0.0, 0.0), Vec3::ONE, 1.0, 1.0);
+        let dot =
+            |n: usize| match &light_overlays(&(0..n).map(|i| light(i as f32)).collect::<Vec<_>>())[0].primitives[0] {
+                Overlay::Point { radius_px, .. } => *radius_px,
+                other => panic!("a dot, not {other:?}"),
+            };
+        assert_eq!((dot(4), dot(4096)), (6.0, 1.5));
     }
 
     #[test]
