@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::{Bvh, BvhTriangle, MAX_DEPTH, MIN_DIR};
+use super::{Bvh, BvhNode, BvhTriangle, MAX_DEPTH, MIN_DIR};
 
 #[inline]
 fn v3(a: &[f32; 4]) -> [f32; 3] {
@@ -43,6 +43,23 @@ pub fn ray_box(origin: Vec3, inv_dir: Vec3, min: [f32; 3], max: [f32; 3], t_max:
     }
 }
 
+/// Whether the ray meets the root's box within `t_max` (false for an empty tree): where both traversals start.
+fn enters_root(nodes: &[BvhNode], origin: Vec3, inv: Vec3, t_max: f32) -> bool {
+    nodes.first().is_some_and(|root| ray_box(origin, inv, root.min, root.max, t_max) != f32::INFINITY)
+}
+
+/// The two children of an inner node whose first child is `a`, the nearer first, with their entry distances
+/// within `t_max` (+inf for a child the ray misses): the child order both traversals share with the WGSL.
+fn ordered_children(nodes: &[BvhNode], a: usize, origin: Vec3, inv: Vec3, t_max: f32) -> (usize, usize, f32, f32) {
+    let ta = ray_box(origin, inv, nodes[a].min, nodes[a].max, t_max);
+    let tb = ray_box(origin, inv, nodes[a + 1].min, nodes[a + 1].max, t_max);
+    if ta <= tb {
+        (a, a + 1, ta, tb)
+    } else {
+        (a + 1, a, tb, ta)
+    }
+}
+
 /// Möller–Trumbore (`bvh_ray_triangle`): true when the ray hits the triangle at `0 < t < t_max`.
 pub fn ray_triangle(origin: Vec3, dir: Vec3, tri: &BvhTriangle, t_max: f32) -> bool {
     ray_triangle_hit(origin, dir, tri, t_max).is_some()
@@ -65,7 +82,7 @@ pub fn occluded_cpu_filtered(
 ) -> bool {
     let inv = safe_inverse(dir);
     let nodes = &bvh.nodes;
-    if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
+    if !enters_root(nodes, origin, inv, t_max) {
         return false;
     }
     let mut stack = [0u32; MAX_DEPTH];
@@ -89,10 +106,7 @@ pub fn occluded_cpu_filtered(
             node = stack[sp] as usize;
             continue;
         }
-        let a = n.first as usize;
-        let ta = ray_box(origin, inv, nodes[a].min, nodes[a].max, t_max);
-        let tb = ray_box(origin, inv, nodes[a + 1].min, nodes[a + 1].max, t_max);
-        let (near, far, t_near, t_far) = if ta <= tb { (a, a + 1, ta, tb) } else { (a + 1, a, tb, ta) };
+        let (near, far, t_near, t_far) = ordered_children(nodes, n.first as usize, origin, inv, t_max);
         if t_near == f32::INFINITY {
             if sp == 0 {
                 return false;
@@ -161,7 +175,7 @@ pub fn closest_hit_cpu_filtered(
 ) -> Option<Hit> {
     let inv = safe_inverse(dir);
     let nodes = &bvh.nodes;
-    if nodes.is_empty() || ray_box(origin, inv, nodes[0].min, nodes[0].max, t_max) == f32::INFINITY {
+    if !enters_root(nodes, origin, inv, t_max) {
         return None;
     }
     let mut best: Option<Hit> = None;
@@ -182,10 +196,7 @@ pub fn closest_hit_cpu_filtered(
                 }
             }
         } else {
-            let a = n.first as usize;
-            let ta = ray_box(origin, inv, nodes[a].min, nodes[a].max, t_best);
-            let tb = ray_box(origin, inv, nodes[a + 1].min, nodes[a + 1].max, t_best);
-            let (near, far, t_near, t_far) = if ta <= tb { (a, a + 1, ta, tb) } else { (a + 1, a, tb, ta) };
+            let (near, far, t_near, t_far) = ordered_children(nodes, n.first as usize, origin, inv, t_best);
             if t_near != f32::INFINITY {
                 node = near;
                 if t_far != f32::INFINITY && sp < MAX_DEPTH {
