@@ -727,7 +727,7 @@ fn real_interiors_are_first_seen_from_inside_and_the_cornell_box_from_outside() 
         assert!(scene.camera_is_framing(), "an OBJ brings no camera");
         let bvh = Bvh::build(&triangles(&scene));
         let b = scene.bounds;
-        let cam = first_view::interior_view(&bvh, &b, scene.camera.fov_y).expect("an enclosed interior");
+        let cam = first_view::first_view(&bvh, &b, scene.camera.fov_y).expect("an enclosed interior");
         let p = cam.position;
         assert!(p.cmpgt(b.min).all() && p.cmplt(b.max).all(), "{path}: {p} inside {b:?}");
         // Seen from where the framing camera would be, above the roof, the model is behind a wall: the
@@ -737,7 +737,18 @@ fn real_interiors_are_first_seen_from_inside_and_the_cornell_box_from_outside() 
     }
     let open_box = load_obj(&scenes.join("cornell-box/CornellBox-Original.obj"), 1.0).unwrap();
     let bvh = Bvh::build(&triangles(&open_box));
-    assert!(first_view::interior_view(&bvh, &open_box.bounds, 0.9).is_none(), "an open box is framed from outside");
+    assert!(first_view::first_view(&bvh, &open_box.bounds, 0.9).is_none(), "an open box is framed from outside");
+    // The glTF Cornell box hangs a logo at the middle of its bounds: probed from it, every ray hit at once and the
+    // box was seen from inside, facing a wall; it is framed from outside like the OBJ.
+    let gltf = Scene::load(&scenes.join("cornell-box-gltf/cornellBox-2.80-Eevee-gltf.gltf"), 1.0).unwrap();
+    let bvh = Bvh::build(&triangles(&gltf));
+    assert!(first_view::first_view(&bvh, &gltf.bounds, 0.9).is_none(), "the glTF box is framed from outside");
+    // The box with water: the pool catches the low rays, so it is enclosed, but its front is open: seen from
+    // the front, looking in (it was seen from its back wall, looking out of the opening).
+    let water = load_obj(&scenes.join("cornell-box/CornellBox-Water.obj"), 1.0).unwrap();
+    let (bvh, b) = (Bvh::build(&triangles(&water)), water.bounds);
+    let cam = first_view::first_view(&bvh, &b, 0.9).expect("a room open at the front");
+    assert!(cam.position.z > b.max.z && cam.forward().z < -0.9, "{} looking {}", cam.position, cam.forward());
 }
 
 /// A glTF as gltfpack writes it (KHR_mesh_quantization): one triangle with `i16` positions and normalised `i8`
